@@ -1,0 +1,44 @@
+# cnclab: the two commands are `make reproduce` and `make test`; each sets up .venv itself.
+SHELL := /bin/bash
+PYTHON ?= $(shell command -v python3.11 || command -v python3)
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.cnclab-installed
+JOBS ?= 2
+
+.PHONY: reproduce test venv claims bench strip clean help
+
+help:
+	@echo "make reproduce   execute every notebook, write build/ (figures, HTML, claims report)"
+	@echo "make test        unit + claims tests and every notebook in fast mode (CNCLAB_FAST=1)"
+	@echo "make bench       run benchmarks/ and print their tables"
+	@echo "make claims      print the claims ledger with freshly computed values"
+
+venv: $(STAMP)
+
+$(STAMP): environment.txt pyproject.toml
+	@echo ">> setting up $(VENV) with $(PYTHON) from environment.txt (exact pins)"
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --disable-pip-version-check -r environment.txt
+	$(PY) -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
+	$(PY) -m ipykernel install --sys-prefix --name python3 --display-name "Python 3 (cnclab)" >/dev/null
+	@touch $(STAMP)
+	@echo ">> $(VENV) ready"
+
+reproduce: $(STAMP)
+	$(PY) -m cnclab reproduce
+
+test: $(STAMP)
+	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --durations=15 tests
+
+claims: $(STAMP)
+	$(PY) -m cnclab claims
+
+bench: $(STAMP)
+	@for b in benchmarks/bench_*.py; do echo ">> $$b"; $(PY) $$b || exit 1; done
+
+strip: $(STAMP)
+	$(PY) -m cnclab nb strip
+
+clean:
+	rm -rf build .pytest_cache

@@ -1,0 +1,33 @@
+"""Command line: ``python -m cnclab <command> ...``.
+
+Commands are imported lazily, so ``python -m cnclab claims`` does not import torch.
+"""
+from __future__ import annotations
+
+import importlib
+import sys
+
+#: command -> (module, one-line help). Each module has ``main(argv) -> int``.
+COMMANDS = {
+    "claims": ("cnclab.claims", "compute every ledger row; --work W, --json, --report DIR"),
+    "reproduce": ("cnclab.reproduce", "execute every notebook, export HTML/figures, write the claims report"),
+    "nb": ("cnclab.notebook_tools", "notebook housekeeping: from-py, strip, list"),
+}
+
+
+def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
+        print("usage: python -m cnclab <command> [options]\n\ncommands:")
+        for name, (_, hlp) in COMMANDS.items():
+            print(f"  {name:<10} {hlp}")
+        if argv and argv[0] not in ("-h", "--help"):
+            print(f"\nerror: unknown command {argv[0]!r}")
+            return 2
+        return 0
+    mod = importlib.import_module(COMMANDS[argv[0]][0])
+    return int(mod.main(argv[1:]) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Analysis and models: designed experiments, regression (statsmodels), neural networks (torch, lazy)."""

@@ -1,0 +1,440 @@
+"""The claims ledger: every number the four works print, next to the value cnclab computes.
+
+``data/claims.csv`` holds one row per printed number. Paper values are transcribed (with seed file
+and table/equation/section); reproduced values are *never* stored: they are computed by calling the
+function named in ``computed_by``.
+
+Columns
+-------
+claim_id        unique id, ``<work>.<chapter-or-section>.<what>`` (e.g. ``mgherony2024.ch3.eq3-5.slope``)
+work            one of ``cnclab.paths.WORK_IDS``
+seed_file       the seed text the number is printed in
+location        table / equation / section / figure where it is printed
+quantity        what the number is, in words
+unit            unit of ``paper_value`` (``-`` for dimensionless, ``%`` for percent)
+paper_value     the number as printed (float)
+rtol, atol      tolerance: holds when ``|reproduced - paper| <= atol + rtol*|paper|``
+tolerance_basis why that tolerance (e.g. "printed to 2 decimals")
+status          MATCH | DIFFERS | NOT_DERIVABLE
+computed_by     dotted name of a zero-argument function returning the value; ``name[key]`` indexes
+                the function's result (a mapping, Series or sequence) with ``key``
+alt_computed_by DIFFERS only: function reproducing the *printed* number under the explanation
+                (the typo, the slipped unit or convention); it must match ``paper_value``
+missing_input   NOT_DERIVABLE only: which input the seed does not give
+slow            1 if computing the claim takes long (skipped by the tests in fast mode)
+notebook        the notebook (relative to ``notebooks/``) that shows the claim
+note            free text: for DIFFERS the explanation, otherwise context
+
+Status semantics (what "holds" means)
+-------------------------------------
+MATCH           the reproduced value lies within tolerance of the paper value (for an
+                :class:`Interval`, the paper value lies inside the interval widened by the tolerance)
+DIFFERS         the reproduced (consistent) value is *outside* tolerance, and the alternative that
+                explains the printed number is *inside* it
+NOT_DERIVABLE   no function; ``missing_input`` names what the seed does not give
+"""
+from __future__ import annotations
+
+import csv
+import dataclasses
+import importlib
+import io
+import json
+import math
+import re
+import time
+import traceback
+from pathlib import Path
+from typing import Any, Iterable
+
+from .paths import CLAIMS_CSV, NOTEBOOKS_DIR, WORK_IDS
+
+COLUMNS = ("claim_id", "work", "seed_file", "location", "quantity", "unit", "paper_value", "rtol",
+           "atol", "tolerance_basis", "status", "computed_by", "alt_computed_by", "missing_input",
+           "slow", "notebook", "note")
+STATUSES = ("MATCH", "DIFFERS", "NOT_DERIVABLE")
+SEED_FILES = {
+    "jacso2021": "000_690a1ed8f09fd780.txt",
+    "kim_yang2006": "002_d412f01ccb8e936f.txt",
+    "hoang2024": "003_216a87306e3bb9cf.txt",
+    "mgherony2024": "004_6087ee43271ee0e7.txt",
+}
+_DOTTED = re.compile(r"^[A-Za-z_][\w]*(\.[A-Za-z_]\w*)+(\[[^\[\]]+\])?$")
+
+
+class LedgerError(ValueError):
+    """A malformed ledger row; the message names file, line and column."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Interval:
+    """A reproduced quantity known as a range (e.g. min..max over training seeds).
+
+    A claim with an Interval value MATCHes when the paper value lies in ``[lo - tol, hi + tol]``.
+    """
+
+    lo: float
+    hi: float
+    center: float | None = None
+
+    def __post_init__(self):
+        if not (self.lo <= self.hi):
+            raise ValueError(f"Interval needs lo <= hi, got {self.lo}, {self.hi}")
+
+    def __float__(self) -> float:
+        return float(self.center if self.center is not None else 0.5 * (self.lo + self.hi))
+
+    def to_json(self):
+        return {"lo": self.lo, "hi": self.hi, "center": self.center}
+
+
+@dataclasses.dataclass(frozen=True)
+class Claim:
+    claim_id: str
+    work: str
+    seed_file: str
+    location: str
+    quantity: str
+    unit: str
+    paper_value: float
+    rtol: float
+    atol: float
+    tolerance_basis: str
+    status: str
+    computed_by: str
+    alt_computed_by: str
+    missing_input: str
+    slow: bool
+    notebook: str
+    note: str
+    line: int = 0  # line in the CSV file (1-based, header is line 1)
+
+    def holds_within(self, value) -> bool:
+        """True when ``value`` is within this claim's tolerance of the paper value."""
+        return within(value, self.paper_value, self.rtol, self.atol)
+
+
+def within(value, paper: float, rtol: float, atol: float) -> bool:
+    tol = atol + rtol * abs(paper)
+    if isinstance(value, Interval):
+        return value.lo - tol <= paper <= value.hi + tol
+    v = float(value)
+    return math.isfinite(v) and abs(v - paper) <= tol
+
+
+def _float(text: str, where: str, name: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise LedgerError(f"{where}: column {name!r} must be a number, got {text!r}") from None
+    if not math.isfinite(v):
+        raise LedgerError(f"{where}: column {name!r} must be finite, got {text!r}")
+    return v
+
+
+def load(path: Path | str = CLAIMS_CSV) -> list[Claim]:
+    """Read and validate the ledger; raises :class:`LedgerError` naming file, line and column."""
+    path = Path(path)
+    with open(path, newline="", encoding="utf-8") as fh:
+        reader = csv.DictReader(fh)
+        missing = [c for c in COLUMNS if c not in (reader.fieldnames or [])]
+        if missing:
+            raise LedgerError(f"{path}: header lacks columns {missing}")
+        rows, seen = [], {}
+        for i, raw in enumerate(reader, start=2):
+            where = f"{path}:{i}"
+            r = {k: (raw.get(k) or "").strip() for k in COLUMNS}
+            cid = r["claim_id"]
+            if not cid:
+                raise LedgerError(f"{where}: empty claim_id")
+            if cid in seen:
+                raise LedgerError(f"{where}: duplicate claim_id {cid!r} (first on line {seen[cid]})")
+            seen[cid] = i
+            if r["work"] not in WORK_IDS:
+                raise LedgerError(f"{where}: column 'work' must be one of {WORK_IDS}, got {r['work']!r}")
+            if r["seed_file"] != SEED_FILES[r["work"]]:
+                raise LedgerError(f"{where}: seed_file {r['seed_file']!r} is not the seed of {r['work']}"
+                                  f" ({SEED_FILES[r['work']]})")
+            if r["status"] not in STATUSES:
+                raise LedgerError(f"{where}: column 'status' must be one of {STATUSES}, got {r['status']!r}")
+            for col in ("location", "quantity", "unit", "tolerance_basis"):
+                if not r[col] and not (col == "tolerance_basis" and r["status"] == "NOT_DERIVABLE"):
+                    raise LedgerError(f"{where}: column {col!r} is empty")
+            for col in ("computed_by", "alt_computed_by"):
+                if r[col] and not _DOTTED.match(r[col]):
+                    raise LedgerError(f"{where}: column {col!r} is not a dotted name: {r[col]!r}")
+            st = r["status"]
+            if st in ("MATCH", "DIFFERS") and not r["computed_by"]:
+                raise LedgerError(f"{where}: {st} row needs computed_by")
+            if st == "DIFFERS" and not (r["alt_computed_by"] and r["note"]):
+                raise LedgerError(f"{where}: DIFFERS row needs alt_computed_by (the explanation) and a note")
+            if st == "NOT_DERIVABLE" and (r["computed_by"] or not r["missing_input"]):
+                raise LedgerError(f"{where}: NOT_DERIVABLE row needs missing_input and no computed_by")
+            if st != "DIFFERS" and r["alt_computed_by"]:
+                raise LedgerError(f"{where}: alt_computed_by only belongs to DIFFERS rows")
+            rows.append(Claim(
+                claim_id=cid, work=r["work"], seed_file=r["seed_file"], location=r["location"],
+                quantity=r["quantity"], unit=r["unit"],
+                paper_value=_float(r["paper_value"], where, "paper_value"),
+                rtol=_float(r["rtol"] or "0", where, "rtol"), atol=_float(r["atol"] or "0", where, "atol"),
+                tolerance_basis=r["tolerance_basis"], status=st, computed_by=r["computed_by"],
+                alt_computed_by=r["alt_computed_by"], missing_input=r["missing_input"],
+                slow=r["slow"] in ("1", "true", "True", "yes"), notebook=r["notebook"], note=r["note"],
+                line=i))
+            if rows[-1].rtol < 0 or rows[-1].atol < 0:
+                raise LedgerError(f"{where}: tolerances must be >= 0")
+    return rows
+
+
+def resolve(dotted: str):
+    """Return a zero-argument callable for ``pkg.mod.func`` or ``pkg.mod.func[key]``."""
+    key = None
+    m = re.match(r"^(.*)\[([^\[\]]+)\]$", dotted)
+    if m:
+        dotted, key = m.group(1), m.group(2)
+    modname, _, attr = dotted.rpartition(".")
+    try:
+        mod = importlib.import_module(modname)
+    except ImportError as exc:
+        raise LedgerError(f"cannot import module {modname!r} of {dotted!r}: {exc}") from exc
+    try:
+        fn = getattr(mod, attr)
+    except AttributeError:
+        raise LedgerError(f"module {modname!r} has no function {attr!r}") from None
+    if not callable(fn):
+        raise LedgerError(f"{dotted!r} is not callable")
+    if key is None:
+        return fn
+
+    def indexed():
+        res = fn()
+        try:
+            return res[key]
+        except (KeyError, IndexError, TypeError):
+            try:
+                return res[int(key)]
+            except (ValueError, KeyError, IndexError, TypeError):
+                raise LedgerError(f"{dotted}: result has no key {key!r}") from None
+
+    return indexed
+
+
+def _scalar(value):
+    if isinstance(value, Interval):
+        return value
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise LedgerError(f"claim function returned {type(value).__name__}, not a number") from None
+
+
+@dataclasses.dataclass
+class Result:
+    claim: Claim
+    reproduced: Any = None      # float, Interval or None
+    alt: Any = None             # DIFFERS: value under the explanation
+    ok: bool = False
+    skipped: bool = False
+    error: str = ""
+    seconds: float = 0.0
+
+    @property
+    def abs_error(self):
+        if self.reproduced is None:
+            return None
+        return abs(float(self.reproduced) - self.claim.paper_value)
+
+    @property
+    def rel_error(self):
+        e = self.abs_error
+        if e is None or self.claim.paper_value == 0:
+            return None
+        return e / abs(self.claim.paper_value)
+
+    def to_json(self) -> dict:
+        c = self.claim
+        enc = lambda v: v.to_json() if isinstance(v, Interval) else v  # noqa: E731
+        return {"claim_id": c.claim_id, "work": c.work, "seed_file": c.seed_file,
+                "location": c.location, "quantity": c.quantity, "unit": c.unit,
+                "paper_value": c.paper_value, "reproduced_value": enc(self.reproduced),
+                "alt_value": enc(self.alt), "abs_error": self.abs_error, "rel_error": self.rel_error,
+                "rtol": c.rtol, "atol": c.atol, "status": c.status, "ok": self.ok,
+                "skipped": self.skipped, "error": self.error, "computed_by": c.computed_by,
+                "note": c.note}
+
+
+def evaluate(claim: Claim, skip_slow: bool = False) -> Result:
+    """Compute one claim and decide whether its status holds."""
+    res = Result(claim)
+    if claim.status == "NOT_DERIVABLE":
+        res.ok = bool(claim.missing_input) and not claim.computed_by
+        return res
+    if skip_slow and claim.slow:
+        res.skipped = True
+        return res
+    t0 = time.perf_counter()
+    try:
+        res.reproduced = _scalar(resolve(claim.computed_by)())
+        inside = claim.holds_within(res.reproduced)
+        if claim.status == "MATCH":
+            res.ok = inside
+        else:  # DIFFERS
+            res.alt = _scalar(resolve(claim.alt_computed_by)())
+            res.ok = (not inside) and claim.holds_within(res.alt)
+    except Exception as exc:  # reported, never hidden
+        res.error = f"{type(exc).__name__}: {exc}"
+        res.ok = False
+        res._traceback = traceback.format_exc()
+    res.seconds = time.perf_counter() - t0
+    return res
+
+
+def select(claims: Iterable[Claim], work: str | None = None, notebook: str | None = None,
+           prefix: str | None = None) -> list[Claim]:
+    out = list(claims)
+    if work:
+        if work not in WORK_IDS:
+            raise ValueError(f"--work must be one of {WORK_IDS}, got {work!r}")
+        out = [c for c in out if c.work == work]
+    if notebook:
+        out = [c for c in out if c.notebook == notebook]
+    if prefix:
+        out = [c for c in out if c.claim_id.startswith(prefix)]
+    return out
+
+
+def evaluate_all(claims: Iterable[Claim], skip_slow: bool = False, progress: bool = False) -> list[Result]:
+    claims = list(claims)
+    it = claims
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(claims, desc="claims", unit="claim")
+    return [evaluate(c, skip_slow=skip_slow) for c in it]
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, Interval):
+        return f"[{v.lo:.6g}, {v.hi:.6g}]"
+    return f"{float(v):.6g}"
+
+
+def results_frame(results: list[Result]):
+    """A pandas DataFrame of results: paper vs reproduced vs tolerance vs status."""
+    import pandas as pd
+
+    rows = []
+    for r in results:
+        c = r.claim
+        rows.append({
+            "claim": c.claim_id, "location": c.location, "quantity": c.quantity, "unit": c.unit,
+            "paper": c.paper_value, "reproduced": _fmt(r.reproduced),
+            "alternative": _fmt(r.alt), "tolerance": f"±({c.atol:g} + {c.rtol:g}·|paper|)",
+            "status": c.status,
+            "holds": "skipped" if r.skipped else ("yes" if r.ok else ("ERROR" if r.error else "NO")),
+            "note": (r.error or c.note),
+        })
+    return pd.DataFrame(rows)
+
+
+def table(notebook: str | None = None, work: str | None = None, prefix: str | None = None):
+    """Compute and tabulate the claims shown by a notebook (its last cell calls this)."""
+    from .runtime import fast_mode
+
+    res = evaluate_all(select(load(), work=work, notebook=notebook, prefix=prefix),
+                       skip_slow=fast_mode())
+    return results_frame(res)
+
+
+def summary_frame(results: list[Result]):
+    """Counts per work and status, with how many hold."""
+    import pandas as pd
+
+    df = pd.DataFrame([{"work": r.claim.work, "status": r.claim.status, "holds": r.ok,
+                        "skipped": r.skipped} for r in results])
+    if df.empty:
+        return df
+    g = df.groupby(["work", "status"]).agg(rows=("holds", "size"), hold=("holds", "sum"),
+                                            skipped=("skipped", "sum"))
+    return g.reset_index()
+
+
+def write_report(results: list[Result], outdir: Path) -> tuple[Path, Path]:
+    """Write ``claims.csv`` and ``claims.md`` into ``outdir`` (atomically)."""
+    from .fileio import atomic_write
+
+    outdir = Path(outdir)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["claim_id", "work", "seed_file", "location", "quantity", "unit", "paper_value",
+                "reproduced_value", "alt_value", "rtol", "atol", "status", "holds", "note"])
+    for r in results:
+        c = r.claim
+        w.writerow([c.claim_id, c.work, c.seed_file, c.location, c.quantity, c.unit, c.paper_value,
+                    _fmt(r.reproduced), _fmt(r.alt), c.rtol, c.atol, c.status,
+                    "skipped" if r.skipped else r.ok, r.error or c.note])
+    p_csv = atomic_write(outdir / "claims.csv", buf.getvalue())
+    md = ["# cnclab claims report", ""]
+    summ = summary_frame(results)
+    md += ["| work | status | rows | hold | skipped |", "|---|---|---|---|---|"]
+    for _, s in summ.iterrows():
+        md.append(f"| {s.work} | {s.status} | {s.rows} | {s.hold} | {s.skipped} |")
+    md.append("")
+    for work in WORK_IDS:
+        rs = [r for r in results if r.claim.work == work]
+        if not rs:
+            continue
+        md += [f"## {work}", "", "| claim | location | paper | reproduced | alternative | tolerance | status | holds |",
+               "|---|---|---|---|---|---|---|---|"]
+        for r in rs:
+            c = r.claim
+            holds = "skipped" if r.skipped else ("yes" if r.ok else "**NO**")
+            md.append(f"| {c.claim_id} | {c.location} | {c.paper_value:g} {c.unit} | {_fmt(r.reproduced)} | "
+                      f"{_fmt(r.alt)} | ±({c.atol:g}+{c.rtol:g}·p) | {c.status} | {holds} |")
+        md.append("")
+    p_md = atomic_write(outdir / "claims.md", "\n".join(md) + "\n")
+    return p_csv, p_md
+
+
+def notebooks_of_ledger(claims: Iterable[Claim]) -> set[Path]:
+    return {NOTEBOOKS_DIR / c.notebook for c in claims if c.notebook}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m cnclab claims [--work W] [--json] [--report DIR] [--skip-slow]``."""
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m cnclab claims",
+                                 description="Compute every ledger row and say whether its status holds.")
+    ap.add_argument("--work", choices=WORK_IDS)
+    ap.add_argument("--prefix", help="only claims whose id starts with this")
+    ap.add_argument("--json", action="store_true", help="print a JSON list of result objects")
+    ap.add_argument("--report", metavar="DIR", help="also write DIR/claims.csv and DIR/claims.md")
+    ap.add_argument("--skip-slow", action="store_true", help="do not compute rows marked slow")
+    ap.add_argument("--ledger", default=str(CLAIMS_CSV), help="ledger CSV (default data/claims.csv)")
+    args = ap.parse_args(argv)
+    try:
+        claims = select(load(args.ledger), work=args.work, prefix=args.prefix)
+    except (LedgerError, FileNotFoundError) as exc:
+        print(f"error: {exc}")
+        return 2
+    results = evaluate_all(claims, skip_slow=args.skip_slow, progress=not args.json)
+    if args.json:
+        print(json.dumps([r.to_json() for r in results], indent=1))
+    else:
+        import pandas as pd
+
+        with pd.option_context("display.max_rows", None, "display.width", 200,
+                               "display.max_colwidth", 60):
+            print(results_frame(results).drop(columns=["note"]).to_string(index=False))
+        print()
+        print(summary_frame(results).to_string(index=False))
+    if args.report:
+        for p in write_report(results, Path(args.report)):
+            print(f"wrote {p}")
+    failed = [r for r in results if not r.ok and not r.skipped]
+    if failed and not args.json:
+        print(f"\n{len(failed)} claim(s) do not hold: " + ", ".join(r.claim.claim_id for r in failed[:20]))
+    return 1 if failed else 0
