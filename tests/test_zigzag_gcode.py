@@ -1,0 +1,102 @@
+"""G-code writer/parser (cnclab.toolpath.gcode) and the Hoang zig-zag generator."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from cnclab.toolpath import gcode
+from cnclab.toolpath.gcode import GcodeError, Move, parse_gcode, path_lengths, write_gcode
+
+
+def _program():
+    return [Move("G0", 0, 0, 10), Move("G1", 0, 0, 0, feed=300, spindle=2000),
+            Move("G1", 20, 0, 0, feed=500, spindle=2000),
+            Move("G2", 30, -10, 0, i=0, j=-10, feed=500, spindle=2000),
+            Move("G3", 30, -10, -1, i=5, j=0, feed=500, spindle=2000),   # full helical circle
+            Move("G0", 30, -10, 10, spindle=2000)]
+
+
+def test_round_trip_exact_and_modal():
+    text = write_gcode(_program(), header=["cnclab test", "second line"])
+    moves = parse_gcode(text)
+    assert len(moves) == 6
+    assert write_gcode(moves, header=["cnclab test", "second line"]) == text
+    # modal: F500 written once, S2000 once, motion word G1 once for the two linear moves
+    assert text.count("F500.0") == 1 and text.count("S2000") == 1
+    assert moves[3].i == 0 and moves[3].j == -10 and moves[3].feed == 500
+    assert moves[5].feed is None and moves[5].spindle == 2000
+
+
+def test_lengths_of_arcs_and_helix():
+    L = path_lengths(_program())
+    quarter = 0.5 * math.pi * 10
+    helix = math.hypot(2 * math.pi * 5, 1.0)
+    assert L["feed"] == pytest.approx(10 + 20 + quarter + helix)
+    assert L["rapid"] == pytest.approx(11)   # from z=-1 back to z=10
+
+
+def test_sample_arc_on_circle_and_direction():
+    start = (10.0, 0.0, 0.0)
+    cw = gcode.sample_arc(start, Move("G2", 0, -10, 0, i=-10, j=0, feed=1), max_segment=0.2)
+    ccw = gcode.sample_arc(start, Move("G3", 0, -10, 0, i=-10, j=0, feed=1), max_segment=0.2)
+    assert np.allclose(np.hypot(cw[:, 0], cw[:, 1]), 10)
+    assert cw[:, 1].max() <= 1e-9            # CW from +X to -Y stays in the lower half (quarter)
+    assert ccw[:, 1].max() == pytest.approx(10, abs=0.01)   # CCW goes the long way (3/4 circle)
+    seg = np.linalg.norm(np.diff(cw, axis=0), axis=1)
+    assert seg.max() <= 0.2 + 1e-9
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("G0 X0 Y0 Z0\nG1 X1 Q5 F100\n", "t.nc:2: unknown word Q5"),
+    ("G20\n", "t.nc:1: G20"),
+    ("G91 G0 X1\n", "t.nc:1: G91"),
+    ("G0 X0 Y0\n", "t.nc:1: position of Z is unknown"),
+    ("G0 X0 Y0 Z0\nG1 X5\n", "t.nc:2: G1 feed move with no feed F"),
+    ("G0 X0 Y0 Z0\nG2 X2 Y0 F100\n", "t.nc:2: G2 arc needs centre offsets I and J"),
+    ("G0 X0 Y0 Z0\nG2 X3 Y0 I1 J0 F100\n", "t.nc:2: arc start radius"),
+    ("G0 X0 Y0 Z0\nG2 X2 Y0 R1 F100\n", "t.nc:2: R-format"),
+    ("G0 X0 Y0 Z0\nM7\n", "t.nc:2: unknown or unsupported word M7"),
+    ("G0 X0 Y0 Z0 @\n", "t.nc:1: cannot read"),
+])
+def test_bad_input_names_source_and_line(text, fragment):
+    with pytest.raises(GcodeError, match=fragment.replace("(", r"\(")):
+        parse_gcode(text, source="t.nc")
+
+
+def test_hand_written_variants_parse():
+    text = "%\nN10 G00 X0 Y0 Z5 (rapid)\nN20 G01 Z-1 F250 ; plunge\nN30 X10\nM30\n%\n"
+    moves = parse_gcode(text)
+    assert [m.motion for m in moves] == ["G0", "G1", "G1"]
+    assert moves[-1].x == 10 and moves[-1].z == -1 and moves[-1].feed == 250
+
+
+def test_move_validation():
+    with pytest.raises(ValueError, match="needs a feed"):
+        Move("G1", 0, 0, 0)
+    with pytest.raises(ValueError, match="i and j"):
+        Move("G2", 0, 0, 0, feed=1)
+    with pytest.raises(ValueError, match="motion must be"):
+        Move("G5", 0, 0, 0)
+
+
+def test_save_is_atomic_and_refuses_input(tmp_path):
+    p = tmp_path / "a.nc"
+    gcode.save_gcode(_program(), p)
+    assert gcode.load_gcode(p)[2].x == 20
+    with pytest.raises(ValueError, match="refusing to overwrite"):
+        gcode.save_gcode(_program(), p, inputs=[p])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(-500, 500), st.floats(-500, 500), st.floats(-50, 50),
+                          st.sampled_from(["G0", "G1"]), st.floats(1, 5000)), min_size=1, max_size=30))
+def test_round_trip_property(pts):
+    moves = [Move(m, x, y, z, feed=None if m == "G0" else f) for x, y, z, m, f in pts]
+    text = write_gcode(moves, decimals=3)
+    again = parse_gcode(text)
+    assert write_gcode(again, decimals=3) == text
+    # every parsed point is within half a unit of the last digit of the original
+    orig = {tuple(np.round(mv.xyz, 3)) for mv in moves}
+    for mv in again:
+        assert tuple(np.round(mv.xyz, 3)) in orig
