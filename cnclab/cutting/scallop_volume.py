@@ -31,7 +31,7 @@ import numpy as np
 
 __all__ = ["stepover", "scallop_height", "theta_from_stepover", "curvature_volume",
            "block_volume_v1", "block_volume_v1_star", "block_volume_v2", "forward_step",
-           "forward_step_as_printed", "scallop_area_exact", "table2_row"]
+           "forward_step_as_printed", "theta_as_printed", "scallop_area_exact", "table2_row"]
 
 
 def _pos(name: str, value, allow_zero: bool = False):
@@ -127,18 +127,32 @@ def forward_step(volume, scallop_height, tool_radius):
     return 2.0 * v / (scallop_height * sz - curvature_volume(th, tool_radius))
 
 
-def forward_step_as_printed(volume, scallop_height, tool_radius, pi: float = 3.14, theta_decimals: int | None = 5):
+def theta_as_printed(scallop_height, tool_radius, decimals: int | None = 5):
+    """θ as Table 2 prints it: **radians**, from S_z rounded to ``decimals``, rounded to ``decimals``.
+
+    >>> float(theta_as_printed(0.05, 2.5))   # printed 0.20034 under the header "θ, °"
+    0.20034
+    """
+    sz = stepover(scallop_height, tool_radius)
+    if decimals is not None:
+        sz = np.round(sz, decimals)
+    th = theta_from_stepover(sz, tool_radius)
+    return th if decimals is None else np.round(th, decimals)
+
+
+def forward_step_as_printed(volume, scallop_height, tool_radius, pi: float = 3.14, decimals: int | None = 5):
     """F_r [mm] as Table 2 prints it: eq. 7 with θ in *radians* put where eq. 3 expects degrees.
 
-    ``π·θ/180`` receives θ in radians (rounded to ``theta_decimals``, as printed in Table 2) while
-    ``sin θ`` takes the radian value; ``pi`` defaults to 3.14. This is the slip that reproduces the
-    printed column to all 5 decimals; it is *not* the unit-consistent value (:func:`forward_step`).
+    The chain of the printed table: S_z rounded to ``decimals``, θ = asin(S_z/2R_T) in radians rounded
+    to ``decimals`` (:func:`theta_as_printed`), then ``π·θ/180`` receives that radian value while
+    ``sin θ`` takes it as radians, with ``pi = 3.14``. This slip reproduces the printed column to all
+    5 decimals; it is *not* the unit-consistent value (:func:`forward_step`).
     """
     v = _pos("volume", volume)
     sz = stepover(scallop_height, tool_radius)
-    th = theta_from_stepover(sz, tool_radius)
-    if theta_decimals is not None:
-        th = np.round(th, theta_decimals)
+    if decimals is not None:
+        sz = np.round(sz, decimals)
+    th = theta_as_printed(scallop_height, tool_radius, decimals)
     r = np.asarray(tool_radius, float)
     return 2.0 * v / (scallop_height * sz - 0.5 * r ** 2 * (pi * th / 180.0 - np.sin(th)))
 
@@ -170,6 +184,7 @@ def table2_row(scallop_height, tool_radius, volume) -> dict:
     return {
         "Sc": scallop_height, "RT": tool_radius, "V": volume, "Sz": sz,
         "theta_rad": th, "theta_deg": float(np.degrees(th)),
+        "theta_printed_convention": float(theta_as_printed(scallop_height, tool_radius)),
         "Fr_printed_convention": float(forward_step_as_printed(volume, scallop_height, tool_radius)),
         "Fr_consistent": float(forward_step(volume, scallop_height, tool_radius)),
         "Fr_v1": 2.0 * volume / (scallop_height * sz),

@@ -1,0 +1,1 @@
+"""Hoang (2024): constant-volume ball-end zig-zag — recipes in :mod:`.constant_volume`."""
