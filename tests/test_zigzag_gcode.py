@@ -100,3 +100,45 @@ def test_round_trip_property(pts):
     orig = {tuple(np.round(mv.xyz, 3)) for mv in moves}
     for mv in again:
         assert tuple(np.round(mv.xyz, 3)) in orig
+
+
+# ---------------------------------------------------------------- zig-zag (Hoang Table 1)
+from cnclab.toolpath import zigzag  # noqa: E402
+from cnclab.works.hoang2024 import constant_volume as cv  # noqa: E402
+
+
+def test_table1_loop_as_printed_counts():
+    sz, fr = 0.994987, 3.02718
+    p = zigzag.hoang_table1_points(0, 0, 50, 100, sz, fr)
+    n = 50 / sz + sz / 2
+    iters = math.floor(n / 2)
+    assert len(p) == 1 + 4 * iters
+    assert p[-1, 1] == pytest.approx(2 * iters * sz)        # ends on a trailing stepover
+    assert np.allclose(np.abs(np.diff(p[:, 0]))[::2], 100)   # each pass is F_r*m = Long
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(1, 200), st.floats(1, 200), st.floats(0.05, 5))
+def test_covering_zigzag_properties(width, length, sz):
+    p = zigzag.zigzag_points((1.0, 2.0), width, length, sz)
+    ys = np.unique(np.round(p[:, 1], 9))
+    assert ys[-1] >= 2.0 + width - 1e-9 and ys[-2] < 2.0 + width - 1e-9   # covers, no spare pass
+    assert np.allclose(np.diff(ys), sz)
+    assert np.all((p[:, 0] >= 1.0 - 1e-9) & (p[:, 0] <= 1.0 + length + 1e-9))
+
+
+def test_forward_step_points_are_on_the_pass():
+    p = zigzag.zigzag_points((0, 0), 1.0, 10.0, 1.0, forward_step=3.0)
+    assert p[:5, 0].tolist() == [0, 3, 6, 9, 10]
+    assert p[5:10, 0].tolist() == [10, 9, 6, 3, 0]
+
+
+def test_table3_accounting_and_gcode_round_trip():
+    moves, text = cv.table3_program(covering=True, decimals=3)
+    sz = cv.table2_recomputed().loc["r2", "Sz"]
+    L = path_lengths(moves)
+    y_last = round(51 * sz, 3)
+    assert L["feed"] == pytest.approx(52 * 100 + y_last + 20, abs=1e-9)
+    assert L["rapid"] == pytest.approx(y_last, abs=1e-9)   # rapid return; the tool starts at (0,0,10)
+    assert write_gcode(moves, header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"],
+                       decimals=3) == text
