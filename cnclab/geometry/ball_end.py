@@ -72,7 +72,7 @@ __all__ = [
     "tangent_point_radii", "tangent_point_diameters", "paper_deff_radius_valued",
     "tangent_points_3d", "CutPointRadii", "cut_point_radii", "cut_point_diameters",
     "chip_removal_radius_variation", "rotation_matrix_Tr", "normal_from_angles",
-    "angles_from_normal", "validate_model_inputs",
+    "angles_from_normal", "validate_model_inputs", "thesis_steps_numerical",
 ]
 
 
@@ -405,3 +405,79 @@ def chip_removal_radius_variation(D, a_p, a_e, A_N1, A_N2, A_f, side: int = 1, m
 
 def _deg(x) -> float:  # small helper for reprs in recipes
     return float(math.degrees(x))
+
+
+# ------------------------------------------------------------ numerical reference (thesis steps)
+def thesis_steps_numerical(D: float, a_p: float, a_e: float, A_N1: float, A_N2: float, A_f: float,
+                           n_rpm: float | None = None, n_scan: int = 24, xtol: float = 1e-13) -> dict:
+    """One point of the thesis's pseudo-code (§5.2, steps 1–11), solved numerically (scalar, slow).
+
+    Builds the transformed circle ``C(t) = T_r·[r cos t, r sin t, −R + a_p]`` (eq 5-4), finds the two
+    tangent points where ``dC/dt`` (xy) is parallel to the feed by bracketing on ``n_scan`` samples and
+    Brent's method (eq 5-5), intersects the circle with the lines at distance ``a_e`` (steps 7–8) the same
+    way, and returns the working **radii** (mm) of points 1, 1′, 1″, 2, 2′, 2″ (keys ``"1"``, ``"1'"``,
+    ``"1''"``, ``"2"``, ``"2'"``, ``"2''"``) and, when ``n_rpm`` is given, the true cutting speeds
+    (m/min, key ``"v_c_1"``, ``"v_c_2"``) from the diameters. Reference for tests and the benchmark;
+    use :func:`cut_point_radii` in practice.
+
+    >>> res = thesis_steps_numerical(10, 1.0, 0.5, 35, 25, 30)
+    >>> bool(abs(res["1"] - float(tangent_point_radii(10, 1.0, 35, 25, 30)[0])) < 1e-9)
+    True
+    """
+    from scipy.optimize import brentq
+
+    D, a_p, A_N1, A_N2, A_f, a_e = (float(v) for v in validate_model_inputs(D, a_p, A_N1, A_N2, A_f, a_e))
+    R = D / 2.0                                                         # step 1
+    r = math.sqrt(a_p * (D - a_p))                                      # step 4
+    T = rotation_matrix_Tr(A_N1, A_N2)                                  # step 5
+    af = math.radians(A_f)
+    f = np.array([math.cos(af), math.sin(af)])
+    m = np.array([-math.sin(af), math.cos(af)])
+
+    def P(t):
+        return T @ np.array([r * math.cos(t), r * math.sin(t), a_p - R])
+
+    def dP(t):
+        return T @ np.array([-r * math.sin(t), r * math.cos(t), 0.0])
+
+    def cross(t):
+        d = dP(t)
+        return d[0] * f[1] - d[1] * f[0]
+
+    ts = np.linspace(0.0, 2 * math.pi, n_scan + 1)                      # step 6
+    vals = [cross(t) for t in ts]
+    roots = []
+    for i in range(n_scan):
+        if vals[i] == 0.0:
+            roots.append(ts[i])
+        elif vals[i] * vals[i + 1] < 0:
+            roots.append(brentq(cross, ts[i], ts[i + 1], xtol=xtol))
+    if len(roots) < 2:       # degenerate (vertical wall with the feed along the tilt): fall back to extremes
+        s = [m @ P(t)[:2] for t in ts]
+        roots = [ts[int(np.argmax(s))], ts[int(np.argmin(s))]]
+    roots.sort(key=lambda t: -(m @ P(t)[:2]))
+    t1, t2 = roots[0], roots[-1]
+    out = {}
+    for name, t0, sgn in (("1", t1, 1.0), ("2", t2, -1.0)):
+        p0 = P(t0)
+        out[name] = math.hypot(p0[0], p0[1])                            # step 9
+        level = sgn * (m @ p0[:2]) - a_e                                # step 7
+
+        def g(t):
+            return sgn * (m @ P(t)[:2]) - level
+
+        pts = []
+        for lo, hi in ((t0, t0 + math.pi), (t0 - math.pi, t0)):         # step 8
+            if a_e == 0.0:
+                pts.append(p0)
+            elif g(lo) * g(hi) <= 0:
+                pts.append(P(brentq(g, lo, hi, xtol=xtol)))
+        if len(pts) == 2:
+            pts.sort(key=lambda q: -(f @ q[:2]))
+            out[name + "'"], out[name + "''"] = (math.hypot(q[0], q[1]) for q in pts)   # step 10
+        else:
+            out[name + "'"] = out[name + "''"] = float("nan")
+    if n_rpm is not None:                                               # step 11
+        out["v_c_1"] = 2 * out["1"] * float(n_rpm) * math.pi / 1000.0
+        out["v_c_2"] = 2 * out["2"] * float(n_rpm) * math.pi / 1000.0
+    return out
