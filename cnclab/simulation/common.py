@@ -1,0 +1,288 @@
+"""Shared part of the 2.5D material-removal simulators (:mod:`.dixel` and :mod:`.pixel`).
+
+Both stock models derive from :class:`StockBase` and only implement material membership
+(``_contains``), the disk cut and the area. Everything that is measured from the stock -- the
+engagement angle, entry/exit angles, chip thickness and the per-step table of :func:`simulate` --
+is written once here, so the two models are compared on exactly the same measurement.
+
+Conventions
+-----------
+* Lengths in mm, the tool is a cylinder of radius ``tool_radius`` (mm, a radius, not a diameter);
+  in the X-Y plane it is a disk.
+* Angles at the API are in **degrees**. ``entry_deg``/``exit_deg`` are measured from the feed
+  direction, counter-clockwise positive, so material on the right of the feed (as in Thesis II of
+  Jacsó 2021, see :mod:`cnclab.toolpath.constant_engagement`) gives negative angles.
+* The engagement angle is the central angle of the part of the tool circumference that lies in
+  material (Jacsó 2021, §2.1). By default only the front half-circle (within +-90 deg of the feed
+  direction) is examined: behind the tool the material has been removed by the tool itself, so this
+  is the limit of a vanishing simulation step (``front_only=False`` examines the full circle).
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+
+class Engagement(NamedTuple):
+    """Engagement of the tool circumference with material at one tool position.
+
+    angle_deg: central angle in contact with material (deg); entry_deg/exit_deg: the first and
+    last engaged angle measured from the feed direction (deg, ccw positive, NaN when not engaged);
+    intervals: (k, 2) array of engaged angular intervals (rad, relative to the feed direction).
+    """
+
+    angle_deg: float
+    entry_deg: float
+    exit_deg: float
+    intervals: np.ndarray
+
+
+def _check_radius(tool_radius) -> float:
+    r = float(tool_radius)
+    if not (math.isfinite(r) and r > 0):
+        raise ValueError(f"tool_radius must be a positive finite length in mm, got {tool_radius!r}")
+    return r
+
+
+def _check_xy(xy, name: str) -> np.ndarray:
+    a = np.asarray(xy, dtype=float)
+    if a.shape != (2,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must be a finite (x, y) pair in mm, got {xy!r}")
+    return a
+
+
+def strip_area(u1, u2, r):
+    """Area (mm^2) of the disk of radius ``r`` centred at 0 lying in the strip ``u1 <= y <= u2``.
+
+    Exact (integral of the chord length); ``u1``, ``u2`` may be arrays.
+
+    >>> round(float(strip_area(-1.0, 1.0, 1.0)), 12) == round(math.pi, 12)
+    True
+    """
+    u1 = np.clip(u1, -r, r)
+    u2 = np.clip(u2, -r, r)
+
+    def g(u):
+        return 0.5 * (u * np.sqrt(np.maximum(r * r - u * u, 0.0)) + r * r * np.arcsin(u / r))
+
+    return 2.0 * (g(u2) - g(u1))
+
+
+def chip_thickness(intervals, f_z: float) -> tuple[float, float]:
+    """Maximum and average uncut chip thickness (mm) over engaged angular intervals.
+
+    Circular-tooth-path approximation (Martellotti 1941; Altintas, *Manufacturing Automation*,
+    2nd ed. 2012, eq. 2.2): a tooth at angle psi from the feed direction cuts h(psi) = f_z cos(psi).
+    Hence h_max = f_z max cos(psi) over the engaged set, and
+    h_avg = f_z * sum(sin psi_2 - sin psi_1) / theta (mean over the engaged arc). For a straight cut
+    this is h_max = f_z sin(theta) (theta <= 90 deg) and h_avg = f_z a_e / (r theta), the Sandvik
+    mean-chip-thickness formula (see :mod:`cnclab.cutting.milling_2d`).
+
+    Parameters: intervals (k, 2) in rad relative to the feed direction, f_z feed per tooth (mm).
+    """
+    iv = np.asarray(intervals, dtype=float).reshape(-1, 2)
+    if iv.size == 0:
+        return 0.0, 0.0
+    lo = np.clip(iv[:, 0], -np.pi / 2, np.pi / 2)
+    hi = np.clip(iv[:, 1], -np.pi / 2, np.pi / 2)
+    keep = hi > lo
+    lo, hi = lo[keep], hi[keep]
+    theta = float(np.sum(hi - lo))
+    if theta <= 0:
+        return 0.0, 0.0
+    contains0 = np.any((lo <= 0) & (hi >= 0))
+    cmax = 1.0 if contains0 else float(np.max(np.cos(np.concatenate([lo, hi]))))
+    h_avg = f_z * float(np.sum(np.sin(hi) - np.sin(lo))) / theta
+    return f_z * cmax, h_avg
+
+
+class StockBase:
+    """Interface shared by the dixel and pixel stocks (see the module docstrings)."""
+
+    resolution_mm: float
+
+    # -- to implement ---------------------------------------------------------------------------
+    def _contains(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:  # pragma: no cover
+        raise NotImplementedError
+
+    def cut_disk(self, center_xy, tool_radius) -> float:  # pragma: no cover
+        raise NotImplementedError
+
+    def area(self) -> float:  # pragma: no cover
+        raise NotImplementedError
+
+    def copy(self):  # pragma: no cover
+        raise NotImplementedError
+
+    # -- shared ---------------------------------------------------------------------------------
+    def contains(self, x, y) -> np.ndarray:
+        """Boolean array: is the point (x, y) (mm, broadcastable arrays) in material?"""
+        x, y = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
+        return self._contains(x.ravel(), y.ravel()).reshape(x.shape)
+
+    def engagement(self, center_xy, tool_radius, feed_direction_xy, front_only: bool = True,
+                   n_samples: int | None = None, bisections: int = 24) -> Engagement:
+        """Engagement of the tool circumference with the material (before cutting at ``center_xy``).
+
+        The circumference (front half by default) is sampled every ~resolution/2 of arc length, each
+        material/air transition is refined by bisection on the membership test, and the engaged
+        arcs are summed. Returns :class:`Engagement` (angles in degrees, intervals in radians).
+
+        >>> from shapely.geometry import box
+        >>> from cnclab.simulation.dixel import Stock
+        >>> st = Stock.from_polygon(box(0, 0, 20, 10), 0.02)
+        >>> round(st.engagement((5, 12), 3, (1, 0)).angle_deg)    # s = 1 mm: acos(1 - 1/3)
+        48
+        """
+        c = _check_xy(center_xy, "center_xy")
+        r = _check_radius(tool_radius)
+        f = _check_xy(feed_direction_xy, "feed_direction_xy")
+        nf = math.hypot(*f)
+        if nf == 0:
+            raise ValueError("feed_direction_xy must be a non-zero vector")
+        psi0 = math.atan2(f[1], f[0])
+        lo, hi = (-np.pi / 2, np.pi / 2) if front_only else (-np.pi, np.pi)
+        if n_samples is None:
+            n_samples = int(max(181, math.ceil((hi - lo) * r / (0.5 * self.resolution_mm)) + 1))
+        psi = np.linspace(lo, hi, n_samples)
+
+        def inside(p):
+            return self._contains(c[0] + r * np.cos(psi0 + p), c[1] + r * np.sin(psi0 + p))
+
+        m = inside(psi)
+        if not m.any():
+            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
+        if m.all():
+            return Engagement(math.degrees(hi - lo), math.degrees(lo), math.degrees(hi),
+                              np.array([[lo, hi]]))
+        k = np.flatnonzero(m[1:] != m[:-1])          # transition between psi[k] and psi[k+1]
+        a, b = psi[k].copy(), psi[k + 1].copy()
+        ma = m[k]
+        for _ in range(bisections):                  # vectorised bisection on all transitions
+            mid = 0.5 * (a + b)
+            mm = inside(mid)
+            same = mm == ma
+            a = np.where(same, mid, a)
+            b = np.where(same, b, mid)
+        edges = 0.5 * (a + b)
+        # build engaged intervals: start at lo if m[0], edges alternate rising/falling
+        bounds = np.concatenate([[lo] if m[0] else [], edges, [hi] if m[-1] else []])
+        iv = bounds.reshape(-1, 2)
+        ang = float(np.sum(iv[:, 1] - iv[:, 0]))
+        return Engagement(math.degrees(ang), math.degrees(iv[0, 0]), math.degrees(iv[-1, 1]), iv)
+
+    def engagement_angle(self, center_xy, tool_radius, feed_direction_xy, **kw) -> float:
+        """Engagement angle (deg) at ``center_xy`` for feed direction ``feed_direction_xy``.
+
+        Central angle of the tool circumference in contact with material; see :meth:`engagement`.
+        """
+        return self.engagement(center_xy, tool_radius, feed_direction_xy, **kw).angle_deg
+
+
+def default_lag_mm(resolution_mm: float, tool_radius: float) -> float:
+    """Distance (mm) behind the tool whose cuts are not yet applied when engagement is measured.
+
+    Exactly, the tool's own recent positions never cover its front half-circle (for a smooth path
+    whose curvature radius exceeds r). In a row/pixel model they do near psi = +-90 deg, because a
+    row of height h at the top/bottom of a disk is up to ~sqrt(2 r h) wide: without a lag the
+    engagement would lose ~sqrt(2h/r) rad at each end (8 deg at r = 3 mm, h = 0.01 mm). The lag
+    2*sqrt(2 r h) + 2h removes this artefact.
+    """
+    return 2.0 * math.sqrt(2.0 * tool_radius * resolution_mm) + 2.0 * resolution_mm
+
+
+def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None, teeth=None,
+             front_only: bool = True, copy: bool = False, lag_mm: float | None = None):
+    """Move the tool through ``centres`` cutting ``stock``; return a per-step pandas DataFrame.
+
+    Works for both stock models (dixel and pixel). At step i the engagement is measured on the
+    material left after step i-1 (feed direction = centres[i] - centres[i-1]), then the disk at
+    centres[i] is cut.
+
+    Parameters
+    ----------
+    stock : dixel or pixel ``Stock`` (updated in place unless ``copy=True``).
+    centres : (N, 2) tool-centre positions (mm) sampled along the path (N >= 2).
+    tool_radius : tool radius r (mm).
+    a_p : axial depth of cut (mm).
+    feed_mm_min : feed rate v_f (mm/min).
+    f_z : feed per tooth (mm); gives chip-thickness columns (NaN without it).
+    teeth : number of teeth z; with f_z gives the spindle speed n = v_f / (z f_z) column (rpm).
+    lag_mm : engagement at step i is measured on the stock with the disks of the last ``lag_mm`` of
+        path not yet cut (default :func:`default_lag_mm`; 0 = measure on the fully updated stock).
+        The removed area of every step is still exact: disks are cut in path order.
+
+    Returns
+    -------
+    DataFrame with columns x, y (mm), s (path length, mm), ds (mm), engagement_deg, entry_deg,
+    exit_deg, removed_mm2 (area removed by this step), mrr_mm3_min = a_p * removed / ds * v_f,
+    h_max_mm, h_avg_mm (and spindle_rpm when ``teeth`` is given). Row 0 (no feed direction from
+    behind) uses centres[1] - centres[0] and has NaN MRR.
+
+    >>> import numpy as np
+    >>> from shapely.geometry import box
+    >>> from cnclab.simulation.dixel import Stock
+    >>> st = Stock.from_polygon(box(0, 0, 30, 10), 0.05)
+    >>> xs = np.arange(-4, 34, 0.05)
+    >>> df = simulate(st, np.c_[xs, np.full_like(xs, 11.5)], 3, a_p=3, feed_mm_min=255, f_z=0.04)
+    >>> round(float(df.mrr_mm3_min[300:400].mean()), 0)       # a_p * a_e * v_f = 3*1.5*255
+    1148.0
+    """
+    import pandas as pd
+
+    if copy:
+        stock = stock.copy()
+    P = np.asarray(centres, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 2 or len(P) < 2:
+        raise ValueError(f"centres must be an (N, 2) array with N >= 2 (mm), got shape {P.shape}")
+    if not np.all(np.isfinite(P)):
+        raise ValueError("centres must be finite")
+    r = _check_radius(tool_radius)
+    for name, v in (("a_p", a_p), ("feed_mm_min", feed_mm_min)):
+        if not (math.isfinite(float(v)) and float(v) > 0):
+            raise ValueError(f"{name} must be positive, got {v!r}")
+    if f_z is not None and not float(f_z) > 0:
+        raise ValueError(f"f_z must be a positive feed per tooth in mm, got {f_z!r}")
+    if teeth is not None and not (int(teeth) == teeth and teeth >= 1):
+        raise ValueError(f"teeth must be a positive integer, got {teeth!r}")
+    d = np.diff(P, axis=0)
+    ds = np.r_[0.0, np.hypot(d[:, 0], d[:, 1])]
+    n = len(P)
+    eng = np.empty(n)
+    ent = np.empty(n)
+    ext = np.empty(n)
+    rem = np.empty(n)
+    hmax = np.full(n, np.nan)
+    havg = np.full(n, np.nan)
+    lag = default_lag_mm(stock.resolution_mm, r) if lag_mm is None else float(lag_mm)
+    if not (lag >= 0):
+        raise ValueError(f"lag_mm must be >= 0, got {lag_mm!r}")
+    s_cum = np.cumsum(ds)
+    fdir = d[0]
+    k = 0                                  # next disk to cut
+    for i in range(n):
+        if i > 0 and ds[i] > 0:
+            fdir = d[i - 1]
+        while k < i and s_cum[i] - s_cum[k] > lag:
+            rem[k] = stock.cut_disk(P[k], r)
+            k += 1
+        if np.hypot(*fdir) > 0:
+            e = stock.engagement(P[i], r, fdir, front_only=front_only)
+            eng[i], ent[i], ext[i] = e.angle_deg, e.entry_deg, e.exit_deg
+            if f_z is not None:
+                hmax[i], havg[i] = chip_thickness(e.intervals, float(f_z))
+        else:
+            eng[i] = ent[i] = ext[i] = np.nan
+    while k < n:
+        rem[k] = stock.cut_disk(P[k], r)
+        k += 1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mrr = np.where(ds > 0, float(a_p) * rem / ds * float(feed_mm_min), np.nan)
+    df = pd.DataFrame({"x": P[:, 0], "y": P[:, 1], "s": s_cum, "ds": ds,
+                       "engagement_deg": eng, "entry_deg": ent, "exit_deg": ext,
+                       "removed_mm2": rem, "mrr_mm3_min": mrr, "h_max_mm": hmax, "h_avg_mm": havg})
+    if teeth is not None and f_z is not None:
+        df["spindle_rpm"] = float(feed_mm_min) / (int(teeth) * float(f_z))
+    return df
