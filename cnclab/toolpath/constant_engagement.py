@@ -1,0 +1,387 @@
+"""Constant-engagement tool paths along arbitrary contours (Jacsó 2021, Theses II and III).
+
+Conventions: lengths in mm, ``theta_deg`` in degrees, ``tool_radius`` is the radius r (the
+booklet's r_sz). The contour c(t) (:mod:`cnclab.geometry.contours`) is the current boundary of the
+material, traversed with the material on its **right**.
+
+Rotation sense (checked here, see :func:`thesis2_feed_direction`): Thesis II's equation
+p = c + R(pi/2 + theta) p' r/|p'| says CP is the feed direction rotated *counter-clockwise* by
+beta = pi/2 + theta, i.e. the feed direction is CP rotated *clockwise* by beta. The prose of §3.2
+("rotating CP by beta = pi/2 + theta") therefore holds only in the clockwise sense. Thesis III's
+Step 1 (rotate P_iC_i by alpha = pi/2 - theta, counter-clockwise) gives the same direction, since
+PC = -CP and pi + pi/2 - theta = -(pi/2 + theta) mod 2 pi.
+
+Thesis II (IVP) is solved with :func:`scipy.integrate.solve_ivp`: differentiating |p - c| = r gives
+p' = lambda u, u = R(-(pi/2 + theta)) (p - c)/r, lambda = -(p - c).c'(t) / (r sin theta).
+Thesis III (Steps 0-5) is :func:`thesis3_path` with explicit Euler or midpoint direction, fixed or
+adaptive step, and :func:`spline_path` connects the points with a cubic spline.
+
+>>> from cnclab.geometry.contours import Line
+>>> res = thesis3_path(Line((0, 0), (10, 0)), 3.0, 60.0, 0.5)
+>>> round(float(res.P[-1, 1]), 9)          # straight contour: offset r cos(theta) = 1.5 mm
+1.5
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def rot(v, angle_rad):
+    """Rotate 2-vectors ``v`` (..., 2) counter-clockwise by ``angle_rad``."""
+    v = np.asarray(v, float)
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / n
+
+
+def _check(tool_radius, theta_deg):
+    if not (tool_radius > 0):
+        raise ValueError(f"tool_radius must be > 0 mm, got {tool_radius!r}")
+    if not (0 < theta_deg <= 180):
+        raise ValueError(f"theta_deg must be in (0, 180] deg, got {theta_deg!r}")
+    return float(tool_radius), math.radians(theta_deg)
+
+
+def thesis3_feed_direction(P, C, theta_deg):
+    """Thesis III Step 1: unit feed direction = P->C rotated ccw by alpha = pi/2 - theta."""
+    return rot(_unit(np.asarray(C, float) - np.asarray(P, float)), math.pi / 2 - math.radians(theta_deg))
+
+
+def thesis2_feed_direction(P, C, theta_deg):
+    """Feed direction implied by Thesis II's equation: u = R(pi/2 + theta)^-1 (P - C)/|P - C|."""
+    return rot(_unit(np.asarray(P, float) - np.asarray(C, float)), -(math.pi / 2 + math.radians(theta_deg)))
+
+
+def start_point(contour, tool_radius, theta_deg, t0=None):
+    """P0 = C0 + r R(pi/2 + theta) T0 (T0 the contour's unit tangent): exact on straight contours."""
+    r, th = _check(tool_radius, theta_deg)
+    t0 = contour.t_min if t0 is None else t0
+    C0 = contour.point(t0)[0]
+    T0 = _unit(contour.deriv(t0)[0])
+    return C0 + r * rot(T0, math.pi / 2 + th)
+
+
+def arc_start_point(arc, tool_radius, theta_deg, kind):
+    """Exact P0 on an :class:`~cnclab.geometry.contours.Arc` contour (path concentric from the start).
+
+    The path radius is d = rho + s - r (concave, arc traversed ccw) or rho - s + r (convex, cw),
+    s from Thesis I; P0 lags C0 by the angle POC of the triangle (d, rho, r).
+    """
+    from cnclab.geometry.engagement import stepover_thesis1
+
+    r, _ = _check(tool_radius, theta_deg)
+    rho = arc.radius
+    s = float(stepover_thesis1(theta_deg, rho, r, kind))
+    d = rho + s - r if kind == "concave" else rho - s + r
+    delta = math.acos(np.clip((d * d + rho * rho - r * r) / (2 * d * rho), -1, 1))
+    a = arc.a0 - arc.sign * delta
+    return arc.c + d * np.array([math.cos(a), math.sin(a)]), d
+
+
+def ray_circle(P, v, C, r):
+    """Smallest lambda >= 0 with |P + lambda v - C| = r (v unit); NaN if the half-line misses."""
+    w = np.asarray(P, float) - np.asarray(C, float)
+    b = float(v @ w)
+    c = float(w @ w) - r * r
+    disc = b * b - c
+    if disc < 0:
+        return math.nan
+    sq = math.sqrt(disc)
+    for lam in (-b - sq, -b + sq):          # nearer intersection first
+        if lam >= -1e-12:
+            return max(lam, 0.0)
+    return math.nan
+
+
+@dataclass
+class PathResult:
+    """Tool-path points P (N, 2) with contour parameters t (N,) and contact points C = c(t) (N, 2)."""
+
+    t: np.ndarray
+    P: np.ndarray
+    C: np.ndarray
+    method: str = ""
+    n_rejected: int = 0
+
+    @property
+    def length(self) -> float:
+        return float(np.sum(np.hypot(*np.diff(self.P, axis=0).T)))
+
+
+def _step(contour, P, t, dt, r, theta_deg, method):
+    """One Thesis III step from (P, t) to t + dt; returns the new P or None if the ray misses."""
+    C = contour.point(t)[0]
+    v = thesis3_feed_direction(P, C, theta_deg)
+    if method == "midpoint":
+        Ch = contour.point(t + 0.5 * dt)[0]
+        lam = ray_circle(P, v, Ch, r)
+        if not math.isfinite(lam):
+            return None
+        Ph = P + lam * v
+        v = thesis3_feed_direction(Ph, Ch, theta_deg)
+    elif method != "euler":
+        raise ValueError(f"method must be 'euler' or 'midpoint', got {method!r}")
+    C1 = contour.point(t + dt)[0]
+    lam = ray_circle(P, v, C1, r)
+    if not math.isfinite(lam):
+        return None
+    return P + lam * v
+
+
+def thesis3_path(contour, tool_radius, theta_deg, dt, method="euler", P0=None, t_end=None,
+                 adaptive=False, tol_mm=1e-4, dt_min=None, dt_max=None, max_steps=2_000_000):
+    """Thesis III: tool-path points holding engagement ``theta_deg`` along ``contour``.
+
+    Steps 0-5 of the booklet with ``method="euler"`` (Step 1 direction at P_i) or ``"midpoint"``
+    (direction re-evaluated at the half step). ``dt`` is the contour-parameter step (mm for
+    arc-length contours). With ``adaptive=True`` the step is chosen by step doubling so the local
+    error stays below ``tol_mm`` (mm). ``P0`` defaults to :func:`start_point`.
+
+    Returns :class:`PathResult`. Raises ValueError if the half-line misses the circle (step too
+    large for the contour's curvature) in fixed-step mode.
+    """
+    r, _ = _check(tool_radius, theta_deg)
+    if not dt > 0:
+        raise ValueError(f"dt must be > 0, got {dt!r}")
+    t = float(contour.t_min)
+    t_end = float(contour.t_max if t_end is None else t_end)
+    P = start_point(contour, r, theta_deg) if P0 is None else np.asarray(P0, float)
+    ts, Ps = [t], [P]
+    dt_min = dt * 1e-3 if dt_min is None else dt_min
+    dt_max = dt * 50 if dt_max is None else dt_max
+    order = 2 if method == "midpoint" else 1
+    rejected = 0
+    h = dt
+    while t < t_end - 1e-12 and len(ts) < max_steps:
+        h = min(h, t_end - t)
+        if not adaptive:
+            Pn = _step(contour, P, t, h, r, theta_deg, method)
+            if Pn is None:
+                raise ValueError(f"dt={dt} too large: the feed half-line misses the circle at t={t:.6g}")
+        else:
+            P1 = _step(contour, P, t, h, r, theta_deg, method)
+            Pm = _step(contour, P, t, 0.5 * h, r, theta_deg, method)
+            P2 = None if Pm is None else _step(contour, Pm, t + 0.5 * h, 0.5 * h, r, theta_deg, method)
+            if P1 is None or P2 is None:
+                rejected += 1
+                h *= 0.5
+                if h < dt_min:
+                    raise ValueError(f"adaptive step fell below dt_min at t={t:.6g}")
+                continue
+            err = float(np.hypot(*(P2 - P1))) / (2 ** order - 1)
+            if err > tol_mm and h > dt_min:
+                rejected += 1
+                h = max(h * max(0.2, 0.9 * (tol_mm / err) ** (1 / (order + 1))), dt_min)
+                continue
+            Pn = P2 + (P2 - P1) / (2 ** order - 1)   # Richardson-extrapolated
+            fac = 2.0 if err == 0 else min(2.0, 0.9 * (tol_mm / err) ** (1 / (order + 1)))
+        t = t + h
+        P = Pn
+        ts.append(t)
+        Ps.append(P)
+        if adaptive:
+            h = min(max(h * fac, dt_min), dt_max)
+    tt = np.asarray(ts)
+    return PathResult(tt, np.asarray(Ps), contour.point(tt), method + ("-adaptive" if adaptive else ""),
+                      rejected)
+
+
+def thesis2_ivp(contour, tool_radius, theta_deg, P0=None, t_eval=None, rtol=1e-10, atol=1e-10,
+                t_end=None):
+    """Thesis II: solve the IVP p = c + R(pi/2 + theta) p' r/|p'|, p(t_min) = P0 with scipy.
+
+    Uses the equivalent ODE p' = lambda u (see the module docstring), RK45 (``DOP853``) with dense
+    output. Returns :class:`PathResult` at ``t_eval`` (default 2001 points).
+    """
+    from scipy.integrate import solve_ivp
+
+    r, th = _check(tool_radius, theta_deg)
+    P0 = start_point(contour, r, theta_deg) if P0 is None else np.asarray(P0, float)
+    t_end = contour.t_max if t_end is None else t_end
+    sin_t = math.sin(th)
+    if sin_t < 1e-12:
+        raise ValueError("theta_deg = 180 (slotting): the feed speed lambda is undefined")
+
+    def f(t, p):
+        c = contour.point(t)[0]
+        dc = contour.deriv(t)[0]
+        w = p - c
+        u = rot(w / np.hypot(*w), -(math.pi / 2 + th))
+        lam = -(w @ dc) / (r * sin_t)
+        return lam * u
+
+    if t_eval is None:
+        t_eval = np.linspace(contour.t_min, t_end, 2001)
+    sol = solve_ivp(f, (contour.t_min, t_end), P0, method="DOP853", t_eval=t_eval, rtol=rtol,
+                    atol=atol, dense_output=True)
+    if not sol.success:
+        raise RuntimeError(f"solve_ivp failed: {sol.message}")
+    res = PathResult(sol.t, sol.y.T, contour.point(sol.t), "thesis2-ivp")
+    res.sol = sol
+    return res
+
+
+def spline_path(P, closed: bool = False):
+    """Cubic spline (C2) through path points P (N, 2) with chord-length parameter (mm).
+
+    Returns (spline, total length); ``spline(u)`` gives points, ``spline(u, 1)`` tangents.
+    """
+    from scipy.interpolate import CubicSpline
+
+    P = np.asarray(P, float)
+    keep = np.r_[True, np.hypot(*np.diff(P, axis=0).T) > 1e-12]
+    P = P[keep]
+    u = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+    return CubicSpline(u, P, bc_type="periodic" if closed else "not-a-knot"), float(u[-1])
+
+
+def resample_path(P, step_mm, spline: bool = True):
+    """Tool-centre samples every ``step_mm`` along the path (cubic spline or polyline through P)."""
+    if not step_mm > 0:
+        raise ValueError(f"step_mm must be > 0, got {step_mm!r}")
+    P = np.asarray(P, float)
+    if spline and len(P) >= 4:
+        sp, L = spline_path(P)
+        return sp(np.linspace(0, L, max(int(math.ceil(L / step_mm)), 1) + 1))
+    d = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+    u = np.linspace(0, d[-1], max(int(math.ceil(d[-1] / step_mm)), 1) + 1)
+    return np.c_[np.interp(u, d, P[:, 0]), np.interp(u, d, P[:, 1])]
+
+
+def engagement_along_path(stock_polygon, centres, tool_radius, resolution_mm, a_p=1.0,
+                          feed_mm_min=1000.0, model="dixel"):
+    """Cut ``stock_polygon`` with the path ``centres`` in the dixel (or pixel) simulator; per-step table."""
+    from cnclab.simulation import dixel, pixel
+
+    mod = {"dixel": dixel, "pixel": pixel}.get(model)
+    if mod is None:
+        raise ValueError(f"model must be 'dixel' or 'pixel', got {model!r}")
+    st = mod.Stock.from_polygon(stock_polygon, resolution_mm)
+    return mod.simulate(st, centres, tool_radius, a_p, feed_mm_min)
+
+
+def deviation_stats(engagement_deg, theta_deg, skip_mm, s_mm, end_skip_mm=0.0):
+    """Mean, p95 and max |engagement - theta| (deg) for path length in [skip_mm, L - end_skip_mm]."""
+    e = np.asarray(engagement_deg, float)
+    s = np.asarray(s_mm, float)
+    m = (s >= skip_mm) & (s <= s[-1] - end_skip_mm) & np.isfinite(e)
+    dev = np.abs(e[m] - theta_deg)
+    return {"mean_deg": float(np.mean(e[m])), "mean_abs_dev_deg": float(np.mean(dev)),
+            "p95_dev_deg": float(np.percentile(dev, 95)), "max_dev_deg": float(np.max(dev)),
+            "n": int(m.sum())}
+
+
+# ---------------------------------------------------------------------------------------------
+# multiple passes (building block for trochoids and pockets)
+# ---------------------------------------------------------------------------------------------
+def cleared_boundary_contour(stock, seed_xy, domain_polygon, min_spacing_mm=None):
+    """Boundary of the cleared region around ``seed_xy`` from a dixel stock, as a closed ccw contour.
+
+    The material is rebuilt from the dixels (row rectangles), the cleared region = domain minus
+    material, and its exterior ring is sampled at the row centre lines (vertical staircase edges,
+    exact in x) plus the midpoints of horizontal edges, thinned to ``min_spacing_mm`` (default 4 row
+    heights) and closed with a periodic cubic spline (:class:`~cnclab.geometry.contours.SplineContour`).
+    """
+    from shapely.geometry import Point
+
+    from cnclab.geometry.contours import SplineContour
+
+    h = stock.resolution_mm
+    min_spacing_mm = 4 * h if min_spacing_mm is None else min_spacing_mm
+    cleared = domain_polygon.difference(stock.to_polygon())
+    geoms = getattr(cleared, "geoms", [cleared])
+    seed = Point(*seed_xy)
+    comp = [g for g in geoms if g.buffer(1e-9).contains(seed)]
+    if not comp:
+        raise ValueError(f"seed_xy={tuple(seed_xy)} is not in a cleared region of the stock")
+    ring = np.asarray(comp[0].exterior.coords)[:-1]
+    a, b = ring, np.roll(ring, -1, axis=0)
+    mid = 0.5 * (a + b)
+    # keep the midpoints of all staircase edges (vertical: row centre samples; horizontal: chords)
+    pts = mid
+    seg = np.hypot(*np.diff(np.vstack([pts, pts[:1]]), axis=0).T)
+    keep = [0]
+    acc = 0.0
+    for i in range(1, len(pts)):
+        acc += seg[i - 1]
+        if acc >= min_spacing_mm:
+            keep.append(i)
+            acc = 0.0
+    pts = pts[keep]
+    area2 = np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
+    if area2 < 0:
+        pts = pts[::-1]
+    return SplineContour(pts, closed=True)
+
+
+def clamp_to_region(P, allowed_polygon):
+    """Project path points outside ``allowed_polygon`` onto its boundary (the final-contour limit)."""
+    import shapely
+
+    P = np.asarray(P, float).copy()
+    inside = shapely.contains_xy(allowed_polygon, P[:, 0], P[:, 1])
+    if not inside.all():
+        ring = allowed_polygon.exterior
+        pts = shapely.points(P[~inside])
+        proj = shapely.line_interpolate_point(ring, shapely.line_locate_point(ring, pts))
+        P[~inside] = shapely.get_coordinates(proj)
+    return P
+
+
+def multi_pass(stock, domain_polygon, final_polygon, seed_xy, tool_radius, theta_deg, n_passes,
+               dt=0.2, step_mm=None, method="midpoint", a_p=1.0, feed_mm_min=1000.0, start_angle_deg=0.0):
+    """Successive constant-engagement laps around a growing cleared region, limited by ``final_polygon``.
+
+    After each lap the boundary is recomputed from the (dixel) ``stock`` (updated in place), the
+    next lap is generated by :func:`thesis3_path` on it, and tool centres are kept inside
+    ``final_polygon`` shrunk by r (so the tool never cuts beyond the final contour).
+    Returns a list of dicts (path, table, removed area) per lap; stops early when nothing is removed.
+    """
+    from cnclab.simulation.common import simulate
+
+    r, _ = _check(tool_radius, theta_deg)
+    step_mm = stock.resolution_mm * 2 if step_mm is None else step_mm
+    allowed = final_polygon.buffer(-r)
+    laps = []
+    for k in range(int(n_passes)):
+        contour = cleared_boundary_contour(stock, seed_xy, domain_polygon)
+        # start the lap at the contour point nearest the ray from the seed at start_angle_deg
+        tt = np.linspace(contour.t_min, contour.t_max, 721)[:-1]
+        pts = contour.point(tt)
+        ang = np.degrees(np.arctan2(pts[:, 1] - seed_xy[1], pts[:, 0] - seed_xy[0]))
+        t0 = tt[np.argmin(np.abs((ang - start_angle_deg + 180) % 360 - 180))]
+        shifted = _Shifted(contour, t0)
+        path = thesis3_path(shifted, r, theta_deg, dt, method=method)
+        P = clamp_to_region(resample_path(path.P, step_mm), allowed)
+        df = simulate(stock, P, r, a_p, feed_mm_min)
+        removed = float(df.removed_mm2.sum())
+        laps.append({"path": P, "table": df, "removed_mm2": removed, "contour": shifted})
+        if removed < 1e-9:
+            break
+    return laps
+
+
+class _Shifted:
+    """A closed contour re-parametrised to start at t0."""
+
+    def __init__(self, base, t0):
+        self.base, self.t0 = base, t0
+        self.t_min, self.t_max, self.closed = 0.0, base.t_max - base.t_min, True
+
+    def _map(self, t):
+        t = np.atleast_1d(np.asarray(t, float))
+        return self.base.t_min + np.mod(t + self.t0 - self.base.t_min, self.t_max)
+
+    def point(self, t):
+        return self.base.point(self._map(t))
+
+    def deriv(self, t):
+        return self.base.deriv(self._map(t))
