@@ -1,0 +1,331 @@
+"""Constant-cutting-speed post-processor (Mgherony 2024, Sec. 7.2.3, Thesis 3).
+
+For every feed point of an APT CL program:
+
+1. the facet of the STL assigned to the cutter location: the facet whose centroid (the thesis's
+   "incentre") is nearest (``facet_rule="centroid"``, thesis rule, KD-tree) or the facet at the
+   smallest Euclidean distance (``"nearest"``);
+2. the facet normal -> inclination angles. Eqs (7-1), (7-2) give A_N1 = atan2(N_y, N_x),
+   A_N2 = acos(N_z) (the *downhill* azimuth); the working-diameter model of Sec. 5.2 (eq 5-3, see
+   :mod:`cnclab.geometry.ball_end`) takes the *uphill* azimuth, so the normal is converted with
+   :func:`cnclab.geometry.ball_end.angles_from_normal` (the same surface; feeding eq 7-1 straight
+   into eq 5-3 would mirror it and swap tangent points 1 and 2);
+3. the feed direction A_f from consecutive points (eq 7-3, with atan2) or a constant input;
+4. the working diameter D_eff at tangent point 1 / 2 (``point`` = "max" uses the larger, i.e. the
+   uphill-side tangent point, "1", "2", or "thesis": the one fixed point that reproduces the
+   thesis's chapter 8 minima/maxima -- point 1 for nominal A_f <= 45 deg, point 2 above);
+5. n = 1000 v_c / (pi D_eff) (eq 7-4), v_f = f_z z n (eq 7-5), clipped to ``n_max`` / ``vf_max``
+   (and ``n_min``), optionally rate-limited by a spindle acceleration limit (rpm/s);
+6. a new APT program with ``SPINDL`` / ``FEDRAT`` records inserted before a feed point only where
+   the value in force differs by more than a threshold (rpm, mm/min).
+
+Units: mm, m/min, rpm, mm/min, degrees.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..geometry.mesh import FacetLocator, TriMesh, machined_surface_mask
+from ..toolpath.apt import AptProgram, CLPoints, fedrat, spindl
+
+__all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
+           "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files",
+           "POINT_RULES"]
+
+POINT_RULES = ("max", "1", "2", "thesis")
+
+
+@dataclasses.dataclass
+class SpindleSchedule:
+    """Per feed point arrays (length M) and summary of a post-processing run.
+
+    ``index`` positions in the CLPoints; ``xyz`` mm; ``facet`` assigned facet; ``A_N1``, ``A_N2``
+    (deg, eq 5-3 convention), ``A_f`` (deg); ``d_eff`` working diameter (mm); ``n_ideal`` rpm from eq 7-4;
+    ``n`` rpm after limits; ``v_f`` mm/min; ``seg_len`` mm of the motion ending at each point;
+    ``limited`` bool (hit n_max/vf_max/n_min or the acceleration limit).
+    """
+
+    index: np.ndarray
+    xyz: np.ndarray
+    facet: np.ndarray
+    A_N1: np.ndarray
+    A_N2: np.ndarray
+    A_f: np.ndarray
+    d_eff: np.ndarray
+    n_ideal: np.ndarray
+    n: np.ndarray
+    v_f: np.ndarray
+    seg_len: np.ndarray
+    limited: np.ndarray
+    v_c: float
+    params: dict
+
+    @property
+    def v_c_actual(self) -> np.ndarray:
+        """Cutting speed (m/min) at the working diameter with the applied n."""
+        return np.pi * self.d_eff * self.n / 1000.0
+
+    def within_share(self, rel: float = 0.05) -> float:
+        """Share of the feed path length whose actual v_c is within ±rel of the nominal v_c."""
+        ok = np.abs(self.v_c_actual - self.v_c) <= rel * self.v_c
+        L = self.seg_len.sum()
+        return float(self.seg_len[ok].sum() / L) if L > 0 else float(ok.mean())
+
+    def spindle_integral(self, n=None) -> float:
+        """Integral of the spindle speed along the feed path, sum n_j * l_j (rpm*mm), Fig 8-4."""
+        return float(np.sum((self.n if n is None else n) * self.seg_len))
+
+    @property
+    def path_length(self) -> float:
+        """Feed path length (mm)."""
+        return float(self.seg_len.sum())
+
+    def summary(self) -> dict:
+        return {"feed_points": int(len(self.n)), "n_min": float(self.n.min()), "n_max": float(self.n.max()),
+                "vf_min": float(self.v_f.min()), "vf_max": float(self.v_f.max()),
+                "d_eff_min": float(self.d_eff.min()), "d_eff_max": float(self.d_eff.max()),
+                "limited_points": int(self.limited.sum()), "path_length_mm": self.path_length,
+                "vc_within_5pct_share": self.within_share(0.05)}
+
+
+def feed_directions(xyz, start=None) -> np.ndarray:
+    """Feed direction (deg, atan2 of eq 7-3) of the motion ending at each point; zero-xy moves inherit
+    the next (or previous) non-zero direction. ``start`` is the position before the first point."""
+    p = np.asarray(xyz, float)
+    prev = np.vstack([p[:1] if start is None else np.asarray(start, float)[None], p[:-1]])
+    d = p[:, :2] - prev[:, :2]
+    ok = np.hypot(d[:, 0], d[:, 1]) > 1e-9
+    ang = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
+    if not ok.any():
+        return np.zeros(len(p))
+    idx = np.where(ok, np.arange(len(p)), len(p))
+    nxt = np.minimum.accumulate(idx[::-1])[::-1]          # next valid index
+    idx2 = np.where(ok, np.arange(len(p)), -1)
+    prv = np.maximum.accumulate(idx2)                     # previous valid index
+    src = np.where(nxt < len(p), nxt, prv)
+    return ang[src]
+
+
+def working_diameters(normals, A_f, tool_diameter: float, a_p: float, point: str = "max",
+                      nominal_feed_deg: float | None = None):
+    """Working diameter (mm) for facet normals (M, 3) and feed directions A_f (deg, (M,)).
+
+    Returns ``(d_eff, A_N1, A_N2)`` with the eq 5-3 angles (deg). ``point``: see module docstring.
+    """
+    from ..geometry.ball_end import angles_from_normal, tangent_point_diameters
+
+    if point not in POINT_RULES:
+        raise ValueError(f"point must be one of {POINT_RULES}, got {point!r}")
+    n = np.asarray(normals, float)
+    n = n * np.where(n[:, 2:3] < 0, -1.0, 1.0)  # a 3-axis tool sees the upward side
+    a1, a2 = angles_from_normal(n)
+    d1, d2 = tangent_point_diameters(tool_diameter, a_p, a1, a2, A_f)
+    if point == "max":
+        d = np.maximum(d1, d2)
+    elif point == "1":
+        d = d1
+    elif point == "2":
+        d = d2
+    else:
+        nom = float(np.median(A_f) if nominal_feed_deg is None else nominal_feed_deg) % 180.0
+        d = d1 if nom <= 45.0 + 1e-9 or nom > 135.0 else d2
+    return np.asarray(d, float), a1, a2
+
+
+def apply_acceleration_limit(n_target, seg_len, f_z: float, teeth: int, accel_rpm_s: float,
+                             n0: float | None = None) -> np.ndarray:
+    """Causal spindle-speed sequence following ``n_target`` (rpm) with |dn/dt| <= accel (rpm/s).
+
+    The time of the motion ending at point j is seg_len_j / v_f with v_f = f_z z n_{j-1} (mm/min),
+    i.e. the feed stays synchronised with the spindle (constant f_z).
+    """
+    if not accel_rpm_s > 0:
+        raise ValueError(f"accel_rpm_s must be > 0 rpm/s, got {accel_rpm_s}")
+    nt = np.asarray(n_target, float)
+    L = np.asarray(seg_len, float)
+    out = np.empty_like(nt)
+    cur = float(nt[0] if n0 is None else n0)
+    k = f_z * teeth / 60.0  # mm/s per rpm
+    for j in range(len(nt)):
+        dt = L[j] / (k * cur) if cur > 0 else 0.0
+        step = accel_rpm_s * dt
+        cur = min(max(nt[j], cur - step), cur + step)
+        out[j] = cur
+    return out
+
+
+def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: float, v_c: float,
+                     f_z: float, teeth: int, feed_direction_deg: float | None = None,
+                     facet_rule: str = "centroid", point: str = "max", n_max: float | None = None,
+                     n_min: float | None = None, vf_max: float | None = None,
+                     accel_rpm_s: float | None = None, filter_facets: bool = True,
+                     locator: FacetLocator | None = None) -> SpindleSchedule:
+    """Compute the point-by-point spindle speed and feed for the feed points of ``cl``.
+
+    Parameters: tool_diameter (mm), a_p (mm), v_c nominal cutting speed (m/min), f_z (mm), teeth;
+    feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule 'centroid' | 'nearest';
+    point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s).
+    """
+    from .speeds import feed_speed, spindle_speed
+
+    for name, v in (("tool_diameter", tool_diameter), ("a_p", a_p), ("v_c", v_c), ("f_z", f_z)):
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be > 0, got {v}")
+    if int(teeth) != teeth or teeth < 1:
+        raise ValueError(f"teeth must be a positive integer, got {teeth}")
+    if facet_rule not in ("centroid", "nearest"):
+        raise ValueError(f"facet_rule must be 'centroid' or 'nearest', got {facet_rule!r}")
+    for name, v in (("n_max", n_max), ("n_min", n_min), ("vf_max", vf_max)):
+        if v is not None and not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be > 0, got {v}")
+    if locator is None:
+        m = mesh.subset(machined_surface_mask(mesh.normals)) if filter_facets else mesh
+        if m.n_facets == 0:
+            raise ValueError("mesh: no facet left after removing side/bottom facets")
+        locator = FacetLocator(m)
+    feed = ~cl.rapid
+    idx = np.nonzero(feed)[0]
+    if idx.size == 0:
+        raise ValueError("program has no feed motion")
+    xyz_all = cl.xyz
+    prev = np.vstack([cl.start[None], xyz_all[:-1]])
+    seg = np.linalg.norm(xyz_all - prev, axis=1)[idx]
+    pts = xyz_all[idx]
+    if feed_direction_deg is None:
+        A_f = feed_directions(xyz_all, cl.start)[idx]
+    else:
+        A_f = np.full(idx.size, float(feed_direction_deg))
+    facet = locator.nearest_centroid(pts) if facet_rule == "centroid" else locator.nearest_facet(pts)
+    normals = locator.mesh.normals[facet]
+    d_eff, a1, a2 = working_diameters(normals, A_f, tool_diameter, a_p, point, feed_direction_deg)
+    d_safe = np.maximum(d_eff, 1e-6)
+    n_ideal = spindle_speed(v_c, d_safe)
+    n = n_ideal.copy()
+    hi = np.inf if n_max is None else n_max
+    if vf_max is not None:
+        hi = min(hi, vf_max / (f_z * teeth))
+    lo = 0.0 if n_min is None else n_min
+    n = np.clip(n, lo, hi)
+    limited = n != n_ideal
+    if accel_rpm_s is not None:
+        n_acc = apply_acceleration_limit(n, seg, f_z, teeth, accel_rpm_s)
+        limited |= np.abs(n_acc - n) > 1e-9
+        n = n_acc
+    v_f = feed_speed(f_z, teeth, n)
+    params = dict(tool_diameter=tool_diameter, a_p=a_p, f_z=f_z, teeth=int(teeth),
+                  feed_direction_deg=feed_direction_deg, facet_rule=facet_rule, point=point,
+                  n_max=n_max, n_min=n_min, vf_max=vf_max, accel_rpm_s=accel_rpm_s)
+    return SpindleSchedule(idx, pts, facet, a1, a2, A_f, d_eff, n_ideal, n, v_f, seg, limited, float(v_c), params)
+
+
+def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSchedule,
+                           rpm_threshold: float = 50.0, vf_threshold: float = 10.0) -> tuple[AptProgram, dict]:
+    """New program with ``SPINDL`` / ``FEDRAT`` inserted before feed GOTOs where the value in force
+    differs by more than ``rpm_threshold`` (rpm) / ``vf_threshold`` (mm/min). Original records are kept
+    (an original SPINDL/FEDRAT resets the value in force). Returns (program, counts)."""
+    if rpm_threshold < 0 or vf_threshold < 0:
+        raise ValueError(f"thresholds must be >= 0, got {rpm_threshold}, {vf_threshold}")
+    target = {int(cl.record[i]): (float(n), float(f)) for i, n, f in zip(sched.index, sched.n, sched.v_f)}
+    out = []
+    cur_n = cur_f = np.nan
+    n_sp = n_fr = 0
+    for k, r in enumerate(program.records):
+        if r.word == "SPINDL" and r.values:
+            cur_n = r.values[-1] if r.values else cur_n
+        elif r.word == "FEDRAT":
+            cur_f = r.values[0]
+        if k in target:
+            n, f = target[k]
+            if not abs(n - cur_n) <= rpm_threshold:
+                out.append(spindl(round(n)))
+                cur_n = round(n)
+                n_sp += 1
+            if not abs(f - cur_f) <= vf_threshold:
+                out.append(fedrat(round(f, 1)))
+                cur_f = round(f, 1)
+                n_fr += 1
+        out.append(r)
+    return AptProgram(out, program.source), {"spindl_inserted": n_sp, "fedrat_inserted": n_fr}
+
+
+def to_gcode_moves(program: AptProgram):
+    """RS274/NGC moves (:class:`cnclab.toolpath.gcode.Move`) of an APT program: G0 rapids, G1 feeds
+    with the F and S in force."""
+    from ..toolpath.gcode import Move
+
+    moves = []
+    f = s = None
+    rapid = False
+    for r in program.records:
+        if r.word == "RAPID":
+            rapid = True
+        elif r.word == "FEDRAT":
+            f = r.values[0]
+        elif r.word == "SPINDL" and r.values:
+            s = r.values[-1]
+        elif r.word == "GOTO":
+            x, y, z = r.values[:3]
+            moves.append(Move("G0", x, y, z, spindle=s) if rapid else Move("G1", x, y, z, feed=f, spindle=s))
+            rapid = False
+    return moves
+
+
+def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, teeth: int, a_p: float,
+                      tool_diameter: float | None = None, gcode_path=None, rpm_threshold: float = 50.0,
+                      vf_threshold: float = 10.0, progress: bool = False, **kwargs) -> dict:
+    """Read STL + APT, compute the schedule, write the new APT (and G-code) atomically.
+
+    Inputs are never overwritten; nothing is written when any step fails. Returns a summary dict.
+    """
+    from ..fileio import atomic_write
+    from ..geometry.mesh import read_stl
+    from ..toolpath.apt import read_apt
+    from ..toolpath.gcode import write_gcode
+
+    t0 = time.perf_counter()
+    steps = ["read STL", "read APT", "working diameter", "write"]
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(steps), desc="spindle", unit="step")
+
+    def tick(msg):
+        if bar is not None:
+            bar.set_postfix_str(msg)
+            bar.update(1)
+
+    ins = [stl_path, apt_path]
+    for p in (out_path, gcode_path):
+        if p is not None:
+            for src in ins:
+                if Path(src).exists() and Path(p).exists() and Path(src).resolve() == Path(p).resolve():
+                    raise ValueError(f"refusing to overwrite the input file {src}: choose another output path")
+    mesh = read_stl(stl_path)
+    tick("STL")
+    prog = read_apt(apt_path)
+    cl = prog.cl_points()
+    tick("APT")
+    D = tool_diameter if tool_diameter is not None else prog.tool_diameter()
+    if D is None:
+        raise ValueError(f"{apt_path}: no CUTTER record; pass tool_diameter (--tool-diameter)")
+    sched = spindle_schedule(mesh, cl, tool_diameter=D, a_p=a_p, v_c=v_c, f_z=f_z, teeth=teeth, **kwargs)
+    tick("D_eff")
+    new, counts = insert_spindle_records(prog, cl, sched, rpm_threshold, vf_threshold)
+    text = new.to_text()
+    gtext = write_gcode(to_gcode_moves(new), header=f"cnclab spindle control of {Path(apt_path).name}") \
+        if gcode_path is not None else None
+    atomic_write(out_path, text, inputs=ins)
+    if gtext is not None:
+        atomic_write(gcode_path, gtext, inputs=ins)
+    tick("written")
+    if bar is not None:
+        bar.close()
+    summ = sched.summary()
+    summ.update(counts, facets=mesh.n_facets, cl_points=len(cl), seconds=time.perf_counter() - t0,
+                tool_diameter=D, out=str(out_path))
+    return summ
