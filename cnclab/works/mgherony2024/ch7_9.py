@@ -1,0 +1,219 @@
+"""Recipes for Mgherony (2024) chapters 7-9 and Theses 3-5: spindle-speed control on STL + APT files,
+the chapter 8 free-form test part, and tool-path reordering.
+
+Every pipeline recipe writes its files (STL, APT) into ``build/mgherony2024/`` and reads them back,
+so the numbers come from real files. Resolution: STL grid cell and CL point step are 0.5 mm (full)
+or 1.0 mm (``CNCLAB_FAST=1``); the claims use the full resolution (ledger rows marked slow).
+Transcribed inputs: ``data/mgherony2024/ch7_9_parameters.json``.
+"""
+from __future__ import annotations
+
+import functools
+import json
+
+import numpy as np
+import pandas as pd
+
+from ...cutting.speeds import cutting_speed, feed_speed, spindle_speed
+from ...geometry.ball_end import horizontal_effective_diameter, tangent_point_diameters
+from ...geometry.freeform_part import FreeformPart, freeform_part_mesh
+from ...geometry.mesh import FacetLocator, machined_surface_mask, read_stl, write_stl
+from ...paths import build_dir, data_path
+from ...runtime import pick
+from ...toolpath import apt
+from ...toolpath.dropcutter import zigzag_finishing_path
+
+DIRECTIONS = (0.0, 22.5, 45.0, 67.5, 90.0)
+
+
+@functools.cache
+def parameters() -> dict:
+    """The transcribed chapter 7-9 inputs and printed values (JSON with provenance)."""
+    return json.loads(data_path("mgherony2024", "ch7_9_parameters.json").read_text())
+
+
+def part() -> FreeformPart:
+    """The reconstructed chapter 8 test part (see :mod:`cnclab.geometry.freeform_part`)."""
+    p = parameters()["ch8_part"]
+    return FreeformPart(p["size"], p["size"], p["sphere_radius"], p["torus_radius"], p["height"])
+
+
+def _out(name):
+    d = build_dir() / "mgherony2024"
+    d.mkdir(parents=True, exist_ok=True)
+    return d / name
+
+
+@functools.cache
+def part_stl(cell_mm: float | None = None) -> str:
+    """Write the closed test part as a binary STL into build/ (grid cell mm) and return its path."""
+    cell = pick(0.5, 1.0) if cell_mm is None else cell_mm
+    path = _out(f"ch8_test_part_cell{cell:g}.stl")
+    write_stl(path, freeform_part_mesh(part(), cell, closed=True))
+    return str(path)
+
+
+@functools.cache
+def surface_mesh(cell_mm: float | None = None):
+    """The machined surface of the STL read back from disk (side/bottom facets removed, Sec. 7.2.3)."""
+    m = read_stl(part_stl(cell_mm))
+    return m.subset(machined_surface_mask(m.normals))
+
+
+@functools.cache
+def zigzag_apt(feed_angle_deg: float, a_e: float = 0.25, step_mm: float | None = None,
+               cell_mm: float | None = None) -> str:
+    """Drop-cut zig-zag finishing CL file (D = 10 ball) at A_f, written to build/; returns its path."""
+    step = pick(0.5, 1.0) if step_mm is None else step_mm
+    tp = parameters()["table7_1"]
+    passes = zigzag_finishing_path(surface_mesh(cell_mm), tp["D"], a_e, feed_angle_deg, step=step)
+    prog = apt.cl_program(passes, tp["v_f"], tp["n"], tp["D"], clearance_z=30.0,
+                          partno=f"CH8_AF{feed_angle_deg:g}")
+    path = _out(f"ch8_zigzag_Af{feed_angle_deg:g}_ae{a_e:g}_step{step:g}.apt")
+    apt.write_apt(path, prog)
+    return str(path)
+
+
+@functools.cache
+def schedule(feed_angle_deg: float, point: str = "thesis", a_e: float = 0.25, accel_rpm_s: float | None = None):
+    """Post-process the A_f zig-zag (read from disk) against the STL (read from disk), Table 7-1 data."""
+    from ...cutting.spindle_control import spindle_schedule
+
+    tp = parameters()["table7_1"]
+    cl = apt.read_apt(zigzag_apt(feed_angle_deg, a_e)).cl_points()
+    return spindle_schedule(read_stl(part_stl()), cl, tool_diameter=tp["D"], a_p=tp["a_p"], v_c=tp["v_c"],
+                            f_z=tp["f_z"], teeth=tp["teeth"], feed_direction_deg=feed_angle_deg, point=point,
+                            accel_rpm_s=accel_rpm_s)
+
+
+def direction_table(point: str = "thesis") -> pd.DataFrame:
+    """Chapter 8 per-direction results on the reconstruction vs the printed minima/maxima."""
+    p = parameters()
+    rows = []
+    for k, a in enumerate(DIRECTIONS):
+        s = schedule(a, point)
+        const = np.full_like(s.n, p["table7_1"]["n"])
+        rows.append({"A_f": a, "n_min": s.n.min(), "n_min_paper": p["ch8_n_min"][k], "n_max": s.n.max(),
+                     "n_max_paper": p["ch8_n_max"][k], "path_mm": s.path_length,
+                     "integral_controlled": s.spindle_integral(), "integral_constant": s.spindle_integral(const),
+                     "points": len(s.n)})
+    df = pd.DataFrame(rows)
+    df["D_eff_implied_by_paper_n_min"] = 1000 * p["table7_1"]["v_c"] / (np.pi * df.n_min_paper)
+    df["D_eff_implied_by_paper_n_max"] = 1000 * p["table7_1"]["v_c"] / (np.pi * df.n_max_paper)
+    return df
+
+
+# ------------------------------------------------------------------------------ claims: chapter 7
+def nominal_feed_mm_min() -> float:
+    """Table 7-1: v_f = f_z z n (eq 7-5) at n = 2000 rpm."""
+    t = parameters()["table7_1"]
+    return float(feed_speed(t["f_z"], t["teeth"], t["n"]))
+
+
+def nominal_vc_m_min() -> float:
+    """Table 7-1: v_c at the nominal diameter D = 10 mm and n = 2000 rpm (eq 5-6)."""
+    t = parameters()["table7_1"]
+    return float(cutting_speed(t["D"], t["n"]))
+
+
+def horizontal_n_rpm() -> float:
+    """n on the horizontal area: eq 7-4 at D_eff = 2 sqrt(a_p (D - a_p)) (the maximum spindle speed)."""
+    t = parameters()["table7_1"]
+    return float(spindle_speed(t["v_c"], horizontal_effective_diameter(t["D"], t["a_p"])))
+
+
+def horizontal_vf_mm_min() -> float:
+    """Maximum feed: eq 7-5 at the horizontal-area spindle speed."""
+    t = parameters()["table7_1"]
+    return float(feed_speed(t["f_z"], t["teeth"], horizontal_n_rpm()))
+
+
+def vc_min_at_2000() -> float:
+    """Lowest actual cutting speed at constant n = 2000 rpm (horizontal area), m/min."""
+    t = parameters()["table7_1"]
+    return float(cutting_speed(horizontal_effective_diameter(t["D"], t["a_p"]), t["n"]))
+
+
+@functools.cache
+def analytic_deff_range(feed_angle_deg: float = 0.0, point: str = "max") -> tuple[float, float]:
+    """(min, max) working diameter (mm) over the reconstructed part's exact normals (fine grid)."""
+    from ...cutting.spindle_control import working_diameters
+
+    P = part()
+    x, y = np.meshgrid(np.linspace(0, 50, 401), np.linspace(0, 50, 401))
+    nrm = P.normal_at(x.ravel(), y.ravel())
+    t = parameters()["table7_1"]
+    d, _, _ = working_diameters(nrm, np.full(len(nrm), feed_angle_deg), t["D"], t["a_p"], point, feed_angle_deg)
+    return float(d.min()), float(d.max())
+
+
+def vc_max_at_2000() -> float:
+    """Highest actual cutting speed at n = 2000 rpm, A_f = 0, on the reconstructed part (m/min)."""
+    return float(cutting_speed(analytic_deff_range(0.0)[1], parameters()["table7_1"]["n"]))
+
+
+def vf_min_reconstruction() -> float:
+    """Lowest controlled feed (eq 7-5) on the reconstructed part, A_f = 0 (mm/min)."""
+    t = parameters()["table7_1"]
+    n_min = spindle_speed(t["v_c"], analytic_deff_range(0.0)[1])
+    return float(feed_speed(t["f_z"], t["teeth"], n_min))
+
+
+def vf_min_from_printed_n_min() -> float:
+    """Explanation: the printed 750 mm/min is eq 7-5 applied to the thesis's printed n_min = 3002 rpm."""
+    t = parameters()["table7_1"]
+    return float(feed_speed(t["f_z"], t["teeth"], parameters()["ch7_text"]["n_min"]))
+
+
+def horizontal_deff_mm() -> float:
+    """Working diameter on the horizontal area (mm): 3.41 for D = 10, a_p = 0.3."""
+    t = parameters()["table7_1"]
+    return float(horizontal_effective_diameter(t["D"], t["a_p"]))
+
+
+def horizontal_working_radius_mm() -> float:
+    """Explanation of "about 1.5 mm" (Sec. 7.3): the working *radius* (Fig 7-12 plots radii, as ch. 5)."""
+    return horizontal_deff_mm() / 2.0
+
+
+# ------------------------------------------------------------------------------ claims: chapter 8
+def ch8_n_max_pipeline() -> dict:
+    """Maximum controlled spindle speed per feed direction from the STL + APT pipeline (rpm)."""
+    return {f"{a:g}": float(schedule(a).n.max()) for a in (0.0, 90.0)}
+
+
+def rz_cross_checks() -> dict:
+    """Ratios (%) computable from in-text Rz values (Sec. 8.3) to check Thesis 4's ranges."""
+    rz = parameters()["ch8_rz"]
+    return {"mean_overall": 100 * rz["ctrl_mean"] / rz["const_mean"],
+            "sd_overall": 100 * rz["ctrl_sd"] / rz["const_sd"],
+            "mean_0deg": 100 * rz["ctrl_mean_0deg"] / rz["const_mean_0deg"]}
+
+
+# ------------------------------------------------------------------------------ chapter 9
+@functools.cache
+def reorder_cases(direction: str = "constant", step_mm: float | None = None):
+    """Original vs reordered metrics for the four Table 9-2 cases on the reconstruction (a_e = 0.5, A_f = 90)."""
+    from ...cutting.spindle_control import feed_directions, working_diameters
+    from ...toolpath.reorder import densify, path_metrics, reorder_path
+
+    t = parameters()["table9_1"]
+    step = pick(2.0, 4.0) if step_mm is None else step_mm
+    cl = apt.read_apt(zigzag_apt(t["A_f"], t["a_e"], step)).cl_points()
+    P = cl.xyz[~cl.rapid]
+    dense, _ = densify(P, t["a_e"])
+    mesh = surface_mesh()
+    nrm = mesh.normals[FacetLocator(mesh).nearest_centroid(dense)]
+    af = np.full(len(dense), float(t["A_f"])) if direction == "constant" else feed_directions(dense)
+    d0, _, _ = working_diameters(nrm, af, t["D"], t["a_p"], "max")
+    rows = [{"case": "original", "start": "-", "k": "-", **path_metrics(dense, d0, t["v_c"])}]
+    middle = int(np.argmin(np.linalg.norm(dense[:, :2] - [25.0, 25.0], axis=1)))
+    corner = int(np.argmin(np.linalg.norm(dense[:, :2] - [50.0, 50.0], axis=1)))
+    orders = {}
+    for case, (st, k) in enumerate([(corner, 4), (middle, 4), (corner, 8), (middle, 8)], start=1):
+        r = reorder_path(dense, nrm, tool_diameter=t["D"], a_p=t["a_p"], k=k, start=st,
+                         feed_direction_deg=t["A_f"], direction=direction)
+        orders[case] = r
+        rows.append({"case": case, "start": st, "k": k,
+                     **path_metrics(dense[r.order], r.d_eff, t["v_c"], jump=r.jump)})
+    return pd.DataFrame(rows), dense, orders
