@@ -124,7 +124,7 @@ def test_rotation_matrix_and_normals():
 
 
 # ----------------------------------------------------------------------------- hypothesis properties
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150, deadline=None, derandomize=True)
 @given(tool_and_depth(), angles, tilts, angles)
 def test_radius_within_zero_and_R(Dap, a1, a2, af):
     D, a_p = Dap
@@ -132,7 +132,7 @@ def test_radius_within_zero_and_R(Dap, a1, a2, af):
         assert -1e-12 <= float(r) <= D / 2 * (1 + 1e-12)
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=100, deadline=None, derandomize=True)
 @given(tool_and_depth(), angles, angles)
 def test_horizontal_surface_independent_of_feed(Dap, a1, af):
     D, a_p = Dap
@@ -141,7 +141,7 @@ def test_horizontal_surface_independent_of_feed(Dap, a1, af):
     assert float(r1) == pytest.approx(expect, rel=1e-12) and float(r2) == pytest.approx(expect, rel=1e-12)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150, deadline=None, derandomize=True)
 @given(tool_and_depth(), angles, tilts, angles)
 def test_point1_at_af_plus_180_equals_point2(Dap, a1, a2, af):
     D, a_p = Dap
@@ -150,7 +150,7 @@ def test_point1_at_af_plus_180_equals_point2(Dap, a1, a2, af):
     assert float(r1_rev) == pytest.approx(float(r2), abs=1e-9 * D)
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=100, deadline=None, derandomize=True)
 @given(tool_and_depth(), angles, tilts, angles, angles)
 def test_rigid_rotation_about_tool_axis_and_equivalent_angles(Dap, a1, a2, af, rot):
     D, a_p = Dap
@@ -160,7 +160,7 @@ def test_rigid_rotation_about_tool_axis_and_equivalent_angles(Dap, a1, a2, af, r
     assert np.allclose(be.tangent_point_radii(D, a_p, a1 + 180.0, -a2, af), base, atol=1e-9 * D)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60, deadline=None, derandomize=True)
 @given(tool_and_depth(), st.floats(0, 360), tilts)
 def test_tilt_across_feed_closed_form(Dap, af, a2):
     """A_N1 = A_f + 90°: the tangent points are the nearest/farthest points, R·|sin(A_N2 ± α)|."""
@@ -172,7 +172,7 @@ def test_tilt_across_feed_closed_form(Dap, af, a2):
     assert float(r2) == pytest.approx(abs(D / 2 * math.sin(b - alpha)), abs=1e-9 * D)
 
 
-@settings(max_examples=25, deadline=None)
+@settings(max_examples=25, deadline=None, derandomize=True)
 @given(tool_and_depth(), angles, tilts, angles)
 def test_agrees_with_brute_force_dense_sampling(Dap, a1, a2, af):
     D, a_p = Dap
@@ -181,7 +181,7 @@ def test_agrees_with_brute_force_dense_sampling(Dap, a1, a2, af):
     assert abs(float(cf[0]) - bf[0]) < 1e-9 and abs(float(cf[1]) - bf[1]) < 1e-9
 
 
-@settings(max_examples=20, deadline=None)
+@settings(max_examples=20, deadline=None, derandomize=True)
 @given(tool_and_depth(), angles, st.floats(-80, 80), angles, st.floats(0.05, 0.95))
 def test_cut_points_agree_with_brute_force(Dap, a1, a2, af, frac):
     D, a_p = Dap
@@ -194,9 +194,11 @@ def test_cut_points_agree_with_brute_force(Dap, a1, a2, af, frac):
     assert abs(float(c.p1_lead) - lead) < 1e-9 and abs(float(c.p1_trail) - trail) < 1e-9
 
 
-@settings(max_examples=40, deadline=None)
-@given(tool_and_depth(), angles, st.floats(-85, 85), angles, st.floats(0, 1))
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(tool_and_depth(), angles, st.floats(-85, 85), angles, st.one_of(st.just(0.0), st.floats(1e-3, 1)))
 def test_closed_form_equals_thesis_steps_numerical(Dap, a1, a2, af, frac):
+    # (a_e -> 0 but > 0 is ill-conditioned for the numerical reference: the a_e line grazes the circle and
+    #  root finding on a flat function only resolves the point to ~sqrt(eps); hence frac = 0 or >= 1e-3)
     D, a_p = Dap
     a_e = frac * D / 2
     c = be.cut_point_radii(D, a_p, a_e, a1, a2, af)

@@ -264,8 +264,31 @@ def tangent_point_radii(D, a_p, A_N1, A_N2, A_f):
     [0.0045, 3.2105]
     """
     D, a_p, A_N1, A_N2, A_f = validate_model_inputs(D, a_p, A_N1, A_N2, A_f)
-    h, r, cb, sb, c1, s1, _ = _frame(D, a_p, A_N1, A_N2, A_f)
-    return _radius_at(h, r, cb, sb, c1, s1), _radius_at(h, r, cb, sb, -c1, -s1)
+    return _tangent_radii_kernel(D, a_p, A_N1, A_N2, A_f)
+
+
+def _tangent_radii_kernel(D, a_p, A_N1, A_N2, A_f):
+    """Hot path of :func:`tangent_point_radii` (validated inputs): few temporaries, in-place ops.
+
+    In the tilt frame (e_a = (cos A_N1, sin A_N1), e_perp) point 1 is
+    ``(h sin b + r cos b cos t1, r sin t1)`` with ``(cos t1, sin t1) = (cos b sin d, cos d)/g``,
+    ``d = A_N1 − A_f``, ``g = |(cos b sin d, cos d)|``; point 2 is the opposite ``t1 + π``.
+    """
+    b = np.radians(A_N2)
+    d = np.radians(A_N1 - A_f)
+    cb, sb = np.cos(b), np.sin(b)
+    sd, cd = np.sin(d), np.cos(d)
+    r = np.sqrt(a_p * (D - a_p))
+    u0 = D * 0.5
+    u0 -= a_p
+    u0 *= sb                                   # h sin b: centre offset along e_a
+    gx = cb * sd
+    g = np.hypot(gx, cd)
+    k = np.divide(r, g, out=np.zeros(np.broadcast(r, g).shape), where=g > 0)  # degenerate: centre
+    wu = k * cb
+    wu *= gx                                   # r cos b cos t1
+    k *= cd                                    # r sin t1
+    return np.hypot(u0 + wu, k), np.hypot(u0 - wu, k)
 
 
 def tangent_point_diameters(D, a_p, A_N1, A_N2, A_f):
