@@ -1,0 +1,323 @@
+"""Constant-MRR contour-parallel path by pixel simulation — Kim & Yang (2006), §3.2–3.3.
+
+Pipeline (all lengths mm, feed mm/min, spindle rpm, MRR mm³/min):
+
+1. a contour-parallel base path (:mod:`cnclab.toolpath.offsets`), optionally with a spiral entry
+   (:func:`spiral_entry`) at the start of each pass;
+2. :func:`modify_path` — the §3.2 pseudo-code on a pixel stock (:mod:`cnclab.simulation.pixel`):
+   for every segment ``Linear_Motion`` counts the not-yet-visited pixels swept by the tool
+   (:func:`linear_motion`); when the count exceeds the reference (eq. 4),
+   ``Additional_Path_Insertion`` shifts the end point to the **left** of the moving direction
+   (into the machined side) until the count is at or below the reference, inserts that segment,
+   extends it by the same length while the extension is still excessive, and inserts a return path
+   to the segment start; the original segment is then re-checked (and cut);
+3. §3.3 post-step: :func:`fit_arcs` replaces runs of short segments by G2/G3 circular moves;
+   :func:`passes_to_moves` writes the program (:mod:`cnclab.toolpath.gcode`).
+
+Eq. 4, the reference pixel count of one tool advance ``Δs`` (feed per tooth) at step length ``s``
+(radial depth) on pixels of side ``p``: ``(Δs/p)·(s/p)``. The paper does **not** give the tooth count
+needed for ``Δs = v_f/(n·z)``: we use :data:`DEFAULT_TEETH` = 2 (a two-flute Ø10 mm carbide end mill,
+Δs = 500/(2000·2) = 0.125 mm). Since Δs is below the 0.3 mm pixel, a single tooth advance sweeps
+only ~4 pixels and its count is quantisation noise; :func:`modify_path` therefore checks segments of
+``step_mm`` (default 1 mm) against eq. 4 scaled by the number of tooth advances in the segment,
+``(L/Δs)·(Δs/p)·(s/p) = (L/p)·(s/p)`` — the same reference per unit length — with a relative
+tolerance ``tolerance`` for pixel noise (both stated in the results).
+
+Spindle current (eqs 5–6) is only available with **assumed** constants (:data:`ASSUMED_CURRENT_MODEL`):
+the paper gives no values of a, b, p1, p2 or H.
+
+>>> round(reference_pixel_count(feed_per_tooth(500, 2000, 2), 3.0, 0.3), 4)   # eq. 4
+4.1667
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from shapely.geometry import Point, Polygon
+
+from .gcode import Move
+
+__all__ = ["DEFAULT_TEETH", "ASSUMED_CURRENT_MODEL", "feed_per_tooth", "reference_pixel_count",
+           "linear_motion", "cut_linear", "modify_path", "ModifiedPath", "spiral_entry", "fit_arcs",
+           "passes_to_moves", "spindle_current", "resample_polyline"]
+
+#: Tooth count used for eq. 4 — NOT given by Kim & Yang (2006); documented choice (2-flute Ø10 mm).
+DEFAULT_TEETH = 2
+
+#: Eq. 6 ``I_M = p1 + H·p2·Z_M`` with ASSUMED constants (not in the paper): idle current p1 [A],
+#: hardness factor H [-] and slope p2 [A per mm³/min]; chosen only to draw an ampere axis.
+ASSUMED_CURRENT_MODEL = {"p1_A": 2.0, "H": 1.0, "p2_A_per_mm3_min": 2.0e-3}
+
+
+def feed_per_tooth(feed_mm_min: float, spindle_rpm: float, teeth: int = DEFAULT_TEETH) -> float:
+    """Feed per tooth Δs = v_f / (n·z) [mm]."""
+    if not (feed_mm_min > 0 and spindle_rpm > 0):
+        raise ValueError(f"feed_mm_min and spindle_rpm must be > 0, got {feed_mm_min}, {spindle_rpm}")
+    if int(teeth) != teeth or teeth < 1:
+        raise ValueError(f"teeth must be an integer >= 1, got {teeth!r}")
+    return feed_mm_min / (spindle_rpm * teeth)
+
+
+def reference_pixel_count(feed_per_tooth_mm: float, step_length_mm: float, pixel_mm: float) -> float:
+    """Eq. 4: ``(Δs/pixel)·(s/pixel)`` pixels removed per tooth advance at the nominal MRR."""
+    for name, v in (("feed_per_tooth_mm", feed_per_tooth_mm), ("step_length_mm", step_length_mm),
+                    ("pixel_mm", pixel_mm)):
+        if not (math.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be > 0 mm, got {v!r}")
+    return (feed_per_tooth_mm / pixel_mm) * (step_length_mm / pixel_mm)
+
+
+def _window(stock, p0, p1, r):
+    h = stock.resolution_mm
+    ny, nx = stock.grid.shape
+    lo = np.minimum(p0, p1) - r
+    hi = np.maximum(p0, p1) + r
+    i0 = max(int(math.floor((lo[0] - stock.x0) / h)), 0)
+    i1 = min(int(math.ceil((hi[0] - stock.x0) / h)), nx)
+    j0 = max(int(math.floor((lo[1] - stock.y0) / h)), 0)
+    j1 = min(int(math.ceil((hi[1] - stock.y0) / h)), ny)
+    if i1 <= i0 or j1 <= j0:
+        return None
+    xc = stock.x0 + (np.arange(i0, i1) + 0.5) * h
+    yc = stock.y0 + (np.arange(j0, j1) + 0.5) * h
+    d = p1 - p0
+    L2 = float(d @ d)
+    X, Y = xc[None, :] - p0[0], yc[:, None] - p0[1]
+    t = np.zeros_like(X + Y) if L2 == 0 else np.clip((X * d[0] + Y * d[1]) / L2, 0.0, 1.0)
+    mask = (X - t * d[0]) ** 2 + (Y - t * d[1]) ** 2 <= r * r
+    return (slice(j0, j1), slice(i0, i1)), mask
+
+
+def linear_motion(stock, p0, p1, tool_radius: float) -> int:
+    """``Linear_Motion``: material pixels (centre within ``tool_radius`` of segment p0–p1) [count].
+
+    ``stock`` is a :class:`cnclab.simulation.pixel.Stock` (read only here).
+    """
+    w = _window(stock, np.asarray(p0, float), np.asarray(p1, float), float(tool_radius))
+    if w is None:
+        return 0
+    sl, mask = w
+    return int(np.count_nonzero(stock.grid[sl] & mask))
+
+
+def cut_linear(stock, p0, p1, tool_radius: float) -> int:
+    """Remove the pixels swept by the tool along p0–p1; returns how many were material."""
+    w = _window(stock, np.asarray(p0, float), np.asarray(p1, float), float(tool_radius))
+    if w is None:
+        return 0
+    sl, mask = w
+    win = stock.grid[sl]
+    n = int(np.count_nonzero(win & mask))
+    win &= ~mask
+    return n
+
+
+def resample_polyline(points, step_mm: float) -> np.ndarray:
+    """Split every segment of ``points`` [(n,2) mm] into equal parts of at most ``step_mm``."""
+    p = np.asarray(points, float)
+    out = [p[:1]]
+    for a, b in zip(p[:-1], p[1:]):
+        L = float(np.hypot(*(b - a)))
+        if L == 0:
+            continue
+        k = max(1, int(math.ceil(L / step_mm - 1e-9)))
+        t = np.arange(1, k + 1)[:, None] / k
+        out.append(a + t * (b - a))
+    return np.vstack(out)
+
+
+@dataclasses.dataclass
+class ModifiedPath:
+    """Result of :func:`modify_path`: passes (list of (n,2) mm), per-pass boolean ``inserted`` flags
+    (True for points reached by an inserted or return segment), and counters."""
+
+    passes: list
+    inserted: list
+    n_excessive: int
+    n_insertions: int
+    n_unresolved: int
+    reference_per_mm: float
+
+
+def modify_path(passes, stock, tool_radius: float, reference_per_mm: float, allowed: Polygon,
+                step_mm: float = 1.0, shift_mm: float | None = None, tolerance: float = 0.15,
+                max_insertions: int = 12) -> ModifiedPath:
+    """Kim & Yang §3.2 path modification on a pixel ``stock`` (cut in place as the tool moves).
+
+    ``reference_per_mm``: reference pixel count per mm of path (eq. 4 / Δs); a segment of length L is
+    excessive when its ``Linear_Motion`` count exceeds ``(1 + tolerance)·reference_per_mm·L``.
+    ``shift_mm``: end-point shift per iteration to the left (default: one pixel); ``allowed``: where
+    the tool centre may go (extensions leaving it stop the insertion). Each pass starts with a
+    plunge at its first point (the disk there is cut, not checked).
+    """
+    r = float(tool_radius)
+    shift = stock.resolution_mm if shift_mm is None else float(shift_mm)
+    guard = allowed.buffer(1e-6)
+    ref = lambda a, b: (1.0 + tolerance) * reference_per_mm * float(np.hypot(*(b - a)))  # noqa: E731
+    out_passes, out_flags = [], []
+    n_exc = n_ins = n_unres = 0
+    for pas in passes:
+        pts = resample_polyline(pas, step_mm)
+        out, flags = [pts[0]], [False]
+        stock.cut_disk_pixels(tuple(pts[0]), r)
+        for a, b in zip(pts[:-1], pts[1:]):
+            tries = 0
+            while linear_motion(stock, a, b, r) > ref(a, b):
+                if tries == 0:
+                    n_exc += 1
+                if tries >= max_insertions:
+                    n_unres += 1
+                    break
+                tries += 1
+                excursion = _additional_path(stock, a, b, r, shift, guard, ref)
+                if not excursion:
+                    n_unres += 1
+                    break
+                n_ins += 1
+                prev = a
+                for q in excursion + [a]:           # the excursion, then the return path to a
+                    cut_linear(stock, prev, q, r)
+                    out.append(q)
+                    flags.append(True)
+                    prev = q
+            cut_linear(stock, a, b, r)
+            out.append(b)
+            flags.append(False)
+        out_passes.append(np.array(out))
+        out_flags.append(np.array(flags))
+    return ModifiedPath(out_passes, out_flags, n_exc, n_ins, n_unres, reference_per_mm)
+
+
+def _additional_path(stock, start, end, r, shift, guard, ref, max_extend: int = 200):
+    """``Additional_Path_Insertion``: cuts and returns the inserted points (the caller adds the return)."""
+    pts = []
+    s, e = np.asarray(start, float), np.asarray(end, float)
+    for _ in range(max_extend):
+        d = e - s
+        L = float(np.hypot(*d))
+        left = np.array([-d[1], d[0]]) / L
+        k, ok = 0, False
+        while k * shift <= 2 * r:                     # shift the end point to the left
+            k += 1
+            e_k = e + k * shift * left
+            if linear_motion(stock, s, e_k, r) <= ref(s, e_k):
+                ok = True
+                break
+        if not ok or not guard.contains(Point(e_k)):
+            break
+        pts.append(e_k)                               # insert start -> shifted end
+        cut_linear(stock, s, e_k, r)                  # the tool cuts it now
+        ext = e_k + (e_k - s)                         # extend with the same length
+        if not guard.contains(Point(ext)):
+            break
+        excessive = linear_motion(stock, e_k, ext, r) > ref(e_k, ext)
+        if not excessive:
+            break
+        s, e = e_k, ext
+    return pts
+
+
+def spiral_entry(region: Polygon, target, pitch_mm: float, step_mm: float = 0.5) -> np.ndarray:
+    """Archimedean spiral from the pole of inaccessibility of ``region`` out to its inscribed radius,
+    then a straight run to ``target`` [mm]; pitch ``pitch_mm`` per turn. Returns (n, 2) points."""
+    from shapely.ops import polylabel
+
+    c = polylabel(region, tolerance=0.05)
+    rho = region.exterior.distance(c) if not region.interiors else region.boundary.distance(c)
+    cx, cy = c.x, c.y
+    tx, ty = target
+    phi_end = 2 * math.pi * rho / pitch_mm
+    if phi_end <= 0:
+        return np.array([[cx, cy], [tx, ty]])
+    # end the spiral at the angle pointing to the target, so the run-out is radial
+    a_t = math.atan2(ty - cy, tx - cx) % (2 * math.pi)
+    phi_end = max(a_t, a_t + 2 * math.pi * math.floor((phi_end - a_t) / (2 * math.pi)))
+    phi = [0.0]
+    while phi[-1] < phi_end:                          # arc-length step ~ step_mm
+        rad = max(pitch_mm * phi[-1] / (2 * math.pi), step_mm)
+        phi.append(min(phi[-1] + step_mm / rad, phi_end))
+    phi = np.array(phi)
+    rad = pitch_mm * phi / (2 * math.pi)
+    pts = np.column_stack([cx + rad * np.cos(phi), cy + rad * np.sin(phi)])
+    return np.vstack([pts, [[tx, ty]]])
+
+
+def _circle(p, q, s):
+    ax, ay = p
+    bx, by = q
+    cx, cy = s
+    d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
+    if abs(d) < 1e-12:
+        return None
+    ux = ((ax * ax + ay * ay) * (by - cy) + (bx * bx + by * by) * (cy - ay) + (cx * cx + cy * cy) * (ay - by)) / d
+    uy = ((ax * ax + ay * ay) * (cx - bx) + (bx * bx + by * by) * (ax - cx) + (cx * cx + cy * cy) * (bx - ax)) / d
+    return np.array([ux, uy]), math.hypot(ax - ux, ay - uy)
+
+
+def fit_arcs(points, tol_mm: float = 0.02, short_mm: float = 2.0, min_points: int = 4,
+             max_radius_mm: float = 500.0):
+    """§3.3 circular interpolation: runs of short segments (≤ ``short_mm``) whose points lie within
+    ``tol_mm`` of one circle (turning one way, sweep < 360°) become arcs.
+
+    Returns a list of ``("line", end)`` and ``("arc", end, centre, ccw)`` items for the polyline
+    after its first point.
+    """
+    p = np.asarray(points, float)
+    n = len(p)
+    seg = np.hypot(*np.diff(p, axis=0).T)
+    items, i = [], 0
+    while i < n - 1:
+        best = None
+        j = i + min_points - 1
+        while j < n and np.all(seg[i:j] <= short_mm) and np.all(seg[i:j] > 0):
+            c = _circle(p[i], p[(i + j) // 2], p[j])
+            if c is None or c[1] > max_radius_mm:
+                break
+            ctr, rad = c
+            if np.max(np.abs(np.hypot(*(p[i:j + 1] - ctr).T) - rad)) > tol_mm:
+                break
+            v = p[i:j + 1] - ctr
+            ang = np.unwrap(np.arctan2(v[:, 1], v[:, 0]))
+            da = np.diff(ang)
+            if not (np.all(da > 0) or np.all(da < 0)) or abs(ang[-1] - ang[0]) >= 2 * math.pi - 1e-6:
+                break
+            best = (j, ctr, bool(da[0] > 0))
+            j += 1
+        if best is None:
+            items.append(("line", p[i + 1]))
+            i += 1
+        else:
+            j, ctr, ccw = best
+            items.append(("arc", p[j], ctr, ccw))
+            i = j
+    return items
+
+
+def passes_to_moves(passes, z_cut: float, z_clear: float, feed: float, spindle: float,
+                    arcs: bool = True, **fit_kw) -> list[Move]:
+    """G-code moves of the passes [mm]: rapid above each pass start, plunge, G1/G2/G3, retract."""
+    moves = []
+    for pas in passes:
+        p = np.asarray(pas, float)
+        moves.append(Move("G0", p[0, 0], p[0, 1], z_clear, spindle=spindle))
+        moves.append(Move("G1", p[0, 0], p[0, 1], z_cut, feed=feed, spindle=spindle))
+        cur = p[0]
+        items = fit_arcs(p, **fit_kw) if arcs else [("line", q) for q in p[1:]]
+        for it in items:
+            end = it[1]
+            if it[0] == "line":
+                moves.append(Move("G1", end[0], end[1], z_cut, feed=feed, spindle=spindle))
+            else:
+                ctr, ccw = it[2], it[3]
+                moves.append(Move("G3" if ccw else "G2", end[0], end[1], z_cut, i=ctr[0] - cur[0],
+                                  j=ctr[1] - cur[1], feed=feed, spindle=spindle))
+            cur = end
+        moves.append(Move("G1", cur[0], cur[1], z_clear, feed=feed, spindle=spindle))
+    return moves
+
+
+def spindle_current(mrr_mm3_min, model: dict = ASSUMED_CURRENT_MODEL):
+    """Eq. 6, ``I_M = p1 + H·p2·Z_M`` [A] with ``model`` constants (default: ASSUMED values)."""
+    return model["p1_A"] + model["H"] * model["p2_A_per_mm3_min"] * np.asarray(mrr_mm3_min, float)
