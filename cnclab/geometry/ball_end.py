@@ -426,10 +426,6 @@ def chip_removal_radius_variation(D, a_p, a_e, A_N1, A_N2, A_f, side: int = 1, m
     return end - start
 
 
-def _deg(x) -> float:  # small helper for reprs in recipes
-    return float(math.degrees(x))
-
-
 # ------------------------------------------------------------ numerical reference (thesis steps)
 def thesis_steps_numerical(D: float, a_p: float, a_e: float, A_N1: float, A_N2: float, A_f: float,
                            n_rpm: float | None = None, n_scan: int = 24, xtol: float = 1e-13) -> dict:
