@@ -1,0 +1,339 @@
+"""Small multilayer perceptrons for regression, trained by Levenberg–Marquardt or a first-order method.
+
+The networks of Mgherony (2024) §6.3.2 were built with MATLAB's Neural Network Toolbox: inputs and
+targets min-max scaled to [-1, 1] (``mapminmax``), a random 70/15/15 train/validation/test split
+(``dividerand``), logistic-sigmoid hidden layers, a linear output layer, and training by
+Levenberg–Marquardt (``trainlm``: μ = 0.001, ×0.1 after a successful step, ×10 after a failed one,
+μ_max = 1e10, early stop after 6 consecutive validation failures, at most 1000 epochs). This module
+reproduces that recipe with torch (imported lazily, only here), in float64 on the CPU, with one
+thread, deterministic for a given ``seed``.
+
+* :func:`train_mlp` — scale, split, build, train; returns a :class:`TrainedMLP` (``predict`` in the
+  original units).
+* trainers: ``"lm"`` (Levenberg–Marquardt with the full Jacobian, per-sample ``torch.func``
+  Jacobians: the nets are tiny), ``"adam"`` and ``"lbfgs"`` (first order / quasi-Newton, full batch).
+
+>>> import numpy as np
+>>> x = np.linspace(-1, 1, 200)[:, None]
+>>> net = train_mlp(x, np.sin(3 * x), hidden=(8,), seed=0, max_epochs=200)
+>>> bool(np.sqrt(np.mean((net.predict(x) - np.sin(3 * x)) ** 2)) < 0.01)
+True
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["MinMaxScaler", "split_indices", "MLPSpec", "TrainedMLP", "train_mlp", "ACTIVATIONS"]
+
+ACTIVATIONS = ("logsig", "tansig", "relu")
+TRAINERS = ("lm", "adam", "lbfgs")
+
+
+def _torch():
+    import torch
+
+    torch.set_num_threads(1)
+    return torch
+
+
+@dataclasses.dataclass
+class MinMaxScaler:
+    """Column-wise affine map of ``[min, max]`` onto ``[lo, hi]`` (MATLAB ``mapminmax``: [-1, 1])."""
+
+    lo: float = -1.0
+    hi: float = 1.0
+    data_min: np.ndarray | None = None
+    data_max: np.ndarray | None = None
+
+    def fit(self, X) -> "MinMaxScaler":
+        X = np.asarray(X, dtype=float)
+        if X.ndim != 2 or len(X) == 0:
+            raise ValueError(f"X must be a non-empty 2-D array, got shape {X.shape}")
+        self.data_min, self.data_max = X.min(axis=0), X.max(axis=0)
+        flat = np.flatnonzero(self.data_max <= self.data_min)
+        if flat.size:
+            raise ValueError(f"column(s) {flat.tolist()} are constant: cannot min-max scale")
+        return self
+
+    def transform(self, X) -> np.ndarray:
+        X = np.asarray(X, dtype=float)
+        return self.lo + (self.hi - self.lo) * (X - self.data_min) / (self.data_max - self.data_min)
+
+    def inverse_transform(self, Z) -> np.ndarray:
+        Z = np.asarray(Z, dtype=float)
+        return self.data_min + (Z - self.lo) * (self.data_max - self.data_min) / (self.hi - self.lo)
+
+
+def split_indices(n: int, fractions=(0.70, 0.15, 0.15), seed: int = 0):
+    """Random train/validation/test index arrays (``dividerand``): sizes round(f·n), the rest to test.
+
+    >>> [len(a) for a in split_indices(2704, seed=1)]
+    [1893, 406, 405]
+    """
+    f = np.asarray(fractions, dtype=float)
+    if f.shape != (3,) or np.any(f < 0) or not np.isclose(f.sum(), 1.0):
+        raise ValueError(f"fractions must be three non-negative numbers summing to 1, got {fractions}")
+    if n < 3:
+        raise ValueError(f"n must be >= 3, got {n}")
+    perm = np.random.default_rng(seed).permutation(n)
+    n_tr, n_va = int(round(f[0] * n)), int(round(f[1] * n))
+    return np.sort(perm[:n_tr]), np.sort(perm[n_tr:n_tr + n_va]), np.sort(perm[n_tr + n_va:])
+
+
+@dataclasses.dataclass(frozen=True)
+class MLPSpec:
+    """Layer sizes and hidden activation; the output layer is linear."""
+
+    n_inputs: int
+    hidden: tuple
+    n_outputs: int
+    activation: str = "logsig"
+
+    def __post_init__(self):
+        if self.activation not in ACTIVATIONS:
+            raise ValueError(f"activation must be one of {ACTIVATIONS}, got {self.activation!r}")
+        if self.n_inputs < 1 or self.n_outputs < 1 or any(int(h) < 1 for h in self.hidden):
+            raise ValueError(f"layer sizes must be >= 1, got {self.n_inputs}, {self.hidden}, {self.n_outputs}")
+
+    @property
+    def sizes(self) -> list[int]:
+        return [self.n_inputs, *map(int, self.hidden), self.n_outputs]
+
+    @property
+    def n_params(self) -> int:
+        s = self.sizes
+        return sum((a + 1) * b for a, b in zip(s[:-1], s[1:]))
+
+    def name(self) -> str:
+        return "-".join(map(str, self.sizes)) + f" ({self.activation})"
+
+
+def _init_params(spec: MLPSpec, seed: int):
+    """Nguyen–Widrow initialisation (MATLAB ``initnw``) of the hidden layers; small uniform output layer."""
+    torch = _torch()
+    g = torch.Generator().manual_seed(int(seed))
+    parts = []
+    sizes = spec.sizes
+    for li, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
+        if li < len(sizes) - 2:
+            beta = 0.7 * n_out ** (1.0 / n_in)
+            W = torch.rand(n_out, n_in, generator=g, dtype=torch.float64) * 2 - 1
+            W = beta * W / W.norm(dim=1, keepdim=True)
+            b = beta * (torch.rand(n_out, generator=g, dtype=torch.float64) * 2 - 1)
+            if spec.activation == "logsig":  # logsig's active region is 4x wider than tansig's
+                W, b = 4 * W, 4 * b
+        else:
+            lim = 1.0 / np.sqrt(n_in)
+            W = lim * (torch.rand(n_out, n_in, generator=g, dtype=torch.float64) * 2 - 1)
+            b = lim * (torch.rand(n_out, generator=g, dtype=torch.float64) * 2 - 1)
+        parts += [W.reshape(-1), b]
+    return torch.cat(parts)
+
+
+def _forward(theta, X, spec: MLPSpec):
+    """Network output for a flat parameter vector ``theta`` (torch); X is (n, n_inputs) or (n_inputs,)."""
+    torch = _torch()
+    act = {"logsig": torch.sigmoid, "tansig": torch.tanh, "relu": torch.relu}[spec.activation]
+    h, k = X, 0
+    sizes = spec.sizes
+    for li, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
+        W = theta[k:k + n_in * n_out].reshape(n_out, n_in)
+        k += n_in * n_out
+        b = theta[k:k + n_out]
+        k += n_out
+        h = h @ W.T + b
+        if li < len(sizes) - 2:
+            h = act(h)
+    return h
+
+
+@dataclasses.dataclass
+class TrainedMLP:
+    """A trained network with its scalers, split, training history and stop reason."""
+
+    spec: MLPSpec
+    theta: np.ndarray
+    x_scaler: MinMaxScaler
+    y_scaler: MinMaxScaler
+    split: tuple
+    history: pd.DataFrame
+    best_epoch: int
+    stop_reason: str
+    trainer: str
+    seed: int
+
+    def predict(self, X) -> np.ndarray:
+        """Outputs in the original units for inputs ``X`` (n, n_inputs) in the original units."""
+        torch = _torch()
+        Z = torch.as_tensor(self.x_scaler.transform(np.atleast_2d(X)), dtype=torch.float64)
+        with torch.no_grad():
+            out = _forward(torch.as_tensor(self.theta), Z, self.spec).numpy()
+        return self.y_scaler.inverse_transform(out)
+
+
+def train_mlp(X, Y, hidden: Sequence[int] = (10,), activation: str = "logsig", trainer: str = "lm",
+              seed: int = 0, max_epochs: int = 1000, max_fail: int = 6, fractions=(0.70, 0.15, 0.15),
+              mu: float = 1e-3, mu_dec: float = 0.1, mu_inc: float = 10.0, mu_max: float = 1e10,
+              min_grad: float = 1e-7, lr: float = 1e-2) -> TrainedMLP:
+    """Min-max scale, split 70/15/15, build ``n_in → hidden… → n_out`` and train with early stopping.
+
+    Parameters
+    ----------
+    X, Y : arrays (n, n_inputs), (n, n_outputs) in original units (e.g. mm, degrees).
+    hidden : hidden layer widths, e.g. ``(10,)`` (Mgherony's a1) or ``(10, 5)`` (a2).
+    activation : ``"logsig"`` (thesis), ``"tansig"`` or ``"relu"`` for the hidden layers.
+    trainer : ``"lm"`` (Levenberg–Marquardt, MATLAB trainlm defaults), ``"adam"`` (full batch, ``lr``)
+        or ``"lbfgs"``.
+    seed : fixes the split and the initial weights.
+    max_epochs, max_fail : epoch cap; stop after ``max_fail`` consecutive epochs without a new best
+        validation MSE (the returned weights are the best-validation ones). For ``adam`` the epoch
+        counts full-batch steps and ``max_fail`` is multiplied by 50 (a single small step rarely helps).
+    mu, mu_dec, mu_inc, mu_max, min_grad : trainlm's damping schedule and gradient stop.
+
+    Returns
+    -------
+    TrainedMLP; ``history`` has columns epoch, train_mse, val_mse, test_mse (scaled units), mu.
+    """
+    torch = _torch()
+    if trainer not in TRAINERS:
+        raise ValueError(f"trainer must be one of {TRAINERS}, got {trainer!r}")
+    X = np.asarray(X, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    if Y.ndim == 1:
+        Y = Y[:, None]
+    if X.ndim != 2 or len(X) != len(Y):
+        raise ValueError(f"X must be (n, n_inputs) and Y (n, n_outputs) with the same n, got {X.shape}, {Y.shape}")
+    if not (np.all(np.isfinite(X)) and np.all(np.isfinite(Y))):
+        raise ValueError("X and Y must be finite")
+    if max_epochs < 1 or max_fail < 1:
+        raise ValueError(f"max_epochs and max_fail must be >= 1, got {max_epochs}, {max_fail}")
+    spec = MLPSpec(X.shape[1], tuple(int(h) for h in hidden), Y.shape[1], activation)
+    xs, ys = MinMaxScaler().fit(X), MinMaxScaler().fit(Y)
+    tr, va, te = split_indices(len(X), fractions, seed)
+    Zx = torch.as_tensor(xs.transform(X), dtype=torch.float64)
+    Zy = torch.as_tensor(ys.transform(Y), dtype=torch.float64)
+    data = {k: (Zx[idx], Zy[idx]) for k, idx in (("train", tr), ("val", va), ("test", te))}
+    theta = _init_params(spec, seed)
+    run = {"lm": _train_lm, "adam": _train_adam, "lbfgs": _train_lbfgs}[trainer]
+    kw = dict(mu=mu, mu_dec=mu_dec, mu_inc=mu_inc, mu_max=mu_max, min_grad=min_grad) if trainer == "lm" else {}
+    if trainer == "adam":
+        kw, max_fail = {"lr": lr}, max_fail * 50
+    theta, hist, best_epoch, reason = run(theta, spec, data, max_epochs, max_fail, **kw)
+    return TrainedMLP(spec, theta.detach().numpy().copy(), xs, ys, (tr, va, te), pd.DataFrame(hist),
+                      best_epoch, reason, trainer, int(seed))
+
+
+def _mse(theta, spec, XY):
+    X, Y = XY
+    return float(((_forward(theta, X, spec) - Y) ** 2).mean())
+
+
+class _EarlyStop:
+    def __init__(self, theta, max_fail):
+        self.best, self.best_theta, self.best_epoch, self.fails, self.max_fail = np.inf, theta.clone(), 0, 0, max_fail
+
+    def update(self, epoch, theta, val) -> bool:
+        """Record the validation MSE; True when training should stop."""
+        if val < self.best:
+            self.best, self.best_theta, self.best_epoch, self.fails = val, theta.clone(), epoch, 0
+        else:
+            self.fails += 1
+        return self.fails >= self.max_fail
+
+
+def _record(hist, epoch, theta, spec, data, mu=np.nan):
+    hist.append({"epoch": epoch, "train_mse": _mse(theta, spec, data["train"]),
+                 "val_mse": _mse(theta, spec, data["val"]), "test_mse": _mse(theta, spec, data["test"]),
+                 "mu": mu})
+    return hist[-1]["val_mse"]
+
+
+def _train_lm(theta, spec, data, max_epochs, max_fail, mu, mu_dec, mu_inc, mu_max, min_grad):
+    torch = _torch()
+    from torch.func import jacrev, vmap
+
+    X, Y = data["train"]
+    n_res = Y.numel()
+    jac = vmap(jacrev(lambda th, x: _forward(th, x, spec)), in_dims=(None, 0))
+    eye = torch.eye(theta.numel(), dtype=torch.float64)
+    hist = []
+    stop = _EarlyStop(theta, max_fail)
+    stop.update(0, theta, _record(hist, 0, theta, spec, data, mu))
+    reason = "max_epochs"
+    for epoch in range(1, max_epochs + 1):
+        with torch.no_grad():
+            e = (Y - _forward(theta, X, spec)).reshape(-1)
+        J = jac(theta, X).reshape(n_res, -1)          # d output / d theta, (n*n_out, P)
+        JtJ, Jte = J.T @ J, J.T @ e
+        perf = float(e @ e) / n_res
+        if float(2 * Jte.abs().max()) / n_res < min_grad:
+            reason = "min_grad"
+            break
+        while True:
+            step = torch.linalg.solve(JtJ + mu * eye, Jte)
+            new = theta + step
+            with torch.no_grad():
+                perf_new = float(((Y - _forward(new, X, spec)) ** 2).mean())
+            if perf_new < perf:
+                theta, mu = new, mu * mu_dec
+                break
+            mu *= mu_inc
+            if mu > mu_max:
+                break
+        if mu > mu_max:
+            reason = "mu_max"
+            break
+        if stop.update(epoch, theta, _record(hist, epoch, theta, spec, data, mu)):
+            reason = "validation_stop"
+            break
+    return stop.best_theta, hist, stop.best_epoch, reason
+
+
+def _train_adam(theta, spec, data, max_epochs, max_fail, lr):
+    torch = _torch()
+    X, Y = data["train"]
+    th = theta.clone().requires_grad_(True)
+    opt = torch.optim.Adam([th], lr=lr)
+    hist = []
+    stop = _EarlyStop(theta, max_fail)
+    stop.update(0, theta, _record(hist, 0, theta.detach(), spec, data))
+    reason = "max_epochs"
+    for epoch in range(1, max_epochs + 1):
+        opt.zero_grad()
+        loss = ((_forward(th, X, spec) - Y) ** 2).mean()
+        loss.backward()
+        opt.step()
+        cur = th.detach()
+        if stop.update(epoch, cur, _record(hist, epoch, cur, spec, data)):
+            reason = "validation_stop"
+            break
+    return stop.best_theta, hist, stop.best_epoch, reason
+
+
+def _train_lbfgs(theta, spec, data, max_epochs, max_fail):
+    torch = _torch()
+    X, Y = data["train"]
+    th = theta.clone().requires_grad_(True)
+    opt = torch.optim.LBFGS([th], lr=1.0, max_iter=20, history_size=50, line_search_fn="strong_wolfe")
+
+    def closure():
+        opt.zero_grad()
+        loss = ((_forward(th, X, spec) - Y) ** 2).mean()
+        loss.backward()
+        return loss
+
+    hist = []
+    stop = _EarlyStop(theta, max_fail)
+    stop.update(0, theta, _record(hist, 0, theta.detach(), spec, data))
+    reason = "max_epochs"
+    for epoch in range(1, max_epochs + 1):
+        opt.step(closure)
+        cur = th.detach()
+        if stop.update(epoch, cur, _record(hist, epoch, cur, spec, data)):
+            reason = "validation_stop"
+            break
+    return stop.best_theta, hist, stop.best_epoch, reason

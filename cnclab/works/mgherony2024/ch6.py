@@ -1,0 +1,428 @@
+"""Mgherony (2024) chapter 6 / Thesis 2: working-diameter dataset, regression (r1, r2, eq 6-5) and MLPs.
+
+Recipes behind the ``mgherony2024.ch6.*`` ledger rows. Everything is computed from the geometric model
+of chapter 5 (:func:`cnclab.geometry.ball_end.tangent_point_diameters`); nothing reads the thesis.
+
+Conventions (found by fitting the alternatives, see :func:`convention_evidence`)
+-------------------------------------------------------------------------------
+* The dataset's inputs are ``D`` (mm), ``a_p`` (mm), ``A_N2`` (degrees) and the *relative feed
+  direction* ``A_f`` (degrees). The printed r1 coefficients come out (to < 1 % of each standard error)
+  only when the relative feed direction is ``A_f = A_N1 − A_f,abs`` — the eq 5-3 azimuth of the surface
+  normal measured from the feed direction — and ``D_eff1`` is tangent point 1 (left of the feed),
+  ``D_eff2`` point 2. (Equivalently ``A_f,abs − A_N1`` with the points swapped: the model is symmetric.)
+* Outputs are **true working diameters** (mm), twice the distance of the tangent point from the axis
+  (the radius reading of chapter 5 halves every coefficient and is rejected by the fit).
+* Regression terms use the angles in **radians** (the thesis's ``AN2_rad``, ``Af_rad``).
+
+>>> df = dataset()
+>>> len(df), list(df.columns)
+(2704, ['D', 'a_p', 'A_N2', 'A_f', 'D_eff1', 'D_eff2'])
+"""
+from __future__ import annotations
+
+import functools
+import hashlib
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ... import __version__
+from ...analysis import response_surface as rs
+from ...analysis.doe import full_factorial
+from ...analysis.error_stats import STAT_NAMES, difference_stats
+from ...claims import Interval
+from ...fileio import atomic_write
+from ...paths import DATA_DIR, data_path
+
+# ----------------------------------------------------------------------------------- Table 6-1
+#: Table 6-1 levels, in the printed order (the plan's first factor varies slowest).
+LEVELS = {
+    "D": [6, 8, 10, 12],
+    "a_p": [0.15, 0.25, 0.35, 0.45],
+    "A_N2": [40, 30, 20, 15, 10, 5, 1, -5, -10, -15, -20, -30, -40],
+    "A_f": [89, 74, 61, 44, 31, 14, 1, -14, -31, -44, -61, -74, -89],
+}
+DATASET_CSV = DATA_DIR / "mgherony2024" / "working_diameter_dataset.csv"
+INPUTS = ("D", "a_p", "A_N2", "A_f")
+OUTPUTS = ("D_eff1", "D_eff2")
+TERM_IDS = {"Constant": "const", "D": "D", "ap": "ap", "AN2^2": "AN2_2", "AN2^4": "AN2_4", "Af^2": "Af_2",
+            "(AN2 x Af)": "AN2_Af", "(AN2 x Af^3)": "AN2_Af3", "(AN2^3 x Af)": "AN2_3_Af",
+            "(AN2^3 x Af^3)": "AN2_3_Af3", "(AN2^5 x Af)": "AN2_5_Af", "(AN2^5 x Af^3)": "AN2_5_Af3",
+            "(AN2^5 x Af^5)": "AN2_5_Af5"}
+
+
+def working_diameters(D, a_p, A_N2, A_f_rel, sign: float = 1.0, offset_deg: float = 0.0):
+    """``(D_eff1, D_eff2)`` true working diameters (mm) for the chapter-6 relative feed direction.
+
+    Parameters: ``D``, ``a_p`` in mm; ``A_N2`` and ``A_f_rel`` in degrees. The thesis's convention is
+    ``sign=+1, offset_deg=0``: the relative feed direction is ``A_N1 − A_f,abs`` (so the model is called
+    with ``A_N1 = A_f_rel`` and an absolute feed along +x); ``sign``/``offset_deg`` give the alternatives
+    tried in :func:`convention_evidence` (``A_N1 = sign·A_f_rel + offset_deg``).
+
+    >>> d1, d2 = working_diameters(10, 0.3, 0, 30)           # horizontal: 2·sqrt(a_p (D − a_p))
+    >>> round(float(d1), 4), round(float(d2), 4)
+    (3.4117, 3.4117)
+    """
+    from ...geometry.ball_end import tangent_point_diameters
+
+    return tangent_point_diameters(D, a_p, sign * np.asarray(A_f_rel, dtype=float) + offset_deg, A_N2, 0.0)
+
+
+@functools.cache
+def _dataset_cached() -> pd.DataFrame:
+    plan = full_factorial(LEVELS)
+    d1, d2 = working_diameters(plan["D"].to_numpy(), plan["a_p"].to_numpy(), plan["A_N2"].to_numpy(),
+                               plan["A_f"].to_numpy())
+    return plan.assign(D_eff1=d1, D_eff2=d2)
+
+
+def dataset() -> pd.DataFrame:
+    """The 2704-row full-factorial dataset of §6.2 (Table 6-1): inputs and D_eff1, D_eff2 (mm)."""
+    return _dataset_cached().copy()
+
+
+def dataset_csv_text() -> str:
+    """The dataset as CSV text (9 decimals, '\\n' line ends): the bytes written to ``data/`` and hashed."""
+    buf = io.StringIO()
+    dataset().to_csv(buf, index=False, float_format="%.9f", lineterminator="\n")
+    return buf.getvalue()
+
+
+def dataset_metadata() -> dict:
+    """Generator, parameters, package version and sha256 of :func:`dataset_csv_text`."""
+    text = dataset_csv_text()
+    return {
+        "file": DATASET_CSV.name,
+        "description": "Mgherony (2024) §6.2 full-factorial working-diameter dataset (Table 6-1), 2704 rows",
+        "source": "seed 004_6087ee43271ee0e7.txt, chapter 6, §6.2 and Table 6-1; model of §5.2",
+        "generator": "cnclab.works.mgherony2024.ch6.dataset",
+        "model": "cnclab.geometry.ball_end.tangent_point_diameters(D, a_p, A_N1=A_f, A_N2, A_f=0)",
+        "parameters": {"levels": LEVELS, "order": "D slowest, then a_p, A_N2, A_f (as printed)"},
+        "columns": {"D": "tool diameter, mm", "a_p": "depth of cut, mm", "A_N2": "surface inclination, degrees",
+                    "A_f": "relative feed direction A_N1 - A_f,abs, degrees",
+                    "D_eff1": "true working diameter at tangent point 1 (left of feed), mm",
+                    "D_eff2": "true working diameter at tangent point 2 (right of feed), mm"},
+        "float_format": "%.9f",
+        "rows": len(dataset()),
+        "cnclab_version": __version__,
+        "sha256": hashlib.sha256(text.encode("utf-8")).hexdigest(),
+    }
+
+
+def write_dataset(path=DATASET_CSV) -> tuple[Path, Path]:
+    """Write the dataset CSV and its ``.json`` metadata sidecar atomically; returns both paths."""
+    path = Path(path)
+    meta = dataset_metadata()
+    meta["file"] = path.name
+    p1 = atomic_write(path, dataset_csv_text())
+    p2 = atomic_write(path.with_suffix(".json"), json.dumps(meta, indent=1) + "\n")
+    return p1, p2
+
+
+# ------------------------------------------------------------------------- printed tables (data/)
+def _read(name: str) -> pd.DataFrame:
+    return pd.read_csv(data_path("mgherony2024", name), comment="#")
+
+
+def printed_r1_table() -> pd.DataFrame:
+    """The MiniTab table under eq 6-4 as printed (index: predictor)."""
+    return _read("ch6_eq6-4_r1_coefficients.csv").set_index("predictor")
+
+
+def printed_table6_2() -> pd.DataFrame:
+    """Table 6-2 as printed (index: term; last row ``R-Sq(adj)`` of the four fits)."""
+    return _read("ch6_table6-2_r2_coefficients.csv").set_index("term")
+
+
+def printed_table6_3() -> pd.DataFrame:
+    """Table 6-3 as printed (index: statistic; columns r1, r2, a1, a2)."""
+    return _read("ch6_table6-3_statistics.csv").set_index("statistic")
+
+
+def printed_percentages() -> pd.DataFrame:
+    """§6.3.3 text percentages (index: model; st_dev_pct, rmse_pct, mape_pct)."""
+    return _read("ch6_s6.3.3_percentages.csv").set_index("model")
+
+
+def printed_ann_figures() -> pd.DataFrame:
+    """§6.3.2 text numbers of Figs 6-4…6-7 (index: a1, a2)."""
+    return _read("ch6_s6.3.2_ann_figures.csv").set_index("model")
+
+
+# ------------------------------------------------------------------------------- conventions
+#: (relative feed reading, A_N1 = sign·A_f + offset, tangent point, output scale)
+CONVENTIONS = {
+    "A_N1-A_f, point 1, diameter": (1, 0, 0, 1.0),
+    "A_N1-A_f, point 2, diameter": (1, 0, 1, 1.0),
+    "A_f-A_N1, point 1, diameter": (-1, 0, 0, 1.0),
+    "A_f-A_N1, point 2, diameter": (-1, 0, 1, 1.0),
+    "from contour (A_N1+90-A_f), point 1": (1, 90, 0, 1.0),
+    "from contour (A_N1+90-A_f), point 2": (1, 90, 1, 1.0),
+    "A_N1-A_f, point 1, radius": (1, 0, 0, 0.5),
+}
+
+
+@functools.cache
+def convention_evidence() -> pd.DataFrame:
+    """Fit r1 under each convention of :data:`CONVENTIONS`; compare with the printed table.
+
+    Columns: ``R-Sq`` (%), ``S`` (mm), ``max |ΔCoef|/SE`` (printed SE) and the worst term.
+    Only the thesis's convention reproduces every coefficient.
+    """
+    plan = full_factorial(LEVELS)
+    printed = printed_r1_table()
+    rows = []
+    for name, (sign, off, point, scale) in CONVENTIONS.items():
+        d = working_diameters(plan["D"].to_numpy(), plan["a_p"].to_numpy(), plan["A_N2"].to_numpy(),
+                              plan["A_f"].to_numpy(), sign, off)[point] * scale
+        fit = rs.fit_polynomial(plan.assign(y=d), "y", rs.R1_TERMS)
+        z = ((fit.params - printed["coef"]) / printed["se_coef"]).abs()
+        rows.append({"convention": name, "R-Sq": fit.r_sq, "S": fit.S, "coef D": fit.params["D"],
+                     "max |dCoef|/SE": z.max(), "worst term": z.idxmax()})
+    return pd.DataFrame(rows).set_index("convention")
+
+
+# ---------------------------------------------------------------------------------- regression
+@functools.cache
+def r1_fit(response: str = "D_eff1", eq6_4_as_printed: bool = False) -> rs.OLSFit:
+    """The r1 model (eq 6-4) fitted to the dataset; ``eq6_4_as_printed`` uses AN2^5·Af^5 as last term."""
+    terms = rs.R1_TERMS_EQ6_4_AS_PRINTED if eq6_4_as_printed else rs.R1_TERMS
+    return rs.fit_polynomial(dataset(), response, terms)
+
+
+def _table_values(fit: rs.OLSFit) -> dict:
+    tab = fit.coefficient_table()
+    out = {}
+    for term, row in tab.iterrows():
+        tid = TERM_IDS[term]
+        out.update({f"coef.{tid}": row["Coef"], f"se.{tid}": row["SE Coef"], f"t.{tid}": row["T"],
+                    f"p.{tid}": row["P"]})
+    out.update({"S": fit.S, "rsq": fit.r_sq, "rsq_adj": fit.r_sq_adj})
+    return out
+
+
+@functools.cache
+def r1_values() -> dict:
+    """r1 MiniTab table flattened: ``coef.<term>``, ``se.<term>``, ``t.<term>``, ``p.<term>``, S, rsq, rsq_adj."""
+    return _table_values(r1_fit())
+
+
+@functools.cache
+def r1_eq6_4_as_printed_values() -> dict:
+    """Same as :func:`r1_values` but with eq 6-4's printed last term AN2^5·Af^5."""
+    return _table_values(r1_fit(eq6_4_as_printed=True))
+
+
+@functools.cache
+def r2_fits(response: str = "D_eff1") -> dict:
+    """Table 6-2: one r2 fit per tool diameter ``{6.0: OLSFit, ...}``."""
+    return rs.fit_per_level(dataset(), response, rs.R2_TERMS, by="D")
+
+
+@functools.cache
+def r2_lines(response: str = "D_eff1") -> pd.DataFrame:
+    """Table 6-2's last columns: slope, intercept, plain and adjusted R² (%) of each coefficient vs D."""
+    return rs.linear_coefficient_functions(r2_fits(response))
+
+
+@functools.cache
+def r2_values() -> dict:
+    """Table 6-2 flattened: ``D6.<term>`` coefficients, ``rsq_adj.D6`` …, ``slope.<term>``,
+    ``intercept.<term>``, ``line_rsq.<term>`` (plain R², %), ``line_rsq_adj.<term>`` (adjusted, %)."""
+    out = {}
+    for D, fit in r2_fits().items():
+        for term, c in fit.params.items():
+            out[f"D{int(D)}.{TERM_IDS[term]}"] = c
+        out[f"rsq_adj.D{int(D)}"] = fit.r_sq_adj
+    for term, row in r2_lines().iterrows():
+        tid = TERM_IDS[term]
+        out.update({f"slope.{tid}": row["slope"], f"intercept.{tid}": row["intercept"],
+                    f"line_rsq.{tid}": row["r_sq"], f"line_rsq_adj.{tid}": row["r_sq_adj"]})
+    return out
+
+
+@functools.cache
+def unified_model(response: str = "D_eff1") -> rs.UnifiedModel:
+    """eq 6-5 / Thesis 2: ``D_eff = Σ f_i(D)·C_i`` with the fitted straight lines of Table 6-2."""
+    return rs.UnifiedModel(r2_lines(response)[["slope", "intercept"]])
+
+
+def printed_unified_model() -> rs.UnifiedModel:
+    """eq 6-5 with the f_i(D) exactly as printed in Table 6-2 (4 decimals)."""
+    t = printed_table6_2().drop(index="R-Sq(adj)")
+    return rs.UnifiedModel(t[["slope", "intercept"]].astype(float))
+
+
+def _r2_separate_predictions(response="D_eff1") -> np.ndarray:
+    df = dataset()
+    pred = np.empty(len(df))
+    for D, fit in r2_fits(response).items():
+        m = (df["D"] == D).to_numpy()
+        pred[m] = fit.predict(df[m])
+    return pred
+
+
+@functools.cache
+def regression_statistics() -> pd.DataFrame:
+    """Table 6-3 statistics of ``D_eff1 − estimate`` for r1, r2 via eq 6-5 (unified) and r2 as 4 fits."""
+    df = dataset()
+    y = df["D_eff1"].to_numpy()
+    preds = {"r1": r1_fit().predict(df), "r2 (unified, eq 6-5)": unified_model().predict(df),
+             "r2 (4 separate fits)": _r2_separate_predictions(),
+             "r2 (eq 6-5, printed f_i)": printed_unified_model().predict(df)}
+    return pd.DataFrame({k: difference_stats(y, p) for k, p in preds.items()}).loc[list(STAT_NAMES)]
+
+
+@functools.cache
+def table6_3_regression_values() -> dict:
+    """``r1.<stat>`` and ``r2.<stat>`` (r2 = unified eq 6-5 model, as Table 6-3 uses)."""
+    t = regression_statistics()
+    out = {f"r1.{s}": t.loc[s, "r1"] for s in STAT_NAMES}
+    out.update({f"r2.{s}": t.loc[s, "r2 (unified, eq 6-5)"] for s in STAT_NAMES})
+    return out
+
+
+@functools.cache
+def table6_3_r2_separate_values() -> dict:
+    """``r2.<stat>`` from the four separate fits (the alternative reading of Table 6-3's r2 column)."""
+    t = regression_statistics()
+    return {f"r2.{s}": t.loc[s, "r2 (4 separate fits)"] for s in STAT_NAMES}
+
+
+# ------------------------------------------------------------------------------ neural networks
+#: Mgherony's two networks (§6.3.2): hidden layer widths.
+ARCHITECTURES = {"a1": (10,), "a2": (10, 5)}
+N_SEEDS = 10
+MAX_EPOCHS = 1000
+
+
+@functools.cache
+def ann_runs(model: str, n_seeds: int = N_SEEDS, trainer: str = "lm", max_epochs: int = MAX_EPOCHS) -> tuple:
+    """Train ``model`` ('a1' or 'a2') for seeds ``0..n_seeds-1``: 4 inputs (D, a_p, A_N2, A_f) →
+    logistic hidden layer(s) → 2 linear outputs (D_eff1, D_eff2), MATLAB-like LM recipe.
+
+    Returns a tuple of :class:`cnclab.analysis.mlp.TrainedMLP`.
+    """
+    from ...analysis.mlp import train_mlp
+
+    if model not in ARCHITECTURES:
+        raise ValueError(f"model must be one of {list(ARCHITECTURES)}, got {model!r}")
+    df = dataset()
+    X, Y = df[list(INPUTS)].to_numpy(), df[list(OUTPUTS)].to_numpy()
+    return tuple(train_mlp(X, Y, hidden=ARCHITECTURES[model], activation="logsig", trainer=trainer,
+                           seed=s, max_epochs=max_epochs) for s in range(n_seeds))
+
+
+def ann_statistics(model: str, n_seeds: int = N_SEEDS, trainer: str = "lm",
+                   max_epochs: int = MAX_EPOCHS) -> pd.DataFrame:
+    """Table 6-3 statistics of D_eff1 over all 2704 rows, one row per seed, plus the pooled R of the
+    train/validation/test subsets (both outputs, MATLAB plotregression) and the tallest-bin error of
+    the 20-bin error histogram (ploterrhist, both outputs pooled), in mm."""
+    df = dataset()
+    X, Y = df[list(INPUTS)].to_numpy(), df[list(OUTPUTS)].to_numpy()
+    rows = []
+    for net in ann_runs(model, n_seeds, trainer, max_epochs):
+        P = net.predict(X)
+        row = difference_stats(Y[:, 0], P[:, 0])
+        for name, idx in zip(("r_train", "r_validation", "r_test"), net.split):
+            row[name] = float(np.corrcoef(Y[idx].ravel(), P[idx].ravel())[0, 1])
+        err = (Y - P).ravel()
+        counts, edges = np.histogram(err, bins=20)
+        k = int(np.argmax(counts))
+        row["hist_peak_error"] = 0.5 * (edges[k] + edges[k + 1])
+        row.update(seed=net.seed, best_epoch=net.best_epoch, stop=net.stop_reason)
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("seed")
+
+
+def _interval(s: pd.Series) -> Interval:
+    return Interval(float(s.min()), float(s.max()), center=float(s.mean()))
+
+
+@functools.cache
+def ann_values() -> dict:
+    """``a1.<stat>``, ``a2.<stat>`` (Table 6-3), ``a1.r_train`` … (Figs 6-6/6-7) and
+    ``a1.hist_peak_error`` (Figs 6-4/6-5) as min–max Intervals over :data:`N_SEEDS` LM seeds."""
+    out = {}
+    for model in ARCHITECTURES:
+        t = ann_statistics(model)
+        for col in (*STAT_NAMES, "r_train", "r_validation", "r_test", "hist_peak_error"):
+            out[f"{model}.{col}"] = _interval(t[col])
+    return out
+
+
+# ------------------------------------------------------------------------------ §6.3.3 percentages
+def _ratio_interval(num: float, den: float, half_unit: float) -> Interval:
+    lo = (num - half_unit) / (den + half_unit)
+    hi = (num + half_unit) / (den - half_unit)
+    return Interval(100 * lo, 100 * hi, center=100 * num / den)
+
+
+_PCT_STATS = {"st_dev_pct": "st_dev", "rmse_pct": "rmse", "mape_pct": "mape"}
+
+
+def percentages_from_table6_3() -> dict:
+    """§6.3.3 percentages recomputed from the *printed* Table 6-3 (``<model>.<stat>_pct``), as Intervals
+    that carry the table's rounding (each value ± half a unit of its 3rd decimal)."""
+    t = printed_table6_3()
+    return {f"{m}.{k}": _ratio_interval(t.loc[s, m], t.loc[s, "r1"], 0.0005)
+            for m in ("r2", "a1", "a2") for k, s in _PCT_STATS.items()}
+
+
+@functools.cache
+def percentages_from_reproduction() -> dict:
+    """§6.3.3 percentages from our reproduction: r2 (eq 6-5) / r1 as numbers; a1, a2 / r1 as min–max
+    Intervals over the LM seeds."""
+    reg = table6_3_regression_values()
+    out = {f"r2.{k}": 100 * reg[f"r2.{s}"] / reg[f"r1.{s}"] for k, s in _PCT_STATS.items()}
+    for m in ("a1", "a2"):
+        t = ann_statistics(m)
+        for k, s in _PCT_STATS.items():
+            out[f"{m}.{k}"] = _interval(100 * t[s] / reg[f"r1.{s}"])
+    return out
+
+
+# ------------------------------------------------------------------------------ beyond the paper
+def surrogate_features(df: pd.DataFrame) -> np.ndarray:
+    """Physics-informed inputs: ``a_p/D`` and sin/cos of A_N2 and A_f (the model is scale-invariant:
+    ``D_eff = D·g(a_p/D, A_N2, A_f)``, and periodic in the angles)."""
+    a2, af = np.radians(df["A_N2"].to_numpy()), np.radians(df["A_f"].to_numpy())
+    return np.column_stack([df["a_p"].to_numpy() / df["D"].to_numpy(), np.sin(a2), np.cos(a2),
+                            np.sin(af), np.cos(af)])
+
+
+@functools.cache
+def surrogate_runs(n_seeds: int = 3, hidden: tuple = (20, 20), max_epochs: int = 400) -> tuple:
+    """Train the surrogate: features of :func:`surrogate_features` → tanh (20, 20) → ``D_eff/D``; LM."""
+    from ...analysis.mlp import train_mlp
+
+    df = dataset()
+    X, Y = surrogate_features(df), df[list(OUTPUTS)].to_numpy() / df[["D"]].to_numpy()
+    return tuple(train_mlp(X, Y, hidden=hidden, activation="tansig", trainer="lm", seed=s,
+                           max_epochs=max_epochs) for s in range(n_seeds))
+
+
+def surrogate_predict(net, df: pd.DataFrame) -> np.ndarray:
+    """``(n, 2)`` working diameters (mm) predicted by a surrogate network."""
+    return net.predict(surrogate_features(df)) * df[["D"]].to_numpy()
+
+
+def held_out_rmse(model: str, n_seeds: int = N_SEEDS, max_epochs: int = MAX_EPOCHS, **surrogate_kw) -> pd.DataFrame:
+    """Test-split RMSE (mm) of D_eff1 and D_eff2 per seed for 'a1', 'a2' or 'surrogate'."""
+    df = dataset()
+    Y = df[list(OUTPUTS)].to_numpy()
+    if model == "surrogate":
+        nets = surrogate_runs(n_seeds, **surrogate_kw)
+        preds = [surrogate_predict(n, df) for n in nets]
+    else:
+        nets = ann_runs(model, n_seeds, "lm", max_epochs)
+        preds = [n.predict(df[list(INPUTS)].to_numpy()) for n in nets]
+    rows = []
+    for net, P in zip(nets, preds):
+        te = net.split[2]
+        r = np.sqrt(np.mean((P[te] - Y[te]) ** 2, axis=0))
+        rows.append({"seed": net.seed, "rmse_D_eff1": r[0], "rmse_D_eff2": r[1]})
+    return pd.DataFrame(rows).set_index("seed")

@@ -1,0 +1,98 @@
+"""Small MLPs: scaling, splitting, Levenberg–Marquardt and first-order trainers (cnclab.analysis.mlp)."""
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from cnclab.analysis.mlp import MinMaxScaler, MLPSpec, split_indices, train_mlp
+
+
+@settings(max_examples=40, deadline=None)
+@given(arrays(np.float64, (7, 3), elements=st.floats(-1e3, 1e3)))
+def test_scaler_round_trip(X):
+    X = X + np.arange(7)[:, None]  # no constant column
+    s = MinMaxScaler().fit(X)
+    Z = s.transform(X)
+    assert Z.min() >= -1 - 1e-12 and Z.max() <= 1 + 1e-12
+    np.testing.assert_allclose(Z.min(axis=0), -1) and np.testing.assert_allclose(Z.max(axis=0), 1)
+    np.testing.assert_allclose(s.inverse_transform(Z), X, atol=1e-9)
+
+
+def test_scaler_rejects_constant_column():
+    with pytest.raises(ValueError, match="constant"):
+        MinMaxScaler().fit(np.array([[1.0, 2.0], [1.0, 3.0]]))
+
+
+def test_split_is_a_deterministic_partition():
+    tr, va, te = split_indices(2704, seed=7)
+    assert (len(tr), len(va), len(te)) == (1893, 406, 405)
+    assert np.array_equal(np.sort(np.concatenate([tr, va, te])), np.arange(2704))
+    again = split_indices(2704, seed=7)
+    assert all(np.array_equal(a, b) for a, b in zip((tr, va, te), again))
+    assert not np.array_equal(tr, split_indices(2704, seed=8)[0])
+    with pytest.raises(ValueError, match="fractions"):
+        split_indices(10, fractions=(0.5, 0.5, 0.5))
+
+
+def test_spec_parameter_counts():
+    assert MLPSpec(4, (10,), 2).n_params == 4 * 10 + 10 + 10 * 2 + 2 == 72      # thesis a1
+    assert MLPSpec(4, (10, 5), 2).n_params == 50 + 55 + 12 == 117               # thesis a2
+    with pytest.raises(ValueError, match="activation"):
+        MLPSpec(4, (10,), 2, activation="swish")
+
+
+def _toy(n=300, seed=0):
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(-2, 2, size=(n, 2))
+    Y = np.column_stack([np.sin(X[:, 0]) * X[:, 1], np.cos(X[:, 1]) + 0.5 * X[:, 0]])
+    return X, Y
+
+
+def test_lm_learns_and_is_deterministic():
+    X, Y = _toy()
+    a = train_mlp(X, Y, hidden=(8,), seed=3, max_epochs=150)
+    b = train_mlp(X, Y, hidden=(8,), seed=3, max_epochs=150)
+    np.testing.assert_array_equal(a.theta, b.theta)           # same seed -> identical network
+    te = a.split[2]
+    rmse = np.sqrt(np.mean((a.predict(X[te]) - Y[te]) ** 2))
+    assert rmse < 0.05 * Y.std()
+    h = a.history
+    assert h["train_mse"].iloc[a.best_epoch] < 0.01 * h["train_mse"].iloc[0]
+    assert h["val_mse"].iloc[a.best_epoch] == h["val_mse"].min()   # returns best-validation weights
+    c = train_mlp(X, Y, hidden=(8,), seed=4, max_epochs=150)
+    assert not np.array_equal(a.theta, c.theta)
+
+
+def test_two_hidden_layers_and_first_order_trainers():
+    X, Y = _toy(200, seed=1)
+    lm = train_mlp(X, Y, hidden=(6, 4), seed=0, max_epochs=100)
+    assert lm.spec.n_params == len(lm.theta) == (2 + 1) * 6 + (6 + 1) * 4 + (4 + 1) * 2
+    for trainer in ("adam", "lbfgs"):
+        net = train_mlp(X, Y, hidden=(6,), trainer=trainer, seed=0, max_epochs=60, lr=0.02)
+        h = net.history
+        assert h["train_mse"].min() < 0.5 * h["train_mse"].iloc[0], trainer
+        assert net.predict(X).shape == Y.shape
+
+
+def test_early_stopping_counts_validation_failures():
+    X, Y = _toy(120, seed=2)
+    net = train_mlp(X, Y + np.random.default_rng(0).normal(0, 0.5, Y.shape), hidden=(10,), seed=0,
+                    max_epochs=500, max_fail=3)
+    if net.stop_reason == "validation_stop":
+        assert len(net.history) - 1 == net.best_epoch + 3
+
+
+@pytest.mark.parametrize("kw, word", [
+    ({"trainer": "sgd"}, "trainer"), ({"max_epochs": 0}, "max_epochs"), ({"activation": "x"}, "activation")])
+def test_bad_arguments(kw, word):
+    X, Y = _toy(30)
+    with pytest.raises(ValueError, match=word):
+        train_mlp(X, Y, **kw)
+
+
+def test_bad_shapes():
+    with pytest.raises(ValueError, match="same n"):
+        train_mlp(np.zeros((10, 2)), np.zeros((9, 1)))
+    with pytest.raises(ValueError, match="finite"):
+        train_mlp(np.full((10, 1), np.nan), np.zeros((10, 1)))
