@@ -1,0 +1,103 @@
+"""Spindle-speed post-processor (cnclab.cutting.spindle_control) and the `spindle` CLI."""
+import numpy as np
+import pytest
+
+from cnclab.__main__ import main as cli
+from cnclab.cutting import spindle_control as sc
+from cnclab.cutting.speeds import spindle_speed
+from cnclab.geometry.freeform_part import tessellate_heightfield
+from cnclab.geometry.mesh import write_stl
+from cnclab.paths import data_path
+from cnclab.toolpath import apt
+
+STL = data_path("mgherony2024", "sample_ch8_part.stl")
+APT = data_path("mgherony2024", "sample_ch8_zigzag_Af0.apt")
+
+
+def _flat_case(slope_deg=0.0):
+    t = np.tan(np.radians(slope_deg))
+    mesh = tessellate_heightfield(lambda x, y: t * y, (0, 20), (0, 20), 4, 4)
+    passes = [np.array([[x, 10.0, t * 10] for x in np.linspace(2, 18, 9)])]
+    return mesh, apt.cl_program(passes, 500, 2000, 10, 30)
+
+
+def test_horizontal_surface_gives_eq_7_4_everywhere():
+    mesh, prog = _flat_case()
+    s = sc.spindle_schedule(mesh, prog.cl_points(), tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2)
+    np.testing.assert_allclose(s.n, 1000 * 63 / (np.pi * 2 * np.sqrt(0.3 * 9.7)))
+    np.testing.assert_allclose(s.v_f, 0.25 * s.n)
+    np.testing.assert_allclose(s.v_c_actual, 63.0)
+    assert s.within_share() == 1.0
+
+
+def test_limits_and_counts():
+    mesh, prog = _flat_case()
+    s = sc.spindle_schedule(mesh, prog.cl_points(), tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2,
+                            n_max=4000)
+    assert (s.n == 4000).all() and s.limited.all()
+    s = sc.spindle_schedule(mesh, prog.cl_points(), tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2,
+                            vf_max=900)
+    assert np.allclose(s.v_f, 900) and s.within_share() == 0.0
+    with pytest.raises(ValueError, match="n_max"):
+        sc.spindle_schedule(mesh, prog.cl_points(), tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2, n_max=-1)
+    with pytest.raises(ValueError, match="teeth"):
+        sc.spindle_schedule(mesh, prog.cl_points(), tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=1.5)
+
+
+def test_slope_across_feed_point_rules():
+    mesh, prog = _flat_case(20.0)   # surface rises towards +y, feed along +x: uphill on the left (point 1)
+    cl = prog.cl_points()
+    kw = dict(tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2)
+    mx = sc.spindle_schedule(mesh, cl, point="max", **kw)
+    p1 = sc.spindle_schedule(mesh, cl, point="1", **kw)
+    p2 = sc.spindle_schedule(mesh, cl, point="2", **kw)
+    assert np.allclose(mx.d_eff, np.maximum(p1.d_eff, p2.d_eff))
+    assert (p1.d_eff > p2.d_eff).all()
+    assert np.allclose(mx.A_N2, 20.0) and np.allclose(mx.A_N1, 90.0)
+
+
+def test_acceleration_limit_is_respected():
+    n_t = np.array([3000, 6000, 6000, 3000, 3000, 5000.0])
+    L = np.full(6, 1.0)
+    out = sc.apply_acceleration_limit(n_t, L, 0.125, 2, 2000.0)
+    dt = L[1:] / (0.25 * out[:-1] / 60)
+    assert (np.abs(np.diff(out)) <= 2000 * dt + 1e-9).all()
+    assert np.isclose(out[0], 3000) and out.max() <= 6000
+
+
+def test_threshold_insertion_keeps_every_original_record():
+    prog = apt.read_apt(APT)
+    cl = prog.cl_points()
+    from cnclab.geometry.mesh import read_stl
+    s = sc.spindle_schedule(read_stl(STL), cl, tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2)
+    new, counts = sc.insert_spindle_records(prog, cl, s, rpm_threshold=100, vf_threshold=25)
+    orig = [r.raw for r in new.records if r.line]
+    assert orig == [r.raw for r in prog.records]
+    back = apt.parse_apt(new.to_text()).cl_points()
+    fp = ~back.rapid
+    assert np.all(np.abs(back.spindle[fp] - s.n) <= 100 + 0.5)
+    assert np.all(np.abs(back.feed[fp] - s.v_f) <= 25 + 0.05)
+    few, c2 = sc.insert_spindle_records(prog, cl, s, rpm_threshold=1000, vf_threshold=250)
+    assert c2["spindl_inserted"] < counts["spindl_inserted"]
+
+
+def test_cli_writes_apt_and_gcode_and_refuses_bad_input(tmp_path, capsys):
+    out, ngc = tmp_path / "o.apt", tmp_path / "o.ngc"
+    rc = cli(["spindle", str(STL), str(APT), "-o", str(out), "--vc", "63", "--fz", "0.125", "--teeth", "2",
+              "--ap", "0.3", "--ae", "1", "--gcode", str(ngc)])
+    assert rc == 0 and "inserted SPINDL" in capsys.readouterr().out
+    from cnclab.toolpath.gcode import parse_gcode
+    moves = parse_gcode(ngc.read_text(), str(ngc))
+    feeds = [m for m in moves if m.motion == "G1"]
+    assert max(m.spindle for m in feeds) == pytest.approx(spindle_speed(63, 2 * np.sqrt(0.3 * 9.7)), abs=0.5)
+    before = APT.read_bytes()
+    assert cli(["spindle", str(STL), str(APT), "-o", str(APT), "--vc", "63", "--fz", "0.125", "--teeth", "2",
+                "--ap", "0.3"]) == 2
+    assert APT.read_bytes() == before
+    bad = tmp_path / "bad.apt"
+    bad.write_text("UNITS / MM\nFEDRAT / 500, MMPM\nGOTO / 1, 2\n")
+    out2 = tmp_path / "never.apt"
+    assert cli(["spindle", str(STL), str(bad), "-o", str(out2), "--vc", "63", "--fz", "0.125", "--teeth", "2",
+                "--ap", "0.3"]) == 2
+    assert "bad.apt:3" in capsys.readouterr().err and not out2.exists()
+    assert not list(tmp_path.glob(".never.apt*"))   # no partial output
