@@ -280,3 +280,12 @@ def test_bad_width_of_cut_and_normals():
         be.chip_removal_radius_variation(10, 1, 0.5, 0, 10, 0, side=3)
     with pytest.raises(ValueError, match="a_p"):
         be.tangent_point_diameters(np.array([10.0, 2.0]), 1.5, 0, 0, 0)   # a_p > D/2 for the second tool
+
+
+def test_large_inputs_evaluated_in_blocks_equal_direct_evaluation():
+    rng = np.random.default_rng(2)
+    n = 3 * be._CHUNK + 17
+    a1, a2, af = rng.uniform(0, 360, n), rng.uniform(-60, 60, n), rng.uniform(0, 360, n)
+    r1, r2 = be.tangent_point_radii(8.0, 0.7, a1[:, None], a2[:, None], af[:, None])
+    k1, k2 = be._tangent_radii_kernel(*be.validate_model_inputs(8.0, 0.7, a1, a2, af))
+    assert r1.shape == (n, 1) and np.array_equal(r1[:, 0], k1) and np.array_equal(r2[:, 0], k2)

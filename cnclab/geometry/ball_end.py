@@ -263,8 +263,21 @@ def tangent_point_radii(D, a_p, A_N1, A_N2, A_f):
     >>> [round(float(v), 4) for v in tangent_point_radii(10, 0.3, 120, -20, 30)]
     [0.0045, 3.2105]
     """
-    D, a_p, A_N1, A_N2, A_f = validate_model_inputs(D, a_p, A_N1, A_N2, A_f)
-    return _tangent_radii_kernel(D, a_p, A_N1, A_N2, A_f)
+    args = validate_model_inputs(D, a_p, A_N1, A_N2, A_f)
+    shape = np.broadcast_shapes(*(a.shape for a in args))
+    size = int(np.prod(shape))
+    if size <= _CHUNK:
+        return _tangent_radii_kernel(*args)
+    # large inputs: evaluate in cache-sized blocks (a loop over blocks, not over points)
+    flat = [np.broadcast_to(a, shape).reshape(-1) if a.ndim else a for a in args]
+    r1, r2 = np.empty(size), np.empty(size)
+    for s in range(0, size, _CHUNK):
+        sl = slice(s, s + _CHUNK)
+        r1[sl], r2[sl] = _tangent_radii_kernel(*(a[sl] if a.ndim else a for a in flat))
+    return r1.reshape(shape), r2.reshape(shape)
+
+
+_CHUNK = 4096
 
 
 def _tangent_radii_kernel(D, a_p, A_N1, A_N2, A_f):
