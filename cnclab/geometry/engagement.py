@@ -38,9 +38,11 @@ def _r(tool_radius):
 
 def _s(s, r):
     s = np.asarray(s, float)
-    if np.any(~np.isfinite(s)) or np.any(s < 0) or np.any(s > 2 * r + 1e-12):
-        raise ValueError(f"s (stepover) must be in [0, 2r] = [0, {2 * float(np.max(r))}] mm, got {s!r}")
-    return s
+    bad = ~np.isfinite(s) | (s < -1e-9) | (s > 2 * r + 1e-9)
+    if np.any(bad):
+        raise ValueError(f"s (stepover) must be in [0, 2r] = [0, {2 * float(np.max(r))}] mm, "
+                         f"got {np.asarray(s)[bad].ravel()[:3]!r}")
+    return np.clip(s, 0.0, 2 * r)
 
 
 def _theta(theta_deg):
