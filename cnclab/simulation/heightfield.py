@@ -7,8 +7,8 @@ plane); its lower hemisphere at horizontal distance ``d`` from the axis reaches
 envelope exactly (``d`` = distance to the segment); sloped segments are sampled.
 
 >>> hf = HeightField.box((0, 10), (0, 10), resolution=0.05, z_top=1.0)
->>> hf.cut_ball_segment((-5, 5, 0), (15, 5, 0), radius=2.0)
->>> round(hf.z[100, 100], 6)          # on the pass centre line the surface is at the tip height
+>>> hf.cut_ball_segment((-5, 5.025, 0), (15, 5.025, 0), radius=2.0)   # y = centre of row 100
+>>> round(float(hf.z[100, 100]), 6)   # on the pass centre line the surface is at the tip height
 0.0
 """
 from __future__ import annotations
