@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from .fileio import atomic_write
-from .notebook_tools import list_notebooks
+from .notebook_tools import INDEX_NOTEBOOK, list_notebooks
 from .paths import NOTEBOOKS_DIR, build_dir
 
 
@@ -39,9 +39,11 @@ def run_all(only: str | None = None) -> int:
 
     out = build_dir()
     nbs = [p for p in list_notebooks() if not only or only in str(p)]
+    work_nbs = [p for p in nbs if p != INDEX_NOTEBOOK]
     t_start = time.perf_counter()
     failures = []
-    for i, p in enumerate(nbs, 1):
+
+    def run(i, p):
         rel = p.relative_to(NOTEBOOKS_DIR)
         print(f"[{i}/{len(nbs)}] {rel} ...", flush=True)
         t0 = time.perf_counter()
@@ -51,18 +53,23 @@ def run_all(only: str | None = None) -> int:
             failures.append(str(rel))
             print(f"      FAILED after {time.perf_counter() - t0:.1f} s: {type(exc).__name__}: "
                   f"{str(exc)[-2000:]}", flush=True)
-            continue
+            return
         dest = out / "notebooks" / rel
         atomic_write(dest, nbformat.writes(nb) + "\n")
         html, _ = HTMLExporter().from_notebook_node(nb)
         atomic_write(dest.with_suffix(".html"), html)
         print(f"      done in {time.perf_counter() - t0:.1f} s (total {time.perf_counter() - t_start:.0f} s)"
-              f" -> {dest.relative_to(out.parent) if out.parent in dest.parents else dest}", flush=True)
+              f" -> {dest}", flush=True)
+
+    for i, p in enumerate(work_nbs, 1):
+        run(i, p)
     print("computing the claims ledger ...", flush=True)
     results = claims.evaluate_all(claims.load(), progress=True)
     p_csv, p_md = claims.write_report(results, out)
     print(claims.summary_frame(results).to_string(index=False))
     print(f"wrote {p_csv} and {p_md}")
+    if INDEX_NOTEBOOK in nbs:  # last: it shows the report just written
+        run(len(nbs), INDEX_NOTEBOOK)
     bad = [r.claim.claim_id for r in results if not r.ok and not r.skipped]
     if failures:
         print(f"{len(failures)} notebook(s) failed: {', '.join(failures)}")
