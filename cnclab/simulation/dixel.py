@@ -301,7 +301,8 @@ class Stock(StockBase):
 
         h = self.resolution_mm
         y = self.y0 + self._row * h
-        boxes = shapely.box(self._a, y, self._b, y + h)
+        y1 = self.y0 + (self._row + 1) * h          # same formula as the next row's bottom edge
+        boxes = shapely.box(self._a, y, self._b, y1)
         return shapely.union_all(boxes)
 
     def boundary_points(self):

@@ -287,15 +287,15 @@ def cleared_boundary_contour(stock, seed_xy, domain_polygon, min_spacing_mm=None
 
     The material is rebuilt from the dixels (row rectangles), the cleared region = domain minus
     material, and its exterior ring is sampled at the row centre lines (vertical staircase edges,
-    exact in x) plus the midpoints of horizontal edges, thinned to ``min_spacing_mm`` (default 4 row
-    heights) and closed with a periodic cubic spline (:class:`~cnclab.geometry.contours.SplineContour`).
+    exact in x) plus the midpoints of horizontal edges, thinned to ``min_spacing_mm`` (default 10 row
+    heights, at least 0.3 mm) and closed with a periodic cubic spline (:class:`~cnclab.geometry.contours.SplineContour`).
     """
     from shapely.geometry import Point
 
     from cnclab.geometry.contours import SplineContour
 
     h = stock.resolution_mm
-    min_spacing_mm = 4 * h if min_spacing_mm is None else min_spacing_mm
+    min_spacing_mm = max(10 * h, 0.3) if min_spacing_mm is None else min_spacing_mm
     cleared = domain_polygon.difference(stock.to_polygon())
     geoms = getattr(cleared, "geoms", [cleared])
     seed = Point(*seed_xy)

@@ -1,0 +1,110 @@
+"""Theses II and III: arcs vs Thesis I, convergence orders, rotation sense, simulated engagement."""
+import math
+
+import numpy as np
+import pytest
+from shapely.geometry import Point, Polygon, box
+
+from cnclab.geometry.contours import Arc, Blob, Ellipse, Line, Reversed, RoundedPolygon, SplineContour
+from cnclab.runtime import pick
+from cnclab.toolpath import constant_engagement as ce
+
+R, TH = 3.0, 60.0
+
+
+def _arc_errors(method, kind, dts):
+    arc = Arc((0, 0), 8.0, 0, 200 if kind == "concave" else -200)
+    P0, d = ce.arc_start_point(arc, R, TH, kind)
+    return np.array([np.max(np.abs(np.hypot(*ce.thesis3_path(arc, R, TH, dt, method, P0=P0).P.T) - d))
+                     for dt in dts])
+
+
+@pytest.mark.parametrize("kind", ["concave", "convex"])
+def test_convergence_orders_on_arcs(kind):
+    dts = np.array([0.4, 0.2, 0.1, 0.05])
+    for method, order in (("euler", 1), ("midpoint", 2)):
+        err = _arc_errors(method, kind, dts)
+        slope = np.polyfit(np.log(dts), np.log(err), 1)[0]
+        assert abs(slope - order) < 0.15, (method, slope)
+
+
+def test_convergence_against_ivp_on_ellipse():
+    ell = Ellipse((0, 0), 12, 8)
+    ref = ce.thesis2_ivp(ell, R, TH, t_end=3.0)
+    dts = np.array([0.04, 0.02, 0.01])
+    for method, order in (("euler", 1), ("midpoint", 2)):
+        err = []
+        for dt in dts:
+            p = ce.thesis3_path(ell, R, TH, dt, method, t_end=3.0)
+            err.append(np.max(np.hypot(*(p.P - ref.sol.sol(p.t).T).T)))
+        slope = np.polyfit(np.log(dts), np.log(err), 1)[0]
+        assert abs(slope - order) < 0.2, (method, slope)
+
+
+def test_thesis2_and_thesis3_directions_agree():
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        C = rng.normal(size=2)
+        a = rng.uniform(0, 2 * np.pi)
+        P = C + R * np.array([np.cos(a), np.sin(a)])
+        assert np.allclose(ce.thesis3_feed_direction(P, C, TH), ce.thesis2_feed_direction(P, C, TH))
+
+
+def test_straight_contour_offset_exact_and_constraint():
+    res = ce.thesis3_path(Line((0, 0), (20, 0)), R, TH, 0.3)
+    assert np.allclose(res.P[:, 1], R * math.cos(math.radians(TH)))
+    assert np.allclose(np.hypot(*(res.P - res.C).T), R)          # |P_i C_i| = r at every step
+
+
+def test_adaptive_step_meets_tolerance_with_fewer_steps():
+    blob = Blob((0, 0), 10.0)
+    ref = ce.thesis2_ivp(blob, R, TH)
+    fixed = ce.thesis3_path(blob, R, TH, 0.01, "midpoint")
+    ada = ce.thesis3_path(blob, R, TH, 0.05, "midpoint", adaptive=True, tol_mm=1e-5)
+    err = np.max(np.hypot(*(ada.P - ref.sol.sol(ada.t).T).T))
+    assert err < 1e-3 and len(ada.t) < len(fixed.t)
+
+
+@pytest.mark.parametrize("name", ["blob", "rounded_polygon", "spline"])
+def test_generated_paths_hold_engagement_in_simulation(name):
+    h = pick(0.01, 0.03)
+    if name == "blob":
+        c = Blob((0, 0), 10.0)
+    elif name == "rounded_polygon":
+        c = RoundedPolygon([(-10, -8), (10, -8), (10, 8), (-10, 8)], 4.0)
+    else:
+        t = np.linspace(0, 2 * np.pi, 9)[:-1]
+        c = SplineContour(np.c_[10 * np.cos(t), 8 * np.sin(t) + np.sin(2 * t)], closed=True)
+    res = ce.thesis3_path(c, R, TH, 0.05, "midpoint")
+    P = ce.resample_path(res.P, h)
+    stock = box(-25, -25, 25, 25).difference(Polygon(c.sample(4000)))
+    df = ce.engagement_along_path(stock, P, R, h)
+    stats = ce.deviation_stats(df.engagement_deg, TH, skip_mm=3.0, s_mm=df.s, end_skip_mm=12.0)
+    assert stats["max_dev_deg"] <= pick(1.0, 1.5), stats
+
+
+def test_reversed_contour_and_bad_input():
+    a = Arc((0, 0), 5, 0, 90)
+    rv = Reversed(a)
+    assert np.allclose(rv.point(0.0), a.point(a.t_max))
+    with pytest.raises(ValueError, match="theta_deg"):
+        ce.thesis3_path(a, R, 0.0, 0.1)
+    with pytest.raises(ValueError, match="tool_radius"):
+        ce.thesis3_path(a, -1, 60, 0.1)
+    with pytest.raises(ValueError, match="dt"):
+        ce.thesis3_path(a, R, 60, 0.0)
+    with pytest.raises(ValueError, match="method"):
+        ce.thesis3_path(a, R, 60, 0.1, method="rk4")
+
+
+def test_multi_pass_grows_pocket_within_final_contour():
+    from cnclab.simulation import dixel
+
+    h = 0.05
+    domain = box(-20, -20, 20, 20)
+    final = Point(0, 0).buffer(14.0, quad_segs=128)
+    stock = dixel.Stock.from_polygon(domain.difference(Point(0, 0).buffer(6.0, quad_segs=128)), h)
+    laps = ce.multi_pass(stock, domain, final, (0, 0), R, TH, n_passes=2, dt=0.1)
+    assert len(laps) == 2 and all(lap["removed_mm2"] > 0 for lap in laps)
+    for lap in laps:
+        assert np.all(np.hypot(*lap["path"].T) <= 14.0 - R + 1e-6)
