@@ -1,0 +1,650 @@
+"""2.5D pocket roughing: user pocket input, medial axis, the Jacsó (2021, §4) hybrid path and the
+comparison strategies (contour-parallel offsets, zig-zag) on the same pocket.
+
+A pocket is a shapely ``Polygon`` (mm) with a pre-drilled start hole (diameter, mm) and cutting data
+(:class:`PocketJob`). Units: mm, mm/min, m/min, degrees. ``tool_diameter`` is a *diameter*;
+``tool_radius`` = diameter / 2 everywhere else.
+
+Hybrid path (:func:`hybrid_path`), after the medial axis transformation (:func:`medial_axis`):
+
+1. **open centre** — spiral-like constant-engagement laps around the start hole
+   (:func:`cnclab.toolpath.constant_engagement.multi_pass`, Thesis III with the stock recomputed
+   after every lap) until a lap touches the final contour;
+2. **arms** — for every medial-axis branch that ends in a tip, constant-engagement trochoidal
+   periods (:func:`cnclab.toolpath.trochoidal.ce_period`) in the branch's frame, the front
+   recomputed from a dixel stock after every period, linked by arcs through the cleared region;
+3. **linking** — straight moves between arms through the cleared centre (fast linking feed).
+
+Every strategy is a :class:`StrategyPath` (points + per-point link flags); :func:`evaluate_strategy`
+cuts it through one dixel stock (pocket minus start hole) and reports engagement maxima, the share
+of the path above theta + 5 deg, machining time and the uncut area; :func:`to_gcode_moves` exports
+it as RS274/NGC moves.
+
+>>> job = PocketJob.from_dict({"polygon": [[0, 0], [40, 0], [40, 30], [0, 30]],
+...                            "start_hole": {"center": [20, 15], "diameter": 11}})
+>>> round(job.volume_mm3(), 1)                # a_p (A_pocket - A_hole) = 3 (1200 - 95.03)
+3314.9
+>>> PocketJob.from_dict({"polygon": [[0, 0], [5, 0], [5, 30], [0, 30]],
+...                      "start_hole": {"center": [2.5, 15], "diameter": 4}})
+Traceback (most recent call last):
+...
+ValueError: pocket: the tool (diameter 6 mm) cannot enter the pocket: it is narrower than the tool
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import shapely
+from shapely import affinity
+from shapely.geometry import LineString, Point, Polygon
+
+__all__ = ["PocketJob", "load_pocket", "star_polygon", "design_star", "medial_axis", "arm_branches",
+           "StrategyPath", "hybrid_path", "contour_parallel_path", "zigzag_path", "evaluate_strategy",
+           "to_gcode_moves", "gcode_roundtrip_error"]
+
+
+# ---------------------------------------------------------------------------------------------
+# input
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class PocketJob:
+    """Pocket and cutting data. Lengths mm, v_c m/min, f_z mm/tooth, feeds mm/min, theta deg."""
+
+    polygon: Polygon
+    start_center: tuple
+    start_hole_diameter: float
+    tool_diameter: float = 6.0
+    teeth: int = 1
+    v_c: float = 120.0
+    f_z: float = 0.04
+    a_p: float = 3.0
+    theta_deg: float = 60.0
+    link_feed: float = 1500.0
+    v_fmax: float = 1000.0
+    roll_radius: float = 1.0
+    source: str = "<dict>"
+    feed_mm_min: float | None = None
+
+    @property
+    def tool_radius(self) -> float:
+        return 0.5 * self.tool_diameter
+
+    @property
+    def spindle_rpm(self) -> float:
+        """n = 1000 v_c / (pi D) (rpm)."""
+        return 1000.0 * self.v_c / (math.pi * self.tool_diameter)
+
+    @property
+    def feed(self) -> float:
+        """Nominal feed (mm/min): ``feed_mm_min`` if given (e.g. the rounded catalogue value), else
+        v_f = f_z z n."""
+        return self.feed_mm_min if self.feed_mm_min else self.f_z * self.teeth * self.spindle_rpm
+
+    @property
+    def a_e(self) -> float:
+        """Radial depth of a straight cut at theta: r (1 - cos theta) (mm)."""
+        return self.tool_radius * (1 - math.cos(math.radians(self.theta_deg)))
+
+    def mrr_nominal(self, feed=None) -> float:
+        """MRR_nom = a_p a_e v_f (mm^3/min)."""
+        return self.a_p * self.a_e * (self.feed if feed is None else feed)
+
+    def start_hole(self) -> Polygon:
+        return Point(self.start_center).buffer(0.5 * self.start_hole_diameter, 256)
+
+    def volume_mm3(self) -> float:
+        """Material to remove: a_p (pocket area - start-hole area) (mm^3)."""
+        return self.a_p * self.polygon.difference(self.start_hole()).area
+
+    def allowed(self) -> Polygon:
+        """Tool-centre region: the pocket shrunk by the tool radius."""
+        return self.polygon.buffer(-self.tool_radius, 64)
+
+    @classmethod
+    def from_dict(cls, d: dict, source: str = "<dict>") -> "PocketJob":
+        """Build and validate from a mapping (the JSON layout of :func:`load_pocket`)."""
+        def num(key, default, sub=None):
+            v = (d.get(sub, {}) if sub else d).get(key, default)
+            try:
+                v = float(v)
+            except (TypeError, ValueError):
+                raise ValueError(f"{source}: '{key}' must be a number, got {v!r}") from None
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{source}: '{key}' must be a positive number, got {v!r}")
+            return v
+
+        pts = d.get("polygon")
+        if pts is None:
+            raise ValueError(f"{source}: missing 'polygon' (a list of [x, y] points in mm)")
+        try:
+            P = np.asarray(pts, float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{source}: 'polygon' must be a list of [x, y] points in mm") from None
+        if P.ndim != 2 or P.shape[1] != 2 or len(P) < 3 or not np.all(np.isfinite(P)):
+            raise ValueError(f"{source}: 'polygon' must hold >= 3 finite [x, y] points in mm")
+        poly = Polygon(P)
+        if not poly.is_valid or poly.area <= 0:
+            raise ValueError(f"{source}: 'polygon' is not a simple polygon ({shapely.is_valid_reason(poly)})")
+        tool = num("tool_diameter", 6.0)
+        hole = d.get("start_hole", {})
+        centre = hole.get("center")
+        if centre is None:
+            centre = shapely.get_coordinates(shapely.maximum_inscribed_circle(poly, 0.01))[0]
+        centre = tuple(float(c) for c in centre)
+        job = cls(poly, centre, num("diameter", 11.0, "start_hole"), tool, int(num("teeth", 1)),
+                  num("v_c", 120.0), num("f_z", 0.04), num("a_p", 3.0), num("theta_deg", 60.0),
+                  num("link_feed", 1500.0), num("v_fmax", 1000.0), num("roll_radius", 1.0), source,
+                  num("feed_mm_min", 1.0) if "feed_mm_min" in d else None)
+        job.validate()
+        return job
+
+    def validate(self) -> None:
+        """Refuse jobs the tool cannot machine; ValueError naming the source and the reason."""
+        if not 0 < self.theta_deg <= 180:
+            raise ValueError(f"{self.source}: theta_deg must be in (0, 180], got {self.theta_deg}")
+        allowed = self.allowed()
+        if allowed.is_empty or allowed.area < 1e-6:
+            raise ValueError(f"{self.source}: the tool (diameter {self.tool_diameter:g} mm) cannot enter "
+                             "the pocket: it is narrower than the tool")
+        if self.start_hole_diameter < self.tool_diameter:
+            raise ValueError(f"{self.source}: start hole diameter {self.start_hole_diameter:g} mm is smaller "
+                             f"than the tool diameter {self.tool_diameter:g} mm: the tool cannot enter it")
+        if not self.polygon.buffer(1e-9).contains(self.start_hole()):
+            raise ValueError(f"{self.source}: the start hole at {self.start_center} (diameter "
+                             f"{self.start_hole_diameter:g} mm) is not inside the pocket")
+
+
+def load_pocket(path) -> PocketJob:
+    """Read a pocket job JSON (read-only): ``{"polygon": [[x, y], ...], "start_hole": {"center":
+    [x, y], "diameter": d}, "tool_diameter": 6, "v_c": 120, "f_z": 0.04, "teeth": 1, "a_p": 3,
+    "theta_deg": 60, "link_feed": 1500, "v_fmax": 1000}`` (mm, m/min, mm/min, deg).
+    Errors name the file (and the line for JSON syntax errors)."""
+    p = Path(path)
+    try:
+        d = json.loads(p.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as e:
+        raise ValueError(f"{p}:{e.lineno}: invalid JSON ({e.msg})") from None
+    if not isinstance(d, dict):
+        raise ValueError(f"{p}: the top level must be a JSON object")
+    if "star" in d and "polygon" not in d:
+        d = dict(d, polygon=shapely.get_coordinates(star_polygon(**d["star"]).exterior).tolist())
+    return PocketJob.from_dict(d, source=str(p))
+
+
+# ---------------------------------------------------------------------------------------------
+# the star pocket of §4 (contour not printed: a parameterised stand-in)
+# ---------------------------------------------------------------------------------------------
+def star_polygon(n_arms=5, outer_radius=23.0, inner_ratio=0.5, tip_radius=4.0, root_radius=2.0,
+                 center=(0.0, 0.0), rotation_deg=90.0, quad_segs=32) -> Polygon:
+    """Rounded star (mm): a regular star polygon with tips at ``outer_radius`` and roots at
+    ``inner_ratio * outer_radius``, its convex tips rounded with ``tip_radius`` (the pocket's concave
+    corners: must exceed the tool radius for the tool to follow) and its roots with ``root_radius``.
+
+    Rounding is morphological: tips by an opening (buffer -rt, +rt), roots by a closing (+rr, -rr).
+    """
+    n = int(n_arms)
+    if n < 3:
+        raise ValueError(f"n_arms must be >= 3, got {n_arms!r}")
+    if not 0 < inner_ratio < 1:
+        raise ValueError(f"inner_ratio must be in (0, 1), got {inner_ratio!r}")
+    k = np.arange(2 * n)
+    rad = np.where(k % 2 == 0, outer_radius, inner_ratio * outer_radius)
+    ang = np.radians(rotation_deg) + k * np.pi / n
+    poly = Polygon(np.c_[center[0] + rad * np.cos(ang), center[1] + rad * np.sin(ang)])
+    poly = poly.buffer(-tip_radius, quad_segs).buffer(tip_radius, quad_segs)
+    poly = poly.buffer(root_radius, quad_segs).buffer(-root_radius, quad_segs)
+    return shapely.set_precision(poly, 1e-9)
+
+
+def design_star(volume_mm3, a_p, hole_diameter, **star_kw) -> float:
+    """Outer radius (mm) of :func:`star_polygon` whose volume a_p (A - A_hole) equals ``volume_mm3``."""
+    from scipy.optimize import brentq
+
+    hole = math.pi * (0.5 * hole_diameter) ** 2
+    star_kw = {k: v for k, v in star_kw.items() if k != "outer_radius"}
+
+    def f(R):
+        return a_p * (star_polygon(outer_radius=R, **star_kw).area - hole) - volume_mm3
+
+    return float(brentq(f, 10.0, 100.0, xtol=1e-9))
+
+
+# ---------------------------------------------------------------------------------------------
+# medial axis
+# ---------------------------------------------------------------------------------------------
+def medial_axis(polygon, spacing_mm=0.25, min_clearance_mm=None):
+    """Approximate medial axis (MultiLineString, mm) from the Voronoi diagram of boundary samples.
+
+    The boundary is sampled every ``spacing_mm``; Voronoi edges (``shapely.voronoi_polygons``,
+    GEOS) lying inside the polygon whose both ends are farther than ``min_clearance_mm`` (default
+    2 spacings) from the boundary are kept and merged. Converges to the medial axis as the spacing
+    shrinks (Brandt & Algazi 1992, CVGIP 55:329).
+    """
+    ring = polygon.exterior
+    n = max(int(math.ceil(ring.length / spacing_mm)), 16)
+    pts = shapely.line_interpolate_point(ring, np.linspace(0, ring.length, n, endpoint=False))
+    edges = shapely.voronoi_polygons(shapely.multipoints(pts), only_edges=True)
+    segs = np.asarray(shapely.get_parts(shapely.line_merge(edges) if False else edges))
+    segs = shapely.get_parts(edges)
+    segs = segs[shapely.within(segs, polygon)]
+    clear = 2 * spacing_mm if min_clearance_mm is None else min_clearance_mm
+    b = polygon.boundary
+    c = shapely.get_coordinates(segs).reshape(-1, 2, 2)
+    d0 = shapely.distance(shapely.points(c[:, 0]), b)
+    d1 = shapely.distance(shapely.points(c[:, 1]), b)
+    segs = segs[(d0 > clear) & (d1 > clear)]
+    return shapely.line_merge(shapely.multilinestrings(segs))
+
+
+def arm_branches(polygon, center, spacing_mm=0.25, min_length_mm=None):
+    """Tips of the medial axis: end points of degree 1 (far from ``center``), with their clearance.
+
+    Returns a list of dicts ``{"tip": (x, y), "angle_deg": direction from center, "clearance_mm":
+    inscribed radius at the tip end, "length_mm": distance from center}``, sorted by angle.
+    """
+    ma = medial_axis(polygon, spacing_mm)
+    parts = shapely.get_parts(ma)
+    ends = np.vstack([shapely.get_coordinates(p)[[0, -1]] for p in parts])
+    key = np.round(ends / (spacing_mm * 0.01)).astype(np.int64)
+    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    deg1 = ends[cnt[inv.ravel()] == 1]
+    c = np.asarray(center, float)
+    dist = np.hypot(*(deg1 - c).T)
+    minlen = 0.25 * dist.max() if min_length_mm is None else min_length_mm
+    # a rounded tip (circular arc) degenerates into a fan of short Voronoi branches converging on
+    # the arc centre: keep one tip (the farthest) per cluster of end points closer than the clearance
+    order = np.argsort(-dist)
+    kept = []
+    for i in order:
+        if dist[i] < minlen:
+            continue
+        clear = polygon.boundary.distance(Point(deg1[i]))
+        if all(np.hypot(*(deg1[i] - deg1[j])) > clear for j in kept):
+            kept.append(i)
+    out = []
+    for p, dd in zip(deg1[kept], dist[kept]):
+        out.append({"tip": (float(p[0]), float(p[1])),
+                    "angle_deg": float(np.degrees(np.arctan2(p[1] - c[1], p[0] - c[0]))),
+                    "clearance_mm": float(polygon.boundary.distance(Point(p))), "length_mm": float(dd)})
+    return sorted(out, key=lambda a: a["angle_deg"])
+
+
+# ---------------------------------------------------------------------------------------------
+# strategy paths
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class StrategyPath:
+    """Tool-centre polyline (N, 2) mm; ``link[i]`` True when the segment ending at point i is a
+    linking move (run at the linking feed, no cutting intended); ``rapid[i]`` True for a retract-
+    rapid-plunge jump (G0 above the part); ``phase`` labels (e.g. 'centre', 'arm 2')."""
+
+    points: np.ndarray
+    link: np.ndarray
+    rapid: np.ndarray
+    phase: np.ndarray
+    name: str = ""
+    info: dict = field(default_factory=dict)
+
+    @staticmethod
+    def build(segments, name="", info=None):
+        """From a list of (points (n,2), kind in {'cut','link','rapid'}, phase) in path order."""
+        pts, link, rapid, phase = [], [], [], []
+        for P, kind, ph in segments:
+            P = np.asarray(P, float)
+            if pts:
+                last = pts[-1][-1]
+                if np.hypot(*(P[0] - last)) < 1e-9:
+                    P = P[1:]
+            if len(P) == 0:
+                continue
+            pts.append(P)
+            link.append(np.full(len(P), kind != "cut"))
+            rapid.append(np.full(len(P), kind == "rapid"))
+            phase.append(np.full(len(P), ph, dtype=object))
+        for a in (link, rapid):
+            a[0][0] = False
+        return StrategyPath(np.vstack(pts), np.concatenate(link), np.concatenate(rapid),
+                            np.concatenate(phase), name, info or {})
+
+    def lengths(self) -> dict:
+        ds = np.r_[0.0, np.hypot(*np.diff(self.points, axis=0).T)]
+        return {"cut": float(ds[~self.link].sum()), "link": float(ds[self.link & ~self.rapid].sum()),
+                "rapid": float(ds[self.rapid].sum())}
+
+
+def _rot(geom_or_pts, angle_deg, origin):
+    if isinstance(geom_or_pts, np.ndarray):
+        a = math.radians(angle_deg)
+        c, s = math.cos(a), math.sin(a)
+        p = geom_or_pts - np.asarray(origin)
+        return np.c_[c * p[:, 0] - s * p[:, 1], s * p[:, 0] + c * p[:, 1]] + np.asarray(origin)
+    return affinity.rotate(geom_or_pts, angle_deg, origin=tuple(origin))
+
+
+def _wedge(center, angle_deg, half_width_deg, radius):
+    a = np.radians(angle_deg + np.linspace(-half_width_deg, half_width_deg, 33))
+    c = np.asarray(center, float)
+    return Polygon(np.vstack([c, c + radius * np.c_[np.cos(a), np.sin(a)]]))
+
+
+def _straight_link(E, S, allowed, via):
+    """Straight link E -> S if it stays in ``allowed``, else E -> via -> S."""
+    guard = allowed.buffer(1e-6)
+    if guard.contains(LineString([E, S])):
+        return np.vstack([E, S])
+    return np.vstack([E, via, S])
+
+
+def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=200,
+                spacing_mm=0.25):
+    """Jacsó §4 hybrid path on ``job`` (see the module docstring). Returns a :class:`StrategyPath`
+    with ``info`` holding the medial axis, the arms, the number of laps and periods per arm."""
+    from cnclab.simulation import dixel
+    from cnclab.simulation.common import simulate
+
+    from .constant_engagement import multi_pass
+    from .trochoidal import ce_period, linking_arc
+
+    r, th = job.tool_radius, job.theta_deg
+    pocket, allowed = job.polygon, job.allowed()
+    c = np.asarray(job.start_center, float)
+    Stock = _stock_class()
+    stock = Stock.from_polygon(pocket.difference(job.start_hole()), resolution_mm)
+    segs = []
+    # 1. open centre: constant-engagement laps until one touches the final contour
+    laps = 0
+    for _ in range(int(max_laps)):
+        lap = None
+        for h in (dt, dt / 2, dt / 4):          # smaller Thesis III steps where the contour is sharp
+            try:
+                # domain shrunk by 2 rows: the staircase slivers along the wall must not join the
+                # cleared region (they would make its boundary the whole pocket outline)
+                lap = multi_pass(stock.copy(), pocket.buffer(-2 * resolution_mm), pocket, tuple(c), r,
+                                 th, 1, dt=h,
+                                 step_mm=resolution_mm, a_p=job.a_p, feed_mm_min=job.feed)[0]
+                break
+            except ValueError:
+                continue
+        if lap is None:
+            break
+        stock = _apply_world(stock, [lap["path"]], r)
+        P = lap["path"]
+        if lap["removed_mm2"] < 1e-6:
+            break
+        if segs:
+            segs.append((np.vstack([segs[-1][0][-1], P[0]]), "cut", "centre"))
+        else:
+            segs.append((np.vstack([c, P[0]]), "link", "centre"))
+        segs.append((P, "cut", "centre"))
+        laps += 1
+        on_wall = shapely.distance(shapely.points(P), allowed.exterior) < 1e-6
+        if on_wall.mean() > 0.02:
+            break
+    # 2. arms along the medial-axis branches
+    arms = arm_branches(pocket, c, spacing_mm)
+    n_arm = max(len(arms), 1)
+    reach = 2 * max(np.hypot(*(np.asarray(pocket.exterior.coords) - c).T))
+    periods = []
+    for k, arm in enumerate(arms):
+        ang = arm["angle_deg"]
+        wedge = _wedge(c, ang, 180.0 / n_arm, reach)
+        material = _polygonal(stock.to_polygon().intersection(wedge))
+        if material.is_empty or material.area < 1e-3:
+            periods.append(0)
+            continue
+        loc_mat = _polygonal(_rot(material, -ang, c))
+        if loc_mat.is_empty or loc_mat.area < 1e-3:
+            periods.append(0)
+            continue
+        loc_allowed = _rot(allowed, -ang, c)
+        loc = Stock.from_polygon(loc_mat, resolution_mm)
+        cuts, arcs = [], []
+        for _ in range(int(max_periods)):
+            Pl = ce_period(loc, r, th, loc_allowed, dt=dt, step_mm=resolution_mm)
+            if Pl is None:
+                break
+            df = simulate(loc, Pl, r, job.a_p, job.feed)
+            if float(df.removed_mm2.sum()) < 1e-3:
+                break
+            if cuts:
+                A, _, _ = linking_arc(cuts[-1][-1], Pl[0], loc_allowed, ds=resolution_mm)
+                arcs.append(A)
+            cuts.append(Pl)
+        periods.append(len(cuts))
+        if not cuts:
+            continue
+        E = segs[-1][0][-1]
+        S = _rot(cuts[0][:1], ang, c)[0]
+        segs.append((_straight_link(E, S, allowed, c), "link", f"arm {k}"))
+        for i, Pl in enumerate(cuts):
+            if i > 0:
+                segs.append((_rot(arcs[i - 1], ang, c), "link", f"arm {k}"))
+            segs.append((_rot(Pl, ang, c), "cut", f"arm {k}"))
+        stock = _apply_world(stock, [_rot(Pl, ang, c) for Pl in cuts], r)
+    info = {"laps": laps, "arms": arms, "periods_per_arm": periods,
+            "medial_axis": medial_axis(pocket, spacing_mm)}
+    return StrategyPath.build(segs, "hybrid (Jacsó §4)", info)
+
+
+def _stock_class():
+    """Dixel stock whose ``to_polygon`` closes the row gaps.
+
+    ``dixel.Stock.to_polygon`` puts row j's top at (y0 + j h) + h and row j+1's bottom at
+    y0 + (j + 1) h; the two differ by rounding, so the union of the row boxes has hairline gaps
+    between rows (190 parts for the star pocket) and a cleared region computed from it leaks through
+    them. Here both edges are the same expression y0 + k h.
+    """
+    from cnclab.simulation import dixel
+
+    class RowStock(dixel.Stock):
+        def copy(self):
+            return RowStock(self.y0, self.resolution_mm, self.n_rows, self._row.copy(), self._a.copy(),
+                            self._b.copy(), self.x_min, self.x_max)
+
+        def to_polygon(self):
+            lo = self.y0 + self._row * self.resolution_mm
+            hi = self.y0 + (self._row + 1) * self.resolution_mm
+            return shapely.union_all(shapely.box(self._a, lo, self._b, hi))
+
+    return RowStock
+
+
+def _polygonal(g):
+    """Polygonal part of a geometry as a valid (Multi)Polygon (slivers under 1e-6 mm^2 dropped)."""
+    from shapely.geometry import MultiPolygon
+
+    parts = [p for p in shapely.get_parts(shapely.make_valid(g)) if isinstance(p, Polygon) and p.area > 1e-6]
+    if not parts:
+        return Polygon()
+    g = shapely.union_all(parts).buffer(0)
+    if isinstance(g, MultiPolygon):
+        g = MultiPolygon([p for p in g.geoms if p.area > 1e-6])
+    return g
+
+
+def _apply_world(stock, paths, r):
+    for P in paths:
+        for p in P:
+            stock.cut_disk(p, r)
+    return stock
+
+
+def contour_parallel_path(job: PocketJob, stepover=None):
+    """Contour-parallel offsets (inside-out, :mod:`cnclab.toolpath.offsets`) at ``stepover``
+    (default the nominal a_e); passes joined by rapids (retract, G0, plunge)."""
+    from .offsets import link_loops, offset_levels
+
+    ae = job.a_e if stepover is None else stepover
+    levels = offset_levels(job.polygon, job.tool_radius, ae)
+    passes = link_loops(levels, job.allowed(), start=job.start_center)
+    segs = [(np.vstack([job.start_center, passes[0][0]]), "link", "cp")]
+    for i, P in enumerate(passes):
+        if i > 0:
+            segs.append((np.vstack([passes[i - 1][-1], P[0]]), "rapid", "cp"))
+        segs.append((P, "cut", "cp"))
+    return StrategyPath.build(segs, "contour-parallel", {"stepover": ae})
+
+
+def zigzag_path(job: PocketJob, stepover=None, angle_deg=0.0):
+    """Zig-zag (direction-parallel) raster over the tool-centre region at ``stepover`` (default a_e),
+    alternate directions, straight feed links along the boundary side when inside the region
+    (else retract-rapid), then one finishing lap of the region boundary (removes the scallops)."""
+    ae = job.a_e if stepover is None else stepover
+    allowed = job.allowed()
+    c = job.start_center
+    A = _rot(allowed, -angle_deg, c)
+    x0, y0, x1, y1 = A.bounds
+    lines = []
+    ys = np.arange(y0 + 1e-6, y1, ae)
+    for i, y in enumerate(ys):
+        g = A.intersection(LineString([(x0 - 1, y), (x1 + 1, y)]))
+        parts = [np.asarray(p.coords) for p in shapely.get_parts(g) if p.length > 1e-6]
+        parts = sorted(parts, key=lambda q: q[:, 0].min())
+        for q in parts:
+            q = q[np.argsort(q[:, 0])]
+            lines.append(q if i % 2 == 0 else q[::-1])
+    guard = A.buffer(1e-6)
+    segs = [(np.vstack([c, _rot(lines[0][:1], angle_deg, c)[0]]), "rapid", "zz")]
+    prev = None
+    for q in lines:
+        qq = _rot(q, angle_deg, c)
+        if prev is not None:
+            kind = "cut" if guard.contains(LineString([q[0], prev])) else "rapid"
+            segs.append((np.vstack([_rot(prev[None], angle_deg, c)[0], qq[0]]), kind, "zz"))
+        segs.append((qq, "cut", "zz"))
+        prev = q[-1]
+    ring = np.asarray(allowed.exterior.coords)
+    segs.append((np.vstack([segs[-1][0][-1], ring[0]]), "rapid", "zz"))
+    segs.append((ring, "cut", "zz"))
+    return StrategyPath.build(segs, "zig-zag", {"stepover": ae})
+
+
+# ---------------------------------------------------------------------------------------------
+# evaluation, feed control and G-code
+# ---------------------------------------------------------------------------------------------
+def _resample_strategy(path: StrategyPath, step_mm):
+    """Insert points so no segment exceeds ``step_mm`` (flags carried by the segment end)."""
+    P = path.points
+    out, lk, rp, ph = [P[:1]], [path.link[:1]], [path.rapid[:1]], [path.phase[:1]]
+    d = np.hypot(*np.diff(P, axis=0).T)
+    n = np.maximum(np.ceil(d / step_mm).astype(int), 1)
+    for i in range(1, len(P)):
+        t = np.arange(1, n[i - 1] + 1)[:, None] / n[i - 1]
+        out.append(P[i - 1] + t * (P[i] - P[i - 1]))
+        m = n[i - 1]
+        lk.append(np.full(m, path.link[i]))
+        rp.append(np.full(m, path.rapid[i]))
+        ph.append(np.full(m, path.phase[i], dtype=object))
+    return StrategyPath(np.vstack(out), np.concatenate(lk), np.concatenate(rp), np.concatenate(ph),
+                        path.name, path.info)
+
+
+def evaluate_strategy(path: StrategyPath, job: PocketJob, resolution_mm=0.05, feed_control=False,
+                      block_mm=0.5, margin_deg=5.0):
+    """Cut ``path`` through the pocket stock (pocket minus start hole) with the dixel simulator.
+
+    Rapid jumps are not simulated (the tool is above the part). Returns ``(table, summary)``:
+    the per-step DataFrame (columns of :func:`cnclab.simulation.common.simulate` plus ``link``,
+    ``rapid``, ``phase``, ``feed_mm_min`` and, with ``feed_control``, the controlled feed and
+    ``mrr_ctrl_mm3_min``) and a dict with the engagement maximum, the share of cutting length above
+    theta + ``margin_deg``, lengths, machining time (cutting at v_f or the controlled feed, links at
+    the linking feed; rapids excluded), uncut area (mm^2) and the theoretical minimum V / MRR_nom.
+    """
+    from cnclab.cutting.feed_control import controlled_feed
+    from cnclab.simulation import dixel
+
+    p = _resample_strategy(path, resolution_mm)
+    stock = dixel.Stock.from_polygon(job.polygon.difference(job.start_hole()), resolution_mm)
+    tables = []
+    P, rapid = p.points, p.rapid
+    # contiguous non-rapid runs are simulated in order; a rapid ends a run
+    starts = np.r_[0, np.flatnonzero(rapid)]
+    ends = np.r_[np.flatnonzero(rapid), len(P)]
+    import pandas as pd
+
+    for a, b in zip(starts, ends):
+        if b - a < 2:
+            continue
+        df = dixel.simulate(stock, P[a:b], job.tool_radius, job.a_p, job.feed, f_z=job.f_z,
+                            teeth=job.teeth)
+        df["link"] = p.link[a:b]
+        df.loc[df.index[0], "link"] = True if a > 0 else df["link"].iloc[0]
+        df["rapid"] = False
+        df["phase"] = p.phase[a:b]
+        df["idx"] = np.arange(a, b)
+        tables.append(df)
+    T = pd.concat(tables, ignore_index=True)
+    # a planned link that removes material is a roll-in/roll-out: it is cutting (cutting feed)
+    T["roll"] = T.link.to_numpy() & (T.removed_mm2.to_numpy() > 1e-6)
+    T["link"] = T.link.to_numpy() & ~T.roll.to_numpy()
+    cut = ~T.link.to_numpy()
+    T["feed_mm_min"] = np.where(cut, job.feed, job.link_feed)
+    if feed_control:
+        v = controlled_feed(T.removed_mm2.to_numpy(), T.ds.to_numpy(), T.engagement_deg.to_numpy(),
+                            cut, job.a_e, job.feed, job.v_fmax, job.theta_deg, block_mm, margin_deg)
+        T["feed_mm_min"] = np.where(cut, v, job.link_feed)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            T["mrr_ctrl_mm3_min"] = np.where(T.ds > 0, job.a_p * T.removed_mm2 / T.ds * T.feed_mm_min, np.nan)
+    ds = T.ds.to_numpy()
+    eng = T.engagement_deg.to_numpy()
+    time_s = 60.0 * float(np.sum(ds / T.feed_mm_min.to_numpy()))
+    Lc = float(ds[cut].sum())
+    above = float(ds[cut & (eng > job.theta_deg + margin_deg)].sum()) / Lc
+    allowed = job.allowed()
+    reach = allowed.buffer(job.tool_radius, 64)
+    left = stock.area()
+    summary = {"strategy": path.name, "max_engagement_deg": float(np.nanmax(eng[cut])),
+               "share_above_theta_plus5": above, "cut_length_mm": Lc,
+               "link_length_mm": float(ds[~cut].sum()), "rapid_length_mm": p.lengths()["rapid"],
+               "roll_in_length_mm": float(ds[T.roll.to_numpy()].sum()),
+               "time_s": time_s, "uncut_area_mm2": left,
+               "unreachable_area_mm2": float(job.polygon.difference(reach).area),
+               "removed_volume_mm3": job.a_p * float(T.removed_mm2.sum()),
+               "t_min_s": 60.0 * job.volume_mm3() / job.mrr_nominal()}
+    summary["time_over_min"] = summary["time_s"] / summary["t_min_s"]
+    return T, summary
+
+
+def to_gcode_moves(path: StrategyPath, job: PocketJob, feeds=None, z_cut=None, z_clear=5.0,
+                   decimals=4):
+    """RS274/NGC moves: G0 to the start above the part, plunge, then G1 per segment at the cutting
+    feed (or ``feeds[i]`` mm/min per point), links at the linking feed, rapid jumps as
+    retract-G0-plunge. ``z_cut`` defaults to -a_p."""
+    from .gcode import Move
+
+    z = -job.a_p if z_cut is None else z_cut
+    S = job.spindle_rpm
+    P = path.points
+    mv = [Move("G0", P[0, 0], P[0, 1], z_clear), Move("G1", P[0, 0], P[0, 1], z, feed=job.feed, spindle=S)]
+    for i in range(1, len(P)):
+        if path.rapid[i]:
+            mv += [Move("G0", P[i - 1, 0], P[i - 1, 1], z_clear), Move("G0", P[i, 0], P[i, 1], z_clear),
+                   Move("G1", P[i, 0], P[i, 1], z, feed=job.feed, spindle=S)]
+            continue
+        f = job.link_feed if path.link[i] else (job.feed if feeds is None else float(feeds[i]))
+        mv.append(Move("G1", P[i, 0], P[i, 1], z, feed=f, spindle=S))
+    mv.append(Move("G0", P[-1, 0], P[-1, 1], z_clear, spindle=S))
+    return mv
+
+
+def gcode_roundtrip_error(path: StrategyPath, job: PocketJob, feeds=None, decimals=4):
+    """Write the G-code, parse it back and compare: (max point distance mm, feed-length difference
+    mm, text) — the parsed program must reproduce the path within the written decimals."""
+    from .gcode import parse_gcode, path_lengths, write_gcode
+
+    moves = to_gcode_moves(path, job, feeds, decimals=decimals)
+    text = write_gcode(moves, header="cnclab " + path.name.replace("(", "").replace(")", ""), decimals=decimals)
+    back = parse_gcode(text, source=path.name)
+    cut_back = np.array([[m.x, m.y] for m in back if m.motion == "G1" and abs(m.z + job.a_p) < 1e-9])
+    keep = np.r_[True, np.hypot(*np.diff(path.points, axis=0).T) > 10 ** -decimals]
+    ref = path.points[keep]
+    # every written cutting-depth point must lie on the path within rounding
+    from scipy.spatial import cKDTree
+
+    d, _ = cKDTree(ref).query(cut_back)
+    dl = abs(path_lengths(back)["feed"] - path_lengths(moves)["feed"])
+    return float(d.max()), float(dl), text

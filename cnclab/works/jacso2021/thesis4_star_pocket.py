@@ -1,0 +1,115 @@
+"""Recipes for Jacsó (2021) §3.4 (Thesis IV, trochoidal slots) and §4 (star pocket, hybrid path).
+
+Inputs: ``data/jacso2021/table4_1_cutting_parameters.json`` (Table 4.1 + §4 text) and
+``data/jacso2021/star_pocket.json`` (the designed star: the booklet does not print the contour).
+Every ledger value is computed here from those files; resolutions follow fast mode
+(:func:`cnclab.runtime.pick`).
+
+>>> round(feed_from_cutting_speed(), 2)        # f_z z 1000 v_c / (pi D)
+254.65
+>>> round(mrr_nominal(), 2)                    # a_p r (1 - cos 60) v_f = 3 * 1.5 * 255
+1147.5
+"""
+from __future__ import annotations
+
+import functools
+import json
+import math
+
+from cnclab.paths import data_path
+from cnclab.runtime import pick
+
+
+@functools.cache
+def table41() -> dict:
+    """Table 4.1 and the §4 text parameters (mm, m/min, mm/min, deg)."""
+    return json.loads(data_path("jacso2021", "table4_1_cutting_parameters.json").read_text())
+
+
+def feed_from_cutting_speed() -> float:
+    """v_f = f_z z n, n = 1000 v_c / (pi D) (mm/min) — Table 4.1 prints 255."""
+    t = table41()
+    n = 1000.0 * t["v_c_m_min"] / (math.pi * t["tool_diameter_mm"])
+    return t["f_z_mm"] * t["teeth"] * n
+
+
+def mrr_nominal() -> float:
+    """MRR_nom = a_p a_e v_f with a_e = r (1 - cos theta) and the printed v_f = 255 (mm^3/min)."""
+    t = table41()
+    a_e = 0.5 * t["tool_diameter_mm"] * (1 - math.cos(math.radians(t["theta_deg"])))
+    return t["a_p_mm"] * a_e * t["v_f_printed_mm_min"]
+
+
+@functools.cache
+def star_job():
+    """The designed star pocket job (:class:`cnclab.toolpath.pocket.PocketJob`)."""
+    from cnclab.toolpath.pocket import load_pocket
+
+    return load_pocket(data_path("jacso2021", "star_pocket.json"))
+
+
+def star_volume_mm3() -> float:
+    """Volume to remove of the designed star at a_p = 3 mm with the 11 mm start hole (mm^3)."""
+    return star_job().volume_mm3()
+
+
+def t_min_s() -> float:
+    """Theoretical minimum machining time V / MRR_nom (s), V of the designed star (= 2098 mm^3)."""
+    return 60.0 * star_volume_mm3() / mrr_nominal()
+
+
+def excess_of_printed_time_pct() -> float:
+    """(134 s / t_min - 1) in % — consistency of the printed 134 s with the printed 22 %."""
+    return 100.0 * (134.0 / t_min_s() - 1.0)
+
+
+@functools.cache
+def star_strategies(resolution_mm=None):
+    """Hybrid (with and without feed control), contour-parallel and zig-zag on the star: summaries.
+
+    Returns ``(summaries DataFrame, {name: (path, table)})``.
+    """
+    import pandas as pd
+
+    from cnclab.toolpath import pocket as pk
+
+    res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
+    job = star_job()
+    hp = pk.hybrid_path(job, res)
+    out, rows = {}, []
+    T0, s0 = pk.evaluate_strategy(hp, job, res, feed_control=False)
+    s0["strategy"] = "hybrid, constant feed"
+    T1, s1 = pk.evaluate_strategy(hp, job, res, feed_control=True)
+    s1["strategy"] = "hybrid, feed control"
+    out["hybrid"] = (hp, T1)
+    rows += [s0, s1]
+    for name, f in (("contour-parallel", pk.contour_parallel_path), ("zig-zag", pk.zigzag_path)):
+        p = f(job)
+        T, s = pk.evaluate_strategy(p, job, res)
+        out[name] = (p, T)
+        rows.append(s)
+    return pd.DataFrame(rows).set_index("strategy"), out
+
+
+@functools.cache
+def trochoid_comparison(width_mm=12.0, theta_max_deg=60.0, resolution_mm=None):
+    """Thesis IV: the three patterns at one engagement limit (Ø6 tool, links at 1500 mm/min)."""
+    from cnclab.toolpath.trochoidal import compare_patterns
+
+    t = table41()
+    res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
+    return compare_patterns(width_mm, 0.5 * t["tool_diameter_mm"], theta_max_deg, res, a_p=t["a_p_mm"],
+                            feed_mm_min=t["v_f_printed_mm_min"], link_feed_mm_min=t["link_feed_mm_min"])
+
+
+@functools.cache
+def trochoid_sweep(resolution_mm=None):
+    """MRR gain of the constant-engagement pattern over W/r and theta_max (slow in full mode)."""
+    from cnclab.toolpath.trochoidal import pattern_sweep
+
+    t = table41()
+    res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
+    wr = pick((3.0, 4.0, 5.0), (4.0,))
+    th = pick((30.0, 45.0, 60.0, 90.0), (45.0, 60.0))
+    return pattern_sweep(wr, th, 0.5 * t["tool_diameter_mm"], res, a_p=t["a_p_mm"],
+                         feed_mm_min=t["v_f_printed_mm_min"], link_feed_mm_min=t["link_feed_mm_min"])
