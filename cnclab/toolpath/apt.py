@@ -40,7 +40,7 @@ class AptError(ValueError):
     """A malformed APT file; the message names the file and line."""
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(slots=True)
 class AptRecord:
     """One logical APT statement: ``word`` (upper case, '' for comments/blank), parsed ``values``.
 
@@ -53,10 +53,13 @@ class AptRecord:
     raw: str
     line: int = 0
     comment: str = ""
+    nums: list | None = None
 
     @property
     def values(self) -> list[float]:
         """The numeric arguments as floats (minor words such as MMPM/CLW skipped)."""
+        if self.nums is not None:
+            return self.nums
         out = []
         for a in self.args:
             try:
@@ -141,13 +144,28 @@ class AptProgram:
     def cl_points(self) -> CLPoints:
         """Motion end points with motion type, feed and spindle in force (validated)."""
         xyz, rapid, feed, spin, rec, line = [], [], [], [], [], []
+        ax, ar, af, asp, arec, al = xyz.append, rapid.append, feed.append, spin.append, rec.append, line.append
         f = math.nan
         s = math.nan
         pending_rapid = False
         start = None
         for i, r in enumerate(self.records):
             w = r.word
-            if w == "RAPID":
+            if w == "GOTO":
+                if pending_rapid:
+                    ar(True)
+                    af(math.nan)
+                    pending_rapid = False
+                else:
+                    if f != f:
+                        raise AptError(f"{self.source}:{r.line}: feed motion (GOTO) before any FEDRAT")
+                    ar(False)
+                    af(f)
+                ax(r.values[:3])
+                asp(s)
+                arec(i)
+                al(r.line)
+            elif w == "RAPID":
                 pending_rapid = True
             elif w == "FEDRAT":
                 f = r.values[0]
@@ -155,17 +173,6 @@ class AptProgram:
                 s = r.values[0] if r.values else s
             elif w == "FROM":
                 start = np.array(r.values[:3])
-            elif w == "GOTO":
-                is_rapid = pending_rapid
-                pending_rapid = False
-                if not is_rapid and math.isnan(f):
-                    raise AptError(f"{self.source}:{r.line}: feed motion (GOTO) before any FEDRAT")
-                xyz.append(r.values[:3])
-                rapid.append(is_rapid)
-                feed.append(math.nan if is_rapid else f)
-                spin.append(s)
-                rec.append(i)
-                line.append(r.line)
         if not xyz:
             raise AptError(f"{self.source}: empty program (no GOTO motion)")
         xyz = np.asarray(xyz, float)
@@ -190,8 +197,26 @@ def parse_apt(text: str, source: str = "<apt>") -> AptProgram:
     records = []
     i = 0
     n_lines = len(lines)
+    fed = False
+    pending_rapid = False
+    n_goto = 0
     while i < n_lines:
         first = i
+        line = lines[i]
+        if line.startswith("GOTO") and "$" not in line:  # fast path for the bulk of a CL file
+            args = line.partition("/")[2].split(",")
+            try:
+                vals = [float(a) for a in args]
+            except ValueError:
+                vals = None
+            if vals is not None and len(vals) in (3, 6) and math.isfinite(sum(vals)):
+                if not pending_rapid and not fed:
+                    raise AptError(f"{source}:{i + 1}: feed motion (GOTO) before any FEDRAT")
+                pending_rapid = False
+                n_goto += 1
+                records.append(AptRecord("GOTO", args, line, i + 1, "", vals))
+                i += 1
+                continue
         phys = [lines[i]]
         while _continues(lines[i]) and i + 1 < n_lines:
             i += 1
@@ -220,6 +245,15 @@ def parse_apt(text: str, source: str = "<apt>") -> AptProgram:
         word = word.strip().upper()
         rec = AptRecord(word, args, raw, first + 1, comment.strip())
         where = f"{source}:{first + 1}"
+        if word == "RAPID":
+            pending_rapid = True
+        elif word == "GOTO":
+            if not pending_rapid and not fed:
+                raise AptError(f"{where}: feed motion (GOTO) before any FEDRAT")
+            pending_rapid = False
+            n_goto += 1
+        elif word == "FEDRAT":
+            fed = True
         if word in ("GOTO", "FROM"):
             vals = []
             for a in args:
@@ -249,11 +283,9 @@ def parse_apt(text: str, source: str = "<apt>") -> AptProgram:
             if unit != "MM":
                 raise AptError(f"{where}: unknown UNITS/{unit}")
         records.append(rec)
-    if not any(r.word == "GOTO" for r in records):
+    if n_goto == 0:
         raise AptError(f"{source}: empty program (no GOTO motion)")
-    prog = AptProgram(records, source)
-    prog.cl_points()  # validates feed-before-FEDRAT
-    return prog
+    return AptProgram(records, source)
 
 
 def read_apt(path) -> AptProgram:
