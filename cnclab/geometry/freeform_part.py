@@ -158,13 +158,22 @@ def freeform_part_mesh(part: FreeformPart | None = None, cell_mm: float = 0.5, c
 
 
 def cylinder_part_mesh(kind: str, cell_mm: float = 0.5, **kwargs) -> TriMesh:
-    """Tessellate a chapter 4 CV/CX cylinder part (geometry from :mod:`cnclab.geometry.cylinder_parts`)."""
-    from . import cylinder_parts as cp  # written by the chapter 4 engineer
+    """Tessellate a chapter 4 CV/CX part (:class:`cnclab.geometry.cylinder_parts.CylinderPart`, mm).
 
-    part = cp.cylinder_part(kind, **kwargs) if hasattr(cp, "cylinder_part") else None
-    if part is None:
-        raise NotImplementedError("cnclab.geometry.cylinder_parts does not provide cylinder_part(kind)")
-    x0, x1, y0, y1 = part.bounds
-    nx = max(1, int(np.ceil((x1 - x0) / cell_mm)))
-    ny = max(1, int(np.ceil((y1 - y0) / cell_mm)))
-    return tessellate_heightfield(part.height_at, (x0, x1), (y0, y1), nx, ny, name=f"mgherony2024_ch4_{kind}")
+    x in [0, length_x], y in [-y_extent, y_extent], z = the part's section z(y); extra keyword
+    arguments go to ``CylinderPart``.
+
+    >>> m = cylinder_part_mesh("CX", cell_mm=5.0)
+    >>> bool((m.normals[:, 2] > 0).all())
+    True
+    """
+    from .cylinder_parts import CylinderPart
+
+    if not cell_mm > 0:
+        raise ValueError(f"cell_mm must be > 0 mm, got {cell_mm}")
+    part = CylinderPart(kind, **kwargs)
+    ye = part.y_extent
+    nx = max(1, int(np.ceil(part.length_x / cell_mm)))
+    ny = max(1, int(np.ceil(2 * ye / cell_mm)))
+    return tessellate_heightfield(lambda x, y: part.z(np.clip(y, -ye, ye)), (0.0, part.length_x), (-ye, ye),
+                                  nx, ny, name=f"mgherony2024_ch4_{kind}")
