@@ -138,3 +138,13 @@ def test_drop_cutter_flat_and_sphere_no_gouge():
     assert np.allclose(d, 5.0, atol=1e-9)  # and always touches
     with pytest.raises(ValueError, match="tool_radius"):
         drop_cutter_z(m, [[0, 0]], -1)
+
+
+def test_cv_cx_parts_tessellate_to_stl(tmp_path):
+    from cnclab.geometry.cylinder_parts import CylinderPart
+    from cnclab.geometry.freeform_part import cylinder_part_mesh
+    for kind in ("CV", "CX"):
+        m = cylinder_part_mesh(kind, cell_mm=2.0)
+        r = read_stl(write_stl(tmp_path / f"{kind}.stl", m))
+        y = r.triangles[:, :, 1].ravel()
+        np.testing.assert_allclose(r.triangles[:, :, 2].ravel(), CylinderPart(kind).z(y), atol=1e-4)
