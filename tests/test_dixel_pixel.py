@@ -111,3 +111,18 @@ def test_bad_input(mod):
         mod.simulate(st, np.zeros((1, 2)), 1, 1, 100)
     with pytest.raises(ValueError, match="a_p"):
         mod.simulate(st, np.zeros((3, 2)) + [[0, 0], [1, 0], [2, 0]], 1, 0, 100)
+
+
+@pytest.mark.parametrize("center, feed, expected", [
+    ((5.0, 12.0), (1.0, 0.0), math.degrees(math.acos(1 - 1 / 3))),   # tool overhangs the grid's top edge
+    ((5.0, -2.0), (1.0, 0.0), math.degrees(math.acos(1 - 1 / 3))),   # ... and its bottom edge
+    ((1.0, 5.0), (0.0, 1.0), math.degrees(math.acos(-1 / 3))),       # centre 1 mm inside the left edge
+])
+def test_engagement_when_the_tool_reaches_beyond_the_stock_grid(center, feed, expected):
+    from shapely.geometry import box
+
+    from cnclab.simulation import dixel, pixel
+
+    for mod in (dixel, pixel):
+        st = mod.Stock.from_polygon(box(0, 0, 20, 10), 0.02)
+        assert st.engagement(center, 3.0, feed).angle_deg == pytest.approx(expected, abs=0.2), mod.__name__

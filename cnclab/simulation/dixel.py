@@ -95,6 +95,9 @@ def scanline_intervals(polygon, y0: float, h: float, n_rows: int):
     return rr[keep], a[keep], b[keep]
 
 
+#: signed x-distance (mm) reported for a row without material (a large negative number)
+_NO_MATERIAL = 1e9
+
 class Stock(StockBase):
     """Dixel stock: per row a sorted set of material intervals (mm). See the module docstring."""
 
@@ -164,7 +167,7 @@ class Stock(StockBase):
 
     def _signed_xdist(self, x, j):
         """Signed x-distance (mm) of points (x, row j) to the material boundary of row j (+ inside)."""
-        big = 1e9
+        big = _NO_MATERIAL
         if self._row.size == 0:
             return np.full(x.shape, -big)
         key = self._row * self._span + (self._a - self.x_min)
@@ -200,8 +203,9 @@ class Stock(StockBase):
             raise ValueError("feed_direction_xy must be a non-zero vector")
         psi0 = math.atan2(f[1], f[0])
         h = self.resolution_mm
-        j_lo = max(int(math.ceil((c[1] - r - self.y0) / h - 0.5)), 0)
-        j_hi = min(int(math.floor((c[1] + r - self.y0) / h - 0.5)), self.n_rows - 1)
+        # every row the circle crosses, also those beyond the grid (they hold no material: air)
+        j_lo = int(math.ceil((c[1] - r - self.y0) / h - 0.5))
+        j_hi = int(math.floor((c[1] + r - self.y0) / h - 0.5))
         j = np.arange(j_lo, j_hi + 1)
         dy = self.y0 + (j + 0.5) * h - c[1]
         cx = np.sqrt(np.maximum(r * r - dy * dy, 0.0))
@@ -234,7 +238,8 @@ class Stock(StockBase):
         edges = ps[k] + w * (ps[k + 1] - ps[k])
         # wide brackets (near the top/bottom rows, where rows are sparse in angle): bisection on
         # the membership test instead of the x-distance interpolation
-        wide = (ps[k + 1] - ps[k]) > 4.0 * h / r
+        # ... and brackets with an empty row on one side, whose x-distance carries no position
+        wide = ((ps[k + 1] - ps[k]) > 4.0 * h / r) | (np.minimum(d0, d1) <= -_NO_MATERIAL / 2)
         if wide.any():
             a, b = ps[k][wide].copy(), ps[k + 1][wide].copy()
             ma = ins[k][wide]
