@@ -1,0 +1,68 @@
+"""Trochoid generators, the exact front engagement vs the dixel simulation, the CE iteration."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from cnclab.toolpath import trochoidal as tr
+
+
+@settings(max_examples=30, deadline=None, derandomize=True)
+@given(st.floats(0.2, 3.0), st.floats(7.0, 20.0))
+def test_generators_stay_in_slot_and_advance_by_step(step, width):
+    R = width / 2 - 3
+    for gen in (tr.circular_trochoid, tr.cycloid):
+        p = gen(step, width, 3.0, 4, ds=0.1)
+        assert np.abs(p.points[:, 1]).max() <= R + 1e-9
+        x1, x2 = (p.points[p.period == k, 0].mean() for k in (1, 2))    # identical sampling
+        assert x2 - x1 == pytest.approx(step, abs=0.05)      # one boundary sample may switch period
+
+
+def test_circular_period_length_is_circle_plus_step():
+    p = tr.circular_trochoid(1.0, 12.0, 3.0, 3, ds=0.01)
+    assert p.length_per_period(1) == pytest.approx(2 * math.pi * 3 + 1, rel=1e-4)
+    L = p.lengths([1])
+    assert L["link"] == pytest.approx(1.0) and L["cut"] == pytest.approx(2 * math.pi * 3, rel=1e-4)
+
+
+@pytest.mark.parametrize("theta", [30.0, 60.0, 90.0])
+def test_front_step_inverse(theta):
+    s = tr.circle_front_step(theta, 14.0, 3.0)
+    assert tr.max_engagement_circle_front(s, 14.0, 3.0) == pytest.approx(theta, abs=1e-9)
+
+
+def test_simulated_front_engagement_matches_exact():
+    s = 0.9
+    p = tr.circular_trochoid(s, 12.0, 3.0, 5, ds=0.05)
+    df, m = tr.evaluate_pattern(p, 12.0, 3.0, 0.05)
+    k = 3
+    sel = df[(df.period == k) & ~df.link & (df.x > k * s + 2.9) & (df.y.abs() < 0.06)]
+    assert sel.engagement_deg.mean() == pytest.approx(tr.max_engagement_circle_front(s, 12, 3), abs=1.0)
+    # steady state removes W * step per period
+    assert m["mrr_avg_sim_mm3_min"] == pytest.approx(m["mrr_avg_mm3_min"], rel=0.01)
+    assert m["max_engagement_deg"] >= sel.engagement_deg.max() - 1e-9
+
+
+def test_ce_iteration_converges_and_holds_theta():
+    it = tr.ce_trochoid_iteration(12.0, 3.0, 60.0, n_periods=7, resolution_mm=0.1)
+    ch = it.table.shape_change_mm.to_numpy()
+    assert ch[-1] < 1.5 * 0.1 and ch[-1] < ch[1]          # converged to ~ one dixel row
+    assert it.table.max_engagement_deg.iloc[-1] == pytest.approx(60.0, abs=3.0)
+    assert 0.5 < it.table.shift_mm.iloc[-1] < 1.5        # < r(1 - cos 60): curved front
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="width"):
+        tr.circular_trochoid(1.0, 6.0, 3.0, 2)
+    with pytest.raises(ValueError, match="step"):
+        tr.cycloid(-1.0, 12.0, 3.0, 2)
+    with pytest.raises(ValueError, match="pattern"):
+        tr.admissible_step("spiral", 60, 12, 3)
+
+
+def test_linking_arc_endpoints_and_bulge():
+    A, C, ccw = tr.linking_arc((0.0, 3.0), (1.0, -3.0), bulge=0.5, ds=0.05)
+    assert np.allclose(A[0], (0, 3)) and np.allclose(A[-1], (1, -3))
+    assert A[:, 0].min() < -2.0 and ccw
+    assert np.allclose(np.hypot(*(A - C).T), np.hypot(*(A[0] - C)))
