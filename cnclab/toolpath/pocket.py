@@ -28,7 +28,7 @@ it as RS274/NGC moves.
 ...                      "start_hole": {"center": [2.5, 15], "diameter": 4}})
 Traceback (most recent call last):
 ...
-ValueError: pocket: the tool (diameter 6 mm) cannot enter the pocket: it is narrower than the tool
+ValueError: <dict>: the tool (diameter 6 mm) cannot enter the pocket: it is narrower than the tool
 """
 from __future__ import annotations
 

@@ -161,7 +161,7 @@ def max_engagement_circle_front(step, width, tool_radius) -> float:
     engages psi in [0, alpha] with cos(alpha) = ((R + r)^2 - d^2 - r^2) / (2 d r).
     Used to check the simulator (the maximum over the period lies slightly after this point).
 
-    >>> round(max_engagement_circle_front(0.9059, 12.0, 3.0), 2)
+    >>> round(max_engagement_circle_front(circle_front_step(60.0, 12.0, 3.0), 12.0, 3.0), 6)
     60.0
     """
     R = slot_limit(width, tool_radius)
