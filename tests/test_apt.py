@@ -81,3 +81,103 @@ def test_write_never_overwrites_input(tmp_path):
     with pytest.raises(ValueError, match="refusing to overwrite"):
         apt.write_apt(src, apt.AptProgram(prog.records[:3]), inputs=[src])
     assert src.read_text() == EXCERPT
+
+
+# ------------------------------------------------------------------ bulk (fast) vs careful parser
+def _run(n, x0=0.0, fmt="GOTO / {:.3f}, {:.3f}, {:.3f}\n"):
+    return "".join(fmt.format(x0 + 0.5 * i, 1.25 - 0.001 * i, -2.0 + i * 1e-3) for i in range(n))
+
+
+HEAD = "PARTNO / T\nUNITS / MM\nSPINDL / RPM, 2000, CLW\nRAPID\nGOTO / 0, 0, 30\nRAPID\n"
+
+
+def _both(text):
+    fast = apt.parse_apt(text, "x.apt", fast=True)
+    careful = apt.parse_apt(text, "x.apt", fast=False)
+    return fast, careful
+
+
+@pytest.mark.parametrize("text", [
+    HEAD + "GOTO / 0, 0, 1\nFEDRAT / 500, MMPM\n" + _run(50) + "RAPID\nGOTO / 1, 1, 30\nFINI\n",
+    (HEAD + "GOTO / 0, 0, 1\nFEDRAT / 500, MMPM\n" + _run(30)).replace("\n", "\r\n") + "FINI",
+    HEAD + "GOTO / 0, 0, 1\nFEDRAT / 500, MMPM\n" + _run(20) + "FEDRAT / 400, MMPM\n" + _run(20, fmt="GOTO/{:.6e},{:+.4f} ,\t{:.2f}\n") + "END\n",
+    HEAD + "FEDRAT / 500, MMPM\nCOOLNT / ON $\n" + _run(20) + _run(3, fmt="GOTO / {},{},{}  $$ c\n") + _run(12),
+    HEAD + "FEDRAT / 500, MMPM\n" + _run(12) + "goto / 1, 2, 3\n" + _run(12, fmt="GOTO / {}, {}, {}, 0, 0, 1\n")
+    + _run(12, fmt="GOTO / .{:.0f}, {:.1f}, {:.0f}.\n") + _run(9),
+])
+def test_fast_and_careful_parsers_give_identical_records(text):
+    fast, careful = _both(text)
+    assert any(isinstance(it, apt._GotoRun) for it in fast.items())  # the bulk path was taken
+    assert fast.to_text() == careful.to_text() == text
+    cf, cc = fast.cl_points(), careful.cl_points()
+    for name in ("xyz", "rapid", "feed", "spindle", "record", "line", "start"):
+        np.testing.assert_array_equal(getattr(cf, name), getattr(cc, name), err_msg=name)
+    assert fast.records == careful.records                     # expands the runs; dataclass equality
+    assert fast.to_text() == text
+
+
+def test_fast_parser_values_equal_python_float():
+    rng = np.random.default_rng(3)
+    v = rng.normal(0, 300, (400, 3))
+    text = "UNITS / MM\nFEDRAT / 500, MMPM\n" + "".join(f"GOTO / {a!r}, {b:.17g}, {c:.9f}\n" for a, b, c in v.tolist())
+    fast, careful = _both(text)
+    np.testing.assert_array_equal(fast.cl_points().xyz, careful.cl_points().xyz)
+    np.testing.assert_array_equal(fast.cl_points().xyz[:, 0], v[:, 0])
+
+
+@pytest.mark.parametrize("bad, msg", [
+    ("GOTO / 1, abc, 3\n", r"x.apt:{}: GOTO value 'abc'"),
+    ("GOTO / 1, 2\n", r"x.apt:{}: GOTO needs 3 .* got 2"),
+    ("GOTO / 1, 1e999, 3\n", r"x.apt:{}: GOTO has a non-finite"),
+    ("GOTO / 1, nan, 3\n", r"x.apt:{}: GOTO has a non-finite"),
+    ("GOTO / 1.2.3, 2, 3\n", r"x.apt:{}: GOTO value '1.2.3'"),
+    ("GOTO / 1-2, 2, 3\n", r"x.apt:{}: GOTO value '1-2'"),
+    ("GOTO / 1 2, 2, 3\n", r"x.apt:{}: GOTO value '1 2'"),
+    ("GOTO / 1e, 2, 3\n", r"x.apt:{}: GOTO value '1e'"),
+    ("GOTO / --1, 2, 3\n", r"x.apt:{}: GOTO value '--1'"),
+    ("GOTO / 1,, 3\n", r"x.apt:{}: GOTO value ''"),
+    ("GOTO / ., 2, 3\n", r"x.apt:{}: GOTO value '.'"),
+    ("GOTO / 1, 2, 3, 4\n", r"x.apt:{}: GOTO needs 3 .* got 4"),
+])
+def test_fast_and_careful_parsers_give_identical_errors(bad, msg):
+    pre = "UNITS / MM\nFEDRAT / 500, MMPM\n" + _run(40)
+    text = pre + bad + _run(40)
+    line = pre.count("\n") + 1
+    for fast in (True, False):
+        with pytest.raises(apt.AptError, match=msg.format(line)):
+            apt.parse_apt(text, "x.apt", fast=fast)
+
+
+@pytest.mark.parametrize("text, line", [
+    ("UNITS / MM\n" + _run(20), 2),                                  # feed before FEDRAT, run's first line
+    ("UNITS / MM\nRAPID\n" + _run(20), 4),                           # rapid consumed, second line is a feed
+    ("UNITS / MM\nFEDRAT / 5, MMPM\nLOADTL / 1, $\n" + _run(20) + "GOTO / 1, 2, $\n", 24),
+])
+def test_fast_and_careful_parsers_agree_on_state_errors(text, line):
+    msgs = []
+    for fast in (True, False):
+        with pytest.raises(apt.AptError, match=rf"x.apt:{line}:") as e:
+            apt.parse_apt(text, "x.apt", fast=fast)
+        msgs.append(str(e.value))
+    assert msgs[0] == msgs[1]
+
+
+def test_bulk_insertion_equals_record_insertion():
+    from cnclab.cutting import spindle_control as sc
+    from cnclab.geometry.freeform_part import FreeformPart, freeform_part_mesh
+
+    part = FreeformPart()
+    mesh = freeform_part_mesh(part, 2.0)
+    x = np.linspace(0, 50, 60)
+    P = np.column_stack([x, np.full_like(x, 20.0), part.height_at(x, np.full_like(x, 20.0))])
+    text = apt.cl_program([P, P[::-1] + [0, 1, 0]], 500, 2000, 10, 30).to_text()
+    outs = []
+    for fast in (True, False):
+        prog = apt.parse_apt(text, "p.apt", fast=fast)
+        cl = prog.cl_points()
+        s = sc.spindle_schedule(mesh, cl, tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2,
+                                feed_direction_deg=0)
+        new, counts = sc.insert_spindle_records(prog, cl, s, rpm_threshold=20, vf_threshold=5)
+        outs.append((new.to_text(), counts, [(m.x, m.y, m.z, m.feed, m.spindle) for m in sc.to_gcode_moves(new)]))
+    assert outs[0] == outs[1]
+    assert outs[0][1]["spindl_inserted"] > 3

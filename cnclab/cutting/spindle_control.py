@@ -226,42 +226,89 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
                            rpm_threshold: float = 50.0, vf_threshold: float = 10.0) -> tuple[AptProgram, dict]:
     """New program with ``SPINDL`` / ``FEDRAT`` inserted before feed GOTOs where the value in force
     differs by more than ``rpm_threshold`` (rpm) / ``vf_threshold`` (mm/min). Original records are kept
-    (an original SPINDL/FEDRAT resets the value in force). Returns (program, counts)."""
+    (an original SPINDL/FEDRAT resets the value in force). Returns (program, counts).
+
+    Bulk GOTO runs of a parsed file are split only where a record is inserted (no per-point objects).
+    """
+    from ..toolpath.apt import _GotoRun
+
     if rpm_threshold < 0 or vf_threshold < 0:
         raise ValueError(f"thresholds must be >= 0, got {rpm_threshold}, {vf_threshold}")
-    target = {int(cl.record[i]): (float(n), float(f)) for i, n, f in zip(sched.index, sched.n, sched.v_f)}
+    tgt = np.asarray(cl.record)[sched.index]
+    if tgt.size > 1 and not (np.diff(tgt) > 0).all():
+        raise ValueError("cl/sched: feed points must be in program order")
+    tgt_l, n_l, f_l = tgt.tolist(), np.asarray(sched.n, float).tolist(), np.asarray(sched.v_f, float).tolist()
+    n_t = len(tgt_l)
     out = []
-    cur_n = cur_f = np.nan
+    cur_n = cur_f = float("nan")
     n_sp = n_fr = 0
-    for k, r in enumerate(program.records):
+    k = 0   # index into the expanded record list
+    j = 0   # next target
+    for it in program.items():
+        if isinstance(it, _GotoRun):
+            m = len(it)
+            j1 = int(np.searchsorted(tgt, k + m, side="left"))
+            a = 0
+            for t in range(j, j1):
+                n, f = n_l[t], f_l[t]
+                ins = []
+                if not abs(n - cur_n) <= rpm_threshold:
+                    cur_n = round(n)
+                    ins.append(spindl(cur_n))
+                    n_sp += 1
+                if not abs(f - cur_f) <= vf_threshold:
+                    cur_f = round(f, 1)
+                    ins.append(fedrat(cur_f))
+                    n_fr += 1
+                if ins:
+                    li = tgt_l[t] - k
+                    if li > a:
+                        out.append(it.slice(a, li))
+                    out.extend(ins)
+                    a = li
+            if a == 0:
+                out.append(it)
+            elif a < m:
+                out.append(it.slice(a, m))
+            j = j1
+            k += m
+            continue
+        r = it
         if r.word == "SPINDL" and r.values:
-            cur_n = r.values[-1] if r.values else cur_n
+            cur_n = r.values[-1]
         elif r.word == "FEDRAT":
             cur_f = r.values[0]
-        if k in target:
-            n, f = target[k]
+        if j < n_t and tgt_l[j] == k:
+            n, f = n_l[j], f_l[j]
             if not abs(n - cur_n) <= rpm_threshold:
-                out.append(spindl(round(n)))
                 cur_n = round(n)
+                out.append(spindl(cur_n))
                 n_sp += 1
             if not abs(f - cur_f) <= vf_threshold:
-                out.append(fedrat(round(f, 1)))
                 cur_f = round(f, 1)
+                out.append(fedrat(cur_f))
                 n_fr += 1
+            j += 1
         out.append(r)
+        k += 1
     return AptProgram(out, program.source), {"spindl_inserted": n_sp, "fedrat_inserted": n_fr}
 
 
 def to_gcode_moves(program: AptProgram):
     """RS274/NGC moves (:class:`cnclab.toolpath.gcode.Move`) of an APT program: G0 rapids, G1 feeds
     with the F and S in force."""
+    from ..toolpath.apt import _GotoRun
     from ..toolpath.gcode import Move
 
     moves = []
     f = s = None
     rapid = False
-    for r in program.records:
-        if r.word == "RAPID":
+    for r in program.items():
+        if isinstance(r, _GotoRun):
+            for x, y, z in r.xyz.tolist():
+                moves.append(Move("G0", x, y, z, spindle=s) if rapid else Move("G1", x, y, z, feed=f, spindle=s))
+                rapid = False
+        elif r.word == "RAPID":
             rapid = True
         elif r.word == "FEDRAT":
             f = r.values[0]

@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -117,20 +119,97 @@ class CLPoints:
         return len(self.xyz)
 
 
-@dataclasses.dataclass
-class AptProgram:
-    """A parsed APT CL program: ``records`` in file order and the ``source`` name for messages."""
+class _GotoRun:
+    """A run of M consecutive plain ``GOTO / x, y, z`` lines parsed in bulk (internal).
 
-    records: list
-    source: str = "<apt>"
+    ``text`` is the exact physical text of the M lines, ``xyz`` (M, 3) their values (mm), ``line`` the
+    1-based source line of the first one. Expanded to :class:`AptRecord` objects only on demand.
+    """
+
+    __slots__ = ("text", "xyz", "line", "_starts")
+
+    def __init__(self, text: str, xyz: np.ndarray, line: int, starts: np.ndarray | None = None):
+        self.text, self.xyz, self.line, self._starts = text, xyz, line, starts
+
+    def __len__(self):
+        return len(self.xyz)
+
+    @property
+    def raw(self) -> str:
+        return self.text
+
+    def starts(self) -> np.ndarray:
+        """Offsets of the M line starts in ``text`` plus ``len(text)`` (M + 1 values)."""
+        if self._starts is None:
+            nl = np.flatnonzero(np.frombuffer(self.text.encode("ascii"), np.uint8) == 10)
+            self._starts = np.concatenate([[0], nl + 1])
+        return self._starts
+
+    def slice(self, a: int, b: int) -> "_GotoRun":
+        """Lines a..b-1 as a new run."""
+        st = self.starts()
+        return _GotoRun(self.text[st[a]:st[b]], self.xyz[a:b], self.line + a, st[a:b + 1] - st[a])
+
+    def records(self) -> list:
+        st = self.starts().tolist()
+        out = []
+        for k, v in enumerate(self.xyz.tolist()):
+            raw = self.text[st[k]:st[k + 1]]
+            args = [a.strip() for a in raw.rstrip("\r\n").partition("/")[2].split(",")]
+            out.append(AptRecord("GOTO", args, raw, self.line + k, "", v))
+        return out
+
+
+class AptProgram:
+    """A parsed APT CL program: ``records`` in file order and the ``source`` name for messages.
+
+    Files read with :func:`parse_apt` keep runs of plain ``GOTO`` lines in bulk (numpy arrays);
+    ``records`` expands them into :class:`AptRecord` objects on first access (after which the list is
+    the program and may be edited). ``to_text``, ``cl_points`` and the spindle post-processor work on
+    the bulk form directly.
+    """
+
+    def __init__(self, records=(), source: str = "<apt>"):
+        self._items = list(records)
+        self._bulk = any(isinstance(r, _GotoRun) for r in self._items)
+        self.source = source
+
+    @property
+    def records(self) -> list:
+        """The list of :class:`AptRecord` (bulk GOTO runs expanded on first access)."""
+        if self._bulk:
+            flat = []
+            for it in self._items:
+                if isinstance(it, _GotoRun):
+                    flat.extend(it.records())
+                else:
+                    flat.append(it)
+            self._items, self._bulk = flat, False
+        return self._items
+
+    @records.setter
+    def records(self, value):
+        self._items, self._bulk = list(value), False
+
+    def items(self) -> list:
+        """Records and bulk GOTO runs in file order (internal fast iteration)."""
+        return self._items
+
+    def __len__(self):
+        return sum(len(it) if isinstance(it, _GotoRun) else 1 for it in self._items)
+
+    def __eq__(self, other):
+        return isinstance(other, AptProgram) and self.source == other.source and self.records == other.records
 
     def to_text(self) -> str:
         """The program text; unchanged records are reproduced exactly."""
-        return "".join(r.raw for r in self.records)
+        return "".join(r.raw for r in self._items)
 
     def tool_diameter(self) -> float | None:
         """Cutter diameter (mm) from ``CUTTER/d`` (also inside a ``$$->`` comment), or None."""
-        for r in self.records:
+        for r in self._items:
+            if isinstance(r, _GotoRun):
+                continue
             if r.word == "CUTTER" and r.values:
                 return r.values[0]
             c = r.comment.upper().replace(" ", "")
@@ -142,29 +221,57 @@ class AptProgram:
         return None
 
     def cl_points(self) -> CLPoints:
-        """Motion end points with motion type, feed and spindle in force (validated)."""
+        """Motion end points with motion type, feed and spindle in force (validated).
+
+        ``record`` indexes the (expanded) ``records`` list.
+        """
         xyz, rapid, feed, spin, rec, line = [], [], [], [], [], []
-        ax, ar, af, asp, arec, al = xyz.append, rapid.append, feed.append, spin.append, rec.append, line.append
         f = math.nan
         s = math.nan
         pending_rapid = False
         start = None
-        for i, r in enumerate(self.records):
+        k = 0
+        buf = []  # (xyz, rapid, feed, spindle, record, line) of single records, flushed into arrays
+
+        def flush():
+            if buf:
+                cols = list(zip(*buf))
+                xyz.append(np.asarray(cols[0], float).reshape(-1, 3))
+                for dst, col, dt in zip((rapid, feed, spin, rec, line), cols[1:],
+                                        (bool, float, float, np.int64, np.int64)):
+                    dst.append(np.asarray(col, dt))
+                buf.clear()
+
+        for r in self._items:
+            if isinstance(r, _GotoRun):
+                flush()
+                m = len(r)
+                ra = np.zeros(m, bool)
+                fe = np.full(m, f)
+                if pending_rapid:
+                    ra[0] = True
+                    fe[0] = math.nan
+                    pending_rapid = False
+                if f != f and (~ra).any():
+                    raise AptError(f"{self.source}:{r.line + int(np.argmax(~ra))}: feed motion (GOTO) before any FEDRAT")
+                xyz.append(r.xyz)
+                rapid.append(ra)
+                feed.append(fe)
+                spin.append(np.full(m, s))
+                rec.append(np.arange(k, k + m, dtype=np.int64))
+                line.append(np.arange(r.line, r.line + m, dtype=np.int64))
+                k += m
+                continue
             w = r.word
             if w == "GOTO":
                 if pending_rapid:
-                    ar(True)
-                    af(math.nan)
+                    is_rapid, fv = True, math.nan
                     pending_rapid = False
                 else:
                     if f != f:
                         raise AptError(f"{self.source}:{r.line}: feed motion (GOTO) before any FEDRAT")
-                    ar(False)
-                    af(f)
-                ax(r.values[:3])
-                asp(s)
-                arec(i)
-                al(r.line)
+                    is_rapid, fv = False, f
+                buf.append((r.values[:3], is_rapid, fv, s, k, r.line))
             elif w == "RAPID":
                 pending_rapid = True
             elif w == "FEDRAT":
@@ -173,11 +280,13 @@ class AptProgram:
                 s = r.values[0] if r.values else s
             elif w == "FROM":
                 start = np.array(r.values[:3])
+            k += 1
+        flush()
         if not xyz:
             raise AptError(f"{self.source}: empty program (no GOTO motion)")
-        xyz = np.asarray(xyz, float)
-        return CLPoints(xyz, np.asarray(rapid, bool), np.asarray(feed, float), np.asarray(spin, float),
-                        np.asarray(rec, np.int64), np.asarray(line, np.int64),
+        xyz = np.concatenate(xyz)
+        return CLPoints(xyz, np.concatenate(rapid), np.concatenate(feed), np.concatenate(spin),
+                        np.concatenate(rec), np.concatenate(line),
                         start if start is not None else xyz[0].copy())
 
 
@@ -191,51 +300,43 @@ def _continues(physical: str) -> bool:
     return s.endswith("$") and not s.endswith("$$")
 
 
-def parse_apt(text: str, source: str = "<apt>") -> AptProgram:
-    """Parse APT CL text into an :class:`AptProgram` (see the module docstring for the dialect)."""
-    lines = text.splitlines(keepends=True)
-    records = []
+class _State:
+    """Parser state carried across careful segments and bulk runs."""
+
+    __slots__ = ("fed", "pending_rapid", "n_goto")
+
+    def __init__(self):
+        self.fed = False
+        self.pending_rapid = False
+        self.n_goto = 0
+
+
+def _parse_careful(lines, first_line: int, records: list, st: _State, source: str) -> None:
+    """The careful per-line parser: every statement, continuation, comment and check."""
     i = 0
     n_lines = len(lines)
-    fed = False
-    pending_rapid = False
-    n_goto = 0
     while i < n_lines:
         first = i
-        line = lines[i]
-        if line.startswith("GOTO") and "$" not in line:  # fast path for the bulk of a CL file
-            args = line.partition("/")[2].split(",")
-            try:
-                vals = [float(a) for a in args]
-            except ValueError:
-                vals = None
-            if vals is not None and len(vals) in (3, 6) and math.isfinite(sum(vals)):
-                if not pending_rapid and not fed:
-                    raise AptError(f"{source}:{i + 1}: feed motion (GOTO) before any FEDRAT")
-                pending_rapid = False
-                n_goto += 1
-                records.append(AptRecord("GOTO", args, line, i + 1, "", vals))
-                i += 1
-                continue
         phys = [lines[i]]
         while _continues(lines[i]) and i + 1 < n_lines:
             i += 1
             phys.append(lines[i])
         if _continues(lines[i]) and i + 1 >= n_lines:
-            raise AptError(f"{source}:{i + 1}: continuation '$' at the end of the file")
+            raise AptError(f"{source}:{first_line + i}: continuation '$' at the end of the file")
         i += 1
         raw = "".join(phys)
         # join continuation lines: drop the trailing '$' of each continued line
         joined = ""
-        for p in phys:
-            s = p.rstrip("\r\n")
-            if _continues(s):
-                s = s.rstrip()[:-1]
-            joined += s + " "
+        for ph in phys:
+            t = ph.rstrip("\r\n")
+            if _continues(t):
+                t = t.rstrip()[:-1]
+            joined += t + " "
         stmt, comment = _split_comment(joined)
         stmt = stmt.strip()
+        lineno = first_line + first
         if not stmt:
-            records.append(AptRecord("", [], raw, first + 1, comment.strip()))
+            records.append(AptRecord("", [], raw, lineno, comment.strip()))
             continue
         if "/" in stmt:
             word, _, rest = stmt.partition("/")
@@ -243,17 +344,17 @@ def parse_apt(text: str, source: str = "<apt>") -> AptProgram:
         else:
             word, args = stmt, []
         word = word.strip().upper()
-        rec = AptRecord(word, args, raw, first + 1, comment.strip())
-        where = f"{source}:{first + 1}"
+        rec = AptRecord(word, args, raw, lineno, comment.strip())
+        where = f"{source}:{lineno}"
         if word == "RAPID":
-            pending_rapid = True
+            st.pending_rapid = True
         elif word == "GOTO":
-            if not pending_rapid and not fed:
+            if not st.pending_rapid and not st.fed:
                 raise AptError(f"{where}: feed motion (GOTO) before any FEDRAT")
-            pending_rapid = False
-            n_goto += 1
+            st.pending_rapid = False
+            st.n_goto += 1
         elif word == "FEDRAT":
-            fed = True
+            st.fed = True
         if word in ("GOTO", "FROM"):
             vals = []
             for a in args:
@@ -265,6 +366,7 @@ def parse_apt(text: str, source: str = "<apt>") -> AptProgram:
                 raise AptError(f"{where}: {word} needs 3 (x,y,z) or 6 (x,y,z,i,j,k) values, got {len(vals)}")
             if not all(math.isfinite(v) for v in vals):
                 raise AptError(f"{where}: {word} has a non-finite value")
+            rec.nums = vals
         elif word == "FEDRAT":
             v = rec.values
             if not v or not math.isfinite(v[0]) or v[0] <= 0:
@@ -283,9 +385,105 @@ def parse_apt(text: str, source: str = "<apt>") -> AptProgram:
             if unit != "MM":
                 raise AptError(f"{where}: unknown UNITS/{unit}")
         records.append(rec)
-    if n_goto == 0:
+
+
+# Candidate runs of plain GOTO lines: upper-case GOTO, '/', then only number characters, commas and
+# blanks, each line ending in a newline. Candidates are then checked strictly (below); anything
+# unusual (comments, '$' continuations, 6 values, lower case, nan, a malformed number ...) is left to
+# the careful parser, which gives the same records and the same error messages.
+_RUN_RE = re.compile(r"(?:^GOTO[ \t]*/[-+0-9.eE, \t]*\r?\n)+", re.M)
+_MIN_RUN = 8
+_NUMCH = np.zeros(256, bool)
+_NUMCH[np.frombuffer(b"0123456789.+-eE", np.uint8)] = True
+
+
+def _bulk_goto(text: str) -> np.ndarray | None:
+    """(M, 3) values of a candidate run if every line is exactly ``GOTO / a, b, c`` with three finite
+    numbers that Python's ``float`` reads as ``numpy.fromstring`` does; else None."""
+    b = np.frombuffer(text.encode("ascii"), np.uint8)
+    nl = np.flatnonzero(b == 10)
+    m = nl.size
+    slash = np.flatnonzero(b == 47)
+    if slash.size != m:
+        return None
+    body = _after_slash(b.size, slash, nl)             # characters after each line's '/'
+    num = _NUMCH[b] & body
+    tok_start = num & ~np.concatenate([[False], num[:-1]])
+    comma = b == 44
+    ev = np.flatnonzero(tok_start | comma)
+    if ev.size != 5 * m:
+        return None
+    ev_line = np.searchsorted(nl, ev)
+    if not (np.bincount(ev_line, minlength=m) == 5).all():
+        return None
+    pattern = comma[ev].reshape(m, 5)
+    if not (pattern == np.array([False, True, False, True, False])).all():
+        return None
+    clean = text.replace("GOTO", "    ").replace("/", " ").replace(",", " ")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            vals = np.fromstring(clean, sep=" ")
+        except (ValueError, DeprecationWarning):
+            return None
+    if vals.size != 3 * m or not np.isfinite(vals).all():
+        return None
+    return vals.reshape(m, 3)
+
+
+def _after_slash(n: int, slash: np.ndarray, nl: np.ndarray) -> np.ndarray:
+    """Bool mask of the positions strictly between each line's '/' and its newline."""
+    d = np.zeros(n + 1, np.int8)
+    d[slash + 1] += 1
+    d[nl] -= 1
+    return np.cumsum(d[:n]) > 0
+
+
+def parse_apt(text: str, source: str = "<apt>", fast: bool = True) -> AptProgram:
+    """Parse APT CL text into an :class:`AptProgram` (see the module docstring for the dialect).
+
+    ``fast=True`` reads runs of plain ``GOTO / x, y, z`` lines in bulk with numpy (same records, same
+    errors, same text as the careful per-line parser used for everything else and with ``fast=False``).
+
+    >>> p = parse_apt("UNITS / MM\\nFEDRAT / 500, MMPM\\n" + "GOTO / 1, 2, 3\\n" * 10)
+    >>> len(p), p.cl_points().xyz.shape
+    (12, (10, 3))
+    """
+    st = _State()
+    items: list = []
+    pos = 0
+    line_no = 1
+    if fast:
+        for m in _RUN_RE.finditer(text):
+            s, e = m.span()
+            if s < pos:
+                continue
+            # a run line continuing the previous statement ('$') belongs to the careful parser
+            prev = text[text.rfind("\n", 0, max(s - 1, 0)) + 1:s] if s > 0 else ""
+            if prev and _continues(prev.rstrip("\r\n")):
+                s = text.index("\n", s) + 1
+            if text.count("\n", s, e) < _MIN_RUN:
+                continue
+            run_text = text[s:e]
+            xyz = _bulk_goto(run_text)
+            if xyz is None:
+                continue
+            before = text[pos:s].splitlines(keepends=True)
+            _parse_careful(before, line_no, items, st, source)
+            line_no += len(before)
+            if not st.pending_rapid and not st.fed:
+                raise AptError(f"{source}:{line_no}: feed motion (GOTO) before any FEDRAT")
+            if st.pending_rapid and not st.fed and len(xyz) > 1:
+                raise AptError(f"{source}:{line_no + 1}: feed motion (GOTO) before any FEDRAT")
+            st.pending_rapid = False
+            st.n_goto += len(xyz)
+            items.append(_GotoRun(run_text, xyz, line_no))
+            line_no += len(xyz)
+            pos = e
+    _parse_careful(text[pos:].splitlines(keepends=True), line_no, items, st, source)
+    if st.n_goto == 0:
         raise AptError(f"{source}: empty program (no GOTO motion)")
-    return AptProgram(records, source)
+    return AptProgram(items, source)
 
 
 def read_apt(path) -> AptProgram:
