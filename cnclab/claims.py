@@ -85,7 +85,8 @@ class Interval:
         return float(self.center if self.center is not None else 0.5 * (self.lo + self.hi))
 
     def to_json(self):
-        return {"lo": self.lo, "hi": self.hi, "center": self.center}
+        return {"lo": float(self.lo), "hi": float(self.hi),
+                "center": None if self.center is None else float(self.center)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -117,9 +118,9 @@ class Claim:
 def within(value, paper: float, rtol: float, atol: float) -> bool:
     tol = atol + rtol * abs(paper)
     if isinstance(value, Interval):
-        return value.lo - tol <= paper <= value.hi + tol
+        return bool(value.lo - tol <= paper <= value.hi + tol)
     v = float(value)
-    return math.isfinite(v) and abs(v - paper) <= tol
+    return bool(math.isfinite(v) and abs(v - paper) <= tol)
 
 
 def _float(text: str, where: str, name: str) -> float:
@@ -263,6 +264,13 @@ class Result:
                 "note": c.note}
 
 
+def _json_default(o):
+    """numpy scalars (np.bool_, np.float64 ...) in results become plain Python values."""
+    if hasattr(o, "item"):
+        return o.item()
+    raise TypeError(f"Object of type {type(o).__name__} is not JSON serializable")
+
+
 def evaluate(claim: Claim, skip_slow: bool = False) -> Result:
     """Compute one claim and decide whether its status holds."""
     res = Result(claim)
@@ -277,10 +285,10 @@ def evaluate(claim: Claim, skip_slow: bool = False) -> Result:
         res.reproduced = _scalar(resolve(claim.computed_by)())
         inside = claim.holds_within(res.reproduced)
         if claim.status == "MATCH":
-            res.ok = inside
+            res.ok = bool(inside)
         else:  # DIFFERS
             res.alt = _scalar(resolve(claim.alt_computed_by)())
-            res.ok = (not inside) and claim.holds_within(res.alt)
+            res.ok = bool((not inside) and claim.holds_within(res.alt))
     except Exception as exc:  # reported, never hidden
         res.error = f"{type(exc).__name__}: {exc}"
         res.ok = False
@@ -444,7 +452,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     results = evaluate_all(claims, skip_slow=args.skip_slow, progress=not args.json)
     if args.json:
-        print(json.dumps([r.to_json() for r in results], indent=1))
+        print(json.dumps([r.to_json() for r in results], indent=1, default=_json_default))
     else:
         import pandas as pd
 
