@@ -26,7 +26,7 @@ def difference_stats(calculated, estimated) -> dict[str, float]:
     Returns
     -------
     dict with ``range`` = max(e) - min(e) (units of x), ``st_dev`` = sample standard deviation of e
-    (ddof=1, as Excel's STDEV / MiniTab), ``r2`` = eq 6-1, ``rmse`` = eq 6-2 (units of x),
+    (ddof=1, as Excel's STDEV / MiniTab), ``r2`` = eq 6-1 (NaN if all x are equal), ``rmse`` = eq 6-2 (units of x),
     ``mape`` = eq 6-3 as a fraction (not percent), ``mean`` = mean of e, ``n``.
     """
     x = np.asarray(calculated, dtype=float).ravel()
@@ -44,7 +44,7 @@ def difference_stats(calculated, estimated) -> dict[str, float]:
     return {
         "range": float(e.max() - e.min()),
         "st_dev": float(e.std(ddof=1)),
-        "r2": float(1.0 - np.sum(e ** 2) / sst),
+        "r2": float(1.0 - np.sum(e ** 2) / sst) if sst > 0 else float("nan"),  # undefined for constant x
         "rmse": float(np.sqrt(np.mean(e ** 2))),
         "mape": float(np.mean(np.abs(e / x))),
         "mean": float(e.mean()),
