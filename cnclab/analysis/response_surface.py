@@ -46,13 +46,28 @@ class Term:
         return hash((self.name, tuple(sorted(self.powers.items()))))
 
     def evaluate(self, data: pd.DataFrame, angle_columns=ANGLE_COLUMNS) -> np.ndarray:
-        out = np.ones(len(data))
+        """The regressor column for ``data`` (angle columns in degrees, converted to radians)."""
+        return self._from_columns(_columns(data, [self], angle_columns), len(data))
+
+    def _from_columns(self, cols: dict, n: int) -> np.ndarray:
+        out = np.ones(n)
         for col, p in self.powers.items():
-            if col not in data.columns:
-                raise ValueError(f"term {self.name!r} needs column {col!r}; data has {list(data.columns)}")
-            v = data[col].to_numpy(dtype=float)
-            out = out * (np.radians(v) if col in angle_columns else v) ** p
+            out = out * cols[col] ** p
         return out
+
+
+def _columns(data: pd.DataFrame, terms, angle_columns) -> dict:
+    """Each column the terms use, as a float array (angles converted to radians once)."""
+    cols = {}
+    for t in terms:
+        for col in t.powers:
+            if col in cols:
+                continue
+            if col not in data.columns:
+                raise ValueError(f"term {t.name!r} needs column {col!r}; data has {list(data.columns)}")
+            v = data[col].to_numpy(dtype=float)
+            cols[col] = np.radians(v) if col in angle_columns else v
+    return cols
 
 
 def _t(name, **powers):
@@ -77,7 +92,8 @@ def design_matrix(data: pd.DataFrame, terms: Sequence[Term], angle_columns=ANGLE
     """The regressor matrix (one column per term, named by the term); angles are converted to radians."""
     if len(data) == 0:
         raise ValueError("data has no rows")
-    return pd.DataFrame({t.name: t.evaluate(data, angle_columns) for t in terms}, index=data.index)
+    cols = _columns(data, terms, angle_columns)
+    return pd.DataFrame({t.name: t._from_columns(cols, len(data)) for t in terms}, index=data.index)
 
 
 @dataclasses.dataclass
