@@ -35,7 +35,8 @@ import math
 
 import numpy as np
 
-from .common import Engagement, StockBase, _check_radius, _check_xy, simulate, strip_area
+from .common import (Engagement, StockBase, _check_radius, _check_xy, _refine_transitions, simulate,
+                     strip_area)
 
 __all__ = ["Stock", "simulate", "Engagement", "scanline_intervals"]
 
@@ -98,19 +99,61 @@ def scanline_intervals(polygon, y0: float, h: float, n_rows: int):
 #: signed x-distance (mm) reported for a row without material (a large negative number)
 _NO_MATERIAL = 1e9
 
+_INF = math.inf
+
+
 class Stock(StockBase):
-    """Dixel stock: per row a sorted set of material intervals (mm). See the module docstring."""
+    """Dixel stock: per row a sorted set of material intervals (mm). See the module docstring.
+
+    Storage: two ``(K, n_rows)`` float arrays ``A``, ``B`` holding row j's intervals ``[A[k, j],
+    B[k, j])`` in increasing k order, padded with ``+inf`` (empty slots); the capacity K doubles when
+    a cut splits a row into more intervals than it holds. A disk cut and an engagement measurement
+    therefore touch only the ~2r/h rows the tool covers, with a fixed number of numpy operations
+    per call (no per-row Python loop, no copy of the whole stock). The flat view ``(rows, a, b)``
+    of :meth:`intervals` (and the ``_row``/``_a``/``_b`` attributes) is built on demand.
+    """
 
     def __init__(self, y0: float, resolution_mm: float, n_rows: int, rows, a, b, x_min: float,
                  x_max: float):
         self.y0 = float(y0)
         self.resolution_mm = float(resolution_mm)
         self.n_rows = int(n_rows)
-        self._row = np.asarray(rows, np.int64)
-        self._a = np.asarray(a, float)
-        self._b = np.asarray(b, float)
         self.x_min, self.x_max = float(x_min), float(x_max)
         self._span = (self.x_max - self.x_min) + 2.0
+        rows = np.asarray(rows, np.int64)
+        a = np.asarray(a, float)
+        b = np.asarray(b, float)
+        if not (rows.shape == a.shape == b.shape and rows.ndim == 1):
+            raise ValueError("rows, a, b must be 1-D arrays of the same length")
+        if rows.size and (rows.min() < 0 or rows.max() >= self.n_rows):
+            raise ValueError(f"rows must lie in [0, n_rows={self.n_rows})")
+        o = np.lexsort((a, rows))
+        rows, a, b = rows[o], a[o], b[o]
+        cnt = np.bincount(rows, minlength=self.n_rows)
+        k = max(int(cnt.max()) if cnt.size else 0, 1) + 1
+        self._A = np.full((k, self.n_rows), _INF)
+        self._B = np.full((k, self.n_rows), _INF)
+        col = np.arange(rows.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        self._A[col, rows] = a
+        self._B[col, rows] = b
+
+    # -- flat view (sorted by row, then a) --------------------------------------------------------
+    def intervals(self):
+        """(rows, a, b) arrays of the material intervals, sorted by row then a (copies)."""
+        j, k = np.nonzero(np.isfinite(self._A.T))
+        return j.astype(np.int64), self._A[k, j], self._B[k, j]
+
+    @property
+    def _row(self):
+        return self.intervals()[0]
+
+    @property
+    def _a(self):
+        return self.intervals()[1]
+
+    @property
+    def _b(self):
+        return self.intervals()[2]
 
     @classmethod
     def from_polygon(cls, polygon, resolution_mm: float, margin_mm: float = 0.0) -> "Stock":
@@ -121,76 +164,107 @@ class Stock(StockBase):
         h = float(resolution_mm)
         if not (math.isfinite(h) and h > 0):
             raise ValueError(f"resolution_mm must be a positive length in mm, got {resolution_mm!r}")
-        rings = _rings(polygon)
+        _rings(polygon)
         minx, miny, maxx, maxy = polygon.bounds
         y0 = miny - float(margin_mm)
         n_rows = int(math.ceil((maxy + float(margin_mm) - y0) / h))
         if n_rows > 5_000_000:
             raise ValueError(f"resolution_mm={h} gives {n_rows} rows: too fine for this polygon")
-        del rings
         rows, a, b = scanline_intervals(polygon, y0, h, n_rows)
         return cls(y0, h, n_rows, rows, a, b, minx - 1.0, maxx + 1.0)
 
     def copy(self) -> "Stock":
-        """An independent copy."""
-        return Stock(self.y0, self.resolution_mm, self.n_rows, self._row.copy(), self._a.copy(),
-                     self._b.copy(), self.x_min, self.x_max)
+        """An independent copy (same class)."""
+        new = object.__new__(type(self))
+        new.__dict__.update(self.__dict__)
+        new._A = self._A.copy()
+        new._B = self._B.copy()
+        return new
 
     def area(self) -> float:
         """Material area (mm^2) = sum of interval lengths x row height."""
-        return float(np.sum(self._b - self._a) * self.resolution_mm)
+        fin = np.isfinite(self._A)
+        return float(np.sum(self._B[fin] - self._A[fin]) * self.resolution_mm)
 
     @property
     def n_intervals(self) -> int:
         """Number of stored material intervals (the model's data size)."""
-        return int(self._row.size)
+        return int(np.count_nonzero(np.isfinite(self._A)))
 
     def row_y(self, rows=None) -> np.ndarray:
         """Centre-line y (mm) of rows (all rows by default)."""
         j = np.arange(self.n_rows) if rows is None else np.asarray(rows)
         return self.y0 + (j + 0.5) * self.resolution_mm
 
-    def intervals(self):
-        """(rows, a, b) arrays of the material intervals, sorted by row then a (copies)."""
-        return self._row.copy(), self._a.copy(), self._b.copy()
-
     def _contains(self, x, y):
-        h = self.resolution_mm
-        j = np.floor((y - self.y0) / h).astype(np.int64)
-        if self._row.size == 0:
-            return np.zeros(x.shape, bool)
-        key = self._row * self._span + (self._a - self.x_min)
-        q = j * self._span + np.clip(x - self.x_min, 0.0, self._span - 1.0)
-        idx = np.searchsorted(key, q, side="right") - 1
-        idc = np.clip(idx, 0, None)
-        return (idx >= 0) & (self._row[idc] == j) & (self._a[idc] <= x) & (x < self._b[idc])
+        j = np.floor((y - self.y0) / self.resolution_mm).astype(np.int64)
+        ok = (j >= 0) & (j < self.n_rows)
+        jc = np.where(ok, j, 0)
+        return ok & np.any((self._A[:, jc] <= x) & (x < self._B[:, jc]), axis=0)
 
-    def _signed_xdist(self, x, j):
-        """Signed x-distance (mm) of points (x, row j) to the material boundary of row j (+ inside)."""
-        big = _NO_MATERIAL
-        if self._row.size == 0:
-            return np.full(x.shape, -big)
-        key = self._row * self._span + (self._a - self.x_min)
-        q = j * self._span + np.clip(x - self.x_min, 0.0, self._span - 1.0)
-        idx = np.searchsorted(key, q, side="right") - 1
-        n = self._row.size
-        ic = np.clip(idx, 0, n - 1)
-        inx = np.clip(idx + 1, 0, n - 1)
-        same = (idx >= 0) & (self._row[ic] == j)
-        inside = same & (x < self._b[ic])
-        d_in = np.minimum(x - self._a[ic], self._b[ic] - x)
-        left = np.where(same, x - self._b[ic], big)                 # gap to the interval on the left
-        right = np.where((idx + 1 < n) & (self._row[inx] == j), self._a[inx] - x, big)
-        return np.where(inside, d_in, -np.minimum(left, right))
+    def _contains_interp(self, x, y):
+        """Membership with the boundary interpolated linearly between row centre lines.
+
+        Between the centre lines of rows j and j+1 holding the same number of intervals, the
+        interval end points are interpolated linearly in y (the polygon through the dixel end
+        points: second-order accurate for smooth boundaries); otherwise the nearer row decides.
+        """
+        t = (y - self.y0) / self.resolution_mm - 0.5
+        j = np.floor(t).astype(np.int64)
+        f = t - j
+        n = self.n_rows
+        j1 = j + 1
+        ok0 = (j >= 0) & (j < n)
+        ok1 = (j1 >= 0) & (j1 < n)
+        A0, B0 = self._A[:, np.where(ok0, j, 0)], self._B[:, np.where(ok0, j, 0)]
+        A1, B1 = self._A[:, np.where(ok1, j1, 0)], self._B[:, np.where(ok1, j1, 0)]
+        fin0 = np.isfinite(A0) & ok0
+        fin1 = np.isfinite(A1) & ok1
+        same = np.all(fin0 == fin1, axis=0)
+        with np.errstate(invalid="ignore"):
+            Ai = A0 + f * (A1 - A0)
+            Bi = B0 + f * (B1 - B0)
+            smooth = np.any(fin0 & (Ai <= x) & (x < Bi), axis=0)
+        near0 = f < 0.5
+        stair = np.where(near0, ok0 & np.any((A0 <= x) & (x < B0), axis=0),
+                         ok1 & np.any((A1 <= x) & (x < B1), axis=0))
+        return np.where(same, smooth, stair)
+
+    def _signed_xdist(self, x, j, endpoint: bool = False):
+        """Signed x-distance (mm) of points (x, row j) to the material boundary of row j (+ inside).
+
+        ``-_NO_MATERIAL`` for rows without material and rows beyond the grid (air). With
+        ``endpoint=True`` also returns the x (mm) of the nearest interval end point (NaN when none).
+        """
+        ok = (j >= 0) & (j < self.n_rows)
+        jc = np.where(ok, j, 0)
+        A = self._A[:, jc]
+        B = self._B[:, jc]
+        # per interval max(a - x, x - b): -(distance inside) if x in [a, b), else the gap to it
+        m = np.maximum(A - x, x - B)
+        if not endpoint:
+            return np.where(ok, -np.minimum(m.min(axis=0), _NO_MATERIAL), -_NO_MATERIAL)
+        kk = m.argmin(axis=0)
+        cols = np.arange(x.size)
+        d = m[kk, cols]
+        a, b = A[kk, cols], B[kk, cols]
+        with np.errstate(invalid="ignore"):
+            e = np.where(np.abs(x - a) <= np.abs(b - x), a, b)
+        good = ok & np.isfinite(d)
+        return np.where(good, -np.minimum(d, _NO_MATERIAL), -_NO_MATERIAL), np.where(good, e, np.nan)
 
     def engagement(self, center_xy, tool_radius, feed_direction_xy, front_only: bool = True,
                    method: str = "rows", **kw) -> Engagement:
         """Engagement of the tool circumference with material (see :meth:`StockBase.engagement`).
 
         ``method="rows"`` (default) uses the dixel structure: the circle crosses every row centre
-        line at two points; the signed x-distance of each crossing to the row's material boundary
-        is interpolated linearly along the circle to locate entry/exit to sub-row accuracy
-        (O(1/resolution) work). ``method="sample"`` uses the generic sampling + bisection.
+        line at two points (O(1/resolution) work). Where consecutive crossings (adjacent rows) are
+        on opposite sides of the material boundary, the boundary between the two rows is taken as
+        the segment joining their nearest interval end points and intersected with the circle
+        (``boundary="polyline"``, default; ``boundary="linear"`` interpolates the signed
+        x-distance linearly along the circle instead). Brackets near the top/bottom of the circle
+        (sparse rows) or next to an empty row are resolved on the membership test.
+        ``method="sample"`` uses the generic sampling + refinement of :class:`StockBase`.
         """
         if method == "sample":
             return super().engagement(center_xy, tool_radius, feed_direction_xy, front_only, **kw)
@@ -203,114 +277,180 @@ class Stock(StockBase):
             raise ValueError("feed_direction_xy must be a non-zero vector")
         psi0 = math.atan2(f[1], f[0])
         h = self.resolution_mm
+        lo, hi = (-np.pi / 2, np.pi / 2) if front_only else (-np.pi, np.pi)
         # every row the circle crosses, also those beyond the grid (they hold no material: air)
         j_lo = int(math.ceil((c[1] - r - self.y0) / h - 0.5))
         j_hi = int(math.floor((c[1] + r - self.y0) / h - 0.5))
+        if j_hi < j_lo:
+            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
         j = np.arange(j_lo, j_hi + 1)
         dy = self.y0 + (j + 0.5) * h - c[1]
         cx = np.sqrt(np.maximum(r * r - dy * dy, 0.0))
-        xs = np.concatenate([c[0] + cx, c[0] - cx])
-        jj = np.concatenate([j, j])
-        phi = np.arctan2(np.concatenate([dy, dy]), np.concatenate([cx, -cx]))
-        dist = self._signed_xdist(xs, jj)
-        psi = np.mod(phi - psi0 + np.pi, 2 * np.pi) - np.pi           # relative to feed, (-pi, pi]
-        o = np.argsort(psi)
-        psi, dist = psi[o], dist[o]
-        lo, hi = (-np.pi / 2, np.pi / 2) if front_only else (-np.pi, np.pi)
-        if psi.size == 0:
-            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
-        # evaluate the signed distance at the range ends by linear interpolation (periodic)
-        pp = np.concatenate([psi - 2 * np.pi, psi, psi + 2 * np.pi])
-        dd = np.concatenate([dist, dist, dist])
-        d_lo, d_hi = np.interp([lo, hi], pp, dd)
-        m = (psi > lo) & (psi < hi)
-        ps = np.concatenate([[lo], psi[m], [hi]])
-        ds = np.concatenate([[d_lo], dist[m], [d_hi]])
-        ins = ds > 0
+        # crossings in increasing polar angle: right side bottom->top, then left side top->bottom
+        dyy = np.concatenate([dy, dy[::-1]])
+        cxx = np.concatenate([cx, -cx[::-1]])
+        jj = np.concatenate([j, j[::-1]])
+        psi = np.arctan2(dyy, cxx) - psi0                 # increasing (up to the -pi/pi wrap)
+        psi = np.mod(psi + np.pi, 2 * np.pi) - np.pi     # relative to feed, (-pi, pi]
+        w = int(np.argmin(psi))                          # rotate so that psi increases
+        if w:
+            psi = np.concatenate([psi[w:], psi[:w]])
+            cxx = np.concatenate([cxx[w:], cxx[:w]])
+            jj = np.concatenate([jj[w:], jj[:w]])
+        # only the crossings inside (lo, hi) (contiguous) and one neighbour on each side
+        inr = np.flatnonzero((psi > lo) & (psi < hi))
+        n = psi.size
+        if inr.size:
+            i0, i1 = int(inr[0]), int(inr[-1]) + 1
+        else:                                            # no row centre line inside the range
+            i0 = i1 = int(np.searchsorted(psi, lo))
+        idx = np.arange(i0 - 1, i1 + 1)
+        pe = psi[idx % n] + 2 * np.pi * np.floor_divide(idx, n)       # unwrapped, increasing
+        xe = c[0] + cxx[idx % n]
+        je = jj[idx % n]
+        dist, ex = self._signed_xdist(xe, je, endpoint=True)
+        ins = dist > 0
         if not ins.any():
             return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
         if ins.all():
             return Engagement(math.degrees(hi - lo), math.degrees(lo), math.degrees(hi),
                               np.array([[lo, hi]]))
         k = np.flatnonzero(ins[1:] != ins[:-1])
-        d0, d1 = ds[k], ds[k + 1]
-        w = np.clip(d0 / (d0 - d1), 0.0, 1.0)
-        edges = ps[k] + w * (ps[k + 1] - ps[k])
-        # wide brackets (near the top/bottom rows, where rows are sparse in angle): bisection on
-        # the membership test instead of the x-distance interpolation
-        # ... and brackets with an empty row on one side, whose x-distance carries no position
-        wide = ((ps[k + 1] - ps[k]) > 4.0 * h / r) | (np.minimum(d0, d1) <= -_NO_MATERIAL / 2)
+        d0, d1 = dist[k], dist[k + 1]
+        p0, p1 = pe[k], pe[k + 1]
+        # first estimate: linear interpolation of the signed x-distance along the circle
+        edges = p0 + np.minimum(np.maximum(d0 / (d0 - d1), 0.0), 1.0) * (p1 - p0)
+        empty = np.minimum(d0, d1) <= -_NO_MATERIAL / 2      # an empty row: no position information
+        wide = ((p1 - p0) > 4.0 * h / r) | empty
+        if kw.get("boundary", "polyline") == "polyline":
+            # the material boundary between two adjacent rows is the segment joining the row end
+            # points nearest to the crossings; intersect it with the tool circle (second order in h
+            # for smooth boundaries, where the x-distance interpolation is first order)
+            adj = ~wide & (np.abs(je[k + 1] - je[k]) == 1)
+            if adj.any():
+                ka = k[adj]
+                xa = ex[ka] - c[0]
+                ya = self.y0 + (je[ka] + 0.5) * h - c[1]
+                dx = ex[ka + 1] - c[0] - xa
+                dyv = self.y0 + (je[ka + 1] + 0.5) * h - c[1] - ya
+                qa = dx * dx + dyv * dyv
+                qb = xa * dx + ya * dyv
+                qc = xa * xa + ya * ya - r * r
+                disc = qb * qb - qa * qc
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    sq = np.sqrt(disc)
+                    best = np.full(ka.size, np.nan)
+                    lin = edges[adj]
+                    for t in ((-qb - sq) / qa, (-qb + sq) / qa):
+                        ang = np.arctan2(ya + t * dyv, xa + t * dx) - psi0
+                        ang = lin + (np.mod(ang - lin + np.pi, 2 * np.pi) - np.pi)
+                        okt = (t >= 0) & (t <= 1) & (ang >= p0[adj]) & (ang <= p1[adj])
+                        closer = okt & ~(np.abs(best - lin) <= np.abs(ang - lin))
+                        best = np.where(closer, ang, best)
+                edges[adj] = np.where(np.isfinite(best), best, lin)
+        # wide brackets (near the top/bottom rows, where rows are sparse in angle) and brackets
+        # next to an empty row: all transitions located on the membership test
         if wide.any():
-            a, b = ps[k][wide].copy(), ps[k + 1][wide].copy()
-            ma = ins[k][wide]
-            for _ in range(kw.get("bisections", 16)):
-                mid = 0.5 * (a + b)
-                mm = self._contains(c[0] + r * np.cos(psi0 + mid), c[1] + r * np.sin(psi0 + mid))
-                same = mm == ma
-                a = np.where(same, mid, a)
-                b = np.where(same, b, mid)
-            edges[wide] = 0.5 * (a + b)
-        bounds = np.concatenate([[lo] if ins[0] else [], edges, [hi] if ins[-1] else []])
-        iv = bounds.reshape(-1, 2)
-        ang = float(np.sum(iv[:, 1] - iv[:, 0]))
+            test = self._contains_interp if kw.get("boundary", "polyline") == "polyline" else self._contains
+            extra = _refine_transitions(test, c, r, psi0, p0[wide], p1[wide], ins[k][wide],
+                                        kw.get("bisections", 16))
+            edges = np.sort(np.concatenate([edges[~wide], extra]))
+        bounds = np.concatenate([pe[:1] if ins[0] else [], edges, pe[-1:] if ins[-1] else []])
+        iv = np.minimum(np.maximum(bounds.reshape(-1, 2), lo), hi)
+        iv = iv[iv[:, 1] > iv[:, 0]]
+        if iv.size == 0:
+            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
+        ang = float((iv[:, 1] - iv[:, 0]).sum())
         return Engagement(math.degrees(ang), math.degrees(iv[0, 0]), math.degrees(iv[-1, 1]), iv)
 
-    def disk_halfwidths(self, cy: float, tool_radius: float):
-        """Rows touched by a disk centred at height ``cy`` and their exact mean half-chords (mm)."""
-        r = _check_radius(tool_radius)
+    def _rows_of_disk(self, cy: float, r: float):
         h = self.resolution_mm
         j_lo = max(int(math.floor((cy - r - self.y0) / h)), 0)
-        j_hi = min(int(math.floor((cy + r - self.y0) / h)), self.n_rows - 1)
+        j_hi = min(int(math.ceil((cy + r - self.y0) / h)) - 1, self.n_rows - 1)
         if j_hi < j_lo:
-            return np.empty(0, np.int64), np.empty(0)
-        j = np.arange(j_lo, j_hi + 1)
-        yb = self.y0 + j * h - cy
-        w = strip_area(yb, yb + h, r) / (2.0 * h)
-        return j, w
+            return j_lo, j_lo, np.empty(0)
+        # exact mean half-chord of each row strip: (G(top) - G(bottom)) / h, G the half-area primitive
+        u = np.clip(self.y0 + np.arange(j_lo, j_hi + 2) * h - cy, -r, r)
+        g = u * np.sqrt(np.maximum(r * r - u * u, 0.0)) + r * r * np.arcsin(u / r)
+        return j_lo, j_hi + 1, np.diff(g) * (0.5 / h)
+
+    def disk_halfwidths(self, cy: float, tool_radius: float):
+        """Rows touched by a disk centred at height ``cy`` and their exact mean half-chords (mm).
+
+        The half-chord of row j is strip area / (2 h), so sum(2 w h) = pi r^2 exactly.
+
+        >>> from shapely.geometry import box
+        >>> st = Stock.from_polygon(box(0, 0, 10, 10), 0.5)
+        >>> j, w = st.disk_halfwidths(5.0, 1.0)
+        >>> j.tolist(), round(float(np.sum(2 * w * 0.5)) / math.pi, 12)
+        ([8, 9, 10, 11], 1.0)
+        """
+        r = _check_radius(tool_radius)
+        j0, j1, w = self._rows_of_disk(float(cy), r)
+        return np.arange(j0, j1, dtype=np.int64), w
 
     def cut_disk(self, center_xy, tool_radius) -> float:
-        """Remove the tool disk at ``center_xy`` (mm); returns the removed area (mm^2)."""
+        """Remove the tool disk at ``center_xy`` (mm); returns the removed area (mm^2).
+
+        Vectorised interval arithmetic on the rows the disk covers: every interval [a, b) of a row
+        with half-chord w becomes [a, min(b, x-w)) and [max(a, x+w), b) (empty pieces dropped).
+        """
         cx, cy = _check_xy(center_xy, "center_xy")
-        j, w = self.disk_halfwidths(cy, tool_radius)
-        if j.size == 0:
+        r = _check_radius(tool_radius)
+        j0, j1, w = self._rows_of_disk(float(cy), r)
+        if j1 <= j0:
             return 0.0
-        i0 = int(np.searchsorted(self._row, j[0], side="left"))
-        i1 = int(np.searchsorted(self._row, j[-1], side="right"))
-        if i1 == i0:
-            return 0.0
-        rr = self._row[i0:i1]
-        a = self._a[i0:i1]
-        b = self._b[i0:i1]
-        ww = w[rr - j[0]]
-        xs, xe = cx - ww, cx + ww
-        ov = np.minimum(b, xe) - np.maximum(a, xs)
+        A = self._A[:, j0:j1]
+        B = self._B[:, j0:j1]
+        xs = cx - w
+        xe = cx + w
+        ov = np.minimum(B, xe) - np.maximum(A, xs)
         hit = ov > 0
-        if not hit.any():
+        rows_hit = np.flatnonzero(hit.any(axis=0))
+        if rows_hit.size == 0:
             return 0.0
         removed = float(np.sum(ov[hit])) * self.resolution_mm
-        # left piece [a, min(b, xs)] and right piece [max(a, xe), b] of every interval
-        la, lb = a, np.where(hit, np.minimum(b, xs), b)
-        ra, rb = np.where(hit, np.maximum(a, xe), b), b
-        na = np.stack([la, ra], 1).ravel()
-        nb = np.stack([lb, rb], 1).ravel()
-        nr = np.repeat(rr, 2)
-        keep = nb > na
-        self._row = np.concatenate([self._row[:i0], nr[keep], self._row[i1:]])
-        self._a = np.concatenate([self._a[:i0], na[keep], self._a[i1:]])
-        self._b = np.concatenate([self._b[:i0], nb[keep], self._b[i1:]])
+        k0, k1 = int(rows_hit[0]), int(rows_hit[-1]) + 1
+        A, B, xs, xe = A[:, k0:k1], B[:, k0:k1], xs[k0:k1], xe[k0:k1]
+        lb = np.minimum(B, xs)
+        ra = np.maximum(A, xe)
+        # left and right pieces; the valid ones are disjoint, so sorting a and b separately keeps
+        # the pairs (empty slots are +inf and sort last)
+        lv = lb > A
+        rv = B > ra
+        na = np.concatenate([np.where(lv, A, _INF), np.where(rv, ra, _INF)], axis=0)
+        nb = np.concatenate([np.where(lv, lb, _INF), np.where(rv, B, _INF)], axis=0)
+        na.sort(axis=0)
+        nb.sort(axis=0)
+        K = self._A.shape[0]
+        if np.isfinite(na[K]).any():                  # a row now holds more than K intervals
+            self._grow(2 * K)
+            K = 2 * K
+        self._A[:, j0 + k0:j0 + k1] = na[:K]
+        self._B[:, j0 + k0:j0 + k1] = nb[:K]
         return removed
+
+    def _grow(self, k: int) -> None:
+        A = np.full((k, self.n_rows), _INF)
+        B = np.full((k, self.n_rows), _INF)
+        k0 = self._A.shape[0]
+        A[:k0] = self._A
+        B[:k0] = self._B
+        self._A, self._B = A, B
 
     def to_polygon(self):
         """Material as a shapely geometry (union of row rectangles, mm)."""
         import shapely
 
         h = self.resolution_mm
-        y = self.y0 + self._row * h
-        y1 = self.y0 + (self._row + 1) * h          # same formula as the next row's bottom edge
-        boxes = shapely.box(self._a, y, self._b, y1)
+        rows, a, b = self.intervals()
+        y = self.y0 + rows * h
+        y1 = self.y0 + (rows + 1) * h               # same formula as the next row's bottom edge
+        boxes = shapely.box(a, y, b, y1)
         return shapely.union_all(boxes)
 
     def boundary_points(self):
         """(k, 2) material boundary samples: interval end points on the row centre lines (mm)."""
-        y = self.row_y(self._row)
-        return np.concatenate([np.c_[self._a, y], np.c_[self._b, y]])
+        rows, a, b = self.intervals()
+        y = self.row_y(rows)
+        return np.concatenate([np.c_[a, y], np.c_[b, y]])

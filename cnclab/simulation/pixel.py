@@ -97,7 +97,7 @@ class Stock(StockBase):
         win = self.grid[j0:j1, i0:i1]
         hit = win & disk
         n = int(np.count_nonzero(hit))
-        win &= ~disk
+        win ^= hit                                   # clear the material pixels under the disk
         return n
 
     def cut_disk(self, center_xy, tool_radius) -> float:
