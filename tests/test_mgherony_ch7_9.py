@@ -61,3 +61,46 @@ def test_files_are_written_and_read_back():
     p = ch7_9.zigzag_apt(0.0)
     assert apt.read_apt(p).to_text() == open(p).read()
     assert read_stl(ch7_9.part_stl()).n_facets > 0
+
+
+def test_reordered_apt_round_trip_visits_every_point_once():
+    from cnclab.toolpath import apt
+    cases, dense, orders = ch7_9.reorder_cases()
+    path = ch7_9.reordered_apt(1)
+    prog = apt.read_apt(path)
+    assert prog.to_text() == open(path).read()
+    cl = prog.cl_points()
+    cut = cl.xyz[cl.xyz[:, 2] < 29.0]                     # below the 30 mm clearance plane
+    np.testing.assert_allclose(cut, dense[orders[1].order], atol=5e-4)
+    plunges = cl.rapid & (cl.xyz[:, 2] < 29.0)
+    assert plunges.sum() == orders[1].n_jumps + 1         # first approach + one plunge per jump
+    # every feed move joins two neighbours: no feed move longer than the k-NN reach of a jump-free step
+    feed_moves = np.linalg.norm(np.diff(cl.xyz, axis=0), axis=1)[~cl.rapid[1:]]
+    assert feed_moves.max() < 3 * ch7_9.parameters()["table9_1"]["a_e"]
+
+
+def test_deltas_match_path_metrics():
+    cases = ch7_9.reorder_cases()[0].set_index("case")
+    for case in ("original", 1, 4):
+        d = ch7_9.deltas(case)
+        assert np.isclose(d["dD"].max(), cases.loc[case, "dD_max"])
+        assert np.isclose(d["dn"].max(), cases.loc[case, "dn_max"])
+
+
+def test_thesis4_ratio_bounds_from_in_text_values():
+    iv = ch7_9.thesis4_mean_ratio_hi_interval()
+    r0 = ch7_9.rz_cross_checks()["mean_0deg"]
+    assert iv.lo < r0 < iv.hi                              # the rounding interval contains the 0-deg ratio
+    rz = ch7_9.parameters()["ch8_rz"]
+    # 0 deg holds both the controlled maximum and the constant minimum -> no other direction can exceed it
+    assert r0 >= 100 * max(rz["ctrl_mean_0deg"], rz["ctrl_mean_45deg"]) / min(rz["const_mean_0deg"],
+                                                                             rz["const_mean_67_5deg"]) - 1e-9
+    assert round(ch7_9.thesis4_mean_ratio_mixed_directions()) == 36
+
+
+def test_table7_1_relations_are_inverse():
+    t = ch7_9.parameters()["table7_1"]
+    from cnclab.cutting.speeds import feed_speed
+    assert np.isclose(feed_speed(ch7_9.feed_per_tooth_mm(), t["teeth"], t["n"]), t["v_f"])
+    assert np.isclose(np.pi * t["D"] * ch7_9.nominal_n_rpm() / 1000, t["v_c"])
+    assert ch7_9.feed_direction_step_deg() == 22.5 and ch7_9.feed_direction_typo_deg() == 22.0

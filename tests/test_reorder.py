@@ -50,3 +50,18 @@ def test_reorder_bad_input():
         densify(P, 0)
     with pytest.raises(ValueError, match="direction"):
         reorder_path(P, np.tile([0, 0, 1.0], (3, 1)), tool_diameter=10, a_p=0.3, direction="x")
+
+
+def test_reordered_program_links_segments_by_rapids():
+    from cnclab.toolpath import apt
+    from cnclab.toolpath.reorder import ReorderResult, reordered_program
+
+    P = np.array([[0, 0, 1.0], [1, 0, 1], [2, 0, 1], [10, 10, 2], [11, 10, 2]])
+    r = ReorderResult(np.array([0, 1, 2, 3, 4]), np.array([False, False, False, True, False]), np.ones(5))
+    prog = reordered_program(P, r, feed_mm_min=500, spindle_rpm=2000, tool_diameter=10, clearance_z=30)
+    cl = apt.parse_apt(prog.to_text()).cl_points()
+    low = cl.xyz[:, 2] < 29
+    np.testing.assert_allclose(cl.xyz[low], P)
+    assert cl.rapid[low].tolist() == [True, False, False, True, False]
+    with pytest.raises(ValueError, match="points must be"):
+        reordered_program(P[:3], r, feed_mm_min=500, spindle_rpm=2000, tool_diameter=10, clearance_z=30)

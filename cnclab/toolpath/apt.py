@@ -504,15 +504,18 @@ def write_apt(path, program: AptProgram, inputs=()) -> Path:
 
 
 def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: float,
-               clearance_z: float, partno: str = "CNCLAB", decimals: int = 3) -> AptProgram:
+               clearance_z: float, partno: str = "CNCLAB", decimals: int = 3, link: str = "feed") -> AptProgram:
     """An APT program cutting each pass (list of (M, 3) arrays of tool-tip points, mm) in order.
 
     The tool rapids above the first point at ``clearance_z`` and down to it, then feeds through all
-    passes in order (a zig-zag: consecutive passes are linked by a feed move), and retracts at the
-    end. Header as in Sec. 7.2.2 (``OUTPUT_ON_TIP``: the points are tool-tip positions).
+    passes in order, and retracts at the end. ``link="feed"``: consecutive passes are linked by a feed
+    move (a zig-zag); ``"rapid"``: by a retract to ``clearance_z``, a rapid over the next pass start and
+    a rapid plunge onto it. Header as in Sec. 7.2.2 (``OUTPUT_ON_TIP``: the points are tool-tip positions).
     """
     if feed_mm_min <= 0 or spindle_rpm <= 0:
         raise ValueError(f"feed_mm_min and spindle_rpm must be > 0, got {feed_mm_min}, {spindle_rpm}")
+    if link not in ("feed", "rapid"):
+        raise ValueError(f"link must be 'feed' or 'rapid', got {link!r}")
     recs = [_word(f"PARTNO / {partno}", "PARTNO", [partno]), _word("MACHIN / MILL, 1", "MACHIN", ["MILL", "1"]),
             _word("$$-> CUTCOM_GEOMETRY_TYPE / OUTPUT_ON_TIP", ""), _word("UNITS / MM", "UNITS", ["MM"]),
             _word(f"$$-> CUTTER / {tool_diameter:.6f}", "")]
@@ -527,13 +530,16 @@ def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: fl
                                              "FROM", [str(p0[0]), str(p0[1]), str(clearance_z)])]
     feed_set = False
     for k, p in enumerate(passes):
-        if k == 0:
+        if k == 0 or link == "rapid":
+            if k > 0:
+                q = passes[k - 1][-1]
+                recs += [_word("RAPID", "RAPID"), goto(q[0], q[1], clearance_z, decimals)]
             recs += [_word("RAPID", "RAPID"), goto(p[0, 0], p[0, 1], clearance_z, decimals)]
             recs += [_word("RAPID", "RAPID"), goto(*p[0], decimals=decimals)]
         if not feed_set:
             recs.append(fedrat(feed_mm_min))
             feed_set = True
-        recs += [goto(*q, decimals=decimals) for q in p[(1 if k == 0 else 0):]]
+        recs += [goto(*q, decimals=decimals) for q in p[(1 if k == 0 or link == "rapid" else 0):]]
     last = passes[-1][-1]
     recs += [_word("RAPID", "RAPID"), goto(last[0], last[1], clearance_z, decimals), _word("FINI", "FINI")]
     for i, r in enumerate(recs, start=1):

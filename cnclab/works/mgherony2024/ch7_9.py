@@ -191,15 +191,20 @@ def rz_cross_checks() -> dict:
 
 
 # ------------------------------------------------------------------------------ chapter 9
+def ch9_original_apt(step_mm: float | None = None) -> str:
+    """The chapter 9 original path (Table 9-1: a_e = 0.5, A_f = 90; CL step 2 mm, 4 mm fast) as an APT file in build/."""
+    t = parameters()["table9_1"]
+    return zigzag_apt(t["A_f"], t["a_e"], pick(2.0, 4.0) if step_mm is None else step_mm)
+
+
 @functools.cache
 def reorder_cases(direction: str = "constant", step_mm: float | None = None):
     """Original vs reordered metrics for the four Table 9-2 cases on the reconstruction (a_e = 0.5, A_f = 90)."""
     from ...cutting.spindle_control import feed_directions, working_diameters
-    from ...toolpath.reorder import densify, path_metrics, reorder_path
+    from ...toolpath.reorder import ReorderResult, densify, path_metrics, reorder_path
 
     t = parameters()["table9_1"]
-    step = pick(2.0, 4.0) if step_mm is None else step_mm
-    cl = apt.read_apt(zigzag_apt(t["A_f"], t["a_e"], step)).cl_points()
+    cl = apt.read_apt(ch9_original_apt(step_mm)).cl_points()
     P = cl.xyz[~cl.rapid]
     dense, _ = densify(P, t["a_e"])
     mesh = surface_mesh()
@@ -207,9 +212,9 @@ def reorder_cases(direction: str = "constant", step_mm: float | None = None):
     af = np.full(len(dense), float(t["A_f"])) if direction == "constant" else feed_directions(dense)
     d0, _, _ = working_diameters(nrm, af, t["D"], t["a_p"], "max")
     rows = [{"case": "original", "start": "-", "k": "-", **path_metrics(dense, d0, t["v_c"])}]
+    orders = {"original": ReorderResult(np.arange(len(dense)), np.zeros(len(dense), bool), d0)}
     middle = int(np.argmin(np.linalg.norm(dense[:, :2] - [25.0, 25.0], axis=1)))
     corner = int(np.argmin(np.linalg.norm(dense[:, :2] - [50.0, 50.0], axis=1)))
-    orders = {}
     for case, (st, k) in enumerate([(corner, 4), (middle, 4), (corner, 8), (middle, 8)], start=1):
         r = reorder_path(dense, nrm, tool_diameter=t["D"], a_p=t["a_p"], k=k, start=st,
                          feed_direction_deg=t["A_f"], direction=direction)
@@ -217,3 +222,107 @@ def reorder_cases(direction: str = "constant", step_mm: float | None = None):
         rows.append({"case": case, "start": st, "k": k,
                      **path_metrics(dense[r.order], r.d_eff, t["v_c"], jump=r.jump)})
     return pd.DataFrame(rows), dense, orders
+
+
+def reordered_apt(case: int = 1, direction: str = "constant") -> str:
+    """Write the Table 9-2 ``case`` reordered path as an APT file into build/ (jumps: retract, rapid,
+    plunge) and return its path; Table 9-1 feed and n = 2000 rpm."""
+    from ...toolpath.reorder import reordered_program
+
+    t = parameters()["table9_1"]
+    _, dense, orders = reorder_cases(direction)
+    prog = reordered_program(dense, orders[case], feed_mm_min=t["v_f"], spindle_rpm=parameters()["table7_1"]["n"],
+                             tool_diameter=t["D"], clearance_z=30.0, partno=f"CH9_CASE{case}")
+    path = _out(f"ch9_reordered_case{case}_{direction}.apt")
+    apt.write_apt(path, prog)
+    return str(path)
+
+
+def deltas(case="original", direction: str = "constant") -> dict:
+    """|Delta D_eff| (mm) and |Delta n| (rpm, eq 7-4 at v_c = 63) between consecutive points of the
+    original or a reordered path (moves into jump points excluded, the tool lifts): Figs 9-9 ... 9-12."""
+    t = parameters()["table9_1"]
+    r = reorder_cases(direction)[2][case]
+    n = spindle_speed(t["v_c"], np.maximum(r.d_eff, 1e-6))
+    keep = ~r.jump[1:]
+    return {"dD": np.abs(np.diff(r.d_eff))[keep], "dn": np.abs(np.diff(n))[keep]}
+
+
+# ------------------------------------------------------------------------------ ledger completeness
+def nominal_n_rpm() -> float:
+    """Table 7-1 / Sec. 8.2: n from eq 7-4 at the nominal diameter D = 10 mm and v_c = 63 m/min (2005.3)."""
+    t = parameters()["table7_1"]
+    return float(spindle_speed(t["v_c"], t["D"]))
+
+
+def feed_per_tooth_mm() -> float:
+    """Table 7-1: f_z = v_f / (z n) (eq 7-5 inverted) from v_f = 500, z = 2, n = 2000."""
+    t = parameters()["table7_1"]
+    return float(t["v_f"] / (t["teeth"] * t["n"]))
+
+
+def vf_peak_ratio() -> float:
+    """Sec. 7.3 'three times greater than the nominal feed rate': max controlled v_f / 500."""
+    return horizontal_vf_mm_min() / parameters()["table7_1"]["v_f"]
+
+
+@functools.cache
+def vc_controlled_range():
+    """Fig 7-18: actual cutting speed (m/min) after control over the A_f = 0 pipeline, as an Interval."""
+    from ...claims import Interval
+
+    v = schedule(0.0).v_c_actual
+    return Interval(float(v.min()), float(v.max()))
+
+
+def feed_direction_step_deg() -> float:
+    """Sec. 8.2: the second of five equally spaced feed directions 0 ... 90 deg (90/4 = 22.5)."""
+    d = parameters()["ch8_feed_directions"]
+    return float(np.linspace(d[0], d[-1], len(d))[1])
+
+
+def feed_direction_typo_deg() -> float:
+    """Explanation of the printed '22 deg' (Sec. 8.2 list): 22.5 with the '.5' dropped."""
+    return float(np.floor(feed_direction_step_deg()))
+
+
+def path_length_difference_mm() -> float:
+    """Sec. 8.2 'maximum difference in tool path length is 100 mm': 10383 - 10286 from the printed lengths."""
+    L = parameters()["ch8_path_length"]
+    return float(L["45"] - L["0"])
+
+
+def thesis4_mean_ratio_hi_interval():
+    """Thesis 4 highest per-direction mean-Rz ratio (%): the in-text extremes (controlled max 2.0 um and
+    constant min 3.7 um, both at 0 deg) make the 0-deg ratio the highest; Interval over the rounding of
+    the printed values to 0.1 um: [1.95/3.75, 2.05/3.65]."""
+    from ...claims import Interval
+
+    rz = parameters()["ch8_rz"]
+    c, k = rz["ctrl_mean_0deg"], rz["const_mean_0deg"]
+    return Interval(100 * (c - 0.05) / (k + 0.05), 100 * (c + 0.05) / (k - 0.05))
+
+
+def thesis4_mean_ratio_mixed_directions() -> float:
+    """1.6 / 4.5 (%): controlled minimum (45 deg) over constant maximum (67.5 deg) -- different directions."""
+    rz = parameters()["ch8_rz"]
+    return 100 * rz["ctrl_mean_45deg"] / rz["const_mean_67_5deg"]
+
+
+def table9_1_feed_mm_min() -> float:
+    """Table 9-1 v_f = 500: eq 7-5 with f_z = 0.125, z = 2 (Table 7-1; Table 9-1 gives neither) at n = 2000."""
+    t = parameters()["table7_1"]
+    return float(feed_speed(t["f_z"], t["teeth"], t["n"]))
+
+
+def start_point_height_mm(which: str = "corner") -> float:
+    """z (mm) of the reconstructed part at the Sec. 9.3 start coordinates: 'corner' (50, 50), 'text' (28.5, 43.919)."""
+    xy = (50.0, 50.0) if which == "corner" else tuple(parameters()["ch9_text"]["start_xyz_text"][:2])
+    return float(part().height_at(*xy))
+
+
+def ch9_delta_minima() -> dict:
+    """min |Delta D_eff| (mm) and min |Delta n| (rpm) of the original path and of case 1 (Figs 9-9 ... 9-12)."""
+    o, c = deltas("original"), deltas(1)
+    return {"dD_original": float(o["dD"].min()), "dD_case1": float(c["dD"].min()),
+            "dn_original": float(o["dn"].min()), "dn_case1": float(c["dn"].min())}
