@@ -108,3 +108,37 @@ def test_multi_pass_grows_pocket_within_final_contour():
     assert len(laps) == 2 and all(lap["removed_mm2"] > 0 for lap in laps)
     for lap in laps:
         assert np.all(np.hypot(*lap["path"].T) <= 14.0 - R + 1e-6)
+
+
+def _spline_contour():
+    t = np.linspace(0, 2 * np.pi, 9)[:-1]
+    return SplineContour(np.c_[10 * np.cos(t), 8 * np.sin(t) + np.sin(2 * t)], closed=True)
+
+
+def test_convergence_orders_on_spline_contour():
+    # Thesis III vs the Thesis II IVP on a closed cubic-spline contour: observed orders 1 and 2
+    table, orders = ce.convergence_study(_spline_contour(), R, TH, [0.08, 0.04, 0.02, 0.01], t_end=20.0)
+    assert abs(orders["euler"] - 1.0) < 0.1 and abs(orders["midpoint"] - 2.0) < 0.1, orders
+    for m, g in table.groupby("method"):
+        assert np.all(np.diff(g.max_err_mm.values) < 0), (m, g)       # error falls at every halving
+
+
+def test_simulated_engagement_deviation_shrinks_with_dt():
+    # the dixel simulator measures the engagement along Euler paths of decreasing step: the deviation
+    # from theta after the entry transient must shrink with dt (first order: about halving)
+    c = _spline_contour()
+    stock = box(-25, -25, 25, 25).difference(Polygon(c.sample(4000)))
+    df = ce.simulated_deviation_vs_dt(c, stock, R, TH, [0.4, 0.2, 0.1], method="euler",
+                                      resolution_mm=0.05, t_end=25.0)
+    dev = df.max_dev_deg.values
+    assert np.all(dev[1:] < 0.7 * dev[:-1]), df
+    assert np.all(np.diff(df.mean_abs_dev_deg.values) < 0), df
+    # the midpoint path at the coarsest of these steps already holds theta within 0.2 deg
+    mid = ce.simulated_deviation_vs_dt(c, stock, R, TH, [0.4], method="midpoint", resolution_mm=0.05,
+                                       t_end=25.0)
+    assert mid.max_dev_deg.iloc[0] <= 0.2, mid
+
+
+def test_convergence_study_bad_input():
+    with pytest.raises(ValueError, match="dts"):
+        ce.convergence_study(Line((0, 0), (10, 0)), R, TH, [0.1])

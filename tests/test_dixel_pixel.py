@@ -126,3 +126,65 @@ def test_engagement_when_the_tool_reaches_beyond_the_stock_grid(center, feed, ex
     for mod in (dixel, pixel):
         st = mod.Stock.from_polygon(box(0, 0, 20, 10), 0.02)
         assert st.engagement(center, 3.0, feed).angle_deg == pytest.approx(expected, abs=0.2), mod.__name__
+
+
+def test_dixel_many_intervals_per_row_match_1d_reference_and_round_trip():
+    # random small disks split rows into many intervals (the per-row capacity must grow); every
+    # row must equal the 1-D reference [0, 20] minus the union of the disks' mean chords
+    from shapely.geometry import MultiLineString
+    from shapely.ops import unary_union
+
+    rng = np.random.default_rng(7)
+    st = dixel.Stock.from_polygon(box(0, 0, 20, 2), 0.1)
+    centres = np.c_[rng.uniform(0, 20, 60), rng.uniform(0, 2, 60)]
+    total = sum(st.cut_disk(c, 0.25) for c in centres)
+    assert st.area() == pytest.approx(40.0 - total, rel=1e-12)
+    rows, a, b = st.intervals()
+    assert np.all(np.diff(rows) >= 0) and np.all(b > a)
+    same_row = rows[1:] == rows[:-1]
+    assert np.all(a[1:][same_row] >= b[:-1][same_row])             # sorted, disjoint
+    assert np.bincount(rows).max() >= 4                             # several intervals in a row
+    for j in range(st.n_rows):
+        chords = []
+        for c in centres:
+            jj, w = st.disk_halfwidths(c[1], 0.25)
+            if j in jj:
+                ww = w[list(jj).index(j)]
+                chords.append([(c[0] - ww, 0), (c[0] + ww, 0)])
+        ref = LineString([(0, 0), (20, 0)]).difference(unary_union(MultiLineString(chords))) if chords \
+            else LineString([(0, 0), (20, 0)])
+        assert np.sum(b[rows == j] - a[rows == j]) == pytest.approx(ref.length, abs=1e-9), j
+    # the flat (rows, a, b) view rebuilds an identical stock (constructor used by subclasses)
+    st2 = dixel.Stock(st.y0, st.resolution_mm, st.n_rows, rows, a, b, st.x_min, st.x_max)
+    assert st2.area() == pytest.approx(st.area(), rel=1e-12)
+    assert st2.engagement((10, 1), 0.8, (1, 0)).angle_deg == pytest.approx(
+        st.engagement((10, 1), 0.8, (1, 0)).angle_deg, abs=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["concave", "convex"])
+def test_dixel_engagement_second_order_with_central_feed_direction(kind):
+    # with the tangent (central difference) as feed direction, the dixel engagement on arcs is
+    # second-order accurate in the row height (polyline boundary between rows)
+    errs = []
+    for h in (0.1, 0.05):
+        if kind == "concave":
+            poly = box(-1, -4, 10.5, 10.5).difference(Point(0, 0).buffer(8.0, quad_segs=512))
+            d, sign, th = 6.5, 1.0, float(theta_concave(1.5, 8.0, R))
+        else:
+            poly = Point(0, 0).buffer(8.0, quad_segs=512).intersection(box(-1, -9, 9, 4))
+            d, sign, th = 9.5, -1.0, float(theta_convex(1.5, 8.0, R))
+        phi = sign * np.linspace(0, math.radians(60), int(math.radians(60) * d / 0.02) + 1)
+        df = dixel.simulate(dixel.Stock.from_polygon(poly, h), np.c_[d * np.cos(phi), d * np.sin(phi)], R,
+                            1, 1000, feed_direction="central")
+        errs.append(np.max(np.abs(df.engagement_deg.values[len(phi) // 2:-1] - th)))
+    assert errs[1] < 0.06 and errs[1] < 0.4 * errs[0], errs
+
+
+def test_material_removal_rate_formula():
+    from cnclab.simulation.common import material_removal_rate
+
+    out = material_removal_rate([0.075, 0.0], [0.05, 0.0], a_p=3.0, feed_mm_min=255.0)
+    assert out[0] == pytest.approx(3 * 1.5 * 255) and np.isnan(out[1])
+    with pytest.raises(ValueError, match="feed_direction"):
+        dixel.simulate(dixel.Stock.from_polygon(box(0, 0, 1, 1), 0.1), [[0, 0], [1, 0]], 1, 1, 100,
+                       feed_direction="forward")

@@ -74,14 +74,43 @@ def strip_area(u1, u2, r):
 def chip_thickness(intervals, f_z: float) -> tuple[float, float]:
     """Maximum and average uncut chip thickness (mm) over engaged angular intervals.
 
-    Circular-tooth-path approximation (Martellotti 1941; Altintas, *Manufacturing Automation*,
-    2nd ed. 2012, eq. 2.2): a tooth at angle psi from the feed direction cuts h(psi) = f_z cos(psi).
-    Hence h_max = f_z max cos(psi) over the engaged set, and
-    h_avg = f_z * sum(sin psi_2 - sin psi_1) / theta (mean over the engaged arc). For a straight cut
-    this is h_max = f_z sin(theta) (theta <= 90 deg) and h_avg = f_z a_e / (r theta), the Sandvik
-    mean-chip-thickness formula (see :mod:`cnclab.cutting.milling_2d`).
+    Circular-tooth-path approximation (Martellotti, *Trans. ASME* 63, 1941; Altintas,
+    *Manufacturing Automation*, 2nd ed. 2012, eq. 2.2): a tooth at angle psi from the feed
+    direction cuts
 
-    Parameters: intervals (k, 2) in rad relative to the feed direction, f_z feed per tooth (mm).
+        h(psi) = f_z cos(psi)                       (mm; |psi| <= 90 deg, the front half)
+
+    so over the engaged set E (only its part in the front half-circle counts)
+
+        h_max = f_z max_{psi in E} cos(psi)
+        h_avg = (1/theta) integral_E h dpsi = f_z sum(sin psi_2 - sin psi_1) / theta,
+
+    theta the engaged angle (rad). For a straight cut of radial depth a_e with a tool of radius r
+    (theta = arccos(1 - a_e/r)): h_max = f_z sin(theta) for theta <= 90 deg (f_z beyond), and
+    h_avg = f_z a_e / (r theta), Sandvik's mean chip thickness h_m = 360 f_z a_e / (pi D theta_deg)
+    (Sandvik Coromant, *Metalcutting technical guide*, milling formulas; D = 2r, kappa_r = 90 deg).
+    The booklet (Jacsó 2021, §2.2) names h_max and h_avg as
+    outputs of the simulator but prints no formula; these are the standard ones.
+
+    Parameters
+    ----------
+    intervals : (k, 2) engaged angular intervals, rad, relative to the feed direction (ccw +).
+    f_z : feed per tooth (mm).
+
+    Returns
+    -------
+    (h_max, h_avg) in mm; (0, 0) when nothing in the front half is engaged.
+
+    Examples
+    --------
+    Straight cut, r = 3 mm, a_e = 1.5 mm (theta = 60 deg, material on the right of the feed):
+
+    >>> th = math.acos(1 - 1.5 / 3)
+    >>> h_max, h_avg = chip_thickness([[-math.pi / 2, -math.pi / 2 + th]], f_z=0.04)
+    >>> round(h_max, 6), round(0.04 * math.sin(th), 6)
+    (0.034641, 0.034641)
+    >>> round(h_avg, 6), round(0.04 * 1.5 / (3 * th), 6)
+    (0.019099, 0.019099)
     """
     iv = np.asarray(intervals, dtype=float).reshape(-1, 2)
     if iv.size == 0:
@@ -138,6 +167,27 @@ def _refine_transitions(contains, c, r, psi0, a, b, ma, bisections=16, n_sub=256
         first = np.where(diff.any(axis=1), diff.argmax(axis=1) + 1, n_sub)
         a, b = grid[rows, first - 1], grid[rows, first]
     return np.sort(0.5 * (a + b))
+
+
+def material_removal_rate(removed_area_mm2, step_mm, a_p, feed_mm_min):
+    """Material removal rate MRR (mm^3/min) of one simulation step.
+
+    Jacsó (2021), §2.2: "the material removal rate ... can be calculated from the area of the
+    sections determined step by step": the tool removes the area ``A`` (mm^2) while advancing
+    ``ds`` (mm), i.e. a volume a_p A in ds / v_f minutes:
+
+        MRR = a_p * A / ds * v_f          (mm^3/min; a_p axial depth mm, v_f feed mm/min)
+
+    For a straight cut of radial depth a_e, A / ds = a_e and MRR = a_p a_e v_f (e.g. Table 4.1:
+    3 mm x 1.5 mm x 255 mm/min = 1147.5 mm^3/min). Array inputs broadcast; ds = 0 gives NaN.
+
+    >>> float(material_removal_rate(1.5 * 0.05, 0.05, a_p=3.0, feed_mm_min=255.0))
+    1147.5
+    """
+    A = np.asarray(removed_area_mm2, dtype=float)
+    ds = np.asarray(step_mm, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(ds > 0, float(a_p) * A / ds * float(feed_mm_min), np.nan)
 
 
 class StockBase:
@@ -257,8 +307,9 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     Returns
     -------
     DataFrame with columns x, y (mm), s (path length, mm), ds (mm), engagement_deg, entry_deg,
-    exit_deg, removed_mm2 (area removed by this step), mrr_mm3_min = a_p * removed / ds * v_f,
-    h_max_mm, h_avg_mm (and spindle_rpm when ``teeth`` is given). Row 0 (no feed direction from
+    exit_deg, removed_mm2 (area removed by this step), mrr_mm3_min = a_p * removed / ds * v_f
+    (:func:`material_removal_rate`), h_max_mm, h_avg_mm (:func:`chip_thickness`; NaN without
+    ``f_z``) (and spindle_rpm = v_f / (z f_z) when ``teeth`` is given). Row 0 (no feed direction from
     behind) uses centres[1] - centres[0] and has NaN MRR.
 
     >>> import numpy as np
@@ -327,8 +378,7 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     while k < n:
         rem[k] = stock.cut_disk(P[k], r)
         k += 1
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mrr = np.where(ds > 0, float(a_p) * rem / ds * float(feed_mm_min), np.nan)
+    mrr = material_removal_rate(rem, ds, a_p, feed_mm_min)
     df = pd.DataFrame({"x": P[:, 0], "y": P[:, 1], "s": s_cum, "ds": ds,
                        "engagement_deg": eng, "entry_deg": ent, "exit_deg": ext,
                        "removed_mm2": rem, "mrr_mm3_min": mrr, "h_max_mm": hmax, "h_avg_mm": havg})
