@@ -17,6 +17,13 @@ Dialect
 - Errors name file and line: GOTO/FROM with other than 3 or 6 values, non-numeric or non-finite
   values, a feed motion before any ``FEDRAT``, a program without motion.
 
+Speed: runs of plain ``GOTO / x, y, z`` lines (the bulk of a CL file) are located with one regular
+expression, checked strictly with numpy (one '/', two commas, exactly one number token per field) and
+converted with ``numpy.fromstring`` (the same correctly rounded conversion as ``float``); they stay in
+bulk (:class:`_GotoRun`) until ``AptProgram.records`` is accessed. Any line that does not pass the
+check goes through the careful per-line parser, so records, text and error messages are identical to
+``parse_apt(..., fast=False)`` (tested). About 7-8x faster on 1e6 points (benchmarks/bench_spindle_postprocess.py).
+
 >>> prog = parse_apt("UNITS / MM\\nRAPID\\nGOTO / 0, 0, 5\\nFEDRAT / 500, MMPM\\nGOTO / 10, 0, 0\\nFINI\\n")
 >>> cl = prog.cl_points()
 >>> cl.xyz.tolist(), cl.rapid.tolist(), cl.feed.tolist()
