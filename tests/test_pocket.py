@@ -1,4 +1,5 @@
-"""Pocket planner on two shapes (designed star, rectangle), input validation, G-code round trip."""
+"""Pocket planner on two shapes (designed star, rectangle), input validation, G-code round trip,
+engagement per segment kind (Jacsó 2021 §4)."""
 import json
 
 import numpy as np
@@ -27,17 +28,52 @@ def test_star_design_volume_and_arms():
     assert len(arms) == 5 and np.allclose(np.diff(ang), 72, atol=2)
 
 
-@pytest.mark.parametrize("shape", ["star", "rect"])
-def test_hybrid_clears_pocket_and_gcode_roundtrips(shape):
-    job = _star_job() if shape == "star" else pk.PocketJob.from_dict(RECT)
+@pytest.fixture(scope="module", params=["star", "rect"])
+def planned(request):
+    job = _star_job() if request.param == "star" else pk.PocketJob.from_dict(RECT)
     hp = pk.hybrid_path(job, 0.1)
+    T, s = pk.evaluate_strategy(hp, job, 0.1, feed_control=True)
+    return request.param, job, hp, T, s
+
+
+def test_hybrid_stays_in_region_and_gcode_roundtrips(planned):
+    name, job, hp, T, s = planned
     # tool centres never leave the region (1 µm: spline resampling of the clamped laps)
     assert shapely.distance(shapely.points(hp.points), job.allowed()).max() < 1e-3
-    T, s = pk.evaluate_strategy(hp, job, 0.1)
-    assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 0.05 * job.volume_mm3() / job.a_p
     assert s["removed_volume_mm3"] == pytest.approx(job.volume_mm3() - job.a_p * s["uncut_area_mm2"], rel=0.02)
-    dmax, dlen, _ = pk.gcode_roundtrip_error(hp, job)
+    dmax, dlen, _ = pk.gcode_roundtrip_error(hp, job, feeds=None)
     assert dmax < 1e-4 and dlen < 1e-2
+
+
+def test_centre_laps_are_spiral_like_and_hold_theta(planned):
+    """Each lap starts where the previous one ended; no full-slot engagement; the lap roll-ins
+    (Thesis III transitions) rise to theta without overshoot."""
+    name, job, hp, T, s = planned
+    c = T[T.phase == "centre"]
+    e = c.engagement_deg.to_numpy()
+    cutting = (c.kind != "link").to_numpy()
+    assert hp.info["laps"] >= 3
+    assert np.mean(e[cutting] > job.theta_deg + 5) < 0.005          # at most isolated dixel spikes
+    assert np.nanmax(e[cutting]) < 120.0                               # never a full-slot plunge
+    assert c.removed_mm2[c.kind == "link"].sum() < 1e-3               # the entry link runs in the hole
+    P = hp.points[hp.phase == "centre"]
+    assert np.hypot(*np.diff(P, axis=0).T).max() < 0.5                 # laps chained, no radial jumps
+
+
+def test_star_engagement_by_segment_and_feed_control(planned):
+    name, job, hp, T, s = planned
+    if name != "star":
+        pytest.skip("rectangle corners: see the notebook discussion (arm entries)")
+    assert s["share_above_cut"] < 0.01 and s["share_above_roll-in"] < 0.01
+    assert s["max_eng_roll-out_deg"] <= job.theta_deg + 5
+    assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 0.01 * job.volume_mm3() / job.a_p
+    v = T.feed_mm_min.to_numpy()
+    roll = T.kind.isin(["roll-in", "roll-out"]).to_numpy()
+    free_link = (T.kind == "link").to_numpy() & ~T.link_cuts.to_numpy()
+    assert np.all(v[~free_link] <= job.v_fmax + 1e-9) and np.all(v[free_link] == job.link_feed)
+    assert np.all(v[T.kind.to_numpy() == "cut"] == job.feed)
+    assert v[roll].max() == job.v_fmax                                 # air parts of roll-ins capped
+    assert s["time_s"] < pk.evaluate_strategy(hp, job, 0.1)[1]["time_s"]
 
 
 def test_comparison_paths_cover_rectangle():
@@ -46,6 +82,11 @@ def test_comparison_paths_cover_rectangle():
         T, s = pk.evaluate_strategy(f(job), job, 0.1)
         assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 1.0     # sharp corners: unreachable
         assert s["max_engagement_deg"] >= 60.0 - 1.0
+
+
+def test_strategy_kinds_validated():
+    with pytest.raises(ValueError, match="kind must be one of"):
+        pk.StrategyPath.build([(np.zeros((2, 2)), "plunge", "x")])
 
 
 def test_validation_errors(tmp_path):

@@ -21,17 +21,19 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["controlled_feed", "machining_time_s", "mrr_error"]
+__all__ = ["controlled_feed", "machining_time_s", "mrr_error", "mrr_error_windowed"]
 
 
 def controlled_feed(removed_mm2, ds_mm, engagement_deg, cutting, a_e_nominal, v_nominal,
-                    v_fmax, theta_deg, block_mm=0.5, margin_deg=5.0):
+                    v_fmax, theta_deg, block_mm=0.5, margin_deg=5.0, adjust=None):
     """Per-step feed (mm/min) along a simulated path (arrays of equal length).
 
     ``removed_mm2``: area removed by each step; ``ds_mm``: step lengths; ``engagement_deg``: step
     engagement; ``cutting``: True on cutting moves (others get NaN). A block of consecutive cutting
     steps (about ``block_mm`` long) whose mean engagement deviates from ``theta_deg`` by more than
     ``margin_deg`` gets v = min(v_fmax, v_nominal a_e / w_block); otherwise v_nominal.
+    With ``adjust`` (bool array, e.g. the roll-in/roll-out steps) exactly the blocks inside it get
+    the MRR-holding feed (the booklet's rule) and every other cutting step runs at v_nominal.
     """
     rem = np.asarray(removed_mm2, float)
     ds = np.asarray(ds_mm, float)
@@ -47,8 +49,12 @@ def controlled_feed(removed_mm2, ds_mm, engagement_deg, cutting, a_e_nominal, v_
         raise ValueError(f"v_fmax ({v_fmax}) must be >= v_nominal ({v_nominal}) mm/min")
     v = np.full(rem.shape, np.nan)
     # block ids: a new block at every cutting-run start and every block_mm of path
+    adj = None if adjust is None else np.asarray(adjust, bool)
+    if adj is not None and adj.shape != cut.shape:
+        raise ValueError("adjust must have the same shape as cutting")
     s = np.cumsum(np.where(cut, ds, 0.0))
-    run = np.cumsum(np.r_[1, np.diff(cut.astype(int)) != 0])
+    state = cut.astype(int) + (0 if adj is None else 2 * adj.astype(int))
+    run = np.cumsum(np.r_[1, np.diff(state) != 0])
     blk = run * 10_000_000 + np.floor(s / block_mm).astype(np.int64)
     idx = np.flatnonzero(cut)
     if idx.size == 0:
@@ -61,7 +67,10 @@ def controlled_feed(removed_mm2, ds_mm, engagement_deg, cutting, a_e_nominal, v_
         w = np.where(L > 0, A / L, 0.0)
         vb = np.where(w > 0, v_nominal * a_e_nominal / w, np.inf)
     vb = np.minimum(vb, v_fmax)
-    off = np.abs(E - theta_deg) > margin_deg
+    if adj is None:
+        off = np.abs(E - theta_deg) > margin_deg
+    else:
+        off = np.bincount(inv, adj[idx].astype(float)) > 0
     vb = np.where(off, vb, float(v_nominal))
     v[idx] = vb[inv]
     return v
@@ -92,3 +101,39 @@ def mrr_error(mrr_mm3_min, mrr_nominal, mask=None) -> dict:
     e = 100.0 * (m[sel] / mrr_nominal - 1.0)
     return {"mean_abs_pct": float(np.mean(np.abs(e))), "p95_abs_pct": float(np.percentile(np.abs(e), 95)),
             "mean_pct": float(np.mean(e)), "n": int(sel.sum())}
+
+
+def mrr_error_windowed(removed_mm2, ds_mm, feed_mm_min, a_p, mrr_nominal, mask=None, window_mm=1.0) -> dict:
+    """MRR deviation from nominal over windows of ``window_mm`` path length (%).
+
+    Definition used for the booklet's "1.5 % MRR error" (§4, Fig. 4.1): the steps in ``mask``
+    (e.g. the constant-engagement cuts, outside roll-in/roll-out) are grouped into consecutive
+    windows of about ``window_mm`` (within contiguous runs of the mask); each window's MRR is
+    its removed volume over its time, a_p sum(A) / sum(ds / v_f) (mm^3/min); returned are the
+    mean and p95 of |MRR_w / MRR_nom - 1| and the signed mean (in %), weighted by window length.
+
+    >>> r = mrr_error_windowed([1.5, 1.5, 1.6, 1.4], [1.0] * 4, [255.0] * 4, 3.0, 1147.5)
+    >>> round(r["mean_abs_pct"], 6), round(r["mean_pct"], 6)
+    (3.333333, 0.0)
+    """
+    rem = np.asarray(removed_mm2, float)
+    ds = np.asarray(ds_mm, float)
+    v = np.asarray(feed_mm_min, float)
+    m = np.ones(rem.shape, bool) if mask is None else np.asarray(mask, bool)
+    m = m & (ds > 0) & np.isfinite(v)
+    if not m.any():
+        return {"mean_abs_pct": float("nan"), "p95_abs_pct": float("nan"), "mean_pct": float("nan"), "n": 0}
+    run = np.cumsum(np.r_[1, np.diff(m.astype(int)) != 0])
+    s = np.cumsum(np.where(m, ds, 0.0)) - np.where(m, ds, 0.0)
+    blk = run * 10_000_000 + np.floor(s / window_mm + 1e-9).astype(np.int64)
+    ub, inv = np.unique(blk[m], return_inverse=True)
+    A = np.bincount(inv, rem[m])
+    L = np.bincount(inv, ds[m])
+    t = np.bincount(inv, ds[m] / v[m])
+    e = 100.0 * (a_p * A / t / mrr_nominal - 1.0)
+    w = L / L.sum()
+    order = np.argsort(np.abs(e))
+    cw = np.cumsum(w[order])
+    p95 = float(np.abs(e)[order][min(int(np.searchsorted(cw, 0.95)), len(e) - 1)])
+    return {"mean_abs_pct": float(np.sum(w * np.abs(e))), "p95_abs_pct": p95,
+            "mean_pct": float(np.sum(w * e)), "n": int(len(e))}

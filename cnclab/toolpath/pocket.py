@@ -43,7 +43,7 @@ from shapely import affinity
 from shapely.geometry import LineString, Point, Polygon
 
 __all__ = ["PocketJob", "load_pocket", "star_polygon", "design_star", "medial_axis", "arm_branches",
-           "StrategyPath", "hybrid_path", "contour_parallel_path", "zigzag_path", "evaluate_strategy",
+           "StrategyPath", "centre_lap", "hybrid_path", "contour_parallel_path", "zigzag_path", "evaluate_strategy",
            "to_gcode_moves", "gcode_roundtrip_error"]
 
 
@@ -278,42 +278,56 @@ def arm_branches(polygon, center, spacing_mm=0.25, min_length_mm=None):
 # ---------------------------------------------------------------------------------------------
 @dataclass
 class StrategyPath:
-    """Tool-centre polyline (N, 2) mm; ``link[i]`` True when the segment ending at point i is a
-    linking move (run at the linking feed, no cutting intended); ``rapid[i]`` True for a retract-
-    rapid-plunge jump (G0 above the part); ``phase`` labels (e.g. 'centre', 'arm 2')."""
+    """Tool-centre polyline (N, 2) mm with per-point labels of the segment ending at point i:
+    ``kinds[i]`` in {"cut", "roll-in", "roll-out", "link", "rapid"}; ``link`` (link or rapid: no
+    cutting intended) and ``rapid`` (retract-G0-plunge jump above the part) are derived from it;
+    ``phase`` labels (e.g. 'centre', 'arm 2')."""
 
     points: np.ndarray
-    link: np.ndarray
-    rapid: np.ndarray
+    kinds: np.ndarray
     phase: np.ndarray
     name: str = ""
     info: dict = field(default_factory=dict)
 
+    @property
+    def link(self) -> np.ndarray:
+        return np.isin(self.kinds, ("link", "rapid"))
+
+    @property
+    def rapid(self) -> np.ndarray:
+        return self.kinds == "rapid"
+
     @staticmethod
     def build(segments, name="", info=None):
-        """From a list of (points (n,2), kind in {'cut','link','rapid'}, phase) in path order."""
-        pts, link, rapid, phase = [], [], [], []
+        """From a list of (points (n,2), kind, phase) in path order; kind in
+        {"cut", "roll-in", "roll-out", "link", "rapid"} or an (n,) array of kinds."""
+        pts, kinds, phase = [], [], []
         for P, kind, ph in segments:
             P = np.asarray(P, float)
-            if pts:
-                last = pts[-1][-1]
-                if np.hypot(*(P[0] - last)) < 1e-9:
-                    P = P[1:]
+            K = np.asarray(kind, dtype=object) if not isinstance(kind, str) else np.full(len(P), kind, dtype=object)
+            if len(K) != len(P):
+                raise ValueError(f"segment kinds ({len(K)}) and points ({len(P)}) differ")
+            bad = set(K) - KINDS
+            if bad:
+                raise ValueError(f"kind must be one of {sorted(KINDS)}, got {sorted(bad)}")
+            if pts and np.hypot(*(P[0] - pts[-1][-1])) < 1e-9:
+                P, K = P[1:], K[1:]
             if len(P) == 0:
                 continue
             pts.append(P)
-            link.append(np.full(len(P), kind != "cut"))
-            rapid.append(np.full(len(P), kind == "rapid"))
+            kinds.append(K)
             phase.append(np.full(len(P), ph, dtype=object))
-        for a in (link, rapid):
-            a[0][0] = False
-        return StrategyPath(np.vstack(pts), np.concatenate(link), np.concatenate(rapid),
-                            np.concatenate(phase), name, info or {})
+        kinds[0] = kinds[0].copy()
+        kinds[0][0] = "cut" if kinds[0][0] == "rapid" else kinds[0][0]
+        return StrategyPath(np.vstack(pts), np.concatenate(kinds), np.concatenate(phase), name, info or {})
 
     def lengths(self) -> dict:
+        """Length (mm) per kind."""
         ds = np.r_[0.0, np.hypot(*np.diff(self.points, axis=0).T)]
-        return {"cut": float(ds[~self.link].sum()), "link": float(ds[self.link & ~self.rapid].sum()),
-                "rapid": float(ds[self.rapid].sum())}
+        return {k: float(ds[self.kinds == k].sum()) for k in sorted(KINDS)}
+
+
+KINDS = {"cut", "roll-in", "roll-out", "link", "rapid"}
 
 
 def _rot(geom_or_pts, angle_deg, origin):
@@ -339,51 +353,112 @@ def _straight_link(E, S, allowed, via):
     return np.vstack([E, via, S])
 
 
+def _label_lap(eng, theta_deg, margin_deg=5.0):
+    """Kinds of a centre lap from its simulated engagement: the leading run below theta - margin
+    is the lap's roll-in (Thesis III transition from the previous lap's end), the trailing run
+    below it the roll-out (the lap closes on its own start); the rest is cut."""
+    e = np.nan_to_num(np.asarray(eng, float))
+    k = np.full(len(e), "cut", dtype=object)
+    hi = np.flatnonzero(e >= theta_deg - margin_deg)
+    if hi.size == 0:
+        k[:] = "roll-in"
+        return k
+    k[:hi[0]] = "roll-in"
+    k[hi[-1] + 1:] = "roll-out"
+    return k
+
+
+def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05):
+    """One spiral-like constant-engagement lap around the cleared region containing ``seed_xy``.
+
+    The boundary of the cleared region is read from the dixel ``stock``
+    (:func:`~cnclab.toolpath.constant_engagement.cleared_boundary_contour`), re-parametrised to start
+    at the boundary point touched by the tool at ``start_xy`` (the previous lap's end, or a point
+    touching the start hole), and Thesis III runs one full turn from ``start_xy``: the lap blends in
+    from the previous one (engagement 0 -> theta, no radial plunge) and closes on its own start.
+    Tool centres are clamped to ``allowed``. Returns the (n, 2) centre points (mm).
+    """
+    from .constant_engagement import cleared_boundary_contour, clamp_to_region, resample_path, thesis3_path
+
+    r = tool_radius
+    c = cleared_boundary_contour(stock, seed_xy, domain)
+    T = c.t_max - c.t_min
+    tt = np.linspace(c.t_min, c.t_max, max(int(T / 0.02), 200), endpoint=False)
+    d = np.hypot(*(c.point(tt) - np.asarray(start_xy)).T)
+    i = int(np.argmin(d))
+    # the entry point: last contour point, going forward from the nearest one, inside the tool circle
+    fwd = np.r_[i:len(tt), 0:i]
+    run = d[fwd] <= max(r, d[i] + 1e-6)
+    j = fwd[int(np.argmin(run)) - 1] if not run.all() else i
+    shifted = _ShiftedClosed(c, tt[j])
+    for h in (dt, dt / 2, dt / 4):
+        try:
+            res = thesis3_path(shifted, r, theta_deg, h, method="midpoint", P0=np.asarray(start_xy, float))
+            break
+        except ValueError:
+            continue
+    else:
+        raise ValueError("Thesis III lap failed at every step size")
+    return clamp_to_region(resample_path(res.P, step_mm), allowed)
+
+
+class _ShiftedClosed:
+    """A closed contour re-parametrised to start at t0 (one full turn)."""
+
+    def __init__(self, base, t0):
+        self.base, self.t0 = base, float(t0)
+        self.t_min, self.t_max, self.closed = 0.0, base.t_max - base.t_min, True
+
+    def _map(self, t):
+        t = np.atleast_1d(np.asarray(t, float))
+        return self.base.t_min + np.mod(t + self.t0 - self.base.t_min, self.t_max)
+
+    def point(self, t):
+        return self.base.point(self._map(t))
+
+    def deriv(self, t):
+        return self.base.deriv(self._map(t))
+
+
 def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=200,
                 spacing_mm=0.25):
     """Jacsó §4 hybrid path on ``job`` (see the module docstring). Returns a :class:`StrategyPath`
-    with ``info`` holding the medial axis, the arms, the number of laps and periods per arm."""
-    from cnclab.simulation import dixel
+    with ``info`` holding the medial axis, the arms, the number of laps and periods per arm.
+
+    Centre: the first lap starts touching the start hole (reached by a non-cutting link from its
+    centre), every further lap starts where the previous one ended (:func:`centre_lap`), as long
+    as a lap stays clear of the final contour (a lap clamped to the wall would turn abruptly there). Arms: constant-engagement trochoidal periods with explicit
+    roll-in / roll-out (:func:`cnclab.toolpath.trochoidal.ce_period`, radius ``job.roll_radius``)
+    in each arm's frame, joined by straight links through the cleared region.
+    """
     from cnclab.simulation.common import simulate
 
-    from .constant_engagement import multi_pass
-    from .trochoidal import ce_period, linking_arc
+    from .trochoidal import _link, ce_period
 
     r, th = job.tool_radius, job.theta_deg
     pocket, allowed = job.polygon, job.allowed()
     c = np.asarray(job.start_center, float)
     Stock = _stock_class()
     stock = Stock.from_polygon(pocket.difference(job.start_hole()), resolution_mm)
-    segs = []
-    # 1. open centre: constant-engagement laps until one touches the final contour
+    # 1. open centre: chained constant-engagement laps
+    E = c + np.array([0.5 * job.start_hole_diameter - r, 0.0])       # touches the hole wall
+    segs = [(_link(c, E, None, resolution_mm), "link", "centre")]
     laps = 0
+    domain = pocket.buffer(-2 * resolution_mm)   # 2 rows: wall slivers must not join the cleared region
     for _ in range(int(max_laps)):
-        lap = None
-        for h in (dt, dt / 2, dt / 4):          # smaller Thesis III steps where the contour is sharp
-            try:
-                # domain shrunk by 2 rows: the staircase slivers along the wall must not join the
-                # cleared region (they would make its boundary the whole pocket outline)
-                lap = multi_pass(stock.copy(), pocket.buffer(-2 * resolution_mm), pocket, tuple(c), r,
-                                 th, 1, dt=h,
-                                 step_mm=resolution_mm, a_p=job.a_p, feed_mm_min=job.feed)[0]
-                break
-            except ValueError:
-                continue
-        if lap is None:
+        try:
+            P = centre_lap(stock, domain, tuple(c), E, r, th, allowed, dt, resolution_mm)
+        except ValueError:
             break
-        stock = _apply_world(stock, [lap["path"]], r)
-        P = lap["path"]
-        if lap["removed_mm2"] < 1e-6:
-            break
-        if segs:
-            segs.append((np.vstack([segs[-1][0][-1], P[0]]), "cut", "centre"))
-        else:
-            segs.append((np.vstack([c, P[0]]), "link", "centre"))
-        segs.append((P, "cut", "centre"))
-        laps += 1
         on_wall = shapely.distance(shapely.points(P), allowed.exterior) < 1e-6
-        if on_wall.mean() > 0.02:
+        if on_wall.any():
+            break               # this lap would run along the final contour: the arms take over
+        df = simulate(stock, P, r, job.a_p, job.feed)
+        if float(df.removed_mm2.sum()) < 1e-6:
             break
+        segs.append((P, _label_lap(df.engagement_deg, th), "centre"))
+        E = P[-1]
+        laps += 1
     # 2. arms along the medial-axis branches
     arms = arm_branches(pocket, c, spacing_mm)
     n_arm = max(len(arms), 1)
@@ -392,63 +467,72 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
     for k, arm in enumerate(arms):
         ang = arm["angle_deg"]
         wedge = _wedge(c, ang, 180.0 / n_arm, reach)
-        material = _polygonal(stock.to_polygon().intersection(wedge))
-        if material.is_empty or material.area < 1e-3:
-            periods.append(0)
-            continue
-        loc_mat = _polygonal(_rot(material, -ang, c))
+        material = _polygonal(_material_polygon(stock).intersection(wedge))
+        loc_mat = _polygonal(_rot(material, -ang, c)) if not material.is_empty else material
         if loc_mat.is_empty or loc_mat.area < 1e-3:
             periods.append(0)
             continue
         loc_allowed = _rot(allowed, -ang, c)
+        # this arm's material only (planning ignores the neighbouring arms' root material: the
+        # few engagement peaks at arm entries come from there, see the notebook)
         loc = Stock.from_polygon(loc_mat, resolution_mm)
-        cuts, arcs = [], []
+        arm_segs, last = [], None
         for _ in range(int(max_periods)):
-            Pl = ce_period(loc, r, th, loc_allowed, dt=dt, step_mm=resolution_mm)
-            if Pl is None:
+            per = ce_period(loc, r, th, loc_allowed, dt=dt, step_mm=resolution_mm,
+                            roll_radius=job.roll_radius, a_p=job.a_p, feed_mm_min=job.feed)
+            if per is None:
                 break
+            Pl = per.points
             df = simulate(loc, Pl, r, job.a_p, job.feed)
             if float(df.removed_mm2.sum()) < 1e-3:
                 break
-            if cuts:
-                A, _, _ = linking_arc(cuts[-1][-1], Pl[0], loc_allowed, ds=resolution_mm)
-                arcs.append(A)
-            cuts.append(Pl)
-        periods.append(len(cuts))
-        if not cuts:
+            if last is not None:
+                arm_segs.append((_link(last, Pl[0], loc_allowed, resolution_mm), "link"))
+            arm_segs.append((Pl, per.kinds))
+            last = Pl[-1]
+        periods.append(sum(1 for s in arm_segs if not isinstance(s[1], str)))
+        if not arm_segs:
             continue
-        E = segs[-1][0][-1]
-        S = _rot(cuts[0][:1], ang, c)[0]
-        segs.append((_straight_link(E, S, allowed, c), "link", f"arm {k}"))
-        for i, Pl in enumerate(cuts):
-            if i > 0:
-                segs.append((_rot(arcs[i - 1], ang, c), "link", f"arm {k}"))
-            segs.append((_rot(Pl, ang, c), "cut", f"arm {k}"))
-        stock = _apply_world(stock, [_rot(Pl, ang, c) for Pl in cuts], r)
+        S = _rot(arm_segs[0][0][:1], ang, c)[0]
+        segs.append((_straight_link(segs[-1][0][-1], S, allowed, c), "link", f"arm {k}"))
+        world = []
+        for Pl, kind in arm_segs:
+            W = _rot(Pl, ang, c)
+            segs.append((W, kind, f"arm {k}"))
+            world.append(W)
+        stock = _apply_world(stock, world, r)
     info = {"laps": laps, "arms": arms, "periods_per_arm": periods,
             "medial_axis": medial_axis(pocket, spacing_mm)}
     return StrategyPath.build(segs, "hybrid (Jacsó §4)", info)
 
 
-def _stock_class():
-    """Dixel stock whose ``to_polygon`` closes the row gaps.
+def _material_polygon(stock):
+    """Material of a dixel stock as a shapely geometry with gap-free row seams (mm).
 
-    ``dixel.Stock.to_polygon`` puts row j's top at (y0 + j h) + h and row j+1's bottom at
+    WORKAROUND (remove when ``dixel.Stock.to_polygon`` is fixed by the simulator owner): the
+    committed ``to_polygon`` puts row j's top at (y0 + j h) + h and row j+1's bottom at
     y0 + (j + 1) h; the two differ by rounding, so the union of the row boxes has hairline gaps
-    between rows (190 parts for the star pocket) and a cleared region computed from it leaks through
-    them. Here both edges are the same expression y0 + k h.
+    (190 parts for the star pocket) and a cleared region computed from it leaks through them.
+    Here both edges are the same expression y0 + k h. Uses only the public ``intervals()``.
     """
+    rows, a, b = stock.intervals()
+    h = stock.resolution_mm
+    return shapely.union_all(shapely.box(a, stock.y0 + rows * h, b, stock.y0 + (rows + 1) * h))
+
+
+def _stock_class():
+    """Dixel stock class whose ``to_polygon`` is :func:`_material_polygon` (the workaround above;
+    ``cleared_boundary_contour`` calls ``to_polygon``)."""
     from cnclab.simulation import dixel
 
     class RowStock(dixel.Stock):
         def copy(self):
-            return RowStock(self.y0, self.resolution_mm, self.n_rows, self._row.copy(), self._a.copy(),
-                            self._b.copy(), self.x_min, self.x_max)
+            new = dixel.Stock.copy(self)
+            new.__class__ = RowStock
+            return new
 
         def to_polygon(self):
-            lo = self.y0 + self._row * self.resolution_mm
-            hi = self.y0 + (self._row + 1) * self.resolution_mm
-            return shapely.union_all(shapely.box(self._a, lo, self._b, hi))
+            return _material_polygon(self)
 
     return RowStock
 
@@ -527,105 +611,119 @@ def zigzag_path(job: PocketJob, stepover=None, angle_deg=0.0):
 # evaluation, feed control and G-code
 # ---------------------------------------------------------------------------------------------
 def _resample_strategy(path: StrategyPath, step_mm):
-    """Insert points so no segment exceeds ``step_mm`` (flags carried by the segment end)."""
+    """Insert points so no segment exceeds ``step_mm`` (labels carried by the segment end)."""
     P = path.points
-    out, lk, rp, ph = [P[:1]], [path.link[:1]], [path.rapid[:1]], [path.phase[:1]]
     d = np.hypot(*np.diff(P, axis=0).T)
     n = np.maximum(np.ceil(d / step_mm).astype(int), 1)
-    for i in range(1, len(P)):
-        t = np.arange(1, n[i - 1] + 1)[:, None] / n[i - 1]
-        out.append(P[i - 1] + t * (P[i] - P[i - 1]))
-        m = n[i - 1]
-        lk.append(np.full(m, path.link[i]))
-        rp.append(np.full(m, path.rapid[i]))
-        ph.append(np.full(m, path.phase[i], dtype=object))
-    return StrategyPath(np.vstack(out), np.concatenate(lk), np.concatenate(rp), np.concatenate(ph),
-                        path.name, path.info)
+    seg = np.repeat(np.arange(1, len(P)), n)                       # segment index of each new point
+    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 1) / np.repeat(n, n)
+    Q = P[seg - 1] + t[:, None] * (P[seg] - P[seg - 1])
+    return StrategyPath(np.vstack([P[:1], Q]), np.r_[path.kinds[:1], path.kinds[seg]],
+                        np.r_[path.phase[:1], path.phase[seg]], path.name, path.info)
+
+
+SEGMENT_KINDS = ("cut", "roll-in", "roll-out", "link")
 
 
 def evaluate_strategy(path: StrategyPath, job: PocketJob, resolution_mm=0.05, feed_control=False,
-                      block_mm=0.5, margin_deg=5.0):
+                      block_mm=0.5, margin_deg=5.0, link_tol_mm2=1e-3, mrr_window_mm=1.0):
     """Cut ``path`` through the pocket stock (pocket minus start hole) with the dixel simulator.
 
-    Rapid jumps are not simulated (the tool is above the part). Returns ``(table, summary)``:
-    the per-step DataFrame (columns of :func:`cnclab.simulation.common.simulate` plus ``link``,
-    ``rapid``, ``phase``, ``feed_mm_min`` and, with ``feed_control``, the controlled feed and
-    ``mrr_ctrl_mm3_min``) and a dict with the engagement maximum, the share of cutting length above
-    theta + ``margin_deg``, lengths, machining time (cutting at v_f or the controlled feed, links at
-    the linking feed; rapids excluded), uncut area (mm^2) and the theoretical minimum V / MRR_nom.
+    Rapid jumps are not simulated (the tool is above the part). Linking moves run at the linking
+    feed only if they remove (almost) nothing: a link step removing more than ``link_tol_mm2`` is
+    flagged ``link_cuts`` and runs at the cutting feed and counts as cutting. With
+    ``feed_control`` the roll-in/roll-out steps get the MRR-holding feed
+    (:func:`cnclab.cutting.feed_control.controlled_feed`, capped at ``job.v_fmax``).
+
+    Returns ``(table, summary)``: the per-step DataFrame (columns of
+    :func:`cnclab.simulation.common.simulate` plus ``kind``, ``phase``, ``link_cuts``,
+    ``feed_mm_min``, ``mrr_ctrl_mm3_min``) and a dict: engagement maximum and share of length
+    above theta + ``margin_deg`` overall and per segment kind (``max_eng_<kind>_deg``,
+    ``share_above_<kind>``), lengths, machining time (s), uncut area (mm^2), the theoretical
+    minimum V / MRR_nom and the MRR error over the "cut" segments
+    (:func:`cnclab.cutting.feed_control.mrr_error_windowed`, windows of ``mrr_window_mm``).
     """
-    from cnclab.cutting.feed_control import controlled_feed
+    import pandas as pd
+
+    from cnclab.cutting.feed_control import controlled_feed, mrr_error_windowed
     from cnclab.simulation import dixel
 
     p = _resample_strategy(path, resolution_mm)
     stock = dixel.Stock.from_polygon(job.polygon.difference(job.start_hole()), resolution_mm)
-    tables = []
     P, rapid = p.points, p.rapid
-    # contiguous non-rapid runs are simulated in order; a rapid ends a run
     starts = np.r_[0, np.flatnonzero(rapid)]
     ends = np.r_[np.flatnonzero(rapid), len(P)]
-    import pandas as pd
-
+    tables = []
     for a, b in zip(starts, ends):
         if b - a < 2:
             continue
-        df = dixel.simulate(stock, P[a:b], job.tool_radius, job.a_p, job.feed, f_z=job.f_z,
-                            teeth=job.teeth)
-        df["link"] = p.link[a:b]
-        df.loc[df.index[0], "link"] = True if a > 0 else df["link"].iloc[0]
-        df["rapid"] = False
+        df = dixel.simulate(stock, P[a:b], job.tool_radius, job.a_p, job.feed, f_z=job.f_z, teeth=job.teeth)
+        df["kind"] = p.kinds[a:b]
+        if a > 0:
+            df.loc[df.index[0], "kind"] = "link"           # the plunge after a rapid
         df["phase"] = p.phase[a:b]
-        df["idx"] = np.arange(a, b)
         tables.append(df)
     T = pd.concat(tables, ignore_index=True)
-    # a planned link that removes material is a roll-in/roll-out: it is cutting (cutting feed)
-    T["roll"] = T.link.to_numpy() & (T.removed_mm2.to_numpy() > 1e-6)
-    T["link"] = T.link.to_numpy() & ~T.roll.to_numpy()
-    cut = ~T.link.to_numpy()
-    T["feed_mm_min"] = np.where(cut, job.feed, job.link_feed)
+    kinds = T.kind.to_numpy()
+    rem = T.removed_mm2.to_numpy()
+    T["link_cuts"] = (kinds == "link") & (rem > link_tol_mm2)
+    cut = (kinds != "link") | T.link_cuts.to_numpy()
+    v = np.where(cut, job.feed, job.link_feed)
     if feed_control:
-        v = controlled_feed(T.removed_mm2.to_numpy(), T.ds.to_numpy(), T.engagement_deg.to_numpy(),
-                            cut, job.a_e, job.feed, job.v_fmax, job.theta_deg, block_mm, margin_deg)
-        T["feed_mm_min"] = np.where(cut, v, job.link_feed)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            T["mrr_ctrl_mm3_min"] = np.where(T.ds > 0, job.a_p * T.removed_mm2 / T.ds * T.feed_mm_min, np.nan)
+        adj = np.isin(kinds, ("roll-in", "roll-out"))
+        vc = controlled_feed(rem, T.ds.to_numpy(), T.engagement_deg.to_numpy(), cut, job.a_e, job.feed,
+                             job.v_fmax, job.theta_deg, block_mm, margin_deg, adjust=adj)
+        v = np.where(cut, vc, job.link_feed)
+    T["feed_mm_min"] = v
     ds = T.ds.to_numpy()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        T["mrr_ctrl_mm3_min"] = np.where(ds > 0, job.a_p * rem / ds * v, np.nan)
     eng = T.engagement_deg.to_numpy()
-    time_s = 60.0 * float(np.sum(ds / T.feed_mm_min.to_numpy()))
+    time_s = 60.0 * float(np.sum(ds / v))
     Lc = float(ds[cut].sum())
-    above = float(ds[cut & (eng > job.theta_deg + margin_deg)].sum()) / Lc
-    allowed = job.allowed()
-    reach = allowed.buffer(job.tool_radius, 64)
-    left = stock.area()
+    lim = job.theta_deg + margin_deg
     summary = {"strategy": path.name, "max_engagement_deg": float(np.nanmax(eng[cut])),
-               "share_above_theta_plus5": above, "cut_length_mm": Lc,
-               "link_length_mm": float(ds[~cut].sum()), "rapid_length_mm": p.lengths()["rapid"],
-               "roll_in_length_mm": float(ds[T.roll.to_numpy()].sum()),
-               "time_s": time_s, "uncut_area_mm2": left,
-               "unreachable_area_mm2": float(job.polygon.difference(reach).area),
-               "removed_volume_mm3": job.a_p * float(T.removed_mm2.sum()),
-               "t_min_s": 60.0 * job.volume_mm3() / job.mrr_nominal()}
+               "share_above_theta_plus5": float(ds[cut & (eng > lim)].sum()) / Lc,
+               "cut_length_mm": Lc, "link_length_mm": float(ds[~cut].sum()),
+               "rapid_length_mm": p.lengths()["rapid"],
+               "link_cutting_length_mm": float(ds[T.link_cuts.to_numpy()].sum()),
+               "link_removed_mm3": job.a_p * float(rem[kinds == "link"].sum())}
+    for k in SEGMENT_KINDS:
+        m = kinds == k
+        Lk = float(ds[m].sum())
+        summary[f"length_{k}_mm"] = Lk
+        summary[f"max_eng_{k}_deg"] = float(np.nanmax(eng[m])) if np.isfinite(eng[m]).any() else float("nan")
+        summary[f"share_above_{k}"] = float(ds[m & (eng > lim)].sum()) / Lk if Lk > 0 else float("nan")
+    reach = job.allowed().buffer(job.tool_radius, 64)
+    summary.update({"time_s": time_s, "uncut_area_mm2": stock.area(),
+                    "unreachable_area_mm2": float(job.polygon.difference(reach).area),
+                    "removed_volume_mm3": job.a_p * float(rem.sum()),
+                    "t_min_s": 60.0 * job.volume_mm3() / job.mrr_nominal()})
     summary["time_over_min"] = summary["time_s"] / summary["t_min_s"]
+    err = mrr_error_windowed(rem, ds, v, job.a_p, job.mrr_nominal(), kinds == "cut", mrr_window_mm)
+    summary["mrr_error_cut_pct"] = err["mean_abs_pct"]
+    summary["mrr_error_cut_p95_pct"] = err["p95_abs_pct"]
     return T, summary
 
 
 def to_gcode_moves(path: StrategyPath, job: PocketJob, feeds=None, z_cut=None, z_clear=5.0,
                    decimals=4):
     """RS274/NGC moves: G0 to the start above the part, plunge, then G1 per segment at the cutting
-    feed (or ``feeds[i]`` mm/min per point), links at the linking feed, rapid jumps as
-    retract-G0-plunge. ``z_cut`` defaults to -a_p."""
+    feed (or ``feeds[i]`` mm/min per point, e.g. the controlled feed), links at the linking feed,
+    rapid jumps as retract-G0-plunge. ``z_cut`` defaults to -a_p."""
     from .gcode import Move
 
     z = -job.a_p if z_cut is None else z_cut
     S = job.spindle_rpm
     P = path.points
     mv = [Move("G0", P[0, 0], P[0, 1], z_clear), Move("G1", P[0, 0], P[0, 1], z, feed=job.feed, spindle=S)]
+    link = path.link
     for i in range(1, len(P)):
         if path.rapid[i]:
             mv += [Move("G0", P[i - 1, 0], P[i - 1, 1], z_clear), Move("G0", P[i, 0], P[i, 1], z_clear),
                    Move("G1", P[i, 0], P[i, 1], z, feed=job.feed, spindle=S)]
             continue
-        f = job.link_feed if path.link[i] else (job.feed if feeds is None else float(feeds[i]))
+        f = job.link_feed if link[i] else (job.feed if feeds is None else float(feeds[i]))
         mv.append(Move("G1", P[i, 0], P[i, 1], z, feed=f, spindle=S))
     mv.append(Move("G0", P[-1, 0], P[-1, 1], z_clear, spindle=S))
     return mv

@@ -78,7 +78,8 @@ class TrochoidPath:
     """Tool-centre polyline (N, 2) mm; ``link[i]`` True when the segment ending at point i is a
     linking (non-cutting by design) move; ``period[i]`` the period index; ``step`` mm per period.
 
-    ``arcs`` optionally lists linking arcs as (start_index, end_index, centre_xy, ccw) for G-code.
+    ``arcs`` optionally lists linking arcs as (start_index, end_index, centre_xy, ccw) for G-code;
+    ``kinds[i]`` labels the segment ending at point i: "cut", "roll-in", "roll-out" or "link".
     """
 
     points: np.ndarray
@@ -87,6 +88,11 @@ class TrochoidPath:
     step: float
     kind: str = ""
     arcs: list = field(default_factory=list)
+    kinds: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.kinds is None:
+            self.kinds = np.where(self.link, "link", "cut").astype(object)
 
     def seg_lengths(self) -> np.ndarray:
         return np.r_[0.0, np.hypot(*np.diff(self.points, axis=0).T)]
@@ -221,6 +227,7 @@ def evaluate_pattern(path: TrochoidPath, width, tool_radius, resolution_mm=0.05,
     df = dixel.simulate(st, path.points, r, a_p, feed_mm_min)
     df["period"] = path.period
     df["link"] = path.link
+    df["kind"] = path.kinds
     periods = np.unique(path.period)
     if steady_periods is None:
         steady_periods = periods[2:-1] if len(periods) > 3 else periods[-1:]
@@ -245,6 +252,10 @@ def evaluate_pattern(path: TrochoidPath, width, tool_radius, resolution_mm=0.05,
         "link_removed_mm2": float(df.removed_mm2[m & path.link].sum()) / n_p,
         "engaged_share": float(np.mean(eng[m] > 1.0)),
     }
+    kinds = np.asarray(path.kinds)
+    for name in ("roll-in", "cut", "roll-out", "link"):
+        e = eng[m & (kinds == name)]
+        metrics[f"max_eng_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
     return df, metrics
 
 
@@ -323,52 +334,180 @@ def _clip_run(P, inside):
     return int(starts[k]), int(ends[k])
 
 
-def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_min=-math.inf):
-    """One constant-engagement cut (Thesis III along the current front), clipped to ``allowed``.
+class _SubContour:
+    """Open contour ``base`` restricted to parameters [t0, base.t_max] (for Thesis III restarts)."""
 
-    ``allowed``: shapely polygon of admissible tool-centre positions (final contour shrunk by r).
-    The raw Thesis III path starts where the tool touches the lowest front point; the part of it
-    outside ``allowed`` is cut off and both ends are moved onto the boundary of ``allowed`` (the
-    roll-in and roll-out). Returns the (n, 2) centre points resampled every ``step_mm``, or None
-    when the front is gone or the path never enters ``allowed``.
+    def __init__(self, base, t0):
+        self.base, self.t_min, self.t_max, self.closed = base, float(t0), float(base.t_max), False
+
+    def point(self, t):
+        return self.base.point(t)
+
+    def deriv(self, t):
+        return self.base.deriv(t)
+
+
+def roll_arc(end_xy, tangent_xy, radius_mm, sweep_deg, ds=0.05, into=True):
+    """Counter-clockwise circular arc of radius ``radius_mm`` tangent to ``tangent_xy`` at ``end_xy``.
+
+    ``into=True``: the roll-in arc that *ends* at ``end_xy`` moving along ``tangent_xy`` (it comes
+    from the left of the tangent, the cleared side when the material is on the right);
+    ``into=False``: the roll-out arc that *starts* there and turns left, away from the material.
+    Returns ``(points (m, 2), centre (2,))``; ``sweep_deg`` is the swept angle in degrees.
+
+    >>> P, C = roll_arc((0.0, 0.0), (1.0, 0.0), 1.0, 90.0, ds=0.1)
+    >>> np.round(P[[0, -1]], 9).tolist(), C.tolist()
+    ([[-1.0, 1.0], [0.0, 0.0]], [0.0, 1.0])
+    """
+    E = np.asarray(end_xy, float)
+    T = np.asarray(tangent_xy, float)
+    T = T / np.hypot(*T)
+    rho = _pos("radius_mm", radius_mm)
+    C = E + rho * np.array([-T[1], T[0]])
+    a_end = math.atan2(E[1] - C[1], E[0] - C[0])
+    sw = math.radians(_pos("sweep_deg", sweep_deg))
+    m = max(int(math.ceil(sw * rho / ds)), 2)
+    ang = a_end - sw + sw * np.linspace(0, 1, m + 1) if into else a_end + sw * np.linspace(0, 1, m + 1)
+    P = np.c_[C[0] + rho * np.cos(ang), C[1] + rho * np.sin(ang)]
+    P[-1 if into else 0] = E
+    return P, C
+
+
+def _disk_has_material(stock, p, r, n_r=6, n_a=48):
+    """True when material lies under the tool disk at ``p`` (polar sample grid, plus the circle)."""
+    rr = r * np.linspace(0.0, 1.0, n_r + 1)[1:, None] * 0.999
+    a = np.linspace(0, 2 * np.pi, n_a, endpoint=False)[None, :]
+    x = p[0] + rr * np.cos(a)
+    y = p[1] + rr * np.sin(a)
+    return bool(stock.contains(np.r_[x.ravel(), p[0]], np.r_[y.ravel(), p[1]]).any())
+
+
+@dataclass
+class CEPeriod:
+    """One planned constant-engagement period: ``segments`` = [(kind, points (n, 2))] with kind in
+    {"roll-in", "cut", "roll-out"}; ``reached_theta`` False when the roll-in march never reached
+    theta (little material left: no constant-engagement part)."""
+
+    segments: list
+    reached_theta: bool
+
+    @property
+    def points(self) -> np.ndarray:
+        return np.vstack([P if i == 0 else P[1:] for i, (_, P) in enumerate(self.segments)])
+
+    @property
+    def kinds(self) -> np.ndarray:
+        return np.concatenate([np.full(len(P) if i == 0 else len(P) - 1, k, dtype=object)
+                               for i, (k, P) in enumerate(self.segments)])
+
+
+def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_min=-math.inf,
+              roll_radius=1.0, roll_sweep_deg=90.0, a_p=1.0, feed_mm_min=1000.0, front_stock=None):
+    """Plan one constant-engagement trochoidal period with explicit roll-in and roll-out.
+
+    Local frame: the period advances along +x, the material front is cut from the lower wall to the
+    upper wall (material on the right of the feed, Thesis II). ``allowed`` is the shapely polygon of
+    admissible tool centres (final contour shrunk by r). Planning runs the dixel simulator on a copy
+    of ``stock`` (never modified):
+
+    1. **roll-in** — a ccw arc of radius ``roll_radius`` (mm, booklet §4: 1 mm) lands tangentially
+       on the lower wall limit behind the material, then the tool moves along the wall limit into
+       the material corner until the simulated engagement reaches ``theta_deg`` (it grows
+       monotonically from 0 while the tool enters the convex corner);
+    2. **cut** — Thesis III (:func:`~cnclab.toolpath.constant_engagement.thesis3_path`) along the
+       current front, started at the roll-in end with the contact at the material entry point, so
+       the engagement stays at theta (it cannot exceed theta: the entry point is held at theta - 90
+       deg from the feed, the front-half measure is <= theta);
+    3. **roll-out** — where the cut reaches the upper wall limit the tool leaves on a ccw arc of
+       radius ``roll_radius`` tangent to the wall limit (the feed turns away from the material).
+
+    ``front_stock`` (default ``stock``): the stock whose front is followed (e.g. one pocket arm's
+    material) while the engagement is simulated on ``stock`` (all the material).
+
+    Returns :class:`CEPeriod`, or None when no material is left in reach.
     """
     import shapely
 
-    from .constant_engagement import resample_path, thesis3_path
+    from cnclab.simulation.common import simulate
 
-    c = front_contour(stock, x_min=x_min)
+    from .constant_engagement import clamp_to_region, resample_path, thesis3_path
+
+    r = _pos("tool_radius", tool_radius)
+    rho = _pos("roll_radius", roll_radius)
+    fs = stock if front_stock is None else front_stock
+    c = front_contour(fs, x_min=x_min)
     if c is None or c.t_max < 2 * stock.resolution_mm:
         return None
-    try:
-        res = thesis3_path(c, tool_radius, theta_deg, dt, method="midpoint")
-    except ValueError:
-        res = thesis3_path(c, tool_radius, theta_deg, dt, method="midpoint", adaptive=True)
-    P = res.P
-    inside = shapely.contains_xy(allowed, P[:, 0], P[:, 1])
-    run = _clip_run(P, inside)
-    if run is None:
-        return None
-    i0, i1 = run
-    Q = P[i0:i1 + 1]
-    ring = allowed.exterior
-    ends = []
-    for k_out, k_in in ((i0 - 1, i0), (i1 + 1, i1)):
-        if 0 <= k_out < len(P):
-            seg = shapely.LineString([P[k_in], P[k_out]])
-            x = seg.intersection(ring)
-            pts = shapely.get_coordinates(x)
-            if len(pts):
-                j = int(np.argmin(np.hypot(*(pts - P[k_in]).T)))
-                ends.append(pts[j])
-                continue
-        ends.append(None)
-    if ends[0] is not None:
-        Q = np.vstack([ends[0], Q])
-    if ends[1] is not None:
-        Q = np.vstack([Q, ends[1]])
-    if len(Q) < 2:
-        return None
-    return resample_path(Q, step_mm, spline=len(Q) >= 4)
+    ring = shapely.LineString(np.asarray(shapely.orient_polygons(allowed).exterior.coords))  # ccw
+    L = ring.length
+    F0 = c.point(c.t_min)[0]
+    s_near = float(ring.project(shapely.Point(F0)))
+    back = 0.25                    # start the march just behind the material (the disk clear of it)
+    while back < 4 * r and _disk_has_material(stock, np.asarray(ring.interpolate(s_near - back).coords[0]), r):
+        back += 0.25
+    s_A = s_near - back
+    if s_A < 0:
+        s_A += L
+    # march along the wall limit (ring direction = +x on the lower wall of a ccw ring)
+    s_m = s_A + np.arange(0.0, back + 3 * r, step_mm)
+    M = shapely.get_coordinates(shapely.line_interpolate_point(ring, np.mod(s_m, L)))
+    T_A = M[1] - M[0]
+    arc, _ = roll_arc(M[0], T_A, rho, roll_sweep_deg, ds=step_mm, into=True)
+    arc = clamp_to_region(arc, allowed)
+    pre = np.vstack([arc, M[1:]])
+    st = stock.copy()
+    df = simulate(st, pre, r, a_p, feed_mm_min)
+    eng = np.nan_to_num(df.engagement_deg.to_numpy())
+    hit = np.flatnonzero(eng[len(arc):] >= theta_deg)
+    if hit.size == 0:            # little material: the whole march is roll-in, then roll out
+        k = int(np.argmax(eng))
+        roll_in = pre[:max(k + 1, len(arc) + 1)]
+        E, T = roll_in[-1], roll_in[-1] - roll_in[-2]
+        out, _ = roll_arc(E, T, rho, roll_sweep_deg, ds=step_mm, into=False)
+        return CEPeriod([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False)
+    i_s = len(arc) + int(hit[0])
+    roll_in = pre[:i_s + 1].copy()
+    e0, e1 = eng[i_s - 1], eng[i_s]
+    if e1 > e0 and i_s > len(arc):     # end exactly where the engagement reaches theta (linear)
+        roll_in[-1] = pre[i_s - 1] + (theta_deg - e0) / (e1 - e0) * (pre[i_s] - pre[i_s - 1])
+    st = fs.copy()
+    simulate(st, roll_in, r, a_p, feed_mm_min, lag_mm=0.0)
+    c = front_contour(st, x_min=x_min)
+    if c is None:
+        return CEPeriod([("roll-in", roll_in)], True)
+    Ps = roll_in[-1]
+    tt = np.linspace(c.t_min, c.t_max, max(int(c.t_max / (0.25 * step_mm)), 50))
+    dist = np.hypot(*(c.point(tt) - Ps).T)
+    inside = np.flatnonzero(dist <= r)
+    t0 = tt[inside[-1]] if inside.size else tt[int(np.argmin(np.abs(dist - r)))]
+    sub = _SubContour(c, t0)
+    res = None
+    for h in (dt, dt / 4):
+        try:
+            res = thesis3_path(sub, r, theta_deg, h, method="midpoint", P0=Ps)
+            break
+        except ValueError:
+            continue
+    if res is None:          # the followed front is out of the tool's reach here: roll out
+        out, _ = roll_arc(Ps, Ps - roll_in[-2], rho, roll_sweep_deg, ds=step_mm, into=False)
+        return CEPeriod([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False)
+    Q = resample_path(res.P, step_mm)
+    ins = shapely.contains_xy(allowed.buffer(1e-9), Q[:, 0], Q[:, 1])
+    ymid = 0.5 * (Q[:, 1].min() + Q[:, 1].max())
+    out_up = np.flatnonzero(~ins & (Q[:, 1] > ymid))
+    i_e = int(out_up[0]) if out_up.size else len(Q)
+    cut = clamp_to_region(Q[:max(i_e, 2)], allowed)
+    # roll-out: leave on an arc tangent to the wall limit at the cut's end (the feed turns away from
+    # the material: the ring runs -x along the upper wall of a ccw ring)
+    E = cut[-1]
+    sE = float(ring.project(shapely.Point(E)))
+    TE = np.asarray(ring.interpolate(min(sE + step_mm, L)).coords[0]) - np.asarray(ring.interpolate(max(sE - step_mm, 0)).coords[0])
+    near_wall = ring.distance(shapely.Point(E)) < 2 * step_mm
+    if not near_wall or float(np.dot(TE, cut[-1] - cut[-2])) <= 0:
+        TE = cut[-1] - cut[-2]          # the cut ended inside the region: leave along its direction
+    roll_out, _ = roll_arc(E, TE, rho, roll_sweep_deg, ds=step_mm, into=False)
+    roll_out = clamp_to_region(roll_out, allowed)
+    return CEPeriod([("roll-in", roll_in), ("cut", np.vstack([Ps, cut[1:]])), ("roll-out", roll_out)], True)
 
 
 def linking_arc(E, S, allowed=None, bulge=0.5, ds=0.05, side=None):
@@ -420,8 +559,10 @@ class CEIteration:
     """Periods of the constant-engagement iteration (Fig. 3.5) and their convergence."""
 
     cuts: list
-    table: object          # pandas DataFrame: period, shift_mm, shape_change_mm, cut_mm, removed_mm2
+    table: object          # pandas DataFrame: period, shift_mm, shape_change_mm, lengths, max engagements
     stock: object
+    periods: list = field(default_factory=list)
+    links: list = field(default_factory=list)
 
 
 def _shape_change(A, B, n=200):
@@ -438,14 +579,25 @@ def _shape_change(A, B, n=200):
     return shift, float(res.max())
 
 
-def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution_mm=0.05,
-                          dt=0.1, a_p=3.0, feed_mm_min=255.0, x_front0=0.0):
-    """Thesis IV iteration: cut period after period into a straight slot (front at ``x_front0``).
+def _link(E, S, allowed, ds):
+    """Straight linking move E -> S (mm) sampled every ``ds``; via the cleared side if needed."""
+    from .constant_engagement import clamp_to_region
 
-    Per period the front is recomputed from the dixel stock, the Thesis III cut is generated and
-    simulated (stock updated). Returns :class:`CEIteration` with the cut polylines and a table of
-    shift (the trochoidal step between consecutive periods, mm) and shape change (max residual
-    after removing the shift, mm): the iteration converges when the shape change stops changing.
+    n = max(int(math.ceil(np.hypot(*(np.asarray(S) - E)) / ds)), 1)
+    P = np.asarray(E) + np.linspace(0, 1, n + 1)[:, None] * (np.asarray(S) - np.asarray(E))
+    return P if allowed is None else clamp_to_region(P, allowed)
+
+
+def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution_mm=0.05,
+                          dt=0.1, a_p=3.0, feed_mm_min=255.0, x_front0=0.0, roll_radius=1.0):
+    """Thesis IV iteration: plan and cut period after period into a straight slot (front at ``x_front0``).
+
+    Per period the front is recomputed from the dixel stock and :func:`ce_period` plans roll-in,
+    constant-engagement cut and roll-out; a straight link joins the previous roll-out to it.
+    Returns :class:`CEIteration`: ``cuts`` (the whole period polylines), ``periods``
+    (:class:`CEPeriod`), ``links`` and a table per period of shift (the trochoidal step, mm),
+    shape change (max residual after removing the shift, mm), lengths, removed area, the maximum
+    engagement per segment type (deg) and the material cut by the link (mm^2).
     """
     import pandas as pd
     from shapely.geometry import box
@@ -458,54 +610,67 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
     length = x_front0 + (n_periods + 2) * 2 * r + 4 * r
     st = dixel.Stock.from_polygon(box(x_front0, -W / 2, length, W / 2), resolution_mm)
     allowed = box(x_front0 - 10 * W, -yl, length + 10 * W, yl)
-    cuts, rows = [], []
+    cuts, periods, links, rows = [], [], [], []
     for k in range(int(n_periods)):
-        P = ce_period(st, r, theta_deg, allowed, dt=dt, step_mm=resolution_mm)
-        if P is None:
+        per = ce_period(st, r, theta_deg, allowed, dt=dt, step_mm=resolution_mm, roll_radius=roll_radius,
+                        a_p=a_p, feed_mm_min=feed_mm_min)
+        if per is None:
             break
-        df = dixel.simulate(st, P, r, a_p, feed_mm_min)
+        P, kinds = per.points, per.kinds
+        lk = _link(cuts[-1][-1], P[0], allowed, resolution_mm) if cuts else P[:1]
+        df = dixel.simulate(st, np.vstack([lk, P[1:]]), r, a_p, feed_mm_min)
+        kk = np.r_[np.full(len(lk), "link", dtype=object), kinds[1:]]
+        if not cuts:
+            kk[0] = kinds[0]
+        eng = df.engagement_deg.to_numpy()
         shift, change = (math.nan, math.nan) if not cuts else _shape_change(cuts[-1], P)
+        row = {"period": k, "shift_mm": shift, "shape_change_mm": change,
+               "cut_mm": float(df.ds[kk != "link"].sum()), "link_mm": float(df.ds[kk == "link"].sum()),
+               "removed_mm2": float(df.removed_mm2.sum()),
+               "link_removed_mm2": float(df.removed_mm2[kk == "link"].sum())}
+        for name in ("roll-in", "cut", "roll-out", "link"):
+            e = eng[kk == name]
+            row[f"max_eng_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
+        rows.append(row)
         cuts.append(P)
-        rows.append({"period": k, "shift_mm": shift, "shape_change_mm": change,
-                     "cut_mm": float(df.ds.sum()), "removed_mm2": float(df.removed_mm2.sum()),
-                     "max_engagement_deg": float(np.nanmax(df.engagement_deg))})
-    return CEIteration(cuts, pd.DataFrame(rows), st)
+        periods.append(per)
+        links.append(lk)
+    return CEIteration(cuts, pd.DataFrame(rows), st, periods, links)
 
 
 def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
-                n_iter=8, link_bulge=0.5, iteration: CEIteration | None = None) -> TrochoidPath:
+                n_iter=8, roll_radius=1.0, iteration: CEIteration | None = None) -> TrochoidPath:
     """Repetitive constant-engagement pattern: the last (converged) period of
-    :func:`ce_trochoid_iteration` repeated ``n_periods`` times with the converged step, each cut
-    followed by a linking arc (:func:`linking_arc`, flagged link) to the next cut's start.
+    :func:`ce_trochoid_iteration` (roll-in, cut, roll-out) repeated ``n_periods`` times with the
+    converged step, joined by straight linking moves (flagged link) through the cleared slot.
     """
-    it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, n_iter, resolution_mm, dt)
+    it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, n_iter, resolution_mm, dt,
+                                            roll_radius=roll_radius)
     if len(it.cuts) < 3:
         raise ValueError("the constant-engagement iteration produced fewer than 3 periods")
-    cut = it.cuts[-1]
+    per = it.periods[-1]
+    P0, K0 = per.points, per.kinds
     step = float(it.table.shift_mm.iloc[-1])
     if not step > 0:
         raise ValueError(f"non-positive converged step {step}")
-    cut = cut - np.array([cut[:, 0].min(), 0.0])
-    pts, link, per, arcs = [], [], [], []
-    n = 0
+    P0 = P0 - np.array([P0[:, 0].min(), 0.0])
+    pts, kinds, per_ix = [], [], []
     for k in range(int(n_periods)):
-        C = cut + np.array([k * step, 0.0])
+        C = P0 + np.array([k * step, 0.0])
         if k > 0:
-            C = C[1:]
+            lk = _link(pts[-1][-1], C[0], None, resolution_mm)
+            pts.append(lk[1:])
+            kinds.append(np.full(len(lk) - 1, "link", dtype=object))
+            per_ix.append(np.full(len(lk) - 1, k - 1))
+            C, KC = C[1:], K0[1:]
+        else:
+            KC = K0
         pts.append(C)
-        link.append(np.zeros(len(C), bool))
-        per.append(np.full(len(C), k))
-        n += len(C)
-        E, S = C[-1], cut[0] + np.array([(k + 1) * step, 0.0])
-        A, centre, ccw = linking_arc(E, S, bulge=link_bulge, ds=resolution_mm)
-        if centre is not None:
-            arcs.append((n - 1, n - 1 + len(A) - 1, centre, ccw))
-        pts.append(A[1:])
-        link.append(np.ones(len(A) - 1, bool))
-        per.append(np.full(len(A) - 1, k))
-        n += len(A) - 1
-    return TrochoidPath(np.vstack(pts), np.concatenate(link), np.concatenate(per), step,
-                        "constant-engagement", arcs)
+        kinds.append(KC)
+        per_ix.append(np.full(len(C), k))
+    kinds = np.concatenate(kinds)
+    return TrochoidPath(np.vstack(pts), kinds == "link", np.concatenate(per_ix), step,
+                        "constant-engagement", kinds=kinds)
 
 
 def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=3.0,
@@ -528,6 +693,10 @@ def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=
     _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
     rows.append({"pattern": "constant-engagement", **m})
     df = pd.DataFrame(rows).set_index("pattern")
+    # every move (links included) at the cutting feed: the "same feed" comparison of Thesis IV
+    df["mrr_same_feed_mm3_min"] = a_p * float(width) * df.step_mm / ((df.cut_mm + df.link_mm) / feed_mm_min)
+    for ref in ("circular", "cycloid"):
+        df[f"mrr_gain_same_feed_vs_{ref}_pct"] = 100 * (df.mrr_same_feed_mm3_min / df.loc[ref, "mrr_same_feed_mm3_min"] - 1)
     df["mrr_gain_vs_circular_pct"] = 100 * (df.mrr_avg_mm3_min / df.loc["circular", "mrr_avg_mm3_min"] - 1)
     df["mrr_gain_vs_cycloid_pct"] = 100 * (df.mrr_avg_mm3_min / df.loc["cycloid", "mrr_avg_mm3_min"] - 1)
     return df
