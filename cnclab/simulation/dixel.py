@@ -230,6 +230,46 @@ class Stock(StockBase):
                          ok1 & np.any((A1 <= x) & (x < B1), axis=0))
         return np.where(same, smooth, stair)
 
+    def _band_transitions(self, c, r, psi0, p0, p1, j0, j1):
+        """Exact transitions of the circle with the polyline boundary inside angle brackets.
+
+        Bracket i runs between consecutive row-centre crossings p0[i] < p1[i] (rad, relative to the
+        feed direction psi0) in rows j0[i], j1[i]; its arc lies in one band between the centre lines
+        of rows jb and jb + 1. When both rows hold the same number of intervals, the boundary in the
+        band is the set of segments joining corresponding end points (see :meth:`_contains_interp`),
+        and the transitions are the circle-segment intersections. Returns ``(ok, angles)``: ok[i]
+        False where this does not apply (rows differ, beyond the grid, even number of crossings);
+        angles (rad) of all transitions of the ok brackets.
+        """
+        h = self.resolution_mm
+        same = j0 == j1
+        ym = c[1] + r * np.sin(psi0 + 0.5 * (p0 + p1))
+        jb = np.where(same, np.where(ym > self.y0 + (j0 + 0.5) * h, j0, j0 - 1), np.minimum(j0, j1))
+        ok = (np.abs(j1 - j0) <= 1) & (jb >= 0) & (jb + 1 < self.n_rows)
+        jc = np.where(ok, jb, 0)
+        A0, A1 = self._A[:, jc], self._A[:, jc + 1]
+        fin = np.isfinite(A0)
+        ok &= np.all(fin == np.isfinite(A1), axis=0)
+        Y0 = self.y0 + (jc + 0.5) * h - c[1]
+        fin2 = np.concatenate([fin, fin])
+        with np.errstate(invalid="ignore"):
+            X0 = np.concatenate([A0, self._B[:, jc]]) - c[0]             # (2K, q) segment starts
+            dX = np.concatenate([A1, self._B[:, jc + 1]]) - c[0] - X0
+            qa = dX * dX + h * h
+            qb = X0 * dX + Y0 * h
+            qc = X0 * X0 + Y0 * Y0 - r * r
+            sq = np.sqrt(qb * qb - qa * qc)
+            angs, valid = [], []
+            for t in ((-qb - sq) / qa, (-qb + sq) / qa):
+                a = np.arctan2(Y0 + t * h, X0 + t * dX) - psi0
+                a = p0 + np.mod(a - p0, 2 * np.pi)
+                angs.append(a)
+                valid.append(fin2 & (t >= 0) & (t <= 1) & (a > p0) & (a < p1))
+        ang = np.concatenate(angs)
+        val = np.concatenate(valid)
+        ok &= (val.sum(axis=0) % 2) == 1
+        return ok, ang[val & ok]
+
     def _signed_xdist(self, x, j, endpoint: bool = False):
         """Signed x-distance (mm) of points (x, row j) to the material boundary of row j (+ inside).
 
@@ -351,10 +391,19 @@ class Stock(StockBase):
         # wide brackets (near the top/bottom rows, where rows are sparse in angle) and brackets
         # next to an empty row: all transitions located on the membership test
         if wide.any():
-            test = self._contains_interp if kw.get("boundary", "polyline") == "polyline" else self._contains
-            extra = _refine_transitions(test, c, r, psi0, p0[wide], p1[wide], ins[k][wide],
-                                        kw.get("bisections", 16))
-            edges = np.sort(np.concatenate([edges[~wide], extra]))
+            kw_ = np.flatnonzero(wide)
+            parts = [edges[~wide]]
+            if kw.get("boundary", "polyline") == "polyline":
+                ok, found = self._band_transitions(c, r, psi0, p0[kw_], p1[kw_], je[k[kw_]], je[k[kw_] + 1])
+                parts.append(found)
+                kw_ = kw_[~ok]
+                test = self._contains_interp
+            else:
+                test = self._contains
+            if kw_.size:
+                parts.append(_refine_transitions(test, c, r, psi0, p0[kw_], p1[kw_], ins[k[kw_]],
+                                                 kw.get("bisections", 16)))
+            edges = np.sort(np.concatenate(parts))
         bounds = np.concatenate([pe[:1] if ins[0] else [], edges, pe[-1:] if ins[-1] else []])
         iv = np.minimum(np.maximum(bounds.reshape(-1, 2), lo), hi)
         iv = iv[iv[:, 1] > iv[:, 0]]

@@ -236,6 +236,67 @@ def dixel_disk_area_ratio() -> float:
     return st.cut_disk((5.0, 5.13), R_TOOL) / (math.pi * R_TOOL ** 2)
 
 
+def accuracy_cases(step_mm: float = 0.02, sweep_deg: float = 60.0, s: float = 1.5, rho: float = 8.0):
+    """Cuts with a closed-form engagement, shared by the accuracy study and the dixel/pixel benchmark.
+
+    Returns a list of ``(name, stock polygon, centres (N, 2) mm, theta_deg)``: a concave arc
+    (widening a ``rho`` hole), a convex arc (turning a ``rho`` disk) -- both with stepover ``s``,
+    theta from §3.1 -- and a straight cut oblique to the rows (25 deg), theta = arccos(1 - s/r).
+    Tool r = 3 mm, tool step ``step_mm``; stocks cropped to the region the cut reaches.
+    """
+    from shapely import affinity
+    from shapely.geometry import Point, box
+
+    r = R_TOOL
+    out = []
+    hole = Point(0, 0).buffer(rho, quad_segs=512)
+    d = rho + s - r
+    phi = np.linspace(0, math.radians(sweep_deg), int(math.radians(sweep_deg) * d / step_mm) + 1)
+    out.append(("concave", box(-1, -r - 1, rho + s + 1, rho + s + 1).difference(hole),
+                np.c_[d * np.cos(phi), d * np.sin(phi)], float(eng.theta_concave(s, rho, r))))
+    d = rho - s + r
+    phi = -np.linspace(0, math.radians(sweep_deg), int(math.radians(sweep_deg) * d / step_mm) + 1)
+    out.append(("convex", hole.intersection(box(-1, -rho - 1, rho + 1, r + 1)),
+                np.c_[d * np.cos(phi), d * np.sin(phi)], float(eng.theta_convex(s, rho, r))))
+    ang = math.radians(25.0)
+    u, nrm = np.array([math.cos(ang), math.sin(ang)]), np.array([-math.sin(ang), math.cos(ang)])
+    lam = np.arange(-3.0, 4.0 + 1e-9, step_mm)
+    poly = affinity.rotate(box(-7, -4, 8, 0), 25.0, origin=(0, 0))
+    out.append(("straight25", poly, lam[:, None] * u + (r - s) * nrm, float(eng.theta_straight(s, r))))
+    return out
+
+
+def engagement_error(model: str, case, resolution_mm: float, feed_direction: str = "central"):
+    """Simulated minus closed-form engagement (deg) over the second half of an :func:`accuracy_cases` cut.
+
+    ``model``: "dixel" or "pixel". The last step is excluded (no central difference there).
+    Returns ``(errors array, per-step DataFrame)``.
+    """
+    from cnclab.simulation import dixel, pixel
+
+    mod = {"dixel": dixel, "pixel": pixel}[model]
+    _, poly, P, th = case
+    df = mod.simulate(mod.Stock.from_polygon(poly, resolution_mm), P, R_TOOL, 1.0, 1000.0,
+                      feed_direction=feed_direction)
+    return df.engagement_deg.values[len(P) // 2:-1] - th, df
+
+
+def accuracy_table(resolutions=(0.1, 0.05, 0.02, 0.01), models=("dixel", "pixel"),
+                   feed_directions=("central", "backward")):
+    """Max |engagement error| (deg) per model, feed direction, resolution (mm) and case (DataFrame)."""
+    import pandas as pd
+
+    rows = []
+    for case in accuracy_cases():
+        for m in models:
+            for fd in feed_directions:
+                for h in resolutions:
+                    e, _ = engagement_error(m, case, h, fd)
+                    rows.append({"case": case[0], "model": m, "feed_direction": fd, "h_mm": h,
+                                 "mean_err_deg": float(e.mean()), "max_abs_err_deg": float(np.abs(e).max())})
+    return pd.DataFrame(rows)
+
+
 # ---------------------------------------------------------------- Kim & Yang eq. 1 ---------
 def kim_yang_eq1_equivalence_residual() -> float:
     """max |eq.1(R = rho + s, r, s) - theta_concave(s, rho, r)| (deg) on a grid of (s, rho)."""
