@@ -13,7 +13,8 @@ artefact common to both models that would otherwise be counted as model error.
 Cost is CPU time (``time.process_time``: robust to the other processes on a shared machine), best of
 ``REPEATS`` runs, per tool step: ``cut`` = one ``cut_disk``; ``step`` = one step of ``simulate``
 (engagement measurement + cut). Exponents k of cost ~ h^-k are least-squares log-log fits over all
-resolutions and over the fine end (h <= 0.01 mm), where the fixed per-call cost matters least.
+resolutions and over the fine end (h <= 0.01 mm); since a fixed per-step cost (numpy call overhead)
+dominates at coarse h, cost = a + b h^-k is fitted as well, whose k is the growth rate §2.2 speaks of.
 The equal-accuracy table interpolates error(h) and cost(h) log-linearly between measured resolutions
 (targets outside the measured range are reported as not reached).
 
@@ -57,6 +58,18 @@ def fit_exponent(hs, cost):
     return float(-np.polyfit(np.log(hs), np.log(cost), 1)[0]) if hs.size >= 2 else math.nan
 
 
+def fit_overhead_power(hs, cost):
+    """Fit cost = a + b h^-k (log-space least squares); returns (a, k, std(k)): overhead and exponent."""
+    from scipy.optimize import curve_fit
+
+    def f(lh, a, b, k):
+        return np.log(a + b * np.exp(-k * lh))
+
+    p, cov = curve_fit(f, np.log(hs), np.log(cost), p0=[float(np.min(cost)) / 2, 1e-3, 1.5],
+                       bounds=([0, 0, 0], [10, 10, 4]))
+    return float(p[0]), float(p[2]), float(np.sqrt(cov[2, 2]))
+
+
 def h_at_error(hs, err, target):
     """Coarsest resolution (mm) at which the error reaches ``target`` (log-log interpolation), or None."""
     if err[0] <= target:
@@ -98,6 +111,10 @@ def main():
         print(f"{m}: cost ~ h^-k: cut k = {fit_exponent(hs, tc):.2f} (h <= 0.01 mm: "
               f"{fit_exponent(hs[fine], tc[fine]):.2f}), simulate step k = {fit_exponent(hs, ts):.2f} "
               f"(h <= 0.01 mm: {fit_exponent(hs[fine], ts[fine]):.2f});  max error ~ h^{-fit_exponent(hs, err):.2f}")
+        if hs.size >= 4:
+            for lab, c in (("cut", tc), ("simulate step", ts)):
+                a, k, sk = fit_overhead_power(hs, c)
+                print(f"       {lab}: cost = a + b h^-k fit: fixed a = {a * 1e3:.3f} ms, k = {k:.2f} +- {sk:.2f}")
     print()
     print("Speed ratio at equal engagement accuracy (max error over the three cases):")
     print(f"{'target [deg]':>12} {'h dixel':>9} {'h pixel':>9} {'dixel step':>11} {'pixel step':>11} "
