@@ -188,3 +188,15 @@ def test_material_removal_rate_formula():
     with pytest.raises(ValueError, match="feed_direction"):
         dixel.simulate(dixel.Stock.from_polygon(box(0, 0, 1, 1), 0.1), [[0, 0], [1, 0]], 1, 1, 100,
                        feed_direction="forward")
+
+
+def test_dixel_engagement_bad_options():
+    st = dixel.Stock.from_polygon(box(0, 0, 10, 10), 0.1)
+    with pytest.raises(ValueError, match="boundary"):
+        st.engagement((5, 12), 3, (1, 0), boundary="spline")
+    with pytest.raises(ValueError, match="method"):
+        st.engagement((5, 12), 3, (1, 0), method="exact")
+    # both boundary models agree on a straight edge parallel to the rows (exact: acos(1 - 1/3))
+    for b in ("polyline", "linear"):
+        assert st.engagement((5, 12), 3, (1, 0), boundary=b).angle_deg == pytest.approx(
+            math.degrees(math.acos(1 - 1 / 3)), abs=0.05)

@@ -310,6 +310,8 @@ class Stock(StockBase):
             return super().engagement(center_xy, tool_radius, feed_direction_xy, front_only, **kw)
         if method != "rows":
             raise ValueError(f"method must be 'rows' or 'sample', got {method!r}")
+        if kw.get("boundary", "polyline") not in ("polyline", "linear"):
+            raise ValueError(f"boundary must be 'polyline' or 'linear', got {kw['boundary']!r}")
         c = _check_xy(center_xy, "center_xy")
         r = _check_radius(tool_radius)
         f = _check_xy(feed_direction_xy, "feed_direction_xy")
