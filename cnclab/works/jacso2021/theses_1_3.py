@@ -180,7 +180,8 @@ def blob_engagement_stats(resolution_mm: float = 0.02, dt: float = 0.05, method:
 
 
 def blob_mean_engagement_coarse() -> float:
-    return blob_engagement_stats(0.05, 0.1)["mean_deg"]
+    """Mean engagement (deg), 0.05 mm rows, midpoint dt = 0.05 (path error O(dt^2): -0.23 deg at dt = 0.1)."""
+    return blob_engagement_stats(0.05, 0.05)["mean_deg"]
 
 
 def blob_max_deviation_fine() -> float:
