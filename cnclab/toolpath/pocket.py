@@ -432,13 +432,13 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
     in each arm's frame, joined by straight links through the cleared region.
     """
     from cnclab.simulation.common import simulate
+    from cnclab.simulation.dixel import Stock
 
     from .trochoidal import _link, ce_period
 
     r, th = job.tool_radius, job.theta_deg
     pocket, allowed = job.polygon, job.allowed()
     c = np.asarray(job.start_center, float)
-    Stock = _stock_class()
     stock = Stock.from_polygon(pocket.difference(job.start_hole()), resolution_mm)
     # 1. open centre: chained constant-engagement laps
     E = c + np.array([0.5 * job.start_hole_diameter - r, 0.0])       # touches the hole wall
@@ -467,7 +467,7 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
     for k, arm in enumerate(arms):
         ang = arm["angle_deg"]
         wedge = _wedge(c, ang, 180.0 / n_arm, reach)
-        material = _polygonal(_material_polygon(stock).intersection(wedge))
+        material = _polygonal(stock.to_polygon().intersection(wedge))
         loc_mat = _polygonal(_rot(material, -ang, c)) if not material.is_empty else material
         if loc_mat.is_empty or loc_mat.area < 1e-3:
             periods.append(0)
@@ -504,37 +504,6 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
     info = {"laps": laps, "arms": arms, "periods_per_arm": periods,
             "medial_axis": medial_axis(pocket, spacing_mm)}
     return StrategyPath.build(segs, "hybrid (Jacsó §4)", info)
-
-
-def _material_polygon(stock):
-    """Material of a dixel stock as a shapely geometry with gap-free row seams (mm).
-
-    WORKAROUND (remove when ``dixel.Stock.to_polygon`` is fixed by the simulator owner): the
-    committed ``to_polygon`` puts row j's top at (y0 + j h) + h and row j+1's bottom at
-    y0 + (j + 1) h; the two differ by rounding, so the union of the row boxes has hairline gaps
-    (190 parts for the star pocket) and a cleared region computed from it leaks through them.
-    Here both edges are the same expression y0 + k h. Uses only the public ``intervals()``.
-    """
-    rows, a, b = stock.intervals()
-    h = stock.resolution_mm
-    return shapely.union_all(shapely.box(a, stock.y0 + rows * h, b, stock.y0 + (rows + 1) * h))
-
-
-def _stock_class():
-    """Dixel stock class whose ``to_polygon`` is :func:`_material_polygon` (the workaround above;
-    ``cleared_boundary_contour`` calls ``to_polygon``)."""
-    from cnclab.simulation import dixel
-
-    class RowStock(dixel.Stock):
-        def copy(self):
-            new = dixel.Stock.copy(self)
-            new.__class__ = RowStock
-            return new
-
-        def to_polygon(self):
-            return _material_polygon(self)
-
-    return RowStock
 
 
 def _polygonal(g):
