@@ -242,6 +242,21 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
     out = []
     cur_n = cur_f = float("nan")
     n_sp = n_fr = 0
+
+    def changes(n, f):
+        """Records to insert before a feed point with values (n, f); updates the values in force."""
+        nonlocal cur_n, cur_f, n_sp, n_fr
+        ins = []
+        if not abs(n - cur_n) <= rpm_threshold:
+            cur_n = round(n)
+            ins.append(spindl(cur_n))
+            n_sp += 1
+        if not abs(f - cur_f) <= vf_threshold:
+            cur_f = round(f, 1)
+            ins.append(fedrat(cur_f))
+            n_fr += 1
+        return ins
+
     k = 0   # index into the expanded record list
     j = 0   # next target
     for it in program.items():
@@ -250,16 +265,7 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
             j1 = int(np.searchsorted(tgt, k + m, side="left"))
             a = 0
             for t in range(j, j1):
-                n, f = n_l[t], f_l[t]
-                ins = []
-                if not abs(n - cur_n) <= rpm_threshold:
-                    cur_n = round(n)
-                    ins.append(spindl(cur_n))
-                    n_sp += 1
-                if not abs(f - cur_f) <= vf_threshold:
-                    cur_f = round(f, 1)
-                    ins.append(fedrat(cur_f))
-                    n_fr += 1
+                ins = changes(n_l[t], f_l[t])
                 if ins:
                     li = tgt_l[t] - k
                     if li > a:
@@ -279,15 +285,7 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
         elif r.word == "FEDRAT":
             cur_f = r.values[0]
         if j < n_t and tgt_l[j] == k:
-            n, f = n_l[j], f_l[j]
-            if not abs(n - cur_n) <= rpm_threshold:
-                cur_n = round(n)
-                out.append(spindl(cur_n))
-                n_sp += 1
-            if not abs(f - cur_f) <= vf_threshold:
-                cur_f = round(f, 1)
-                out.append(fedrat(cur_f))
-                n_fr += 1
+            out.extend(changes(n_l[j], f_l[j]))
             j += 1
         out.append(r)
         k += 1

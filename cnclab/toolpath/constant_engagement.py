@@ -413,7 +413,7 @@ def multi_pass(stock, domain_polygon, final_polygon, seed_xy, tool_radius, theta
         pts = contour.point(tt)
         ang = np.degrees(np.arctan2(pts[:, 1] - seed_xy[1], pts[:, 0] - seed_xy[0]))
         t0 = tt[np.argmin(np.abs((ang - start_angle_deg + 180) % 360 - 180))]
-        shifted = _Shifted(contour, t0)
+        shifted = ShiftedContour(contour, t0)
         path = thesis3_path(shifted, r, theta_deg, dt, method=method)
         P = clamp_to_region(resample_path(path.P, step_mm), allowed)
         df = simulate(stock, P, r, a_p, feed_mm_min)
@@ -424,11 +424,11 @@ def multi_pass(stock, domain_polygon, final_polygon, seed_xy, tool_radius, theta
     return laps
 
 
-class _Shifted:
-    """A closed contour re-parametrised to start at t0."""
+class ShiftedContour:
+    """A closed contour re-parametrised to start at parameter ``t0`` (one full turn, t in [0, period))."""
 
     def __init__(self, base, t0):
-        self.base, self.t0 = base, t0
+        self.base, self.t0 = base, float(t0)
         self.t_min, self.t_max, self.closed = 0.0, base.t_max - base.t_min, True
 
     def _map(self, t):

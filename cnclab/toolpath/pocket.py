@@ -378,7 +378,8 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
     from the previous one (engagement 0 -> theta, no radial plunge) and closes on its own start.
     Tool centres are clamped to ``allowed``. Returns the (n, 2) centre points (mm).
     """
-    from .constant_engagement import cleared_boundary_contour, clamp_to_region, resample_path, thesis3_path
+    from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, resample_path,
+                                      thesis3_path)
 
     r = tool_radius
     c = cleared_boundary_contour(stock, seed_xy, domain)
@@ -390,7 +391,7 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
     fwd = np.r_[i:len(tt), 0:i]
     run = d[fwd] <= max(r, d[i] + 1e-6)
     j = fwd[int(np.argmin(run)) - 1] if not run.all() else i
-    shifted = _ShiftedClosed(c, tt[j])
+    shifted = ShiftedContour(c, tt[j])
     for h in (dt, dt / 2, dt / 4):
         try:
             res = thesis3_path(shifted, r, theta_deg, h, method="midpoint", P0=np.asarray(start_xy, float))
@@ -400,24 +401,6 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
     else:
         raise ValueError("Thesis III lap failed at every step size")
     return clamp_to_region(resample_path(res.P, step_mm), allowed)
-
-
-class _ShiftedClosed:
-    """A closed contour re-parametrised to start at t0 (one full turn)."""
-
-    def __init__(self, base, t0):
-        self.base, self.t0 = base, float(t0)
-        self.t_min, self.t_max, self.closed = 0.0, base.t_max - base.t_min, True
-
-    def _map(self, t):
-        t = np.atleast_1d(np.asarray(t, float))
-        return self.base.t_min + np.mod(t + self.t0 - self.base.t_min, self.t_max)
-
-    def point(self, t):
-        return self.base.point(self._map(t))
-
-    def deriv(self, t):
-        return self.base.deriv(self._map(t))
 
 
 def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=200,
