@@ -43,11 +43,10 @@ import json
 import math
 import re
 import time
-import traceback
 from pathlib import Path
 from typing import Any, Iterable
 
-from .paths import CLAIMS_CSV, NOTEBOOKS_DIR, WORK_IDS
+from .paths import CLAIMS_CSV, WORK_IDS
 
 COLUMNS = ("claim_id", "work", "seed_file", "location", "quantity", "unit", "paper_value", "rtol",
            "atol", "tolerance_basis", "status", "computed_by", "alt_computed_by", "missing_input",
@@ -292,7 +291,6 @@ def evaluate(claim: Claim, skip_slow: bool = False) -> Result:
     except Exception as exc:  # reported, never hidden
         res.error = f"{type(exc).__name__}: {exc}"
         res.ok = False
-        res._traceback = traceback.format_exc()
     res.seconds = time.perf_counter() - t0
     return res
 
@@ -426,10 +424,6 @@ def write_report(results: list[Result], outdir: Path) -> tuple[Path, Path]:
         md.append("")
     p_md = atomic_write(outdir / "claims.md", "\n".join(md) + "\n")
     return p_csv, p_md
-
-
-def notebooks_of_ledger(claims: Iterable[Claim]) -> set[Path]:
-    return {NOTEBOOKS_DIR / c.notebook for c in claims if c.notebook}
 
 
 def main(argv: list[str] | None = None) -> int:
