@@ -21,9 +21,55 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 from typing import NamedTuple
 
 import numpy as np
+
+#: implementations of the per-step work: "numpy" (the readable reference, vectorised per call) and
+#: "numba" (compiled kernels in :mod:`._kernels`, line-by-line ports; a whole path is one call)
+BACKENDS = ("numpy", "numba")
+
+
+def _default_backend() -> str:
+    name = os.environ.get("CNCLAB_SIM_BACKEND", "numba")
+    if name not in BACKENDS:
+        raise ValueError(f"CNCLAB_SIM_BACKEND must be one of {BACKENDS}, got {name!r}")
+    if name == "numba":
+        try:
+            import numba  # noqa: F401
+        except ImportError:  # pragma: no cover - numba is pinned in environment.txt
+            return "numpy"
+    return name
+
+
+_BACKEND = [_default_backend()]
+
+
+def set_backend(name: str) -> str:
+    """Select the default simulator backend ("numpy" or "numba"); returns the previous one.
+
+    Both give the same results (tests/test_simulation_kernels.py); "numba" is the fast default
+    (environment variable ``CNCLAB_SIM_BACKEND`` overrides it at import).
+    """
+    if name not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {name!r}")
+    old = _BACKEND[0]
+    _BACKEND[0] = name
+    return old
+
+
+def get_backend() -> str:
+    """The current default simulator backend ("numpy" or "numba")."""
+    return _BACKEND[0]
+
+
+def _resolve_backend(backend) -> str:
+    if backend is None:
+        return _BACKEND[0]
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS} or None, got {backend!r}")
+    return backend
 
 
 class Engagement(NamedTuple):
@@ -258,6 +304,22 @@ class StockBase:
         ang = float(np.sum(iv[:, 1] - iv[:, 0]))
         return Engagement(math.degrees(ang), math.degrees(iv[0, 0]), math.degrees(iv[-1, 1]), iv)
 
+    def _engagement_from_intervals(self, iv) -> Engagement:
+        """:class:`Engagement` of engaged intervals (k, 2) (rad) returned by a compiled kernel."""
+        if iv.shape[0] == 0:
+            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
+        ang = float((iv[:, 1] - iv[:, 0]).sum())
+        return Engagement(math.degrees(ang), math.degrees(iv[0, 0]), math.degrees(iv[-1, 1]), iv)
+
+    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out):  # pragma: no cover
+        """Run the whole path in one compiled call (see :func:`simulate`); False if not available."""
+        return False
+
+    def _plain(self) -> bool:  # pragma: no cover
+        """True when ``cut_disk``/``engagement`` are the model's own (accept ``backend=``, may be
+        replaced by the compiled path); False for a subclass that overrides them."""
+        return False
+
     def engagement_angle(self, center_xy, tool_radius, feed_direction_xy, **kw) -> float:
         """Engagement angle (deg) at ``center_xy`` for feed direction ``feed_direction_xy``.
 
@@ -280,7 +342,7 @@ def default_lag_mm(resolution_mm: float, tool_radius: float) -> float:
 
 def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None, teeth=None,
              front_only: bool = True, copy: bool = False, lag_mm: float | None = None,
-             feed_direction: str = "backward"):
+             feed_direction: str = "backward", backend: str | None = None):
     """Move the tool through ``centres`` cutting ``stock``; return a per-step pandas DataFrame.
 
     Works for both stock models (dixel and pixel). At step i the engagement is measured on the
@@ -303,6 +365,10 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
         ``"central"``: centres[i+1] - centres[i-1], the tangent of a smoothly sampled path to
         O(ds^2) (the backward chord lags the tangent by half the step's turning angle, e.g. 0.09 deg
         for ds = 0.02 mm on a 6.5 mm radius, which shifts the measured front half-circle by as much).
+    backend : ``"numba"`` (the whole loop in one compiled call), ``"numpy"`` (the reference: a Python
+        loop over the steps calling ``stock.engagement`` / ``stock.cut_disk``) or None (the default
+        of :func:`set_backend`). Same results; a stock subclass that overrides ``engagement`` or
+        ``cut_disk`` always takes the numpy path (so the override is used).
 
     Returns
     -------
@@ -354,30 +420,15 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     if not (lag >= 0):
         raise ValueError(f"lag_mm must be >= 0, got {lag_mm!r}")
     s_cum = np.cumsum(ds)
-    s_l, ds_l = s_cum.tolist(), ds.tolist()          # Python floats: cheap scalar access per step
-    fdir = d[0]
-    k = 0                                  # next disk to cut
-    for i in range(n):
-        if i > 0 and ds_l[i] > 0:
-            fdir = d[i - 1]
-        while k < i and s_l[i] - s_l[k] > lag:
-            rem[k] = stock.cut_disk(P[k], r)
-            k += 1
-        fd = fdir
-        if central and 0 < i < n - 1:
-            v = P[i + 1] - P[i - 1]
-            if v[0] != 0 or v[1] != 0:
-                fd = v
-        if fd[0] != 0 or fd[1] != 0:
-            e = stock.engagement(P[i], r, fd, front_only=front_only)
-            eng[i], ent[i], ext[i] = e.angle_deg, e.entry_deg, e.exit_deg
-            if f_z is not None:
-                hmax[i], havg[i] = chip_thickness(e.intervals, float(f_z))
-        else:
-            eng[i] = ent[i] = ext[i] = np.nan
-    while k < n:
-        rem[k] = stock.cut_disk(P[k], r)
-        k += 1
+    fz = math.nan if f_z is None else float(f_z)
+    be = _resolve_backend(backend)
+    plain = stock._plain()
+    compiled = (be == "numba" and plain
+                and stock._simulate_compiled(P, d, ds, s_cum, r, lag, central, front_only, fz,
+                                             (eng, ent, ext, rem, hmax, havg)))
+    if not compiled:
+        _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z,
+                       (eng, ent, ext, rem, hmax, havg), {"backend": be} if plain else {})
     mrr = material_removal_rate(rem, ds, a_p, feed_mm_min)
     df = pd.DataFrame({"x": P[:, 0], "y": P[:, 1], "s": s_cum, "ds": ds,
                        "engagement_deg": eng, "entry_deg": ent, "exit_deg": ext,
@@ -385,3 +436,34 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     if teeth is not None and f_z is not None:
         df["spindle_rpm"] = float(feed_mm_min) / (int(teeth) * float(f_z))
     return df
+
+
+def _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z, out, kw):
+    """The reference loop of :func:`simulate` (a Python loop over the steps calling
+    ``stock.engagement(..., **kw)`` and ``stock.cut_disk(..., **kw)``): fills the arrays ``out``."""
+    eng, ent, ext, rem, hmax, havg = out
+    n = len(P)
+    s_l, ds_l = s_cum.tolist(), ds.tolist()          # Python floats: cheap scalar access per step
+    fdir = d[0]
+    k = 0                                  # next disk to cut
+    for i in range(n):
+        if i > 0 and ds_l[i] > 0:
+            fdir = d[i - 1]
+        while k < i and s_l[i] - s_l[k] > lag:
+            rem[k] = stock.cut_disk(P[k], r, **kw)
+            k += 1
+        fd = fdir
+        if central and 0 < i < n - 1:
+            v = P[i + 1] - P[i - 1]
+            if v[0] != 0 or v[1] != 0:
+                fd = v
+        if fd[0] != 0 or fd[1] != 0:
+            e = stock.engagement(P[i], r, fd, front_only=front_only, **kw)
+            eng[i], ent[i], ext[i] = e.angle_deg, e.entry_deg, e.exit_deg
+            if f_z is not None:
+                hmax[i], havg[i] = chip_thickness(e.intervals, float(f_z))
+        else:
+            eng[i] = ent[i] = ext[i] = np.nan
+    while k < n:
+        rem[k] = stock.cut_disk(P[k], r, **kw)
+        k += 1

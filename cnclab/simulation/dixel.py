@@ -35,8 +35,8 @@ import math
 
 import numpy as np
 
-from .common import (Engagement, StockBase, _check_radius, _check_xy, _refine_transitions, simulate,
-                     strip_area)
+from .common import (Engagement, StockBase, _check_radius, _check_xy, _refine_transitions, _resolve_backend,
+                     simulate, strip_area)
 
 __all__ = ["Stock", "simulate", "Engagement", "scanline_intervals"]
 
@@ -293,8 +293,26 @@ class Stock(StockBase):
         good = ok & np.isfinite(d)
         return np.where(good, -np.minimum(d, _NO_MATERIAL), -_NO_MATERIAL), np.where(good, e, np.nan)
 
+    def _plain(self) -> bool:
+        cls = type(self)
+        return cls.cut_disk is Stock.cut_disk and cls.engagement is Stock.engagement
+
+    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out):
+        from . import _kernels as K
+
+        n = len(P)
+        i, k, f0, f1 = 0, 0, float(d[0, 0]), float(d[0, 1])
+        dummy = np.zeros((1, 1), np.bool_)
+        while True:
+            i, k, f0, f1 = K.simulate_path(0, self._A, self._B, dummy, 0.0, self.y0, self.resolution_mm,
+                                           P, d, ds, s, r, lag, central, front_only, True, 16, 0, f_z,
+                                           i, k, f0, f1, *out)
+            if i == n and k == n:
+                return True
+            self._grow(2 * self._A.shape[0])          # a row ran out of interval slots: grow, resume
+
     def engagement(self, center_xy, tool_radius, feed_direction_xy, front_only: bool = True,
-                   method: str = "rows", **kw) -> Engagement:
+                   method: str = "rows", backend: str | None = None, **kw) -> Engagement:
         """Engagement of the tool circumference with material (see :meth:`StockBase.engagement`).
 
         ``method="rows"`` (default) uses the dixel structure: the circle crosses every row centre
@@ -305,7 +323,10 @@ class Stock(StockBase):
         x-distance linearly along the circle instead). Brackets near the top/bottom of the circle
         (sparse rows) or next to an empty row are resolved on the membership test.
         ``method="sample"`` uses the generic sampling + refinement of :class:`StockBase`.
+        ``backend``: "numba" (compiled port, :func:`._kernels.dixel_engagement`), "numpy" (this
+        code, the reference) or None (default of :func:`.common.set_backend`).
         """
+        be = _resolve_backend(backend)
         if method == "sample":
             return super().engagement(center_xy, tool_radius, feed_direction_xy, front_only, **kw)
         if method != "rows":
@@ -317,6 +338,13 @@ class Stock(StockBase):
         f = _check_xy(feed_direction_xy, "feed_direction_xy")
         if math.hypot(*f) == 0:
             raise ValueError("feed_direction_xy must be a non-zero vector")
+        if be == "numba":
+            from . import _kernels as K
+
+            iv = K.dixel_engagement(self._A, self._B, self.y0, self.resolution_mm, float(c[0]), float(c[1]), r,
+                                    float(f[0]), float(f[1]), bool(front_only),
+                                    kw.get("boundary", "polyline") == "polyline", int(kw.get("bisections", 16)))
+            return self._engagement_from_intervals(iv)
         psi0 = math.atan2(f[1], f[0])
         h = self.resolution_mm
         lo, hi = (-np.pi / 2, np.pi / 2) if front_only else (-np.pi, np.pi)
@@ -440,14 +468,24 @@ class Stock(StockBase):
         j0, j1, w = self._rows_of_disk(float(cy), r)
         return np.arange(j0, j1, dtype=np.int64), w
 
-    def cut_disk(self, center_xy, tool_radius) -> float:
+    def cut_disk(self, center_xy, tool_radius, backend: str | None = None) -> float:
         """Remove the tool disk at ``center_xy`` (mm); returns the removed area (mm^2).
 
-        Vectorised interval arithmetic on the rows the disk covers: every interval [a, b) of a row
-        with half-chord w becomes [a, min(b, x-w)) and [max(a, x+w), b) (empty pieces dropped).
+        Interval arithmetic on the rows the disk covers: every interval [a, b) of a row with
+        half-chord w becomes [a, min(b, x-w)) and [max(a, x+w), b) (empty pieces dropped).
+        ``backend="numpy"``: vectorised over the rows (the reference); "numba": the compiled loop
+        :func:`._kernels.dixel_cut`; None: the default of :func:`.common.set_backend`.
         """
         cx, cy = _check_xy(center_xy, "center_xy")
         r = _check_radius(tool_radius)
+        if _resolve_backend(backend) == "numba":
+            from . import _kernels as K
+
+            while True:
+                v = K.dixel_cut(self._A, self._B, self.y0, self.resolution_mm, float(cx), float(cy), r)
+                if v >= 0:
+                    return v
+                self._grow(2 * self._A.shape[0])
         j0, j1, w = self._rows_of_disk(float(cy), r)
         if j1 <= j0:
             return 0.0

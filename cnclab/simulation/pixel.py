@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from .common import Engagement, StockBase, _check_radius, _check_xy, simulate
+from .common import Engagement, StockBase, _check_radius, _check_xy, _resolve_backend, simulate
 from .dixel import _rings, scanline_intervals
 
 __all__ = ["Stock", "simulate", "Engagement"]
@@ -79,10 +79,54 @@ class Stock(StockBase):
         out[ok] = self.grid[j[ok], i[ok]]
         return out
 
-    def cut_disk_pixels(self, center_xy, tool_radius) -> int:
-        """Remove the pixels whose centres lie in the disk; returns how many were material."""
+    def _plain(self) -> bool:
+        cls = type(self)
+        return (cls.cut_disk is Stock.cut_disk and cls.cut_disk_pixels is Stock.cut_disk_pixels
+                and cls.engagement is Stock.engagement)
+
+    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out):
+        from . import _kernels as K
+
+        dummy = np.empty((1, 1))
+        K.simulate_path(1, dummy, dummy, self.grid, self.x0, self.y0, self.resolution_mm, P, d, ds, s, r, lag,
+                        central, front_only, True, 24, 0, f_z, 0, 0, float(d[0, 0]), float(d[0, 1]), *out)
+        return True
+
+    def engagement(self, center_xy, tool_radius, feed_direction_xy, front_only: bool = True,
+                   n_samples: int | None = None, bisections: int = 24,
+                   backend: str | None = None) -> Engagement:
+        """Engagement of the tool circumference with the material (see :meth:`StockBase.engagement`).
+
+        ``backend``: "numpy" (the sampling reference of :class:`StockBase`), "numba" (its compiled
+        port :func:`._kernels.pixel_engagement`) or None (default of :func:`.common.set_backend`).
+        """
+        if _resolve_backend(backend) == "numpy":
+            return super().engagement(center_xy, tool_radius, feed_direction_xy, front_only, n_samples,
+                                      bisections)
+        from . import _kernels as K
+
+        c = _check_xy(center_xy, "center_xy")
+        r = _check_radius(tool_radius)
+        f = _check_xy(feed_direction_xy, "feed_direction_xy")
+        if math.hypot(*f) == 0:
+            raise ValueError("feed_direction_xy must be a non-zero vector")
+        iv = K.pixel_engagement(self.grid, self.x0, self.y0, self.resolution_mm, float(c[0]), float(c[1]), r,
+                                float(f[0]), float(f[1]), bool(front_only),
+                                0 if n_samples is None else int(n_samples), int(bisections))
+        return self._engagement_from_intervals(iv)
+
+    def cut_disk_pixels(self, center_xy, tool_radius, backend: str | None = None) -> int:
+        """Remove the pixels whose centres lie in the disk; returns how many were material.
+
+        ``backend``: "numpy" (vectorised over the bounding window, the reference), "numba" (the
+        compiled per-row loop :func:`._kernels.pixel_cut`) or None (default of :func:`.common.set_backend`).
+        """
         cx, cy = _check_xy(center_xy, "center_xy")
         r = _check_radius(tool_radius)
+        if _resolve_backend(backend) == "numba":
+            from . import _kernels as K
+
+            return int(K.pixel_cut(self.grid, self.x0, self.y0, self.resolution_mm, float(cx), float(cy), r))
         h = self.resolution_mm
         ny, nx = self.grid.shape
         i0 = max(int(math.floor((cx - r - self.x0) / h)), 0)
@@ -100,6 +144,6 @@ class Stock(StockBase):
         win ^= hit                                   # clear the material pixels under the disk
         return n
 
-    def cut_disk(self, center_xy, tool_radius) -> float:
+    def cut_disk(self, center_xy, tool_radius, backend: str | None = None) -> float:
         """Remove the tool disk at ``center_xy`` (mm); returns the removed area (mm^2)."""
-        return self.cut_disk_pixels(center_xy, tool_radius) * self.resolution_mm ** 2
+        return self.cut_disk_pixels(center_xy, tool_radius, backend) * self.resolution_mm ** 2
