@@ -2,12 +2,20 @@
 
 1. Densify the CL points so that no step exceeds d_lim (eqs 9-1 ... 9-3; d_lim = a_e suggested).
 2. Assign each point the normal of its STL facet (nearest centroid, as Sec. 7.2.3).
-3. Neighbour sets: the k nearest points (k = 4 or 8); the thesis grows a radius R until at least k
-   points are inside, which (without ties) is the k-nearest set -- a KD-tree query.
+3. Neighbour sets (``neighbours=``): "knn" (default, the thesis reading): the k nearest points
+   (k = 4 or 8) of every point, visited or not -- the thesis grows a radius R until at least k points
+   are inside, which (without ties) is the k-nearest set, a KD-tree query; visited points are then
+   removed from the set as tabu. "radius": the same growth taken literally, R = m * radius_step
+   (m = 1, 2, ...) until >= k points are inside, all points within that R (ties and overshoot kept).
+   "unvisited": the k nearest *unvisited* points at every step (never empty, so it only jumps when
+   ``adjacent_mm`` is given) -- a contrast reading, not the text's.
 4. From the start point, repeatedly move to the unvisited (non-tabu) neighbour with the smallest
-   |D_eff(neighbour, A_f = direction of the move) - D_eff(current)|; ties within ``tie_tol`` (flat
-   areas) go to the neighbour closest to the current feed direction. When every neighbour is
-   visited, *jump* to the nearest unvisited point (counted).
+   |D_eff(neighbour, A_f = direction of the move) - D_eff(current)| (``direction="move"``, Sec. 9.2:
+   "the milling direction ... based on the slopes between the tool position and its neighbor
+   points"), or of the point's D_eff at the constant Table 9-1 feed direction (``"constant"``);
+   ties within ``tie_tol`` (flat areas) go to the neighbour closest to the current feed direction.
+   When every neighbour is visited, *jump* to the nearest unvisited point (counted). With
+   ``adjacent_mm`` a move to a chosen neighbour farther than that is flagged as a jump too.
 
 Complexity: the working diameters of all (point, neighbour) pairs are computed in one vectorised
 call; the walk itself is O(N k) plus the jump searches (KD-tree of the unvisited points, rebuilt
@@ -21,7 +29,9 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["densify", "ReorderResult", "reorder_path", "path_metrics", "reordered_program"]
+__all__ = ["densify", "neighbour_sets", "ReorderResult", "reorder_path", "path_metrics", "reordered_program"]
+
+NEIGHBOUR_RULES = ("knn", "radius", "unvisited")
 
 
 def densify(points, d_lim: float) -> tuple[np.ndarray, np.ndarray]:
@@ -47,6 +57,46 @@ def densify(points, d_lim: float) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack([dense, P[-1:]]), np.append(seg, len(P) - 1)
 
 
+def neighbour_sets(points, k: int, rule: str = "knn", radius_step: float | None = None, tree=None):
+    """Static neighbour sets (self excluded) as CSR arrays ``(indptr, indices)``.
+
+    ``rule="knn"``: the k nearest points; ``"radius"``: every point within R = m * radius_step (mm),
+    m the smallest integer for which at least k points are inside (Sec. 9.2 read literally: on a
+    regular grid the set can exceed k). Distances are 3D (eq 9-1).
+
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]])
+    >>> ip, ix = neighbour_sets(P, 2)
+    >>> ip.tolist(), sorted(ix[:2].tolist())
+    ([0, 2, 4, 6, 8], [1, 2])
+    >>> neighbour_sets(P, 2, "radius", 1.0)[0].tolist()      # R = 1 holds 2 points: no overshoot
+    [0, 2, 4, 6, 8]
+    >>> neighbour_sets(P, 3, "radius", 1.0)[0].tolist()      # R = 2 holds all 3 others
+    [0, 3, 6, 9, 12]
+    """
+    P = np.asarray(points, float)
+    N = len(P)
+    if rule not in ("knn", "radius"):
+        raise ValueError(f"rule must be 'knn' or 'radius' for static sets, got {rule!r}")
+    k = int(min(k, N - 1))
+    tree = cKDTree(P) if tree is None else tree
+    dist, nb = tree.query(P, k=k + 1)
+    if rule == "knn":
+        # drop the point itself (normally column 0; with duplicate points it may sit elsewhere)
+        own = nb == np.arange(N)[:, None]
+        own[~own.any(axis=1), -1] = True
+        own[np.cumsum(own, axis=1) > 1] = False
+        keep = nb[~own].reshape(N, k)
+        return np.arange(0, N * k + 1, k), keep.ravel()
+    if not (radius_step is not None and np.isfinite(radius_step) and radius_step > 0):
+        raise ValueError(f"radius_step must be > 0 mm for rule 'radius', got {radius_step}")
+    R = np.maximum(1, np.ceil(dist[:, -1] / radius_step - 1e-9)) * radius_step
+    lists = tree.query_ball_point(P, R * (1 + 1e-12) + 1e-12, return_sorted=True)
+    rows = [[q for q in L if q != i] for i, L in enumerate(lists)]
+    counts = np.fromiter((len(r) for r in rows), np.int64, N)
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    return indptr, np.fromiter((q for r in rows for q in r), np.int64, int(indptr[-1]))
+
+
 @dataclasses.dataclass
 class ReorderResult:
     """``order`` (N,) visiting order; ``jump`` (N,) bool, True where the move into the point is a jump;
@@ -63,16 +113,29 @@ class ReorderResult:
 
 def reorder_path(points, normals, *, tool_diameter: float, a_p: float, k: int = 4, start: int = 0,
                  feed_direction_deg: float = 0.0, point: str = "max", tie_tol: float = 1e-6,
-                 direction: str = "move") -> ReorderResult:
-    """Reorder CL ``points`` (N, 3) with facet ``normals`` (N, 3) by the Sec. 9.2 search.
+                 direction: str = "move", neighbours: str = "knn", radius_step: float | None = None,
+                 adjacent_mm: float | None = None) -> ReorderResult:
+    """Reorder CL ``points`` (N, 3, mm) with facet ``normals`` (N, 3) by the Sec. 9.2 search.
 
     Parameters: tool_diameter, a_p (mm); k neighbours (4 or 8 in the thesis); start index;
-    feed_direction_deg initial/tie-break direction; point tangent-point rule (see spindle_control);
-    direction "move" (D_eff of a neighbour evaluated with A_f = direction of the move to it, as Sec. 9.2
-    describes) or "constant" (D_eff of every point at the constant feed_direction_deg of Table 9-1).
+    feed_direction_deg initial/tie-break direction (deg); point tangent-point rule (see spindle_control);
+    direction "move" (default, Sec. 9.2: D_eff of a neighbour evaluated with A_f = direction of the move
+    to it) or "constant" (D_eff of every point at the constant feed_direction_deg of Table 9-1);
+    neighbours "knn" (default) / "radius" (needs radius_step, mm) / "unvisited" (module docstring);
+    adjacent_mm: also flag moves longer than this (mm) as jumps (None: only empty-set jumps).
+
+    >>> x, y = np.meshgrid(np.arange(3.0), np.arange(2.0))
+    >>> P = np.column_stack([x.ravel(), y.ravel(), np.zeros(6)])
+    >>> r = reorder_path(P, np.tile([0, 0, 1.0], (6, 1)), tool_diameter=10, a_p=0.3, k=4)
+    >>> r.order.tolist(), r.n_jumps                   # flat: along the feed direction, then back
+    ([0, 1, 2, 5, 4, 3], 0)
     """
     if direction not in ("move", "constant"):
         raise ValueError(f"direction must be 'move' or 'constant', got {direction!r}")
+    if neighbours not in NEIGHBOUR_RULES:
+        raise ValueError(f"neighbours must be one of {NEIGHBOUR_RULES}, got {neighbours!r}")
+    if adjacent_mm is not None and not adjacent_mm > 0:
+        raise ValueError(f"adjacent_mm must be > 0 mm or None, got {adjacent_mm}")
     from ..cutting.spindle_control import working_diameters
 
     P = np.asarray(points, float)
@@ -84,40 +147,68 @@ def reorder_path(points, normals, *, tool_diameter: float, a_p: float, k: int = 
     if int(k) != k or k < 1:
         raise ValueError(f"k must be a positive integer, got {k}")
     k = int(min(k, N - 1))
-    tree = cKDTree(P)
-    _, nb = tree.query(P, k=k + 1)
-    nb = nb[:, 1:]
-    # working diameter of every neighbour for the move direction current -> neighbour
-    dx = P[nb, 0] - P[:, None, 0]
-    dy = P[nb, 1] - P[:, None, 1]
-    ang = np.degrees(np.arctan2(dy, dx))
     nrm = np.asarray(normals, float)
-    d_nb, _, _ = working_diameters(nrm[nb.ravel()], ang.ravel(), tool_diameter, a_p, point, feed_direction_deg)
-    d_nb = d_nb.reshape(nb.shape)
-    if direction == "constant":
-        d_pt = working_diameters(nrm, np.full(N, float(feed_direction_deg)), tool_diameter, a_p, point,
-                                 feed_direction_deg)[0]
-        d_nb = d_pt[nb]
-    d_start, _, _ = working_diameters(nrm[[start]], np.array([feed_direction_deg]), tool_diameter, a_p, point,
-                                      feed_direction_deg)
+    tree = cKDTree(P)
+
+    def deff(idx, ang_deg):
+        return working_diameters(nrm[idx], ang_deg, tool_diameter, a_p, point, feed_direction_deg)[0]
+
+    d_pt = deff(np.arange(N), np.full(N, float(feed_direction_deg))) if direction == "constant" else None
+    # static candidate lists (for "unvisited": a 4k-nearest cache, extended on demand)
+    if neighbours == "unvisited":
+        indptr, flat = neighbour_sets(P, min(4 * k, N - 1), "knn", tree=tree)
+    else:
+        indptr, flat = neighbour_sets(P, k, neighbours, radius_step, tree=tree)
+    src = np.repeat(np.arange(N), np.diff(indptr))
+    ang = np.arctan2(P[flat, 1] - P[src, 1], P[flat, 0] - P[src, 0])
+    # working diameter of every (point, neighbour) pair for the move direction point -> neighbour
+    d_flat = d_pt[flat] if d_pt is not None else deff(flat, np.degrees(ang))
+    fl, dl, al = flat.tolist(), d_flat.tolist(), ang.tolist()
+    bounds = list(zip(indptr[:-1].tolist(), indptr[1:].tolist()))
+
+    def candidates(cur):
+        """(index, D_eff, move angle rad) of the candidate neighbours of ``cur`` (tabu included)."""
+        a, b = bounds[cur]
+        if neighbours != "unvisited":
+            return zip(fl[a:b], dl[a:b], al[a:b])
+        free = [j for j in range(a, b) if not visited[fl[j]]][:k]
+        if len(free) == k or b - a == N - 1:
+            return ((fl[j], dl[j], al[j]) for j in free)
+        q = nearest_unvisited(cur, k)                  # beyond the cache: query and evaluate now
+        aq = np.arctan2(P[q, 1] - P[cur, 1], P[q, 0] - P[cur, 0])
+        dq = d_pt[q] if d_pt is not None else deff(q, np.degrees(aq))
+        return zip(q.tolist(), dq.tolist(), aq.tolist())
+
+    pool = {"idx": np.arange(N), "tree": tree, "used": 0}
+
+    def nearest_unvisited(cur, m):
+        """The m nearest unvisited points to ``cur`` (KD-tree of the unvisited pool, rebuilt when half used)."""
+        if pool["used"] * 2 > len(pool["idx"]):
+            pool["idx"] = np.nonzero(~visited)[0]
+            pool["tree"] = cKDTree(P[pool["idx"]])
+            pool["used"] = 0
+        idx, kk = pool["idx"], 2 * m + 6
+        while True:
+            kq = min(kk, len(idx))
+            _, c = pool["tree"].query(P[cur], k=kq)
+            c = idx[np.atleast_1d(c)]
+            free = c[~visited[c]]
+            if free.size >= m or kq == len(idx):
+                return free[:m]
+            kk *= 4
+
     visited = np.zeros(N, bool)
     order = np.empty(N, np.int64)
     jump = np.zeros(N, bool)
-    deff = np.empty(N)
-    cur, cur_d, cur_dir = start, float(d_start[0]), math.radians(feed_direction_deg)
+    d_eff = np.empty(N)
+    cur_d = float(d_pt[start] if d_pt is not None else deff(np.array([start]), np.array([feed_direction_deg]))[0])
+    cur, cur_dir = start, math.radians(feed_direction_deg)
     visited[cur] = True
-    order[0], deff[0] = cur, cur_d
-    # jump search: KD-tree over the unvisited points, rebuilt when half of it is visited
-    pool = np.arange(N)
-    pool_tree = tree
-    pool_visited = 1
-    nb_l = nb.tolist()
-    dnb_l = d_nb.tolist()
-    ang_l = np.radians(ang).tolist()
+    order[0], d_eff[0] = cur, cur_d
+    adj2 = None if adjacent_mm is None else adjacent_mm ** 2
     for step in range(1, N):
         best, best_key = -1, None
-        row, drow, arow = nb_l[cur], dnb_l[cur], ang_l[cur]
-        for q, dq, aq in zip(row, drow, arow):
+        for q, dq, aq in candidates(cur):
             if visited[q]:
                 continue
             diff = abs(dq - cur_d)
@@ -126,31 +217,19 @@ def reorder_path(points, normals, *, tool_diameter: float, a_p: float, k: int = 
             if best_key is None or key < best_key:
                 best, best_key, best_d, best_a = q, key, dq, aq
         if best < 0:  # stuck: jump to the nearest unvisited point
-            if pool_visited * 2 > len(pool):
-                pool = np.nonzero(~visited)[0]
-                pool_tree = cKDTree(P[pool])
-                pool_visited = 0
-            kk = 8
-            while True:
-                kq = min(kk, len(pool))
-                _, cand = pool_tree.query(P[cur], k=kq)
-                cand = pool[np.atleast_1d(cand)]
-                free = cand[~visited[cand]]
-                if free.size or kq == len(pool):
-                    break
-                kk *= 4
-            best = int(free[0])
+            best = int(nearest_unvisited(cur, 1)[0])
             v = P[best] - P[cur]
             best_a = math.atan2(v[1], v[0]) if abs(v[0]) + abs(v[1]) > 1e-12 else cur_dir
-            a_deg = math.degrees(best_a) if direction == "move" else feed_direction_deg
-            best_d = float(working_diameters(nrm[[best]], np.array([a_deg]), tool_diameter, a_p,
-                                             point, feed_direction_deg)[0][0])
+            best_d = float(d_pt[best] if d_pt is not None else deff(np.array([best]),
+                                                                      np.array([math.degrees(best_a)]))[0])
+            jump[step] = True
+        elif adj2 is not None and float(np.sum((P[best] - P[cur]) ** 2)) > adj2:
             jump[step] = True
         visited[best] = True
-        pool_visited += 1
-        order[step], deff[step] = best, best_d
+        pool["used"] += 1
+        order[step], d_eff[step] = best, best_d
         cur, cur_d, cur_dir = best, best_d, best_a
-    return ReorderResult(order, jump, deff)
+    return ReorderResult(order, jump, d_eff)
 
 
 def path_metrics(points, d_eff, v_c: float = 63.0, jump=None) -> dict:

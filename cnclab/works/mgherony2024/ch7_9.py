@@ -198,33 +198,151 @@ def ch9_original_apt(step_mm: float | None = None) -> str:
 
 
 @functools.cache
-def reorder_cases(direction: str = "constant", step_mm: float | None = None):
-    """Original vs reordered metrics for the four Table 9-2 cases on the reconstruction (a_e = 0.5, A_f = 90)."""
-    from ...cutting.spindle_control import feed_directions, working_diameters
-    from ...toolpath.reorder import ReorderResult, densify, path_metrics, reorder_path
+def ch9_points(step_mm: float | None = None):
+    """The chapter 9 point cloud: the original path (read from its APT file) densified to d_lim = a_e
+    (eqs 9-1 ... 9-3), each point's nearest-centroid STL normal, and the corner / middle start indices.
+
+    Returns ``(dense (N, 3) mm, normals (N, 3), {"corner": i, "middle": j})``.
+    """
+    from ...toolpath.reorder import densify
 
     t = parameters()["table9_1"]
     cl = apt.read_apt(ch9_original_apt(step_mm)).cl_points()
-    P = cl.xyz[~cl.rapid]
-    dense, _ = densify(P, t["a_e"])
+    dense, _ = densify(cl.xyz[~cl.rapid], t["a_e"])
     mesh = surface_mesh()
     nrm = mesh.normals[FacetLocator(mesh).nearest_centroid(dense)]
+    starts = {"corner": int(np.argmin(np.linalg.norm(dense[:, :2] - [50.0, 50.0], axis=1))),
+              "middle": int(np.argmin(np.linalg.norm(dense[:, :2] - [25.0, 25.0], axis=1)))}
+    return dense, nrm, starts
+
+
+def original_deff(direction: str = "move", step_mm: float | None = None) -> np.ndarray:
+    """D_eff (mm) along the original path: A_f = direction of each move ("move") or 90 deg ("constant")."""
+    from ...cutting.spindle_control import feed_directions, working_diameters
+
+    t = parameters()["table9_1"]
+    dense, nrm, _ = ch9_points(step_mm)
     af = np.full(len(dense), float(t["A_f"])) if direction == "constant" else feed_directions(dense)
-    d0, _, _ = working_diameters(nrm, af, t["D"], t["a_p"], "max")
+    return working_diameters(nrm, af, t["D"], t["a_p"], "max")[0]
+
+
+@functools.cache
+def reorder_cases(direction: str = "move", step_mm: float | None = None, neighbours: str = "knn"):
+    """Original vs reordered metrics for the four Table 9-2 cases on the reconstruction (a_e = 0.5, A_f = 90).
+
+    Default = the Sec. 9.2 reading: k nearest neighbours (visited ones tabu), D_eff of a neighbour for
+    the direction of the move to it. Returns ``(table, dense points, {case: ReorderResult})``.
+    """
+    from ...toolpath.reorder import ReorderResult, path_metrics, reorder_path
+
+    t = parameters()["table9_1"]
+    dense, nrm, starts = ch9_points(step_mm)
+    d0 = original_deff(direction, step_mm)
     rows = [{"case": "original", "start": "-", "k": "-", **path_metrics(dense, d0, t["v_c"])}]
     orders = {"original": ReorderResult(np.arange(len(dense)), np.zeros(len(dense), bool), d0)}
-    middle = int(np.argmin(np.linalg.norm(dense[:, :2] - [25.0, 25.0], axis=1)))
-    corner = int(np.argmin(np.linalg.norm(dense[:, :2] - [50.0, 50.0], axis=1)))
-    for case, (st, k) in enumerate([(corner, 4), (middle, 4), (corner, 8), (middle, 8)], start=1):
-        r = reorder_path(dense, nrm, tool_diameter=t["D"], a_p=t["a_p"], k=k, start=st,
-                         feed_direction_deg=t["A_f"], direction=direction)
+    for case, (where, k) in enumerate([("corner", 4), ("middle", 4), ("corner", 8), ("middle", 8)], start=1):
+        r = reorder_path(dense, nrm, tool_diameter=t["D"], a_p=t["a_p"], k=k, start=starts[where],
+                         feed_direction_deg=t["A_f"], direction=direction, neighbours=neighbours,
+                         radius_step=t["a_e"], adjacent_mm=1.5 * t["a_e"] if neighbours == "unvisited" else None)
         orders[case] = r
-        rows.append({"case": case, "start": st, "k": k,
+        rows.append({"case": case, "start": starts[where], "k": k,
                      **path_metrics(dense[r.order], r.d_eff, t["v_c"], jump=r.jump)})
     return pd.DataFrame(rows), dense, orders
 
 
-def reordered_apt(case: int = 1, direction: str = "constant") -> str:
+def move_statistics(dense, result, a_e: float) -> dict:
+    """Shape of a reordered path: jumps, non-adjacent feed moves (> 1.5 a_e, 3D), share of diagonal
+    feed moves (direction nearer 45 deg than an axis), share of straight continuations (two
+    consecutive feed moves turning < 10 deg), mean feed step (mm), and the share of jumps that land
+    on a dead end (the next move is a jump again: an isolated point left behind)."""
+    Q = dense[result.order]
+    v = np.diff(Q, axis=0)
+    L = np.linalg.norm(v, axis=1)
+    feed = ~result.jump[1:]
+    a = np.degrees(np.arctan2(v[:, 1], v[:, 0])) % 90.0
+    diag = np.abs(a - 45.0) < 22.5
+    j = result.jump
+    h = np.arctan2(v[:, 1], v[:, 0])
+    turn = np.abs(np.angle(np.exp(1j * np.diff(h))))
+    both = feed[1:] & feed[:-1]
+    return {"jumps": int(j.sum()), "long_feed_moves": int(np.sum(feed & (L > 1.5 * a_e))),
+            "diagonal_share": float(diag[feed].mean()),
+            "straight_share": float(np.mean(turn[both] < np.radians(10.0))),
+            "mean_feed_step_mm": float(L[feed].mean()),
+            "dead_end_share": float(np.sum(j[1:-1] & j[2:]) / max(1, j.sum())),
+            "distance_mm": float(L.sum())}
+
+
+READINGS = {  # name: (neighbour rule, D_eff direction rule)
+    "thesis: k-NN, D_eff per move": ("knn", "move"),
+    "k-NN, D_eff at constant A_f": ("knn", "constant"),
+    "radius steps of a_e, per move": ("radius", "move"),
+    "radius steps of a_e, constant A_f": ("radius", "constant"),
+    "k unvisited, per move": ("unvisited", "move"),
+    "k unvisited, constant A_f": ("unvisited", "constant"),
+}
+
+
+@functools.cache
+def reorder_readings(step_mm: float | None = None) -> pd.DataFrame:
+    """The Table 9-2 experiment under six readings of Sec. 9.2 (``READINGS``): one row per
+    (reading, case) with :func:`move_statistics`, the |Delta D_eff| / |Delta n| maxima (jumps excluded)
+    and the same maxima of the original path under that reading's D_eff rule. For "k unvisited" the
+    neighbour set is never empty, so a jump is a move to a point farther than 1.5 a_e."""
+    t = parameters()["table9_1"]
+    rows = []
+    for name, (nb, direction) in READINGS.items():
+        table, dense, orders = reorder_cases(direction, step_mm, nb)
+        tab = table.set_index("case")
+        for case in (1, 2, 3, 4):
+            rows.append({"reading": name, "case": case, "k": tab.loc[case, "k"],
+                         **move_statistics(dense, orders[case], t["a_e"]),
+                         "dD_max": tab.loc[case, "dD_max"], "dn_max": tab.loc[case, "dn_max"],
+                         "dD_max_original": tab.loc["original", "dD_max"],
+                         "dn_max_original": tab.loc["original", "dn_max"]})
+    return pd.DataFrame(rows)
+
+
+def reading_verdicts(step_mm: float | None = None) -> pd.DataFrame:
+    """Per reading, which Table 9-2 / Sec. 9.3 qualitative claims hold on the reconstruction:
+    more neighbours -> longer path (case 3 > 1 and 4 > 2), -> more jumps (same pairs), start point
+    changes jumps by <= 10 % at equal k (1 vs 2, 3 vs 4), case 1 narrows max |Delta D_eff| and |Delta n|."""
+    df = reorder_readings(step_mm).set_index(["reading", "case"])
+    out = []
+    for name in READINGS:
+        r = df.loc[name]
+        J, L = r["jumps"], r["distance_mm"]
+        out.append({"reading": name, "jumps_k4": f"{J[1]}/{J[2]}", "jumps_k8": f"{J[3]}/{J[4]}",
+                    "dist_k4": f"{L[1]:.0f}/{L[2]:.0f}", "dist_k8": f"{L[3]:.0f}/{L[4]:.0f}",
+                    "longer_path": bool(L[3] > L[1] and L[4] > L[2]),
+                    "more_jumps": bool(J[3] > J[1] and J[4] > J[2]),
+                    "start_limited": bool(abs(J[1] - J[2]) <= 0.1 * J[1] and abs(J[3] - J[4]) <= 0.1 * J[3]),
+                    "case1_narrows": bool(r.loc[1, "dD_max"] < r.loc[1, "dD_max_original"]
+                                          and r.loc[1, "dn_max"] < r.loc[1, "dn_max_original"]),
+                    "diag_share_k4": r.loc[[1, 2], "diagonal_share"].mean(),
+                    "diag_share_k8": r.loc[[3, 4], "diagonal_share"].mean(),
+                    "straight_share_k4": r.loc[[1, 2], "straight_share"].mean(),
+                    "straight_share_k8": r.loc[[3, 4], "straight_share"].mean()})
+    return pd.DataFrame(out).set_index("reading")
+
+
+def deff_direction_spread(step_mm: float | None = None) -> dict:
+    """Why the move reading keeps its heading: over the sloped points of the chapter 9 cloud, the median
+    spread (max - min, mm) of D_eff over the 8 grid directions 0, 45, ..., 315 deg, against the median
+    non-zero |Delta D_eff| between consecutive points of the original path at the constant A_f = 90."""
+    from ...cutting.spindle_control import working_diameters
+
+    t = parameters()["table9_1"]
+    dense, nrm, _ = ch9_points(step_mm)
+    slope = np.abs(nrm[:, 2]) < np.cos(np.radians(1.0))
+    D = np.stack([working_diameters(nrm[slope], np.full(int(slope.sum()), a), t["D"], t["a_p"], "max")[0]
+                  for a in np.arange(0.0, 360.0, 45.0)])
+    adj = np.abs(np.diff(original_deff("constant", step_mm)))
+    return {"sloped_share": float(slope.mean()), "direction_spread_median_mm": float(np.median(np.ptp(D, axis=0))),
+            "adjacent_change_median_mm": float(np.median(adj[adj > 0]))}
+
+
+def reordered_apt(case: int = 1, direction: str = "move") -> str:
     """Write the Table 9-2 ``case`` reordered path as an APT file into build/ (jumps: retract, rapid,
     plunge) and return its path; Table 9-1 feed and n = 2000 rpm."""
     from ...toolpath.reorder import reordered_program
@@ -238,7 +356,7 @@ def reordered_apt(case: int = 1, direction: str = "constant") -> str:
     return str(path)
 
 
-def deltas(case="original", direction: str = "constant") -> dict:
+def deltas(case="original", direction: str = "move") -> dict:
     """|Delta D_eff| (mm) and |Delta n| (rpm, eq 7-4 at v_c = 63) between consecutive points of the
     original or a reordered path (moves into jump points excluded, the tool lifts): Figs 9-9 ... 9-12."""
     t = parameters()["table9_1"]
