@@ -1,0 +1,509 @@
+"""Constant-engagement clearing of a 2.5D pocket with islands and narrow necks (Jacsó 2021, Thesis III).
+
+Units: lengths in mm, areas in mm², feeds in mm/min, ``theta_deg`` in degrees; ``tool_radius`` is
+the *radius* of the flat end mill. The pocket is a shapely ``Polygon`` whose holes are islands.
+
+Algorithm (:func:`ce_clearing`):
+
+1. **regions and entries** — the *allowed region* is the pocket shrunk by the tool radius (the final
+   contour for the tool centre: walls offset inwards, islands grown). One seed per part of the
+   pocket: the centres of the largest inscribed circles of the components of the allowed region
+   eroded by ``seed_clearance_ratio`` x its largest inscribed radius (:func:`default_seeds`; a neck
+   narrower than that separates two parts). At each seed a **helical entry** bores a hole of radius
+   ``entry_radius_mm`` (XY trace: a circle of radius ``entry_radius_mm - r`` about the seed; in
+   G-code a one-turn helical ramp to the cutting depth and one flat turn).
+2. **constant-engagement laps** — round robin over the seeds: the boundary of the cleared region
+   around the seed is read from a dixel stock
+   (:func:`~cnclab.toolpath.constant_engagement.cleared_boundary_contour`) and one full turn of the
+   Thesis III path (engagement ``theta_deg``, midpoint direction) is traced from where the previous
+   lap ended, so laps chain like a spiral. Tool centres are kept in the allowed region
+   (:func:`clamp_inside`, islands included): the pass is limited by the final contour. The lap is
+   cut into the stock; stretches that remove nothing become straight **links** through the cleared
+   region when the tool swept along the chord removes nothing and stays in the allowed region
+   (otherwise the lap's own air stretch is kept as a link). A seed's laps stop when a lap removes
+   less than ``min_removed_mm2``; when the cleared regions of two seeds merge, the later seed's
+   chain ends and the earlier one continues on the merged boundary.
+3. **cleanup** — leftovers the laps do not reach (material enclosed between the cleared region and
+   an island, slivers on the final contour, the corners) are cut by a final contour pass along every
+   ring of the allowed region (outer ring counter-clockwise, islands clockwise: climb milling with
+   an M3 spindle, material on the right), its air stretches again linked. This pass is *not*
+   engagement-controlled: its spikes are reported by :func:`evaluate_path` (kind ``"cleanup"``).
+
+The result is a :class:`ClearingPath` (points + per-point kind of the segment ending there:
+``"entry"``, ``"cut"``, ``"cleanup"``, ``"link"`` or ``"rapid"``). :func:`evaluate_path` cuts any
+such path through one fresh dixel stock and reports engagement / MRR maxima, the share of the
+cutting length above theta + 5 deg, cutting / linking lengths, time and uncut area;
+:func:`to_moves` exports G-code moves (:mod:`cnclab.toolpath.gcode`).
+
+>>> from shapely.geometry import box
+>>> path = ce_clearing(box(0, 0, 40, 30), tool_radius=5, theta_deg=66.42, resolution_mm=0.25)
+>>> _, s = evaluate_path(path, box(0, 0, 40, 30), 5, 66.42, resolution_mm=0.25)
+>>> s["uncut_area_mm2"] < 1.05 * s["unreachable_area_mm2"] + 1.0     # only the corner cusps remain
+True
+>>> round(s["median_engagement_cut_deg"])                            # the laps hold theta
+66
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, MultiPolygon, Point, Polygon
+from shapely.geometry.polygon import orient
+
+__all__ = ["ClearingPath", "KINDS", "default_seeds", "clamp_inside", "helical_entry", "ce_clearing",
+           "evaluate_path", "to_moves", "path_from_programme"]
+
+#: Segment kinds of a :class:`ClearingPath`; ``link`` and ``rapid`` are not meant to cut.
+KINDS = ("entry", "cut", "cleanup", "link", "rapid")
+
+
+@dataclass
+class ClearingPath:
+    """Tool-centre polyline ``points`` (N, 2) mm; ``kinds[i]`` labels the segment *ending* at point i
+    (one of :data:`KINDS`; ``kinds[0]`` is the start); ``region[i]`` the seed index (-1: cleanup)."""
+
+    points: np.ndarray
+    kinds: np.ndarray
+    region: np.ndarray
+    info: dict = field(default_factory=dict)
+
+    def lengths(self) -> dict:
+        """Length (mm) per kind."""
+        ds = np.r_[0.0, np.hypot(*np.diff(self.points, axis=0).T)]
+        return {k: float(ds[self.kinds == k].sum()) for k in KINDS}
+
+
+def _polys(g) -> list:
+    return [p for p in shapely.get_parts(g) if isinstance(p, Polygon) and not p.is_empty]
+
+
+def _check_common(pocket, tool_radius, theta_deg=None):
+    if not isinstance(pocket, (Polygon, MultiPolygon)) or pocket.is_empty or not pocket.is_valid:
+        raise ValueError("pocket must be a valid, non-empty shapely Polygon (mm, holes = islands)")
+    if not (isinstance(tool_radius, (int, float)) and math.isfinite(tool_radius) and tool_radius > 0):
+        raise ValueError(f"tool_radius must be > 0 mm, got {tool_radius!r}")
+    if theta_deg is not None and not (0 < theta_deg < 180):
+        raise ValueError(f"theta_deg must be in (0, 180) deg, got {theta_deg!r}")
+    allowed = pocket.buffer(-tool_radius, quad_segs=64)
+    if allowed.is_empty or allowed.area < 1e-6:
+        raise ValueError(f"tool_radius={tool_radius} mm: the tool does not fit in the pocket")
+    return allowed
+
+
+def default_seeds(allowed, seed_clearance_ratio: float = 0.6) -> list[tuple]:
+    """One seed per part of the allowed region ``allowed`` (mm): the centres of the largest
+    inscribed circles of the components of ``allowed`` eroded by ``seed_clearance_ratio`` times its
+    largest inscribed radius, largest part first. Necks narrower than twice that erosion separate parts.
+
+    >>> from shapely.geometry import box
+    >>> two = box(0, 0, 30, 20).union(box(30, 8, 40, 12)).union(box(40, 0, 70, 20))
+    >>> [tuple(round(v) for v in s) for s in default_seeds(two)]
+    [(15, 10), (55, 10)]
+    """
+    if not 0 < seed_clearance_ratio < 1:
+        raise ValueError(f"seed_clearance_ratio must be in (0, 1), got {seed_clearance_ratio!r}")
+    parts = _polys(allowed)
+    if not parts:
+        raise ValueError("allowed must be a non-empty polygon")
+    rmax = max(shapely.distance(shapely.maximum_inscribed_circle(p, 0.01), p.boundary) for p in parts)
+    core = allowed.buffer(-seed_clearance_ratio * rmax)
+    seeds = []
+    for p in sorted(_polys(core), key=lambda q: -q.area):
+        c = shapely.get_coordinates(shapely.maximum_inscribed_circle(p, 0.01))[0]
+        seeds.append((float(c[0]), float(c[1])))
+    return seeds
+
+
+def clamp_inside(P, allowed):
+    """Project the points ``P`` (N, 2) mm lying outside ``allowed`` onto its nearest boundary point
+    (outer ring *or* island ring); points inside are unchanged.
+
+    >>> from shapely.geometry import box
+    >>> ring = box(0, 0, 10, 10).difference(box(4, 4, 6, 6))
+    >>> clamp_inside([[5.0, 4.5], [12.0, 5.0]], ring).round(6).tolist()
+    [[5.0, 4.0], [10.0, 5.0]]
+    """
+    P = np.array(P, float)
+    inside = shapely.contains_xy(allowed, P[:, 0], P[:, 1])
+    if not inside.all():
+        lines = shapely.shortest_line(allowed.boundary, shapely.points(P[~inside]))
+        P[~inside] = shapely.get_coordinates(lines)[0::2]
+    return P
+
+
+def _resample(P, step):
+    d = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+    if d[-1] <= 0:
+        return P[:1].copy()
+    u = np.linspace(0, d[-1], max(int(math.ceil(d[-1] / step)), 1) + 1)
+    return np.c_[np.interp(u, d, P[:, 0]), np.interp(u, d, P[:, 1])]
+
+
+def helical_entry(seed_xy, entry_radius_mm: float, tool_radius: float, step_mm: float = 0.2):
+    """XY trace of a helical entry boring a hole of radius ``entry_radius_mm`` about ``seed_xy``: one
+    counter-clockwise circle of radius ``entry_radius_mm - tool_radius`` (mm), starting and ending at
+    angle 0. Returns (n, 2) points, spaced <= ``step_mm``."""
+    e = float(entry_radius_mm) - float(tool_radius)
+    if not e > 0:
+        raise ValueError(f"entry_radius_mm must exceed tool_radius={tool_radius} mm, got {entry_radius_mm!r}")
+    n = max(int(math.ceil(2 * math.pi * e / step_mm)), 16)
+    a = np.linspace(0.0, 2 * math.pi, n + 1)
+    c = np.asarray(seed_xy, float)
+    pts = c + e * np.c_[np.cos(a), np.sin(a)]
+    pts[-1] = pts[0]
+    return pts
+
+
+def _touch_start(contour, E, r):
+    """Contour parameter t0 where a lap from ``E`` starts, and the start point P0 (|P0 - c(t0)| <= r)."""
+    T = contour.t_max - contour.t_min
+    tt = np.linspace(contour.t_min, contour.t_max, max(int(T / 0.02), 200), endpoint=False)
+    d = np.hypot(*(contour.point(tt) - np.asarray(E)).T)
+    i = int(np.argmin(d))
+    if d[i] > r:
+        C = contour.point(tt[i])[0]
+        return tt[i], C + r * (np.asarray(E) - C) / d[i]
+    # last contour point, going forward from the nearest one, still under the tool (as pocket.centre_lap)
+    fwd = np.r_[i:len(tt), 0:i]
+    run = d[fwd] <= r
+    j = fwd[int(np.argmin(run)) - 1] if not run.all() else i
+    return tt[j], np.asarray(E, float)
+
+
+def _lap(stock, domain, seed, E, r, theta_deg, allowed, dt, step):
+    """One Thesis III turn around the cleared region containing ``seed``, from ``E``; (n, 2) centres."""
+    from .constant_engagement import ShiftedContour, cleared_boundary_contour, resample_path, thesis3_path
+
+    c = cleared_boundary_contour(stock, seed, domain)
+    t0, P0 = _touch_start(c, E, r)
+    shifted = ShiftedContour(c, t0)
+    for h in (dt, dt / 2, dt / 4):
+        try:
+            res = thesis3_path(shifted, r, theta_deg, h, method="midpoint", P0=P0)
+            break
+        except ValueError:
+            continue
+    else:
+        return None
+    P = clamp_inside(resample_path(res.P, step), allowed)
+    P = clamp_inside(_resample(P, step), allowed)
+    if np.hypot(*(P0 - np.asarray(E))) > 1e-9:
+        P = np.vstack([E, P])
+    return P
+
+
+def _chord_clear(a, b, material, guard, r, margin_mm):
+    """Is the straight move a -> b inside ``guard`` and its swept disk (radius r - margin) free of
+    ``material`` (shapely geometry)?"""
+    line = LineString([a, b])
+    if line.length < 1e-9:
+        return True
+    if not guard.contains(line):
+        return False
+    return material.is_empty or not line.buffer(r - margin_mm, quad_segs=16).intersects(material)
+
+
+def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, margin_mm):
+    """Label the points of a simulated stretch ``P`` (``removed[i]``: area cut at point i, mm²).
+    Cutting points keep ``kind``; an air run between cutting points becomes one straight link when
+    the tool swept along the chord stays in ``guard`` and misses the material left at that time
+    (``material`` before the stretch minus the stretch swept so far), otherwise it stays as an air
+    link along ``P``. Trailing air is dropped. Returns ``(points, kinds)`` or None."""
+    cutting = removed > air_tol_mm2
+    if not cutting.any():
+        return None
+    last = int(np.flatnonzero(cutting)[-1])
+    out_p, out_k = [P[0]], [kind if cutting[0] else "link"]
+    i = 1
+    while i <= last:
+        if cutting[i]:
+            out_p.append(P[i])
+            out_k.append(kind)
+            i += 1
+            continue
+        j = i
+        while not cutting[j]:
+            j += 1                                        # P[i:j] air, P[j] cuts (j <= last)
+        ok = False
+        if j - i >= min_run and np.hypot(*(P[j - 1] - out_p[-1])) < 0.9 * np.sum(np.hypot(*np.diff(P[i - 1:j], axis=0).T)):
+            swept = LineString(P[:i]).buffer(r, quad_segs=16) if i > 1 else Point(P[0]).buffer(r, quad_segs=16)
+            ok = _chord_clear(out_p[-1], P[j - 1], material.difference(swept), guard, r, margin_mm)
+        if ok:
+            out_p.append(P[j - 1])                        # straight link to the last air point
+            out_k.append("link")
+        else:
+            out_p.extend(P[i:j])
+            out_k.extend(["link"] * (j - i))
+        i = j
+    return np.asarray(out_p), np.asarray(out_k, dtype=object)
+
+
+def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_radius_mm=None,
+                resolution_mm: float = 0.1, step_mm=None, dt: float = 0.2, max_laps: int = 200,
+                min_removed_mm2=None, seed_clearance_ratio: float = 0.6, cleanup: bool = True,
+                a_p: float = 1.0, feed_mm_min: float = 1000.0) -> ClearingPath:
+    """Constant-engagement clearing of ``pocket`` (see the module docstring).
+
+    Parameters
+    ----------
+    pocket : shapely Polygon (mm); holes are islands.
+    tool_radius : flat end mill radius r (mm).
+    theta_deg : target engagement angle (deg), e.g. arccos(1 - a_e/r) for a straight cut at a_e.
+    seeds : start points (mm), one per part; default :func:`default_seeds`.
+    entry_radius_mm : radius of the helical-entry hole (mm, > r); default 1.6 r, reduced to fit.
+    resolution_mm : dixel row height of the planning stock (mm).
+    step_mm : spacing of the tool-centre samples (mm); default ``2 * resolution_mm``.
+    dt : Thesis III contour-parameter step (mm of boundary).
+    max_laps : cap on the total number of laps.
+    min_removed_mm2 : a seed's laps end when a lap removes less (mm²); default ``r * step_mm``.
+    seed_clearance_ratio : see :func:`default_seeds`.
+    cleanup : add the final contour pass.
+    a_p, feed_mm_min : axial depth (mm) and feed (mm/min) passed to the planning simulation.
+
+    Returns a :class:`ClearingPath` whose ``info`` holds the seeds, laps per seed, the entry radius
+    and the planning stock's uncut area.
+    """
+    from cnclab.simulation import dixel
+    from cnclab.simulation.common import simulate
+
+    allowed = _check_common(pocket, tool_radius, theta_deg)
+    r = float(tool_radius)
+    if not (isinstance(resolution_mm, (int, float)) and resolution_mm > 0):
+        raise ValueError(f"resolution_mm must be > 0 mm, got {resolution_mm!r}")
+    step = 2.0 * resolution_mm if step_mm is None else float(step_mm)
+    if not step > 0:
+        raise ValueError(f"step_mm must be > 0 mm, got {step_mm!r}")
+    if not dt > 0:
+        raise ValueError(f"dt must be > 0 mm, got {dt!r}")
+    min_removed = r * step if min_removed_mm2 is None else float(min_removed_mm2)
+    air_tol = 0.5 * resolution_mm * resolution_mm    # mm²: half a row² = air
+    seeds = default_seeds(allowed, seed_clearance_ratio) if seeds is None else [tuple(map(float, s)) for s in seeds]
+    if not seeds:
+        raise ValueError("seeds must hold at least one (x, y) point in mm")
+    for s in seeds:
+        if len(s) != 2 or not allowed.contains(Point(s)):
+            raise ValueError(f"seeds: {s!r} is not inside the allowed region (pocket shrunk by tool_radius)")
+    guard = allowed.buffer(1e-6)
+    stock = dixel.Stock.from_polygon(pocket, resolution_mm)
+    domain = pocket.buffer(-2 * resolution_mm)          # wall slivers must not join the cleared region
+    segs: list = []                                       # (points, kinds, region)
+
+    def emit(P, K, reg):
+        segs.append((np.asarray(P, float), np.asarray(K, dtype=object), reg))
+
+    # 1. entries
+    entry_r = []
+    for k, s in enumerate(seeds):
+        clear = float(allowed.boundary.distance(Point(s)))
+        er = 1.6 * r if entry_radius_mm is None else float(entry_radius_mm)
+        er = min(er, r + clear)
+        if er <= r + 0.5 * step:
+            raise ValueError(f"seeds: {s!r} is too close to the final contour for a helical entry")
+        entry_r.append(er)
+        H = helical_entry(s, er, r, step)
+        if segs:
+            emit(np.vstack([segs[-1][0][-1], H[0]]), ["rapid", "rapid"], k)
+        simulate(stock, H, r, a_p, feed_mm_min)
+        emit(H, ["entry"] * len(H), k)
+    # chains
+    ends = [helical_entry(s, er, r, step)[0] for s, er in zip(seeds, entry_r)]
+    active = [True] * len(seeds)
+    laps = [0] * len(seeds)
+    n_laps = 0
+    while any(active) and n_laps < max_laps:
+        for k in range(len(seeds)):
+            if not active[k] or n_laps >= max_laps:
+                continue
+            material = stock.to_polygon()
+            cleared = domain.difference(material)
+            comp = [g for g in _polys(cleared) if g.buffer(1e-9).contains(Point(seeds[k]))]
+            if not comp or any(active[j] and comp[0].buffer(1e-9).contains(Point(seeds[j])) for j in range(k)):
+                active[k] = False                          # merged into an earlier seed's region
+                continue
+            P = _lap(stock, domain, seeds[k], ends[k], r, theta_deg, allowed, dt, step)
+            if P is None:
+                active[k] = False
+                continue
+            pre = stock.copy()
+            df = simulate(stock, P, r, a_p, feed_mm_min)
+            rem = df.removed_mm2.to_numpy()
+            if rem.sum() < min_removed:
+                stock = pre
+                active[k] = False
+                continue
+            Q, K = _split_runs(P, rem, material, guard, r, air_tol, "cut", 3, resolution_mm)
+            a = segs[-1][0][-1]
+            if np.hypot(*(Q[0] - a)) > 1e-9:
+                kind = "link" if _chord_clear(a, Q[0], stock.to_polygon(), guard, r, resolution_mm) else "rapid"
+                emit(np.vstack([a, Q[0]]), [kind, kind], k)
+            emit(Q, K, k)
+            ends[k] = Q[-1]
+            laps[k] += 1
+            n_laps += 1
+    # 3. cleanup: final contour pass on every ring of the allowed region
+    if cleanup:
+        rings = []
+        for p in _polys(orient(allowed, 1.0) if isinstance(allowed, Polygon) else allowed):
+            p = orient(p, 1.0)
+            rings += [np.asarray(p.exterior.coords)] + [np.asarray(i.coords) for i in p.interiors]
+        for ring in rings:
+            cur = segs[-1][0][-1]
+            i0 = int(np.argmin(np.hypot(*(ring[:-1] - cur).T)))
+            R = np.vstack([np.roll(ring[:-1], -i0, axis=0), ring[:-1][i0:i0 + 1]])
+            R = _resample(R, step)
+            material = stock.to_polygon()
+            df = simulate(stock, R, r, a_p, feed_mm_min)
+            run = _split_runs(R, df.removed_mm2.to_numpy(), material, guard, r, air_tol, "cleanup", 3, resolution_mm)
+            if run is None:
+                continue
+            Q, K = run
+            a = segs[-1][0][-1]
+            kind = "link" if _chord_clear(a, Q[0], stock.to_polygon(), guard, r, resolution_mm) else "rapid"
+            emit(np.vstack([a, Q[0]]), [kind, kind], -1)
+            emit(Q, K, -1)
+    pts, kinds, reg = [], [], []
+    for P, K, g in segs:
+        if pts and np.hypot(*(P[0] - pts[-1][-1])) < 1e-9:
+            P, K = P[1:], K[1:]
+        if len(P):
+            pts.append(P)
+            kinds.append(K)
+            reg.append(np.full(len(P), g))
+    kinds[0] = kinds[0].copy()
+    kinds[0][0] = "entry"
+    info = {"seeds": seeds, "laps_per_seed": laps, "entry_radius_mm": entry_r,
+            "planning_uncut_area_mm2": stock.area(), "theta_deg": float(theta_deg),
+            "resolution_mm": float(resolution_mm), "step_mm": step}
+    return ClearingPath(np.vstack(pts), np.concatenate(kinds), np.concatenate(reg), info)
+
+
+def path_from_programme(points, rapid) -> ClearingPath:
+    """A :class:`ClearingPath` from a program read back as points (``gcode.to_polyline`` output,
+    cutting-depth points only): every feed segment labelled ``"cut"``, G0 jumps ``"rapid"``."""
+    P = np.asarray(points, float)[:, :2]
+    K = np.where(np.asarray(rapid, bool), "rapid", "cut").astype(object)
+    return ClearingPath(P, K, np.zeros(len(P), int))
+
+
+def evaluate_path(path: ClearingPath, pocket, tool_radius: float, theta_deg: float, resolution_mm: float = 0.1,
+                  a_p: float = 1.0, feed_mm_min: float = 1000.0, radial_depth_mm=None, margin_deg: float = 5.0,
+                  mrr_window_mm: float = 1.0, air_tol_mm2=None):
+    """Cut ``path`` through one fresh dixel stock of ``pocket``; per-step table and summary.
+
+    Rapid segments are jumps above the part (not simulated). A step *cuts* when it removes more than
+    ``air_tol_mm2`` (default 0.5 row² ) — the cutting / linking split is by removal, whatever the
+    label. Summary (lengths mm, time min, engagement deg, areas mm²): max engagement and share of the
+    cutting length above ``theta_deg + margin_deg`` (overall and per kind), max MRR over windows of
+    ``mrr_window_mm`` divided by the nominal ``a_p * radial_depth_mm * feed`` (radial depth default
+    r (1 - cos theta)), cutting / linking / rapid lengths, feed time at ``feed_mm_min`` (links at the
+    same feed), uncut and unreachable areas.
+    """
+    import pandas as pd
+
+    from cnclab.simulation import dixel
+
+    _check_common(pocket, tool_radius, theta_deg)
+    r = float(tool_radius)
+    h = float(resolution_mm)
+    ae = r * (1 - math.cos(math.radians(theta_deg))) if radial_depth_mm is None else float(radial_depth_mm)
+    air = 0.5 * h * h if air_tol_mm2 is None else float(air_tol_mm2)
+    P, K = np.asarray(path.points, float), np.asarray(path.kinds, dtype=object)
+    # resample every non-rapid segment to <= h
+    d = np.hypot(*np.diff(P, axis=0).T)
+    n = np.where(K[1:] == "rapid", 1, np.maximum(np.ceil(d / h).astype(int), 1))
+    seg = np.repeat(np.arange(1, len(P)), n)
+    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 1) / np.repeat(n, n)
+    Q = np.vstack([P[:1], P[seg - 1] + t[:, None] * (P[seg] - P[seg - 1])])
+    KQ = np.r_[K[:1], K[seg]]
+    stock = dixel.Stock.from_polygon(pocket, h)
+    rapid = KQ == "rapid"
+    starts = np.r_[0, np.flatnonzero(rapid)]
+    stops = np.r_[np.flatnonzero(rapid), len(Q)]
+    tables = []
+    for a, b in zip(starts, stops):
+        if b - a < 2:
+            continue
+        df = dixel.simulate(stock, Q[a:b], r, a_p, feed_mm_min)
+        df["kind"] = KQ[a:b]
+        df["plunge"] = np.r_[True, np.zeros(b - a - 1, bool)]
+        tables.append(df)
+    T = pd.concat(tables, ignore_index=True)
+    T["s"] = np.cumsum(T.ds.to_numpy())
+    rem, ds = T.removed_mm2.to_numpy(), T.ds.to_numpy()
+    eng = T.engagement_deg.to_numpy()
+    plunge = T.plunge.to_numpy()
+    cut = (rem > air) & ~plunge                  # the plunge disk is axial drilling, not a radial cut
+    T["cutting"] = cut
+    # windowed MRR over the cutting steps (consecutive in path order)
+    s_cut = np.cumsum(np.where(cut, ds, 0.0))
+    win = np.floor(s_cut / mrr_window_mm).astype(int)
+    A = np.bincount(win[cut], weights=rem[cut])
+    L = np.bincount(win[cut], weights=ds[cut])
+    full = L >= 0.5 * mrr_window_mm
+    mrr_w = a_p * A[full] / L[full] * feed_mm_min
+    nominal = a_p * ae * feed_mm_min
+    lim = theta_deg + margin_deg
+    Lc = float(ds[cut].sum())
+    kinds = T.kind.to_numpy()
+    summary = {"max_engagement_deg": float(np.nanmax(eng[cut])),
+               "median_engagement_cut_deg": float(np.nanmedian(eng[cut])),
+               "share_above_theta_plus5": float(ds[cut & (eng > lim)].sum()) / Lc,
+               "max_mrr_over_nominal": float(mrr_w.max() / nominal),
+               "p99_mrr_over_nominal": float(np.percentile(mrr_w, 99) / nominal),
+               "cutting_length_mm": Lc, "linking_length_mm": float(ds[~cut].sum()),
+               "rapid_length_mm": float(np.hypot(*np.diff(P, axis=0).T)[K[1:] == "rapid"].sum()),
+               "feed_time_min": float(ds.sum()) / feed_mm_min,
+               "n_plunges": int(plunge.sum()), "plunge_area_mm2": float(rem[plunge].sum()),
+               "uncut_area_mm2": stock.area(),
+               "unreachable_area_mm2": float(pocket.difference(pocket.buffer(-r, quad_segs=64)
+                                                                .buffer(r, quad_segs=64)).area)}
+    for k in KINDS[:3]:
+        m = cut & (kinds == k)
+        Lk = float(ds[m].sum())
+        summary[f"cutting_length_{k}_mm"] = Lk
+        summary[f"max_engagement_{k}_deg"] = float(np.nanmax(eng[m])) if m.any() else float("nan")
+        summary[f"share_above_{k}"] = float(ds[m & (eng > lim)].sum()) / Lk if Lk > 0 else float("nan")
+    return T, summary
+
+
+def to_moves(path: ClearingPath, z_cut: float, z_clear: float, feed: float, spindle: float):
+    """RS274/NGC moves of ``path`` (mm, mm/min, rpm). An entry (the points labelled ``"entry"``
+    after the start or after a rapid) is written as a helical ramp along its circle from z = 0 down
+    to ``z_cut`` (G1 points) followed by the same circle flat at ``z_cut``; a rapid segment becomes
+    retract-G0-plunge; everything else is G1 at ``z_cut`` and ``feed``."""
+    from .gcode import Move
+
+    if not z_cut < 0 < z_clear:
+        raise ValueError(f"z_cut must be < 0 < z_clear (mm), got {z_cut!r}, {z_clear!r}")
+    P, K = np.asarray(path.points, float), path.kinds
+    n = len(P)
+    mv = [Move("G0", P[0, 0], P[0, 1], z_clear, spindle=spindle)]
+
+    def start_at(i0):
+        """Tool above P[i0]: helix along the following entry points, or plunge; returns next index."""
+        j = i0
+        while j + 1 < n and K[j + 1] == "entry":
+            j += 1
+        if j == i0:
+            mv.append(Move("G1", P[i0, 0], P[i0, 1], z_cut, feed=feed, spindle=spindle))
+            return i0 + 1
+        circ = P[i0:j + 1]
+        s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(circ, axis=0).T))]
+        mv.append(Move("G1", circ[0, 0], circ[0, 1], 0.0, feed=feed, spindle=spindle))
+        mv.extend(Move("G1", x, y, z_cut * f, feed=feed, spindle=spindle) for (x, y), f in zip(circ[1:], s[1:] / s[-1]))
+        mv.extend(Move("G1", x, y, z_cut, feed=feed, spindle=spindle) for x, y in circ[1:])
+        return j + 1
+
+    i = start_at(0)
+    while i < n:
+        if K[i] == "rapid":
+            mv += [Move("G0", P[i - 1, 0], P[i - 1, 1], z_clear), Move("G0", P[i, 0], P[i, 1], z_clear)]
+            i = start_at(i)
+            continue
+        mv.append(Move("G1", P[i, 0], P[i, 1], z_cut, feed=feed, spindle=spindle))
+        i += 1
+    mv.append(Move("G0", P[-1, 0], P[-1, 1], z_clear))
+    return mv
