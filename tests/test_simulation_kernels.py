@@ -1,0 +1,166 @@
+"""Compiled (numba) simulator kernels agree with the numpy reference on random stocks and paths."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from shapely.geometry import Point, box
+
+from cnclab.runtime import pick
+from cnclab.simulation import common, dixel, pixel
+
+TOL = 1e-9
+N_EXAMPLES = pick(25, 10)
+
+
+def _random_stock_polygon(rng):
+    """A box with up to two round holes and a rectangular notch (several intervals per row)."""
+    poly = box(-6, -6, 6, 6)
+    for _ in range(rng.integers(0, 3)):
+        poly = poly.difference(Point(rng.uniform(-4, 4, 2)).buffer(rng.uniform(0.5, 2.0), quad_segs=32))
+    if rng.random() < 0.5:
+        x, y = rng.uniform(-5, 3, 2)
+        poly = poly.difference(box(x, y, x + rng.uniform(0.3, 2), y + rng.uniform(0.3, 2)))
+    return poly
+
+
+def _random_path(rng, n_seg=3, step=0.05):
+    """Lines and arcs joined end to end (mm), sampled every ~``step``; sometimes repeated points."""
+    p = rng.uniform(-5, 5, 2)
+    heading = rng.uniform(-math.pi, math.pi)
+    pts = [p]
+    for _ in range(n_seg):
+        L = rng.uniform(1.0, 5.0)
+        m = max(int(L / step), 2)
+        if rng.random() < 0.5:                              # line
+            t = np.arange(1, m + 1) * (L / m)
+            seg = p + t[:, None] * [math.cos(heading), math.sin(heading)]
+        else:                                               # arc of radius rho, either sense
+            rho = rng.uniform(1.0, 6.0) * rng.choice([-1.0, 1.0])
+            dphi = np.arange(1, m + 1) * (L / m) / rho
+            ctr = p + rho * np.array([-math.sin(heading), math.cos(heading)])
+            ang = heading - math.pi / 2 + dphi
+            seg = ctr + abs(rho) * np.c_[np.cos(ang), np.sin(ang)] * np.sign(rho)
+            heading += dphi[-1]
+        pts.append(seg)
+        p = seg[-1]
+    P = np.vstack([np.atleast_2d(q) for q in pts])
+    if rng.random() < 0.3:                                 # a standstill (ds = 0) inside the path
+        i = rng.integers(1, len(P) - 1)
+        P = np.insert(P, i, P[i], axis=0)
+    return P
+
+
+def _compare_runs(mod, seed, h, **kw):
+    rng = np.random.default_rng(seed)
+    poly = _random_stock_polygon(rng)
+    P = _random_path(rng)
+    r = float(rng.uniform(0.5, 3.0))
+    out = {}
+    for be in ("numpy", "numba"):
+        s = mod.Stock.from_polygon(poly, h)
+        out[be] = (mod.simulate(s, P, r, 2.0, 500.0, f_z=0.03, backend=be, **kw), s)
+    (a, sa), (b, sb) = out["numpy"], out["numba"]
+    for c in a.columns:
+        x, y = a[c].to_numpy(), b[c].to_numpy()
+        assert np.array_equal(np.isnan(x), np.isnan(y)), c
+        ok = ~np.isnan(x)
+        assert np.max(np.abs(x[ok] - y[ok]), initial=0.0) <= TOL * max(1.0, np.max(np.abs(x[ok]), initial=0)), c
+    assert sa.area() == pytest.approx(sb.area(), rel=1e-12, abs=1e-9)
+    return sa, sb, a
+
+
+@settings(max_examples=N_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), h=st.sampled_from([0.05, 0.08, 0.13]),
+       central=st.booleans(), front_only=st.booleans(), lag=st.sampled_from([None, 0.0, 0.7]))
+def test_dixel_simulate_compiled_equals_reference(seed, h, central, front_only, lag):
+    sa, sb, df = _compare_runs(dixel, seed, h, feed_direction="central" if central else "backward",
+                               front_only=front_only, lag_mm=lag)
+    ra, aa, ba = sa.intervals()
+    rb, ab, bb = sb.intervals()
+    assert np.array_equal(ra, rb)                            # same intervals in every row
+    assert np.max(np.abs(aa - ab), initial=0) <= TOL and np.max(np.abs(ba - bb), initial=0) <= TOL
+
+
+@settings(max_examples=N_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), h=st.sampled_from([0.05, 0.08]), front_only=st.booleans())
+def test_pixel_simulate_compiled_equals_reference(seed, h, front_only):
+    sa, sb, _ = _compare_runs(pixel, seed, h, front_only=front_only)
+    assert np.array_equal(sa.grid, sb.grid)                 # the same pixels removed
+
+
+@settings(max_examples=N_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1))
+def test_single_calls_agree_including_options(seed):
+    # engagement with the non-default options (full circle, linear boundary, sample counts) and
+    # single cuts on a stock already cut by many small disks (several intervals per row)
+    rng = np.random.default_rng(seed)
+    poly = _random_stock_polygon(rng)
+    for mod in (dixel, pixel):
+        s = mod.Stock.from_polygon(poly, 0.07)
+        for c in rng.uniform(-6, 6, (15, 2)):
+            assert s.copy().cut_disk(c, 0.4, backend="numba") == pytest.approx(
+                s.cut_disk(c, 0.4, backend="numpy"), rel=1e-12, abs=1e-12)
+        for _ in range(10):
+            c, f, r = rng.uniform(-7, 7, 2), rng.normal(size=2), rng.uniform(0.3, 3)
+            opts = [{}, {"front_only": False}]
+            opts += [{"boundary": "linear"}, {"bisections": 24}] if mod is dixel else [{"n_samples": 400}]
+            for o in opts:
+                e1 = s.engagement(c, r, f, backend="numpy", **o)
+                e2 = s.engagement(c, r, f, backend="numba", **o)
+                assert e2.angle_deg == pytest.approx(e1.angle_deg, abs=TOL), o
+                assert e1.intervals.shape == e2.intervals.shape, o
+                assert np.allclose(e1.intervals, e2.intervals, rtol=0, atol=TOL), o
+
+
+def test_dixel_capacity_grows_inside_the_compiled_loop():
+    # many small disks split the rows into more intervals than the initial capacity holds: the
+    # compiled loop stops, the capacity doubles, and the path resumes -- same result as numpy
+    rng = np.random.default_rng(3)
+    P = np.c_[np.linspace(0, 20, 400), 1 + 0.8 * np.sin(np.linspace(0, 60, 400))]
+    P = P[rng.permutation(len(P))[:120]]
+    res = []
+    for be in ("numpy", "numba"):
+        s = dixel.Stock.from_polygon(box(0, 0, 20, 2), 0.1)
+        k0 = s._A.shape[0]
+        df = dixel.simulate(s, P, 0.2, 1, 100, backend=be, lag_mm=0.0)
+        res.append((df, s))
+    assert res[1][1]._A.shape[0] > k0                        # it did grow
+    assert np.allclose(res[0][0].removed_mm2, res[1][0].removed_mm2, rtol=0, atol=1e-12)
+    assert np.allclose(res[0][0].engagement_deg, res[1][0].engagement_deg, rtol=0, atol=TOL, equal_nan=True)
+    for x, y in zip(res[0][1].intervals(), res[1][1].intervals()):
+        assert np.array_equal(x, y) if x.dtype.kind == "i" else np.allclose(x, y, rtol=0, atol=1e-12)
+
+
+def test_pixel_cut_kernel_equals_window_test_on_boundary_cases():
+    # disks centred on pixel corners/centres and reaching beyond the grid: the per-row chord range
+    # with its end fix-up selects exactly the pixels whose centres satisfy x^2 + y^2 <= r^2
+    for c, r in [((0.0, 0.0), 1.0), ((0.05, 0.05), 0.5), ((1.0, 1.0), 0.3), ((-0.2, 2.0), 0.7),
+                 ((1.025, 0.975), 0.45)]:
+        a = pixel.Stock.from_polygon(box(0, 0, 2, 2), 0.05)
+        b = a.copy()
+        assert a.cut_disk_pixels(c, r, backend="numpy") == b.cut_disk_pixels(c, r, backend="numba")
+        assert np.array_equal(a.grid, b.grid)
+
+
+def test_backend_switch_and_subclass_override():
+    with pytest.raises(ValueError, match="backend"):
+        common.set_backend("cuda")
+    with pytest.raises(ValueError, match="backend"):
+        dixel.Stock.from_polygon(box(0, 0, 1, 1), 0.1).cut_disk((0, 0), 1, backend="fortran")
+    old = common.set_backend("numpy")
+    try:
+        assert common.get_backend() == "numpy"
+    finally:
+        common.set_backend(old)
+    calls = []
+
+    class Counting(dixel.Stock):                  # an override must be honoured by simulate
+        def cut_disk(self, center_xy, tool_radius):
+            calls.append(1)
+            return super().cut_disk(center_xy, tool_radius)
+
+    s = Counting.from_polygon(box(0, 0, 10, 10), 0.1)
+    dixel.simulate(s, np.c_[np.linspace(1, 9, 20), np.full(20, 5.0)], 1.0, 1, 100, backend="numba")
+    assert len(calls) == 20
