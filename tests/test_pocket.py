@@ -53,20 +53,32 @@ def test_centre_laps_are_spiral_like_and_hold_theta(planned):
     e = c.engagement_deg.to_numpy()
     cutting = (c.kind != "link").to_numpy()
     assert hp.info["laps"] >= 3
-    assert np.mean(e[cutting] > job.theta_deg + 5) < 0.005          # at most isolated dixel spikes
-    assert np.nanmax(e[cutting]) < 120.0                               # never a full-slot plunge
+    # the last lap meets the final contour (clamped, max_wall_share): short transients where it
+    # leaves the wall; the laps before it hold theta up to isolated dixel spikes
+    assert np.mean(e[cutting] > job.theta_deg + 5) < 0.025
+    assert np.nanmax(e[cutting]) < 100.0                               # never a full-slot plunge
     assert c.removed_mm2[c.kind == "link"].sum() < 1e-3               # the entry link runs in the hole
     P = hp.points[hp.phase == "centre"]
     assert np.hypot(*np.diff(P, axis=0).T).max() < 0.5                 # laps chained, no radial jumps
 
 
-def test_star_engagement_by_segment_and_feed_control(planned):
+def test_engagement_bounded_and_pocket_cleared(planned):
+    """Both shapes: the arms (remaining material split into sectors, CE trochoids) clear the pocket
+    except the corners the tool cannot reach; engagement stays near theta except short transients
+    where a lap or a period meets the final contour (documented in the notebook)."""
     name, job, hp, T, s = planned
-    if name != "star":
-        pytest.skip("rectangle corners: see the notebook discussion (arm entries)")
-    assert s["share_above_cut"] < 0.01 and s["share_above_roll-in"] < 0.01
-    assert s["max_eng_roll-out_deg"] <= job.theta_deg + 5
-    assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 0.01 * job.volume_mm3() / job.a_p
+    assert s["share_above_theta_plus5"] < 0.015
+    assert s["share_above_roll-in"] < 0.01
+    assert s["share_above_roll-out"] < 0.03       # rectangle: last periods roll out in the end-wall corners
+    assert s["max_engagement_deg"] < 105.0                       # never near a full-slot plunge
+    assert s["link_removed_mm3"] < 0.01 * job.volume_mm3()
+    # uncut beyond the geometrically unreachable corners (rectangle: 4 r^2 (1 - pi/4) = 7.73 mm^2)
+    assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 0.005 * job.polygon.area
+    if name == "rect":
+        assert s["unreachable_area_mm2"] == pytest.approx(4 * 9 * (1 - np.pi / 4), rel=1e-3)
+        assert len(hp.info["arms"]) == 2                         # the two ends of the rectangle
+    else:
+        assert len(hp.info["arms"]) == 5
     v = T.feed_mm_min.to_numpy()
     roll = T.kind.isin(["roll-in", "roll-out"]).to_numpy()
     free_link = (T.kind == "link").to_numpy() & ~T.link_cuts.to_numpy()

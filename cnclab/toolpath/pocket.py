@@ -42,7 +42,7 @@ import shapely
 from shapely import affinity
 from shapely.geometry import LineString, Point, Polygon
 
-__all__ = ["PocketJob", "load_pocket", "star_polygon", "design_star", "medial_axis", "arm_branches",
+__all__ = ["PocketJob", "load_pocket", "star_polygon", "design_star", "medial_axis", "arm_branches", "arm_regions",
            "StrategyPath", "centre_lap", "hybrid_path", "contour_parallel_path", "zigzag_path", "evaluate_strategy",
            "to_gcode_moves", "gcode_roundtrip_error"]
 
@@ -404,7 +404,7 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
 
 
 def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=200,
-                spacing_mm=0.25):
+                spacing_mm=0.25, max_rounds=3, arm_min_area_mm2=1.0, max_wall_share=0.3):
     """Jacsó §4 hybrid path on ``job`` (see the module docstring). Returns a :class:`StrategyPath`
     with ``info`` holding the medial axis, the arms, the number of laps and periods per arm.
 
@@ -434,7 +434,7 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
         except ValueError:
             break
         on_wall = shapely.distance(shapely.points(P), allowed.exterior) < 1e-6
-        if on_wall.any():
+        if on_wall.mean() > max_wall_share:
             break               # this lap would run along the final contour: the arms take over
         df = simulate(stock, P, r, job.a_p, job.feed)
         if float(df.removed_mm2.sum()) < 1e-6:
@@ -442,51 +442,126 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
         segs.append((P, _label_lap(df.engagement_deg, th), "centre"))
         E = P[-1]
         laps += 1
-    # 2. arms along the medial-axis branches
-    arms = arm_branches(pocket, c, spacing_mm)
-    n_arm = max(len(arms), 1)
-    reach = 2 * max(np.hypot(*(np.asarray(pocket.exterior.coords) - c).T))
-    periods = []
-    for k, arm in enumerate(arms):
-        ang = arm["angle_deg"]
-        wedge = _wedge(c, ang, 180.0 / n_arm, reach)
-        material = _polygonal(stock.to_polygon().intersection(wedge))
-        loc_mat = _polygonal(_rot(material, -ang, c)) if not material.is_empty else material
-        if loc_mat.is_empty or loc_mat.area < 1e-3:
-            periods.append(0)
-            continue
-        loc_allowed = _rot(allowed, -ang, c)
-        # this arm's material only (planning ignores the neighbouring arms' root material: the
-        # few engagement peaks at arm entries come from there, see the notebook)
-        loc = Stock.from_polygon(loc_mat, resolution_mm)
-        arm_segs, last = [], None
-        for _ in range(int(max_periods)):
-            per = ce_period(loc, r, th, loc_allowed, dt=dt, step_mm=resolution_mm,
-                            roll_radius=job.roll_radius, a_p=job.a_p, feed_mm_min=job.feed)
-            if per is None:
-                break
-            Pl = per.points
-            df = simulate(loc, Pl, r, job.a_p, job.feed)
-            if float(df.removed_mm2.sum()) < 1e-3:
-                break
-            if last is not None:
-                arm_segs.append((_link(last, Pl[0], loc_allowed, resolution_mm), "link"))
-            arm_segs.append((Pl, per.kinds))
-            last = Pl[-1]
-        periods.append(sum(1 for s in arm_segs if not isinstance(s[1], str)))
-        if not arm_segs:
-            continue
-        S = _rot(arm_segs[0][0][:1], ang, c)[0]
-        segs.append((_straight_link(segs[-1][0][-1], S, allowed, c), "link", f"arm {k}"))
-        world = []
-        for Pl, kind in arm_segs:
-            W = _rot(Pl, ang, c)
-            segs.append((W, kind, f"arm {k}"))
-            world.append(W)
-        stock = _apply_world(stock, world, r)
-    info = {"laps": laps, "arms": arms, "periods_per_arm": periods,
+    # 2. arms: the remaining material, split into arm regions (re-read after every arm)
+    reach = allowed.buffer(r, 64)
+    arms_done, periods, rounds = [], [], 0
+    while rounds < int(max_rounds):
+        regions = arm_regions(_polygonal(stock.to_polygon().intersection(reach)), c, r,
+                              min_area_mm2=arm_min_area_mm2)
+        if not regions:
+            break
+        rounds += 1
+        for arm in regions:
+            k = len(arms_done)
+            arms_done.append(arm)
+            ang = arm["angle_deg"]
+            world_mat = _polygonal(stock.to_polygon())
+            material = _polygonal(world_mat.intersection(arm["region"]).intersection(reach))
+            if material.is_empty or material.area < 1e-3:
+                periods.append(0)
+                continue
+            loc_mat = _polygonal(_rot(material, -ang, c))
+            loc_all = _polygonal(_rot(world_mat, -ang, c))
+            loc_allowed = _rot(allowed, -ang, c)
+            loc = Stock.from_polygon(loc_mat, resolution_mm)          # this arm's front
+            full = Stock.from_polygon(loc_all, resolution_mm)         # all material: engagement
+            arm_segs, last = [], None
+            for _ in range(int(max_periods)):
+                per = ce_period(full, r, th, loc_allowed, dt=dt, step_mm=resolution_mm,
+                                roll_radius=job.roll_radius, a_p=job.a_p, feed_mm_min=job.feed,
+                                front_stock=loc)
+                if per is None:
+                    break
+                Pl = per.points
+                df = simulate(loc, Pl, r, job.a_p, job.feed)
+                simulate(full, Pl, r, job.a_p, job.feed)
+                if float(df.removed_mm2.sum()) < 1e-3:
+                    break
+                if last is not None:
+                    arm_segs.append((_free_link(last, Pl[0], loc_allowed, full, r, resolution_mm)))
+                arm_segs.append((Pl, per.kinds))
+                last = Pl[-1]
+            periods.append(sum(1 for s in arm_segs if not isinstance(s[1], str)))
+            if not arm_segs:
+                continue
+            S = _rot(arm_segs[0][0][:1], ang, c)[0]
+            segs.append((*_free_link(segs[-1][0][-1], S, allowed, stock, r, resolution_mm, via=c), f"arm {k}"))
+            world = []
+            for Pl, kind in arm_segs:
+                W = _rot(Pl, ang, c)
+                segs.append((W, kind, f"arm {k}"))
+                world.append(W)
+            stock = _apply_world(stock, world, r)
+    info = {"laps": laps, "arms": arms_done, "periods_per_arm": periods, "rounds": rounds,
             "medial_axis": medial_axis(pocket, spacing_mm)}
     return StrategyPath.build(segs, "hybrid (Jacsó §4)", info)
+
+
+def arm_regions(material, center, tool_radius, min_area_mm2=1.0, open_mm=None):
+    """Split the material left after the centre laps into arms (Jacsó §4: the narrowing arms).
+
+    The material (shapely geometry, mm) is opened by ``open_mm`` (default r / 2: strips thinner
+    than r along the walls do not make an arm); every remaining component larger than
+    ``min_area_mm2`` is an arm, its axis the direction (deg) from ``center`` to its centroid. The
+    plane is split into angular sectors at the bisectors between neighbouring axes, so every bit
+    of material (strips included) belongs to exactly one arm. Returns a list of dicts
+    ``{"angle_deg", "region" (sector polygon), "area_mm2"}`` sorted by angle.
+
+    >>> from shapely.geometry import box
+    >>> m = box(0, 0, 4, 10).union(box(16, 0, 20, 10))          # two ends of a cleared slot
+    >>> sorted(abs(round(a["angle_deg"])) for a in arm_regions(m, (10, 5), 3.0))
+    [0, 180]
+    """
+    d = 0.5 * tool_radius if open_mm is None else open_mm
+    if material.is_empty:
+        return []
+    core = material.buffer(-d, 16).buffer(d, 16)
+    parts = [g for g in shapely.get_parts(core) if g.area > min_area_mm2]
+    if not parts:
+        parts = [g for g in shapely.get_parts(material) if g.area > min_area_mm2]
+    if not parts:
+        return []
+    c = np.asarray(center, float)
+    ang = np.array([math.degrees(math.atan2(p.centroid.y - c[1], p.centroid.x - c[0])) for p in parts])
+    area = np.array([p.area for p in parts])
+    o = np.argsort(ang)
+    ang, area = ang[o], area[o]
+    b = shapely.bounds(material)
+    reach = 2.0 * (np.hypot(b[2] - b[0], b[3] - b[1]) + np.hypot(*(c - b[:2])))
+    out = []
+    n = len(ang)
+    for i in range(n):
+        if n == 1:
+            lo, hi = ang[i] - 180.0, ang[i] + 180.0
+        else:
+            prev, nxt = ang[i - 1] - (360.0 if i == 0 else 0.0), ang[(i + 1) % n] + (360.0 if i == n - 1 else 0.0)
+            lo, hi = 0.5 * (prev + ang[i]), 0.5 * (ang[i] + nxt)
+        out.append({"angle_deg": float((ang[i] + 180) % 360 - 180), "region": _sector(c, lo, hi, reach),
+                    "area_mm2": float(area[i])})
+    return out
+
+
+def _sector(center, a0_deg, a1_deg, radius):
+    a = np.radians(np.linspace(a0_deg, a1_deg, max(int(abs(a1_deg - a0_deg) / 2), 8) + 1))
+    c = np.asarray(center, float)
+    return Polygon(np.vstack([c, c + radius * np.c_[np.cos(a), np.sin(a)]])).buffer(0)
+
+
+def _free_link(E, S, allowed, stock, r, ds, via=None):
+    """Linking move E -> S (mm): straight if the tool stays in ``allowed`` and clear of the
+    ``stock`` material (sampled every ``ds``), else through ``via``, else a rapid jump
+    (retract, G0, plunge into the cleared start). Returns (points, kind)."""
+    from .trochoidal import _disk_has_material, _link
+
+    guard = allowed.buffer(1e-6)
+    for Q in ([E, S],) + (([E, via, S],) if via is not None else ()):
+        Q = np.asarray(Q, float)
+        if not guard.contains(LineString(Q)):
+            continue
+        pts = np.vstack([_link(Q[i], Q[i + 1], None, ds)[(1 if i else 0):] for i in range(len(Q) - 1)])
+        if not any(_disk_has_material(stock, p, r * 0.98) for p in pts[1:-1:2]):
+            return pts, "link"
+    return np.vstack([E, S]), "rapid"
 
 
 def _polygonal(g):

@@ -493,9 +493,18 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
         return CEPeriod([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False)
     Q = resample_path(res.P, step_mm)
     ins = shapely.contains_xy(allowed.buffer(1e-9), Q[:, 0], Q[:, 1])
+    # the cut ends where it first leaves the region through the *upper* wall: the wall limit there
+    # runs backwards (-x in this frame, ccw ring); along an end wall (tangent ~ +y) the clamped cut
+    # follows the wall and keeps clearing the corner material
     ymid = 0.5 * (Q[:, 1].min() + Q[:, 1].max())
-    out_up = np.flatnonzero(~ins & (Q[:, 1] > ymid))
-    i_e = int(out_up[0]) if out_up.size else len(Q)
+    out = np.flatnonzero(~ins & (Q[:, 1] > ymid))
+    if out.size:
+        sq = shapely.line_locate_point(ring, shapely.points(Q[out]))
+        tq = (shapely.get_coordinates(shapely.line_interpolate_point(ring, np.mod(sq + step_mm, L)))
+              - shapely.get_coordinates(shapely.line_interpolate_point(ring, np.mod(sq - step_mm, L))))
+        back_wall = tq[:, 0] < -0.5 * np.hypot(*tq.T)
+        out = out[back_wall] if back_wall.any() else out[-1:]
+    i_e = int(out[0]) if out.size else len(Q)
     cut = clamp_to_region(Q[:max(i_e, 2)], allowed)
     # roll-out: leave on an arc tangent to the wall limit at the cut's end (the feed turns away from
     # the material: the ring runs -x along the upper wall of a ccw ring)
@@ -505,6 +514,9 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     near_wall = ring.distance(shapely.Point(E)) < 2 * step_mm
     if not near_wall or float(np.dot(TE, cut[-1] - cut[-2])) <= 0:
         TE = cut[-1] - cut[-2]          # the cut ended inside the region: leave along its direction
+    if not np.hypot(*TE) > 1e-9:
+        d = np.hypot(*np.diff(cut, axis=0).T) > 1e-9
+        TE = np.diff(cut, axis=0)[d][-1] if d.any() else np.array([1.0, 0.0])
     roll_out, _ = roll_arc(E, TE, rho, roll_sweep_deg, ds=step_mm, into=False)
     roll_out = clamp_to_region(roll_out, allowed)
     return CEPeriod([("roll-in", roll_in), ("cut", np.vstack([Ps, cut[1:]])), ("roll-out", roll_out)], True)
