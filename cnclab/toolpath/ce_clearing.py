@@ -12,17 +12,18 @@ Algorithm (:func:`ce_clearing`):
    narrower than that separates two parts). At each seed a **helical entry** bores a hole of radius
    ``entry_radius_mm`` (XY trace: a circle of radius ``entry_radius_mm - r`` about the seed; in
    G-code a one-turn helical ramp to the cutting depth and one flat turn).
-2. **constant-engagement laps** — round robin over the seeds: the boundary of the cleared region
-   around the seed is read from a dixel stock
+2. **constant-engagement laps** — seed after seed: the boundary of the cleared region around the
+   seed is read from a dixel stock
    (:func:`~cnclab.toolpath.constant_engagement.cleared_boundary_contour`) and one full turn of the
    Thesis III path (engagement ``theta_deg``, midpoint direction) is traced from where the previous
-   lap ended, so laps chain like a spiral. Tool centres are kept in the allowed region
-   (:func:`clamp_inside`, islands included): the pass is limited by the final contour. The lap is
-   cut into the stock; stretches that remove nothing become straight **links** through the cleared
-   region when the tool swept along the chord removes nothing and stays in the allowed region
-   (otherwise the lap's own air stretch is kept as a link). A seed's laps stop when a lap removes
-   less than ``min_removed_mm2``; when the cleared regions of two seeds merge, the later seed's
-   chain ends and the earlier one continues on the merged boundary.
+   lap ended, so laps chain like a spiral. Tool centres are kept in the seed's *cell* (the part of
+   the allowed region geodesically nearest to the seed, :func:`geodesic_cells`; islands included,
+   :func:`clamp_inside`): the pass is limited by the final contour and, across a neck, by the
+   neighbouring cell. The lap is cut into the stock; stretches that remove nothing become links:
+   straight when the tool swept along the chord misses the material, else the shortest grid route
+   through the cleared region (:func:`_geodesic`, scipy Dijkstra), else the lap's own air stretch.
+   A seed's laps stop when a lap removes less than ``min_removed_mm2``; a seed whose entry hole is
+   already cleared is skipped.
 3. **cleanup** — leftovers the laps do not reach (material enclosed between the cleared region and
    an island, slivers on the final contour, the corners) are cut by a final contour pass along every
    ring of the allowed region (outer ring counter-clockwise, islands clockwise: climb milling with
@@ -53,7 +54,7 @@ import shapely
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
-__all__ = ["ClearingPath", "KINDS", "default_seeds", "clamp_inside", "helical_entry", "ce_clearing",
+__all__ = ["ClearingPath", "KINDS", "default_seeds", "geodesic_cells", "clamp_inside", "helical_entry", "ce_clearing",
            "evaluate_path", "to_moves", "path_from_programme"]
 
 #: Segment kinds of a :class:`ClearingPath`; ``link`` and ``rapid`` are not meant to cut.
@@ -108,10 +109,10 @@ def default_seeds(allowed, seed_clearance_ratio: float = 0.6) -> list[tuple]:
     parts = _polys(allowed)
     if not parts:
         raise ValueError("allowed must be a non-empty polygon")
-    rmax = max(shapely.distance(shapely.maximum_inscribed_circle(p, 0.01), p.boundary) for p in parts)
+    rmax = max(shapely.maximum_inscribed_circle(p, 0.01).length for p in parts)   # centre -> nearest point
     core = allowed.buffer(-seed_clearance_ratio * rmax)
     seeds = []
-    for p in sorted(_polys(core), key=lambda q: -q.area):
+    for p in sorted(_polys(core), key=lambda q: (-round(q.area, 6), q.centroid.x, q.centroid.y)):
         c = shapely.get_coordinates(shapely.maximum_inscribed_circle(p, 0.01))[0]
         seeds.append((float(c[0]), float(c[1])))
     return seeds
@@ -206,7 +207,81 @@ def _chord_clear(a, b, material, guard, r, margin_mm):
     return material.is_empty or not line.buffer(r - margin_mm, quad_segs=16).intersects(material)
 
 
-def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, margin_mm):
+def _grid_graph(free, grid_mm):
+    """8-connected grid graph of the points of ``free`` (spacing ``grid_mm``): (csr, points (n, 2))."""
+    from scipy.sparse import coo_matrix
+
+    x0, y0, x1, y1 = free.bounds
+    X, Y = np.meshgrid(np.arange(x0, x1 + grid_mm, grid_mm), np.arange(y0, y1 + grid_mm, grid_mm))
+    ok = shapely.contains_xy(free, X, Y)
+    idx = np.full((ok.shape[0] + 2, ok.shape[1] + 2), -1)
+    idx[1:-1, 1:-1][ok] = np.arange(ok.sum())
+    A = idx[1:-1, 1:-1]
+    rows, cols, w = [], [], []
+    for dj, di in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        B = idx[1 + dj:idx.shape[0] - 1 + dj, 1 + di:idx.shape[1] - 1 + di]
+        m = (A >= 0) & (B >= 0)
+        rows.append(A[m])
+        cols.append(B[m])
+        w.append(np.full(int(m.sum()), grid_mm * math.hypot(di, dj)))
+    n = int(ok.sum())
+    G = coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
+    return G, np.c_[X[ok], Y[ok]]
+
+
+def _geodesic(a, b, free, grid_mm, guard):
+    """Shortest 8-connected grid path (spacing ``grid_mm``) from a to b inside the polygon ``free``
+    (scipy Dijkstra), simplified; (n, 2) points a ... b inside ``guard``, or None."""
+    from scipy.sparse.csgraph import dijkstra
+
+    if free.is_empty:
+        return None
+    G, pts = _grid_graph(free, grid_mm)
+    if len(pts) == 0:
+        return None
+    ia = int(np.argmin(np.hypot(*(pts - a).T)))
+    ib = int(np.argmin(np.hypot(*(pts - b).T)))
+    dist, pred = dijkstra(G, directed=False, indices=ia, return_predecessors=True)
+    if not np.isfinite(dist[ib]):
+        return None
+    chain = [ib]
+    while chain[-1] != ia:
+        chain.append(pred[chain[-1]])
+    route = np.vstack([a, pts[chain[::-1]], b])
+    simp = LineString(route).simplify(0.5 * grid_mm, preserve_topology=False)
+    if free.buffer(0.5 * grid_mm).contains(simp) and guard.contains(simp):
+        return np.asarray(simp.coords)
+    return route if guard.contains(LineString(route)) else None
+
+
+def geodesic_cells(allowed, seeds, grid_mm: float = 1.0):
+    """Split ``allowed`` (mm) into one cell per seed: the points geodesically nearest (inside
+    ``allowed``, 8-connected grid of ``grid_mm``) to that seed; the cells tile ``allowed`` (their
+    interfaces are straightened to within ``grid_mm``). Returns a list of polygons."""
+    from scipy.sparse.csgraph import dijkstra
+
+    G, pts = _grid_graph(allowed, grid_mm)
+    src = [int(np.argmin(np.hypot(*(pts - np.asarray(s)).T))) for s in seeds]
+    D = np.atleast_2d(dijkstra(G, directed=False, indices=src))
+    lab = np.argmin(D, axis=0)
+    if len(seeds) == 1:
+        return [allowed]
+    cells, taken = [], Polygon()
+    for k in range(len(seeds)):
+        q = pts[lab == k]
+        sq = shapely.union_all(shapely.box(q[:, 0] - grid_mm / 2, q[:, 1] - grid_mm / 2,
+                                           q[:, 0] + grid_mm / 2, q[:, 1] + grid_mm / 2))
+        # grow by one grid step to cover the boundary strip, simplify the staircase, no overlaps
+        cell = sq.buffer(2 * grid_mm).simplify(0.5 * grid_mm).intersection(allowed).difference(taken)
+        if k == len(seeds) - 1:
+            cell = allowed.difference(taken)
+        cells.append(cell)
+        taken = taken.union(cell)
+    return cells
+
+
+def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, margin_mm, free=None,
+                grid_mm=1.0):
     """Label the points of a simulated stretch ``P`` (``removed[i]``: area cut at point i, mm²).
     Cutting points keep ``kind``; an air run between cutting points becomes one straight link when
     the tool swept along the chord stays in ``guard`` and misses the material left at that time
@@ -231,9 +306,17 @@ def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, marg
         if j - i >= min_run and np.hypot(*(P[j - 1] - out_p[-1])) < 0.9 * np.sum(np.hypot(*np.diff(P[i - 1:j], axis=0).T)):
             swept = LineString(P[:i]).buffer(r, quad_segs=16) if i > 1 else Point(P[0]).buffer(r, quad_segs=16)
             ok = _chord_clear(out_p[-1], P[j - 1], material.difference(swept), guard, r, margin_mm)
+        route = None
+        if not ok and free is not None and j - i >= min_run:
+            route = _geodesic(out_p[-1], P[j - 1], free, grid_mm, guard)
+            if route is not None and LineString(route).length >= 0.9 * LineString(P[i - 1:j]).length:
+                route = None
         if ok:
             out_p.append(P[j - 1])                        # straight link to the last air point
             out_k.append("link")
+        elif route is not None:                           # shortest link through the cleared region
+            out_p.extend(route[1:])
+            out_k.extend(["link"] * (len(route) - 1))
         else:
             out_p.extend(P[i:j])
             out_k.extend(["link"] * (j - i))
@@ -244,6 +327,7 @@ def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, marg
 def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_radius_mm=None,
                 resolution_mm: float = 0.1, step_mm=None, dt: float = 0.2, max_laps: int = 200,
                 min_removed_mm2=None, seed_clearance_ratio: float = 0.6, cleanup: bool = True,
+                link_grid_mm: float = 1.0,
                 a_p: float = 1.0, feed_mm_min: float = 1000.0) -> ClearingPath:
     """Constant-engagement clearing of ``pocket`` (see the module docstring).
 
@@ -260,6 +344,8 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
     max_laps : cap on the total number of laps.
     min_removed_mm2 : a seed's laps end when a lap removes less (mm²); default ``r * step_mm``.
     seed_clearance_ratio : see :func:`default_seeds`.
+    link_grid_mm : grid spacing (mm) of the seed cells (:func:`geodesic_cells`) and of the shortest
+        links through the cleared region.
     cleanup : add the final contour pass.
     a_p, feed_mm_min : axial depth (mm) and feed (mm/min) passed to the planning simulation.
 
@@ -294,53 +380,58 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
     def emit(P, K, reg):
         segs.append((np.asarray(P, float), np.asarray(K, dtype=object), reg))
 
-    # 1. entries
-    entry_r = []
+    cells = geodesic_cells(allowed, seeds, link_grid_mm)
+
+    def free_region():
+        mat = stock.to_polygon()
+        return mat, allowed.difference(mat.buffer(r - resolution_mm, quad_segs=16))
+
+    def go_to(Q0, k, material, free):
+        """Link from the current tool position to Q0: straight, shortest through the cleared region, or rapid."""
+        a = segs[-1][0][-1]
+        if np.hypot(*(Q0 - a)) < 1e-9:
+            return
+        if _chord_clear(a, Q0, material, guard, r, resolution_mm):
+            emit(np.vstack([a, Q0]), ["link", "link"], k)
+            return
+        route = _geodesic(a, Q0, free, link_grid_mm, guard)
+        if route is not None:
+            emit(route, ["link"] * len(route), k)
+        else:
+            emit(np.vstack([a, Q0]), ["rapid", "rapid"], k)
+
+    entry_r, laps, n_laps = [], [0] * len(seeds), 0
     for k, s in enumerate(seeds):
+        # 1. helical entry (skipped when an earlier seed's laps already cleared this part)
         clear = float(allowed.boundary.distance(Point(s)))
-        er = 1.6 * r if entry_radius_mm is None else float(entry_radius_mm)
-        er = min(er, r + clear)
+        er = min(1.6 * r if entry_radius_mm is None else float(entry_radius_mm), r + clear)
         if er <= r + 0.5 * step:
             raise ValueError(f"seeds: {s!r} is too close to the final contour for a helical entry")
         entry_r.append(er)
+        material = stock.to_polygon()
+        if material.intersection(Point(s).buffer(er)).area < 0.05 * math.pi * er * er:
+            continue
         H = helical_entry(s, er, r, step)
         if segs:
             emit(np.vstack([segs[-1][0][-1], H[0]]), ["rapid", "rapid"], k)
         simulate(stock, H, r, a_p, feed_mm_min)
         emit(H, ["entry"] * len(H), k)
-    # chains
-    ends = [helical_entry(s, er, r, step)[0] for s, er in zip(seeds, entry_r)]
-    active = [True] * len(seeds)
-    laps = [0] * len(seeds)
-    n_laps = 0
-    while any(active) and n_laps < max_laps:
-        for k in range(len(seeds)):
-            if not active[k] or n_laps >= max_laps:
-                continue
-            material = stock.to_polygon()
-            cleared = domain.difference(material)
-            comp = [g for g in _polys(cleared) if g.buffer(1e-9).contains(Point(seeds[k]))]
-            if not comp or any(active[j] and comp[0].buffer(1e-9).contains(Point(seeds[j])) for j in range(k)):
-                active[k] = False                          # merged into an earlier seed's region
-                continue
-            P = _lap(stock, domain, seeds[k], ends[k], r, theta_deg, allowed, dt, step)
+        E = H[0]
+        # 2. constant-engagement laps limited by this seed's cell of the allowed region
+        while n_laps < max_laps:
+            material, free = free_region()
+            P = _lap(stock, domain, s, E, r, theta_deg, cells[k], dt, step)
             if P is None:
-                active[k] = False
-                continue
+                break
             pre = stock.copy()
-            df = simulate(stock, P, r, a_p, feed_mm_min)
-            rem = df.removed_mm2.to_numpy()
+            rem = simulate(stock, P, r, a_p, feed_mm_min).removed_mm2.to_numpy()
             if rem.sum() < min_removed:
                 stock = pre
-                active[k] = False
-                continue
-            Q, K = _split_runs(P, rem, material, guard, r, air_tol, "cut", 3, resolution_mm)
-            a = segs[-1][0][-1]
-            if np.hypot(*(Q[0] - a)) > 1e-9:
-                kind = "link" if _chord_clear(a, Q[0], stock.to_polygon(), guard, r, resolution_mm) else "rapid"
-                emit(np.vstack([a, Q[0]]), [kind, kind], k)
+                break
+            Q, K = _split_runs(P, rem, material, guard, r, air_tol, "cut", 3, resolution_mm, free, link_grid_mm)
+            go_to(Q[0], k, material, free)
             emit(Q, K, k)
-            ends[k] = Q[-1]
+            E = Q[-1]
             laps[k] += 1
             n_laps += 1
     # 3. cleanup: final contour pass on every ring of the allowed region
@@ -354,16 +445,14 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
             i0 = int(np.argmin(np.hypot(*(ring[:-1] - cur).T)))
             R = np.vstack([np.roll(ring[:-1], -i0, axis=0), ring[:-1][i0:i0 + 1]])
             R = _resample(R, step)
-            material = stock.to_polygon()
+            material, free = free_region()
             df = simulate(stock, R, r, a_p, feed_mm_min)
-            run = _split_runs(R, df.removed_mm2.to_numpy(), material, guard, r, air_tol, "cleanup", 3, resolution_mm)
+            run = _split_runs(R, df.removed_mm2.to_numpy(), material, guard, r, air_tol, "cleanup", 3,
+                              resolution_mm, free, link_grid_mm)
             if run is None:
                 continue
-            Q, K = run
-            a = segs[-1][0][-1]
-            kind = "link" if _chord_clear(a, Q[0], stock.to_polygon(), guard, r, resolution_mm) else "rapid"
-            emit(np.vstack([a, Q[0]]), [kind, kind], -1)
-            emit(Q, K, -1)
+            go_to(run[0][0], -1, material, free)
+            emit(*run, -1)
     pts, kinds, reg = [], [], []
     for P, K, g in segs:
         if pts and np.hypot(*(P[0] - pts[-1][-1])) < 1e-9:
