@@ -690,20 +690,25 @@ def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=
     """The three patterns at the same engagement limit: admissible step, lengths, MRR (one row each).
 
     Circular and cycloid steps come from :func:`admissible_step`; the constant-engagement pattern
-    uses ``theta_deg = theta_max_deg`` and its converged step. Returns a pandas DataFrame.
+    is planned at the angle theta' <= theta_max whose simulated maximum engagement respects the
+    limit (:func:`ce_trochoid_at_limit`, column ``theta_plan_deg``), so all three patterns are
+    compared at the same simulated maximum engagement. Returns a pandas DataFrame.
     """
     import pandas as pd
 
+    p = ce_trochoid(width, tool_radius, theta_max_deg, n_periods, resolution_mm)
+    _, m_ce = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
+    # equal *simulated* maximum engagement: the CE pattern planned at theta_max overshoots it by a
+    # few degrees at its roll-in corner, so the conventional patterns get that same limit
+    lim = max(float(theta_max_deg), m_ce["max_engagement_deg"])
     rows = []
     for kind in ("circular", "cycloid"):
-        s = admissible_step(kind, theta_max_deg, width, tool_radius, resolution_mm)
+        s = admissible_step(kind, lim, width, tool_radius, resolution_mm)
         gen = circular_trochoid if kind == "circular" else cycloid
         p = gen(s, width, tool_radius, n_periods, ds=resolution_mm)
         _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
-        rows.append({"pattern": kind, **m})
-    p = ce_trochoid(width, tool_radius, theta_max_deg, n_periods, resolution_mm)
-    _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
-    rows.append({"pattern": "constant-engagement", **m})
+        rows.append({"pattern": kind, "theta_limit_deg": lim, **m})
+    rows.append({"pattern": "constant-engagement", "theta_limit_deg": lim, **m_ce})
     df = pd.DataFrame(rows).set_index("pattern")
     # every move (links included) at the cutting feed: the "same feed" comparison of Thesis IV
     df["mrr_same_feed_mm3_min"] = a_p * float(width) * df.step_mm / ((df.cut_mm + df.link_mm) / feed_mm_min)
