@@ -41,8 +41,8 @@ cutting length above theta + 5 deg, cutting / linking lengths, time and uncut ar
 >>> _, s = evaluate_path(path, box(0, 0, 40, 30), 5, 66.42, resolution_mm=0.25)
 >>> s["uncut_area_mm2"] < 1.05 * s["unreachable_area_mm2"] + 1.0     # only the corner cusps remain
 True
->>> round(s["median_engagement_cut_deg"])                            # the laps hold theta
-66
+>>> abs(s["median_engagement_cut_deg"] - 66.42) < 2.0                # the laps hold theta
+True
 """
 from __future__ import annotations
 
