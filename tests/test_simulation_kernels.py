@@ -164,3 +164,16 @@ def test_backend_switch_and_subclass_override():
     s = Counting.from_polygon(box(0, 0, 10, 10), 0.1)
     dixel.simulate(s, np.c_[np.linspace(1, 9, 20), np.full(20, 5.0)], 1.0, 1, 100, backend="numba")
     assert len(calls) == 20
+
+
+def test_dixel_engagement_few_rows_under_the_tool():
+    # tool radius comparable to the row height: only a few crossings, the front range may start at
+    # the first crossing behind the tool (2 pi unwrapping) or hold all/none of them (general port)
+    rng = np.random.default_rng(11)
+    s = dixel.Stock.from_polygon(box(0, 0, 4, 4).difference(Point(2, 2).buffer(0.8, quad_segs=16)), 0.13)
+    for _ in range(pick(3000, 1500)):
+        c, f, r = rng.uniform(0.5, 3.5, 2), rng.normal(size=2), rng.uniform(0.05, 0.5)
+        fo = bool(rng.random() < 0.8)
+        e1 = s.engagement(c, r, f, front_only=fo, backend="numpy")
+        e2 = s.engagement(c, r, f, front_only=fo, backend="numba")
+        assert e1.intervals.shape == e2.intervals.shape and np.allclose(e1.intervals, e2.intervals, rtol=0, atol=TOL)

@@ -303,10 +303,116 @@ def _band(A, B, y0, h, cx, cy, r, psi0, p0, p1, j0, j1, out, n_out):
     return False, start
 
 
+@njit(cache=True, inline="always")
+def _crossing(o, m, j_lo, y0, h, cy, r):
+    """Crossing o of the circle with the row centre lines, in the reference's order (right side
+    bottom->top, then left side top->bottom): (dy, x-offset, row)."""
+    if o < m:
+        q = o
+    else:
+        q = 2 * m - 1 - o
+    dy = y0 + (j_lo + q + 0.5) * h - cy
+    cxq = math.sqrt(max(r * r - dy * dy, 0.0))
+    return dy, (cxq if o < m else -cxq), j_lo + q
+
+
+@njit(cache=True, inline="always")
+def _crossing_psi(o, m, j_lo, y0, h, cy, r, psi0):
+    dy, x, _ = _crossing(o, m, j_lo, y0, h, cy, r)
+    return _npmod(math.atan2(dy, x) - psi0 + _PI, _TWO_PI) - _PI
+
+
+@njit(cache=True)
+def _dixel_engagement_front(A, B, y0, h, cx, cy, r, psi0, m, j_lo, polyline, bisections):
+    """Front half-circle engagement computing the polar angle (atan2) only where it is used.
+
+    Same result as the all-crossings port below: a crossing is in the range (-pi/2, pi/2) when its
+    component along the feed direction is > 0, decided on the exact angle when that component is
+    within 1e-9 r of 0; the polar angles are evaluated only at the brackets with a material/air
+    transition and at the two ends (with the reference's 2 pi unwrapping). Returns (ok, intervals);
+    ok False (degenerate: no crossing or every crossing in range) -> the caller uses the full port.
+    """
+    n = 2 * m
+    lo, hi = -_PI / 2, _PI / 2
+    cu, su = math.cos(psi0), math.sin(psi0)
+    tol = 1e-9 * r
+    # (hot loops are kept free of branches that raise -- float %, atan2 -- which slow them ~20x)
+    inr = np.empty(n, np.bool_)
+    n_amb = 0
+    for o in range(n):
+        dy, x, _ = _crossing(o, m, j_lo, y0, h, cy, r)
+        u = x * cu + dy * su
+        inr[o] = u > tol
+        n_amb += abs(u) <= tol
+    if n_amb:
+        for o in range(n):
+            dy, x, _ = _crossing(o, m, j_lo, y0, h, cy, r)
+            if abs(x * cu + dy * su) <= tol:
+                p = _crossing_psi(o, m, j_lo, y0, h, cy, r, psi0)
+                inr[o] = p > lo and p < hi
+    n_r = 0
+    for o in range(n):
+        n_r += inr[o]
+    if n_r == 0 or n_r == n:
+        return False, np.empty((0, 2))
+    o_s = -1
+    prev = inr[n - 1]
+    for o in range(n):
+        if inr[o] and not prev:
+            o_s = o
+            break
+        prev = inr[o]
+    # the range must be one cyclic block of n_r crossings (else: the general port decides)
+    o = o_s
+    for q in range(n_r):
+        if not inr[o]:
+            return False, np.empty((0, 2))
+        o += 1
+        if o == n:
+            o = 0
+    o_e = o - 1 if o > 0 else n - 1
+    ne = n_r + 2
+    je = np.empty(ne, np.int64)
+    dist = np.empty(ne)
+    ex = np.empty(ne)
+    o = o_s - 1 if o_s > 0 else n - 1
+    for q in range(ne):
+        dy, x, jq = _crossing(o, m, j_lo, y0, h, cy, r)
+        je[q] = jq
+        dist[q], ex[q] = _dixel_signed_xdist(A, B, cx + x, jq)
+        o += 1
+        if o == n:
+            o = 0
+    # polar angles only at the ends and around the transitions
+    need = np.zeros(ne, np.bool_)
+    need[0] = True
+    need[ne - 1] = True
+    for q in range(ne - 1):
+        t = (dist[q] > 0) != (dist[q + 1] > 0)
+        need[q] |= t
+        need[q + 1] |= t
+    pe = np.full(ne, np.nan)
+    ps = _crossing_psi(o_s, m, j_lo, y0, h, cy, r, psi0)
+    pl = _crossing_psi(o_e, m, j_lo, y0, h, cy, r, psi0)
+    for q in range(ne):
+        if need[q]:
+            o = o_s - 1 + q
+            if o < 0:
+                o += n
+            elif o >= n:
+                o -= n
+            p = _crossing_psi(o, m, j_lo, y0, h, cy, r, psi0)
+            if q == 0 and p > ps:
+                p -= _TWO_PI
+            elif q == ne - 1 and p < pl:
+                p += _TWO_PI
+            pe[q] = p
+    return True, _finish(A, B, y0, h, cx, cy, r, psi0, pe, je, dist, ex, ne, lo, hi, polyline, bisections)
+
+
 @njit(cache=True)
 def dixel_engagement(A, B, y0, h, cx, cy, r, f0, f1, front_only, polyline, bisections):
     """Port of ``dixel.Stock.engagement`` (method="rows"): (k, 2) engaged intervals (rad, from feed)."""
-    n_rows = A.shape[1]
     psi0 = math.atan2(f1, f0)
     if front_only:
         lo, hi = -_PI / 2, _PI / 2
@@ -318,6 +424,10 @@ def dixel_engagement(A, B, y0, h, cx, cy, r, f0, f1, front_only, polyline, bisec
     if j_hi < j_lo:
         return empty
     m = j_hi - j_lo + 1
+    if front_only:
+        ok, iv = _dixel_engagement_front(A, B, y0, h, cx, cy, r, psi0, m, j_lo, polyline, bisections)
+        if ok:
+            return iv
     n = 2 * m
     psi = np.empty(n)
     cxx = np.empty(n)
@@ -357,7 +467,6 @@ def dixel_engagement(A, B, y0, h, cx, cy, r, f0, f1, front_only, polyline, bisec
     je = np.empty(ne, np.int64)
     dist = np.empty(ne)
     ex = np.empty(ne)
-    n_in = 0
     for q in range(ne):
         idx = i0 - 1 + q
         t = idx % n
@@ -366,6 +475,17 @@ def dixel_engagement(A, B, y0, h, cx, cy, r, f0, f1, front_only, polyline, bisec
         xe[q] = cx + cxx[o]
         je[q] = jj[o]
         dist[q], ex[q] = _dixel_signed_xdist(A, B, xe[q], je[q])
+    return _finish(A, B, y0, h, cx, cy, r, psi0, pe, je, dist, ex, ne, lo, hi, polyline, bisections)
+
+
+@njit(cache=True)
+def _finish(A, B, y0, h, cx, cy, r, psi0, pe, je, dist, ex, ne, lo, hi, polyline, bisections):
+    """Engaged intervals from the crossings' angles ``pe`` (needed only at the ends and at brackets
+    with a transition), rows ``je``, signed x-distances ``dist`` and nearest end points ``ex``."""
+    n_rows = A.shape[1]
+    empty = np.empty((0, 2))
+    n_in = 0
+    for q in range(ne):
         if dist[q] > 0:
             n_in += 1
     if n_in == 0:
@@ -375,13 +495,17 @@ def dixel_engagement(A, B, y0, h, cx, cy, r, f0, f1, front_only, polyline, bisec
         out[0, 0] = lo
         out[0, 1] = hi
         return out
+    trans = np.empty(ne, np.int64)        # brackets with a transition (a tight loop first)
+    n_t = 0
+    for k in range(ne - 1):
+        trans[n_t] = k
+        n_t += (dist[k] > 0) != (dist[k + 1] > 0)
     edges = np.empty(64)
     n_e = 0
     wk = np.empty(ne, np.int64)           # wide brackets, to resolve afterwards
     n_w = 0
-    for k in range(ne - 1):
-        if (dist[k] > 0) == (dist[k + 1] > 0):
-            continue
+    for kt in range(n_t):
+        k = trans[kt]
         d0 = dist[k]
         d1 = dist[k + 1]
         p0 = pe[k]
