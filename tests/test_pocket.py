@@ -116,3 +116,42 @@ def test_validation_errors(tmp_path):
     ok = tmp_path / "ok.json"
     ok.write_text(json.dumps(RECT))
     assert pk.load_pocket(ok).feed == 255
+
+
+def test_angular_lobes_split_an_l_but_not_a_bar():
+    """An L-shaped material component seen from its corner is two arms (one per leg, ~0 and ~90
+    deg, areas in proportion to the legs); a straight bar is one."""
+    from shapely.geometry import box
+
+    L = box(4, -2, 30, 2).union(box(-2, 4, 2, 20)).union(box(2, 2, 4, 4).buffer(1.5))
+    lobes = sorted(pk._angular_lobes(L, (0, 0), 3.0))
+    assert len(lobes) == 2
+    assert abs(lobes[0][0]) < 12 and abs(lobes[1][0] - 90) < 12      # the corner joint pulls them 45-ward
+    assert lobes[0][1] > lobes[1][1]                         # the longer leg holds more material
+    assert sum(a for _, a in lobes) == pytest.approx(L.area, rel=1e-9)
+    assert len(pk._angular_lobes(box(4, -2, 30, 2), (0, 0), 3.0)) == 1
+    arms = pk.arm_regions(L, (0, 0), 3.0)
+    assert sorted(round(a["angle_deg"] / 10) * 10 for a in arms) == [0, 90]
+
+
+def test_l_shaped_pocket_from_json():
+    """Third shape (data/jacso2021/l_pocket.json): the start hole in the corner square, two legs.
+    With max_wall_share 0.5 (the centre laps clear the corner square) the legs become two arms of CE
+    trochoids: engagement bounded, uncut area = the five sharp corners (5 r^2 (1 - pi/4)) plus a
+    small remainder, links cut nothing, G-code round trip."""
+    from cnclab.paths import data_path
+
+    job = pk.load_pocket(data_path("jacso2021", "l_pocket.json"))
+    hp = pk.hybrid_path(job, 0.1, max_wall_share=0.5)
+    T, s = pk.evaluate_strategy(hp, job, 0.1, feed_control=True)
+    assert len(hp.info["arms"]) == 2
+    angles = sorted(round(a["angle_deg"] / 10) * 10 for a in hp.info["arms"])
+    assert angles == [0, 90]                                       # one arm per leg
+    assert s["unreachable_area_mm2"] == pytest.approx(5 * 9 * (1 - np.pi / 4), rel=1e-3)
+    assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 0.005 * job.polygon.area
+    assert s["max_engagement_deg"] < 110.0
+    assert s["share_above_theta_plus5"] < 0.015
+    assert s["link_removed_mm3"] < 0.01 * job.volume_mm3()
+    assert shapely.distance(shapely.points(hp.points), job.allowed()).max() < 1e-3
+    dmax, dlen, _ = pk.gcode_roundtrip_error(hp, job)
+    assert dmax < 1e-4 and dlen < 1e-2

@@ -469,7 +469,7 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
             for _ in range(int(max_periods)):
                 per = ce_period(full, r, th, loc_allowed, dt=dt, step_mm=resolution_mm,
                                 roll_radius=job.roll_radius, a_p=job.a_p, feed_mm_min=job.feed,
-                                front_stock=loc)
+                                front_stock=loc, x_min=c[0])
                 if per is None:
                     break
                 Pl = per.points
@@ -522,8 +522,12 @@ def arm_regions(material, center, tool_radius, min_area_mm2=1.0, open_mm=None):
     if not parts:
         return []
     c = np.asarray(center, float)
-    ang = np.array([math.degrees(math.atan2(p.centroid.y - c[1], p.centroid.x - c[0])) for p in parts])
-    area = np.array([p.area for p in parts])
+    ang, area = [], []
+    for p in parts:
+        for a, ar in _angular_lobes(p, c, tool_radius):
+            ang.append(a)
+            area.append(ar)
+    ang, area = np.array(ang), np.array(area)
     o = np.argsort(ang)
     ang, area = ang[o], area[o]
     b = shapely.bounds(material)
@@ -539,6 +543,64 @@ def arm_regions(material, center, tool_radius, min_area_mm2=1.0, open_mm=None):
         out.append({"angle_deg": float((ang[i] + 180) % 360 - 180), "region": _sector(c, lo, hi, reach),
                     "area_mm2": float(area[i])})
     return out
+
+
+def _angular_lobes(part, center, tool_radius, bin_deg=5.0, valley=0.35, min_share=0.05):
+    """Directions (deg) and areas (mm^2) of the lobes of ``part`` seen from ``center``.
+
+    The area of ``part`` is histogrammed over the direction from ``center`` (grid samples every
+    r/6, ``bin_deg`` bins, circular [1 2 1]/4 smoothing twice); neighbouring maxima separated by a
+    minimum below ``valley`` times the lower maximum are separate lobes (e.g. the two legs of an L
+    joined around its inner corner: one component, two arms). Lobes under ``min_share`` of the
+    area join their neighbour. Returns [(direction deg, area mm^2)], one item for a single lobe.
+    """
+    c = np.asarray(center, float)
+    x0, y0, x1, y1 = part.bounds
+    h = tool_radius / 6.0
+    X, Y = np.meshgrid(np.arange(x0 + 0.5 * h, x1, h), np.arange(y0 + 0.5 * h, y1, h))
+    m = shapely.contains_xy(part, X, Y)
+    a = np.degrees(np.arctan2(Y[m] - c[1], X[m] - c[0]))
+    whole = [(math.degrees(math.atan2(part.centroid.y - c[1], part.centroid.x - c[0])), part.area)]
+    if a.size < 20:
+        return whole
+    nb = int(round(360.0 / bin_deg))
+    H = np.bincount(((a + 180.0) / bin_deg).astype(int) % nb, minlength=nb).astype(float)
+    for _ in range(2):
+        H = 0.25 * np.roll(H, 1) + 0.5 * H + 0.25 * np.roll(H, -1)
+    peaks = np.flatnonzero((H > np.roll(H, 1)) & (H >= np.roll(H, -1)) & (H > 0))
+    if peaks.size < 2:
+        return whole
+    # merge neighbouring peaks without a deep enough valley between them (circularly)
+    peaks = list(peaks)
+    changed = True
+    while changed and len(peaks) > 1:
+        changed = False
+        for i in range(len(peaks)):
+            p, q = peaks[i], peaks[(i + 1) % len(peaks)]
+            idx = np.arange(p, p + ((q - p) % nb) + 1) % nb
+            if H[idx].min() >= valley * min(H[p], H[q]):
+                peaks.remove(p if H[p] < H[q] else q)
+                changed = True
+                break
+    if len(peaks) < 2:
+        return whole
+    # lobe boundaries at the minima between consecutive peaks
+    bounds = []
+    for i in range(len(peaks)):
+        p, q = peaks[i], peaks[(i + 1) % len(peaks)]
+        idx = np.arange(p, p + ((q - p) % nb) + 1) % nb
+        bounds.append(idx[int(np.argmin(H[idx]))])
+    b = ((a + 180.0) / bin_deg).astype(int) % nb
+    lobes = []
+    for i in range(len(peaks)):
+        lo, hi = bounds[i - 1], bounds[i]
+        sel = ((b - lo) % nb) < ((hi - lo) % nb)
+        if sel.any():
+            z = np.exp(1j * np.radians(a[sel])).mean()
+            lobes.append((math.degrees(np.angle(z)), part.area * sel.mean()))
+    if min(ar for _, ar in lobes) < min_share * part.area:
+        return whole
+    return lobes
 
 
 def _sector(center, a0_deg, a1_deg, radius):

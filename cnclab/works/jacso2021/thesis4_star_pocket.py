@@ -117,3 +117,33 @@ def trochoid_sweep(resolution_mm=None):
     th = pick((30.0, 45.0, 60.0, 75.0, 90.0), (45.0, 60.0))
     return pattern_sweep(wr, th, 0.5 * t["tool_diameter_mm"], res, a_p=t["a_p_mm"],
                          feed_mm_min=t["v_f_printed_mm_min"], link_feed_mm_min=t["link_feed_mm_min"])
+
+
+USER_POCKETS = (("rectangle 40 x 24", "rectangle_pocket.json", {}),
+                ("L-shape", "l_pocket.json", {}),
+                ("L-shape, max_wall_share 0.5", "l_pocket.json", {"max_wall_share": 0.5}))
+
+
+@functools.cache
+def user_pockets(resolution_mm=None):
+    """The hybrid path on the user-pocket examples of ``data/jacso2021`` (rectangle, L-shape with the
+    default and a larger ``max_wall_share``), evaluated with feed control.
+
+    Returns ``(summaries DataFrame indexed by case, {case: (job, path, table)})``; the summary adds
+    ``uncut_beyond_unreachable_mm2`` = uncut area minus the corners the tool cannot reach.
+    """
+    import pandas as pd
+
+    from cnclab.toolpath import pocket as pk
+
+    res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
+    rows, out = [], {}
+    for case, fname, kw in USER_POCKETS:
+        job = pk.load_pocket(data_path("jacso2021", fname))
+        hp = pk.hybrid_path(job, res, **kw)
+        T, s = pk.evaluate_strategy(hp, job, res, feed_control=True)
+        s.update(case=case, laps=hp.info["laps"], arms=len(hp.info["arms"]),
+                 uncut_beyond_unreachable_mm2=s["uncut_area_mm2"] - s["unreachable_area_mm2"])
+        rows.append(s)
+        out[case] = (job, hp, T)
+    return pd.DataFrame(rows).set_index("case"), out
