@@ -130,8 +130,8 @@ def test_angular_lobes_split_an_l_but_not_a_bar():
     assert lobes[0][1] > lobes[1][1]                         # the longer leg holds more material
     assert sum(a for _, a in lobes) == pytest.approx(L.area, rel=1e-9)
     assert len(pk._angular_lobes(box(4, -2, 30, 2), (0, 0), 3.0)) == 1
-    arms = pk.arm_regions(L, (0, 0), 3.0)
-    assert sorted(round(a["angle_deg"] / 10) * 10 for a in arms) == [0, 90]
+    arms = sorted(a["angle_deg"] for a in pk.arm_regions(L, (0, 0), 3.0))
+    assert len(arms) == 2 and abs(arms[0]) < 12 and abs(arms[1] - 90) < 12
 
 
 def test_l_shaped_pocket_from_json():
