@@ -412,7 +412,8 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
     centre), every further lap starts where the previous one ended (:func:`centre_lap`), as long
     as a lap stays clear of the final contour (a lap clamped to the wall would turn abruptly there). Arms: constant-engagement trochoidal periods with explicit
     roll-in / roll-out (:func:`cnclab.toolpath.trochoidal.ce_period`, radius ``job.roll_radius``)
-    in each arm's frame, joined by straight links through the cleared region.
+    in each arm's frame (the front ignores material behind the start-hole centre, which belongs to
+    another arm or a later round), joined by straight links through the cleared region.
     """
     from cnclab.simulation.common import simulate
     from cnclab.simulation.dixel import Stock
@@ -502,7 +503,9 @@ def arm_regions(material, center, tool_radius, min_area_mm2=1.0, open_mm=None):
 
     The material (shapely geometry, mm) is opened by ``open_mm`` (default r / 2: strips thinner
     than r along the walls do not make an arm); every remaining component larger than
-    ``min_area_mm2`` is an arm, its axis the direction (deg) from ``center`` to its centroid. The
+    ``min_area_mm2`` is an arm, its axis the direction (deg) from ``center`` to its centroid — or
+    several arms when the component has separate angular lobes seen from ``center`` (the two legs
+    of an L joined around its inner corner: :func:`_angular_lobes`). The
     plane is split into angular sectors at the bisectors between neighbouring axes, so every bit
     of material (strips included) belongs to exactly one arm. Returns a list of dicts
     ``{"angle_deg", "region" (sector polygon), "area_mm2"}`` sorted by angle.
