@@ -19,7 +19,13 @@ Algorithm (:func:`ce_clearing`):
    lap ended, so laps chain like a spiral. Tool centres are kept in the seed's *cell* (the part of
    the allowed region geodesically nearest to the seed, :func:`geodesic_cells`; islands included,
    :func:`clamp_inside`): the pass is limited by the final contour and, across a neck, by the
-   neighbouring cell. The lap is cut into the stock; stretches that remove nothing become links:
+   neighbouring cell. The limit acts *within* the lap (``wall="gate"``): a stretch pushed onto the
+   final contour is kept only while a trial cut holds the engagement at or below
+   ``theta_deg + gate_margin_deg``; otherwise the lap ends where it meets the final contour and
+   resumes where it leaves it, so the tool is not dragged along the wall through the wedge between
+   the previous lap and the wall (that wedge is cut by later laps or the final pass). Links are cut
+   through the planning stock too: a link step that removes material is labelled ``"linkcut"``.
+   The lap is cut into the stock; stretches that remove nothing become links:
    straight when the tool swept along the chord misses the material, else the shortest grid route
    through the cleared region (:func:`_geodesic`, scipy Dijkstra), else the lap's own air stretch.
    A seed's laps stop when a lap removes less than ``min_removed_mm2``; a seed whose entry hole is
@@ -31,7 +37,8 @@ Algorithm (:func:`ce_clearing`):
    engagement-controlled: its spikes are reported by :func:`evaluate_path` (kind ``"cleanup"``).
 
 The result is a :class:`ClearingPath` (points + per-point kind of the segment ending there:
-``"entry"``, ``"cut"``, ``"cleanup"``, ``"link"`` or ``"rapid"``). :func:`evaluate_path` cuts any
+``"entry"``, ``"cut"``, ``"cleanup"``, ``"linkcut"`` (a link step that removes material: cutting
+feed), ``"link"`` (linking feed) or ``"rapid"``). :func:`evaluate_path` cuts any
 such path through one fresh dixel stock and reports engagement / MRR maxima, the share of the
 cutting length above theta + 5 deg, cutting / linking lengths, time and uncut area;
 :func:`to_moves` exports G-code moves (:mod:`cnclab.toolpath.gcode`).
@@ -46,6 +53,7 @@ True
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -54,11 +62,13 @@ import shapely
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
-__all__ = ["ClearingPath", "KINDS", "default_seeds", "geodesic_cells", "clamp_inside", "helical_entry", "ce_clearing",
+__all__ = ["ClearingPath", "KINDS", "CUTTING_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "clamp_inside", "helical_entry", "ce_clearing",
            "evaluate_path", "to_moves", "path_from_programme"]
 
 #: Segment kinds of a :class:`ClearingPath`; ``link`` and ``rapid`` are not meant to cut.
-KINDS = ("entry", "cut", "cleanup", "link", "rapid")
+KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
+#: Kinds written at the cutting feed (``linkcut``: a step of a planned link that removes material).
+CUTTING_KINDS = ("entry", "cut", "cleanup", "linkcut")
 
 
 @dataclass
@@ -174,8 +184,15 @@ def _touch_start(contour, E, r):
     return tt[j], np.asarray(E, float)
 
 
-def _lap(stock, domain, seed, E, r, theta_deg, allowed, dt, step):
-    """One Thesis III turn around the cleared region containing ``seed``, from ``E``; (n, 2) centres."""
+def _lap(stock, domain, seed, E, r, theta_deg, cell, dt, step, wall="trim"):
+    """One Thesis III turn around the cleared region containing ``seed``, from ``E``.
+
+    Returns a list of (n, 2) tool-centre runs (mm). ``wall="trim"``: the lap is limited by the final
+    contour *within* the turn — it ends where it meets the boundary of ``cell`` and resumes where it
+    re-enters (each run ends / starts on the boundary), so the tool is never dragged along the wall
+    into material. ``wall="clamp"`` (previous behaviour, kept for comparison): every centre outside
+    ``cell`` is pushed back onto its nearest boundary point, one run.
+    """
     from .constant_engagement import ShiftedContour, cleared_boundary_contour, resample_path, thesis3_path
 
     c = cleared_boundary_contour(stock, seed, domain)
@@ -189,11 +206,58 @@ def _lap(stock, domain, seed, E, r, theta_deg, allowed, dt, step):
             continue
     else:
         return None
-    P = clamp_inside(resample_path(res.P, step), allowed)
-    P = clamp_inside(_resample(P, step), allowed)
-    if np.hypot(*(P0 - np.asarray(E))) > 1e-9:
-        P = np.vstack([E, P])
-    return P
+    P = _resample(resample_path(res.P, step), step)
+    if wall in ("clamp", "gate"):
+        if wall == "clamp" and np.hypot(*(P0 - np.asarray(E))) > 1e-9:
+            P = np.vstack([E, P])
+        Q = clamp_inside(P, cell)
+        moved = np.hypot(*(Q - P).T) > 1e-9
+        return [Q] if wall == "clamp" else (Q, moved)
+    if wall != "trim":
+        raise ValueError(f"wall must be 'trim', 'gate' or 'clamp', got {wall!r}")
+    inside = shapely.contains_xy(cell, P[:, 0], P[:, 1])
+    runs = []
+    edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]))
+    for a, b in zip(edges[0::2], edges[1::2]):            # P[a:b] inside
+        run = P[a:b]
+        ends = []
+        for i_out, i_in, at_start in ((a - 1, a, True), (b, b - 1, False)):
+            if 0 <= i_out < len(P):                          # the crossing of the cell boundary
+                x = LineString([P[i_in], P[i_out]]).intersection(cell.boundary)
+                q = shapely.get_coordinates(x)
+                if len(q):
+                    q = q[np.argmin(np.hypot(*(q - P[i_in]).T))]
+                    ends.append((at_start, q))
+        for at_start, q in ends:
+            run = np.vstack([q, run]) if at_start else np.vstack([run, q])
+        if len(run) >= 2:
+            runs.append(run)
+    return runs
+
+
+def _gate(stock, Q, moved, r, limit_deg, a_p, feed_mm_min):
+    """Split the clamped lap ``Q`` (mm) into runs, leaving out every wall stretch (maximal run of
+    ``moved`` points) on which a trial cut of ``Q`` through a copy of ``stock`` exceeds ``limit_deg``."""
+    from cnclab.simulation.common import simulate
+
+    eng = simulate(stock, Q, r, a_p, feed_mm_min, copy=True).engagement_deg.to_numpy()
+    keep = np.ones(len(Q), bool)
+    edges = np.flatnonzero(np.diff(np.r_[0, moved.astype(int), 0]))
+    for a, b in zip(edges[0::2], edges[1::2]):            # Q[a:b] on the wall
+        if np.nanmax(np.r_[eng[a:min(b + 1, len(Q))], 0.0]) > limit_deg:
+            keep[a:b] = False
+            if a > 0:
+                keep[a] = True                                # the run ends on the wall ...
+            if b < len(Q):
+                keep[b - 1] = True                            # ... and resumes from it
+                if b - 1 == a:
+                    keep[a] = False
+    runs = []
+    edges = np.flatnonzero(np.diff(np.r_[0, keep.astype(int), 0]))
+    for a, b in zip(edges[0::2], edges[1::2]):
+        if b - a >= 2:
+            runs.append(Q[a:b])
+    return runs
 
 
 def _chord_clear(a, b, material, guard, r, margin_mm):
@@ -229,11 +293,13 @@ def _grid_graph(free, grid_mm):
     return G, np.c_[X[ok], Y[ok]]
 
 
-def _geodesic(a, b, free, grid_mm, guard):
+def _geodesic(a, b, free, grid_mm, guard, material=None, r=0.0, margin_mm=0.0):
     """Shortest 8-connected grid path (spacing ``grid_mm``) from a to b inside the polygon ``free``
-    (scipy Dijkstra), simplified; (n, 2) points a ... b inside ``guard``, or None."""
+    (scipy Dijkstra), simplified; (n, 2) points a ... b inside ``guard`` (and, when ``material`` is
+    given, whose swept disk of radius ``r - margin_mm`` misses it), or None."""
     from scipy.sparse.csgraph import dijkstra
 
+    free = free() if callable(free) else free
     if free.is_empty:
         return None
     G, pts = _grid_graph(free, grid_mm)
@@ -249,9 +315,15 @@ def _geodesic(a, b, free, grid_mm, guard):
         chain.append(pred[chain[-1]])
     route = np.vstack([a, pts[chain[::-1]], b])
     simp = LineString(route).simplify(0.5 * grid_mm, preserve_topology=False)
-    if free.buffer(0.5 * grid_mm).contains(simp) and guard.contains(simp):
+
+    def ok(line):
+        if not guard.contains(line):
+            return False
+        return material is None or material.is_empty or not line.buffer(r - margin_mm, quad_segs=8).intersects(material)
+
+    if free.buffer(0.5 * grid_mm).contains(simp) and ok(simp):
         return np.asarray(simp.coords)
-    return route if guard.contains(LineString(route)) else None
+    return route if ok(LineString(route)) else None
 
 
 def geodesic_cells(allowed, seeds, grid_mm: float = 1.0):
@@ -308,7 +380,8 @@ def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, marg
             ok = _chord_clear(out_p[-1], P[j - 1], material.difference(swept), guard, r, margin_mm)
         route = None
         if not ok and free is not None and j - i >= min_run:
-            route = _geodesic(out_p[-1], P[j - 1], free, grid_mm, guard)
+            swept = LineString(P[:j]).buffer(r, quad_segs=16)
+            route = _geodesic(out_p[-1], P[j - 1], free, grid_mm, guard, material.difference(swept), r, margin_mm)
             if route is not None and LineString(route).length >= 0.9 * LineString(P[i - 1:j]).length:
                 route = None
         if ok:
@@ -327,7 +400,7 @@ def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, marg
 def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_radius_mm=None,
                 resolution_mm: float = 0.1, step_mm=None, dt: float = 0.2, max_laps: int = 200,
                 min_removed_mm2=None, seed_clearance_ratio: float = 0.6, cleanup: bool = True,
-                link_grid_mm: float = 1.0,
+                link_grid_mm: float = 1.0, wall: str = "gate", gate_margin_deg: float = 5.0,
                 a_p: float = 1.0, feed_mm_min: float = 1000.0) -> ClearingPath:
     """Constant-engagement clearing of ``pocket`` (see the module docstring).
 
@@ -347,6 +420,15 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
     link_grid_mm : grid spacing (mm) of the seed cells (:func:`geodesic_cells`) and of the shortest
         links through the cleared region.
     cleanup : add the final contour pass.
+    wall : how a lap is limited by the final contour (the boundary of the seed's cell):
+        ``"gate"`` (default) — centres outside the cell are put on its boundary, but every such
+        wall stretch whose simulated engagement exceeds ``theta_deg + gate_margin_deg`` is left out:
+        the lap ends where it meets the final contour and resumes where it leaves it, the gap bridged
+        by a link through the cleared region (the wedge it skips is cut by later laps / the final pass);
+        ``"trim"`` — every outside stretch is left out (the lap never follows the wall);
+        ``"clamp"`` — centres pushed onto the boundary, all kept (earlier behaviour: the tool is
+        dragged along the wall and cuts full-width wedges, up to 180 deg).
+    gate_margin_deg : engagement margin (deg) above ``theta_deg`` tolerated on a wall stretch.
     a_p, feed_mm_min : axial depth (mm) and feed (mm/min) passed to the planning simulation.
 
     Returns a :class:`ClearingPath` whose ``info`` holds the seeds, laps per seed, the entry radius
@@ -364,6 +446,10 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
         raise ValueError(f"step_mm must be > 0 mm, got {step_mm!r}")
     if not dt > 0:
         raise ValueError(f"dt must be > 0 mm, got {dt!r}")
+    if wall not in ("gate", "trim", "clamp"):
+        raise ValueError(f"wall must be 'gate', 'trim' or 'clamp', got {wall!r}")
+    if not gate_margin_deg >= 0:
+        raise ValueError(f"gate_margin_deg must be >= 0 deg, got {gate_margin_deg!r}")
     min_removed = r * step if min_removed_mm2 is None else float(min_removed_mm2)
     air_tol = 0.5 * resolution_mm * resolution_mm    # mm²: half a row² = air
     seeds = default_seeds(allowed, seed_clearance_ratio) if seeds is None else [tuple(map(float, s)) for s in seeds]
@@ -383,20 +469,29 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
     cells = geodesic_cells(allowed, seeds, link_grid_mm)
 
     def free_region():
+        """Material now, and (computed on demand) the region where the tool centre misses it."""
         mat = stock.to_polygon()
-        return mat, allowed.difference(mat.buffer(r - resolution_mm, quad_segs=16))
+        return mat, functools.cache(lambda: allowed.difference(mat.buffer(r - resolution_mm, quad_segs=16)))
+
+    def link(R, k, kind="link"):
+        """Emit the link ``R`` after cutting it through the stock: steps that remove material -> linkcut."""
+        R = _resample(np.asarray(R, float), step)
+        rem = simulate(stock, R, r, a_p, feed_mm_min).removed_mm2.to_numpy()
+        emit(R, np.where(rem > air_tol, "linkcut", kind), k)
 
     def go_to(Q0, k, material, free):
         """Link from the current tool position to Q0: straight, shortest through the cleared region, or rapid."""
         a = segs[-1][0][-1]
         if np.hypot(*(Q0 - a)) < 1e-9:
             return
+        # material the tool already touches at either end (it cuts there anyway) is not an obstacle
+        material = material.difference(Point(a).buffer(r, quad_segs=16))
         if _chord_clear(a, Q0, material, guard, r, resolution_mm):
-            emit(np.vstack([a, Q0]), ["link", "link"], k)
+            link(np.vstack([a, Q0]), k)
             return
-        route = _geodesic(a, Q0, free, link_grid_mm, guard)
+        route = _geodesic(a, Q0, free, link_grid_mm, guard, material, r, resolution_mm)
         if route is not None:
-            emit(route, ["link"] * len(route), k)
+            link(route, k)
         else:
             emit(np.vstack([a, Q0]), ["rapid", "rapid"], k)
 
@@ -419,19 +514,28 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
         E = H[0]
         # 2. constant-engagement laps limited by this seed's cell of the allowed region
         while n_laps < max_laps:
-            material, free = free_region()
-            P = _lap(stock, domain, s, E, r, theta_deg, cells[k], dt, step)
-            if P is None:
+            runs = _lap(stock, domain, s, E, r, theta_deg, cells[k], dt, step, wall)
+            if not runs:
                 break
-            pre = stock.copy()
-            rem = simulate(stock, P, r, a_p, feed_mm_min).removed_mm2.to_numpy()
-            if rem.sum() < min_removed:
+            if wall == "gate":
+                runs = _gate(stock, *runs, r, theta_deg + gate_margin_deg, a_p, feed_mm_min)
+                if not runs:
+                    break
+            pre, n_segs = stock.copy(), len(segs)
+            removed = 0.0
+            for P in runs:                               # link to the run, cut it, next run
+                material, free = free_region()
+                go_to(P[0], k, material, free)
+                rem = simulate(stock, P, r, a_p, feed_mm_min).removed_mm2.to_numpy()
+                removed += float(rem.sum())
+                run = _split_runs(P, rem, material, guard, r, air_tol, "cut", 3, resolution_mm, free, link_grid_mm)
+                if run is not None:
+                    emit(*run, k)
+            if removed < min_removed or len(segs) == n_segs:
                 stock = pre
+                del segs[n_segs:]
                 break
-            Q, K = _split_runs(P, rem, material, guard, r, air_tol, "cut", 3, resolution_mm, free, link_grid_mm)
-            go_to(Q[0], k, material, free)
-            emit(Q, K, k)
-            E = Q[-1]
+            E = segs[-1][0][-1]
             laps[k] += 1
             n_laps += 1
     # 3. cleanup: final contour pass on every ring of the allowed region
@@ -445,14 +549,15 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
             i0 = int(np.argmin(np.hypot(*(ring[:-1] - cur).T)))
             R = np.vstack([np.roll(ring[:-1], -i0, axis=0), ring[:-1][i0:i0 + 1]])
             R = _resample(R, step)
+            if not (simulate(stock, R, r, a_p, feed_mm_min, copy=True).removed_mm2.to_numpy() > air_tol).any():
+                continue
             material, free = free_region()
+            go_to(R[0], -1, material, free)
             df = simulate(stock, R, r, a_p, feed_mm_min)
             run = _split_runs(R, df.removed_mm2.to_numpy(), material, guard, r, air_tol, "cleanup", 3,
                               resolution_mm, free, link_grid_mm)
-            if run is None:
-                continue
-            go_to(run[0][0], -1, material, free)
-            emit(*run, -1)
+            if run is not None:
+                emit(*run, -1)
     pts, kinds, reg = [], [], []
     for P, K, g in segs:
         if pts and np.hypot(*(P[0] - pts[-1][-1])) < 1e-9:
@@ -477,19 +582,38 @@ def path_from_programme(points, rapid) -> ClearingPath:
     return ClearingPath(P, K, np.zeros(len(P), int))
 
 
+#: Linking feed (mm/min) on non-cutting moves: Jacsó (2021) §4, "on the straight sections of the
+#: connecting movements, an equally increased feed rate (v_f = 1500 mm/min) was used" (text under Table 4.1).
+LINK_FEED_MM_MIN = 1500.0
+#: Rapid traverse (mm/min) for retract / reposition moves: an ASSUMED machine value (neither seed gives one).
+RAPID_MM_MIN = 10000.0
+
+
 def evaluate_path(path: ClearingPath, pocket, tool_radius: float, theta_deg: float, resolution_mm: float = 0.1,
                   a_p: float = 1.0, feed_mm_min: float = 1000.0, radial_depth_mm=None, margin_deg: float = 5.0,
-                  mrr_window_mm: float = 1.0, air_tol_mm2=None):
+                  mrr_window_mm: float = 1.0, air_tol_mm2=None, link_feed_mm_min: float = LINK_FEED_MM_MIN,
+                  rapid_mm_min: float = RAPID_MM_MIN, retract_mm: float = 5.5):
     """Cut ``path`` through one fresh dixel stock of ``pocket``; per-step table and summary.
 
     Rapid segments are jumps above the part (not simulated). A step *cuts* when it removes more than
     ``air_tol_mm2`` (default 0.5 row² ) — the cutting / linking split is by removal, whatever the
-    label. Summary (lengths mm, time min, engagement deg, areas mm²): max engagement and share of the
-    cutting length above ``theta_deg + margin_deg`` (overall and per kind), max MRR over windows of
-    ``mrr_window_mm`` divided by the nominal ``a_p * radial_depth_mm * feed`` (radial depth default
-    r (1 - cos theta)), cutting / linking / rapid lengths, feed time at ``feed_mm_min`` (links at the
-    same feed), uncut and unreachable areas.
+    label, so every path gets the same rule. Steps labelled ``"entry"`` (a helical ramp, which a 2.5D
+    full-depth simulation would wrongly count as a slot) are left out of the engagement and MRR
+    statistics and reported on their own: length of the XY circle, time of its two turns (ramp + flat)
+    at ``feed_mm_min``, and the *mean* MRR over them (bore area x a_p / time).
+
+    Summary (lengths mm, times min, engagement deg, areas mm²): max / median engagement and share of
+    the cutting length above ``theta_deg + margin_deg`` (entry excluded; also per kind), max MRR over
+    windows of ``mrr_window_mm`` divided by the nominal ``a_p * radial_depth_mm * feed`` (radial depth
+    default r (1 - cos theta)), cutting / linking / rapid lengths and times: cutting steps at
+    ``feed_mm_min``, non-cutting feed steps at ``link_feed_mm_min``, rapids (XY plus ``retract_mm`` of
+    vertical travel each) at ``rapid_mm_min``; ``time_one_feed_min`` is all feed moves at
+    ``feed_mm_min`` (rapids excluded; the earlier single-feed figure); uncut and unreachable areas.
     """
+    for name, v in (("feed_mm_min", feed_mm_min), ("link_feed_mm_min", link_feed_mm_min),
+                    ("rapid_mm_min", rapid_mm_min)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be > 0 mm/min, got {v!r}")
     import pandas as pd
 
     from cnclab.simulation import dixel
@@ -526,6 +650,11 @@ def evaluate_path(path: ClearingPath, pocket, tool_radius: float, theta_deg: flo
     plunge = T.plunge.to_numpy()
     cut = (rem > air) & ~plunge                  # the plunge disk is axial drilling, not a radial cut
     T["cutting"] = cut
+    kinds = T.kind.to_numpy()
+    is_entry = kinds == "entry"
+    entry_area = float(rem[is_entry].sum())
+    L_entry = float(ds[is_entry].sum())
+    cut_all, cut = cut, cut & ~is_entry          # statistics below: entry excluded
     # windowed MRR over the cutting steps (consecutive in path order)
     s_cut = np.cumsum(np.where(cut, ds, 0.0))
     win = np.floor(s_cut / mrr_window_mm).astype(int)
@@ -536,21 +665,28 @@ def evaluate_path(path: ClearingPath, pocket, tool_radius: float, theta_deg: flo
     nominal = a_p * ae * feed_mm_min
     lim = theta_deg + margin_deg
     Lc = float(ds[cut].sum())
-    kinds = T.kind.to_numpy()
-    summary = {"max_engagement_deg": float(np.nanmax(eng[cut])),
+    Ll = float(ds[~cut_all & ~is_entry].sum())
+    n_rapid = int(np.sum((K[1:] == "rapid") & (K[:-1] != "rapid")))
+    Lr = float(np.hypot(*np.diff(P, axis=0).T)[K[1:] == "rapid"].sum())
+    t_entry = 2.0 * L_entry / feed_mm_min
+    times = {"cutting_time_min": Lc / feed_mm_min, "linking_time_min": Ll / link_feed_mm_min,
+             "rapid_time_min": (Lr + n_rapid * retract_mm) / rapid_mm_min, "entry_time_min": t_entry}
+    summary = {**times, "total_time_min": sum(times.values()),
+               "time_one_feed_min": float(ds.sum()) / feed_mm_min,
+               "entry_length_mm": L_entry, "n_entries": int(np.sum(is_entry[1:] & ~is_entry[:-1]) + is_entry[0]),
+               "entry_mean_mrr_over_nominal": (entry_area * a_p / t_entry / nominal) if t_entry > 0 else float("nan"),
+               "max_engagement_deg": float(np.nanmax(eng[cut])),
                "median_engagement_cut_deg": float(np.nanmedian(eng[cut])),
                "share_above_theta_plus5": float(ds[cut & (eng > lim)].sum()) / Lc,
                "max_mrr_over_nominal": float(mrr_w.max() / nominal),
                "p99_mrr_over_nominal": float(np.percentile(mrr_w, 99) / nominal),
-               "cutting_length_mm": Lc, "linking_length_mm": float(ds[~cut].sum()),
-               "rapid_length_mm": float(np.hypot(*np.diff(P, axis=0).T)[K[1:] == "rapid"].sum()),
-               "feed_time_min": float(ds.sum()) / feed_mm_min,
+               "cutting_length_mm": Lc, "linking_length_mm": Ll, "rapid_length_mm": Lr, "n_rapids": n_rapid,
                "n_plunges": int(plunge.sum()), "plunge_area_mm2": float(rem[plunge].sum()),
                "uncut_area_mm2": stock.area(),
                "unreachable_area_mm2": float(pocket.difference(pocket.buffer(-r, quad_segs=64)
                                                                 .buffer(r, quad_segs=64)).area)}
-    for k in KINDS[:3]:
-        m = cut & (kinds == k)
+    for k in CUTTING_KINDS:
+        m = cut_all & (kinds == k)
         Lk = float(ds[m].sum())
         summary[f"cutting_length_{k}_mm"] = Lk
         summary[f"max_engagement_{k}_deg"] = float(np.nanmax(eng[m])) if m.any() else float("nan")
@@ -558,11 +694,12 @@ def evaluate_path(path: ClearingPath, pocket, tool_radius: float, theta_deg: flo
     return T, summary
 
 
-def to_moves(path: ClearingPath, z_cut: float, z_clear: float, feed: float, spindle: float):
+def to_moves(path: ClearingPath, z_cut: float, z_clear: float, feed: float, spindle: float, link_feed=None):
     """RS274/NGC moves of ``path`` (mm, mm/min, rpm). An entry (the points labelled ``"entry"``
     after the start or after a rapid) is written as a helical ramp along its circle from z = 0 down
     to ``z_cut`` (G1 points) followed by the same circle flat at ``z_cut``; a rapid segment becomes
-    retract-G0-plunge; everything else is G1 at ``z_cut`` and ``feed``."""
+    retract-G0-plunge; a ``"link"`` segment is G1 at ``z_cut`` and ``link_feed`` (mm/min, default
+    ``feed``); everything else is G1 at ``z_cut`` and ``feed``."""
     from .gcode import Move
 
     if not z_cut < 0 < z_clear:
@@ -592,7 +729,8 @@ def to_moves(path: ClearingPath, z_cut: float, z_clear: float, feed: float, spin
             mv += [Move("G0", P[i - 1, 0], P[i - 1, 1], z_clear), Move("G0", P[i, 0], P[i, 1], z_clear)]
             i = start_at(i)
             continue
-        mv.append(Move("G1", P[i, 0], P[i, 1], z_cut, feed=feed, spindle=spindle))
+        f = feed if (link_feed is None or K[i] != "link") else float(link_feed)
+        mv.append(Move("G1", P[i, 0], P[i, 1], z_cut, feed=f, spindle=spindle))
         i += 1
     mv.append(Move("G0", P[-1, 0], P[-1, 1], z_clear))
     return mv
