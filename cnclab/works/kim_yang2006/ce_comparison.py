@@ -131,3 +131,24 @@ def ce_breakdown() -> pd.DataFrame:
     return pd.DataFrame({k: {"cutting length [mm]": s[f"cutting_length_{k}_mm"],
                              "max engagement [deg]": s[f"max_engagement_{k}_deg"],
                              "share above theta+5": s[f"share_above_{k}"]} for k in cc.CUTTING_KINDS})
+
+
+@functools.cache
+def wall_modes(modes: tuple = ("clamp", "gate")) -> pd.DataFrame:
+    """Lap statistics of the CE clearing under each final-contour handling ``wall`` (see
+    :func:`cnclab.toolpath.ce_clearing.ce_clearing`): max engagement and share above theta+5 of the
+    laps, of the whole path (entry excluded), retracts, total time. Each mode plans and evaluates anew."""
+    c = ky.conditions()
+    rows = {}
+    for w in modes:
+        path = cc.ce_clearing(ky.pocket(), ky.tool_radius(), theta_deg(), resolution_mm=resolution_mm(),
+                              a_p=c["axial_depth_mm"], feed_mm_min=c["feed_mm_min"], wall=w)
+        s = cc.evaluate_path(path, ky.pocket(), ky.tool_radius(), theta_deg(), resolution_mm(),
+                             a_p=c["axial_depth_mm"], feed_mm_min=c["feed_mm_min"],
+                             radial_depth_mm=c["radial_depth_mm"])[1]
+        rows[w] = {"laps: max engagement [deg]": s["max_engagement_cut_deg"],
+                   "laps: share above theta+5": s["share_above_cut"],
+                   "path: max engagement [deg]": s["max_engagement_deg"],
+                   "path: share above theta+5": s["share_above_theta_plus5"],
+                   "retracts": s["n_rapids"], "total time [min]": s["total_time_min"]}
+    return pd.DataFrame(rows)
