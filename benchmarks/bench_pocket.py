@@ -1,40 +1,64 @@
-"""Benchmark: pocket strategies on the designed star (Jacsó 2021 §4) — planning and dixel
-simulation time per strategy at two resolutions, ratios measured in one run.
+"""Benchmark: pocket strategies on the designed star and the user pockets (rectangle, L-shape) of
+Jacsó (2021) §4 — planning and dixel simulation time per shape and strategy, ratios measured in
+one run, printed as one table.
 
-Run: ``.venv/bin/python benchmarks/bench_pocket.py``
+The hybrid path runs with the default ``max_wall_share="auto"`` (every candidate planned and
+simulated): ``chosen_plan_s`` is the planning time of the chosen candidate alone, so
+``auto_cost = plan_s / chosen_plan_s`` is what the automatic choice costs.
+
+Run: ``.venv/bin/python benchmarks/bench_pocket.py`` (resolutions 0.2 and 0.1 mm) or
+``--quick`` (0.1 mm only: the fast-mode resolution of the notebook and the tests).
 """
+import argparse
 import time
 
 import pandas as pd
 
+from cnclab.paths import data_path
 from cnclab.toolpath import pocket as pk
 from cnclab.works.jacso2021.thesis4_star_pocket import star_job
 
+SHAPES = {"star": star_job,
+          "rectangle": lambda: pk.load_pocket(data_path("jacso2021", "rectangle_pocket.json")),
+          "L-shape": lambda: pk.load_pocket(data_path("jacso2021", "l_pocket.json"))}
+
 
 def main(resolutions=(0.2, 0.1)):
-    job = star_job()
-    plans = {"hybrid": lambda res: pk.hybrid_path(job, res),
-             "contour-parallel": lambda res: pk.contour_parallel_path(job),
-             "zig-zag": lambda res: pk.zigzag_path(job)}
     rows = []
-    for res in resolutions:
-        for name, plan in plans.items():
-            t0 = time.perf_counter()
-            p = plan(res)
-            t1 = time.perf_counter()
-            _, s = pk.evaluate_strategy(p, job, res)
-            t2 = time.perf_counter()
-            rows.append({"resolution_mm": res, "strategy": name, "plan_s": t1 - t0, "simulate_s": t2 - t1,
-                         "total_s": t2 - t0, "points": len(p.points),
-                         "machining_time_s": s["time_s"], "max_eng_deg": s["max_engagement_deg"]})
+    for shape, make in SHAPES.items():
+        job = make()
+        plans = {"hybrid": lambda res: pk.hybrid_path(job, res),
+                 "contour-parallel": lambda res: pk.contour_parallel_path(job),
+                 "zig-zag": lambda res: pk.zigzag_path(job)}
+        for res in resolutions:
+            for name, plan in plans.items():
+                t0 = time.perf_counter()
+                p = plan(res)
+                t1 = time.perf_counter()
+                _, s = pk.evaluate_strategy(p, job, res, feed_control=name == "hybrid")
+                t2 = time.perf_counter()
+                row = {"shape": shape, "resolution_mm": res, "strategy": name, "plan_s": t1 - t0,
+                       "simulate_s": t2 - t1, "total_s": t2 - t0, "points": len(p.points),
+                       "machining_time_s": s["time_s"], "max_eng_deg": s["max_engagement_deg"],
+                       "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"]}
+                if name == "hybrid":
+                    c = p.info["wall_share_candidates"]
+                    chosen = next(m for m in c if m["max_wall_share"] == p.info["max_wall_share"])
+                    row.update(max_wall_share=p.info["max_wall_share"], chosen_plan_s=chosen["plan_s"],
+                               auto_cost=(t1 - t0) / chosen["plan_s"])
+                rows.append(row)
     df = pd.DataFrame(rows)
-    ref = df[(df.strategy == "zig-zag")].set_index("resolution_mm").total_s
-    df["total_vs_zigzag"] = df.total_s / df.resolution_mm.map(ref)
-    coarse = df[df.resolution_mm == resolutions[0]].set_index("strategy").total_s
-    df["total_vs_coarse"] = df.total_s / df.strategy.map(coarse)
-    print(df.round(3).to_string(index=False))
+    ref = df[df.strategy == "zig-zag"].set_index(["shape", "resolution_mm"]).total_s
+    df["total_vs_zigzag"] = df.total_s / pd.Series(list(zip(df["shape"], df.resolution_mm))).map(ref).to_numpy()
+    if len(resolutions) > 1:
+        coarse = df[df.resolution_mm == resolutions[0]].set_index(["shape", "strategy"]).total_s
+        df["total_vs_coarse"] = df.total_s / pd.Series(list(zip(df["shape"], df.strategy))).map(coarse).to_numpy()
+    with pd.option_context("display.width", 200):
+        print(df.round(3).to_string(index=False))
     return df
 
 
 if __name__ == "__main__":
-    main()
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="0.1 mm only (the fast-mode resolution)")
+    main((0.1,) if ap.parse_args().quick else (0.2, 0.1))

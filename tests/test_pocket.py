@@ -1,5 +1,5 @@
-"""Pocket planner on two shapes (designed star, rectangle), input validation, G-code round trip,
-engagement per segment kind (Jacsó 2021 §4)."""
+"""Pocket planner on three shapes (designed star, rectangle, L), the automatic max_wall_share choice,
+input validation, G-code round trip, engagement per segment kind (Jacsó 2021 §4)."""
 import json
 
 import numpy as np
@@ -31,9 +31,68 @@ def test_star_design_volume_and_arms():
 @pytest.fixture(scope="module", params=["star", "rect"])
 def planned(request):
     job = _star_job() if request.param == "star" else pk.PocketJob.from_dict(RECT)
-    hp = pk.hybrid_path(job, 0.1)
+    hp = pk.hybrid_path(job, 0.1)                                   # max_wall_share="auto"
     T, s = pk.evaluate_strategy(hp, job, 0.1, feed_control=True)
     return request.param, job, hp, T, s
+
+
+def test_auto_wall_share_records_candidates(planned):
+    """Star and rectangle: both candidates planned and simulated, the records agree with the chosen
+    path's own evaluation, 0.3 wins (0.5 runs more laps along the wall: more path above theta + 5)."""
+    name, job, hp, T, s = planned
+    c = hp.info["wall_share_candidates"]
+    assert [m["max_wall_share"] for m in c] == [0.3, 0.5]
+    assert hp.info["max_wall_share"] == 0.3 and hp.info["laps"] == c[0]["laps"]
+    assert c[0]["max_engagement_deg"] == pytest.approx(s["max_engagement_deg"])
+    assert c[0]["uncut_beyond_unreachable_mm2"] == pytest.approx(s["uncut_area_mm2"] - s["unreachable_area_mm2"])
+    # 0.5 was planned anew exactly when the lap that stopped the 0.3 centre ran along the wall on <= 0.5
+    stop = hp.info["stop_lap_wall_share"]
+    assert (c[1]["same_as"] is None) == (stop is not None and 0.3 < stop <= 0.5)
+    assert (c[1]["laps"] > c[0]["laps"]) == (c[1]["same_as"] is None)
+    assert c[1]["share_above_theta_plus5"] > c[0]["share_above_theta_plus5"] + 0.0025
+    assert hp.info["wall_share_choice"]["share_above_theta_plus5"]["kept"] == [0]
+
+
+def test_numeric_wall_share_gives_the_auto_winner():
+    """A numeric max_wall_share plans that value only: 0.3 on the rectangle is the auto path."""
+    job = pk.PocketJob.from_dict(RECT)
+    hp = pk.hybrid_path(job, 0.2, max_wall_share=0.3)
+    assert "wall_share_candidates" not in hp.info and hp.info["max_wall_share"] == 0.3
+    auto = pk.hybrid_path(job, 0.2, wall_share_candidates=(0.3,))
+    assert np.array_equal(auto.points, hp.points) and np.array_equal(auto.kinds, hp.kinds)
+    for bad in (0.0, 1.5, "best"):
+        with pytest.raises(ValueError, match="max_wall_share"):
+            pk.hybrid_path(job, 0.2, max_wall_share=bad)
+    with pytest.raises(ValueError, match="wall_share_candidates"):
+        pk.hybrid_path(job, 0.2, wall_share_candidates=(0.3, 2.0))
+
+
+def _m(uncut, share, eng, t):
+    return {"uncut_beyond_unreachable_mm2": uncut, "share_above_theta_plus5": share, "max_engagement_deg": eng,
+            "time_s": t}
+
+
+def test_choose_candidate_lexicographic_rule():
+    """Synthetic metrics (pocket 1000 mm^2: uncut tolerance 2.5 mm^2; share 0.0025; engagement 2 deg)."""
+    ch = pk.choose_candidate
+    # 1. uncut area decides first, whatever the rest
+    assert ch([_m(10.1, 0.001, 70, 100), _m(2.0, 0.02, 110, 200)], 1000)[0] == 1
+    # within the uncut tolerance the share above theta + 5 decides ...
+    assert ch([_m(3.0, 0.006, 95, 200), _m(1.0, 0.014, 90, 100)], 1000)[0] == 0
+    # ... shares within 0.25 points: the maximum engagement ...
+    assert ch([_m(1.0, 0.010, 99, 100), _m(1.0, 0.012, 95, 200)], 1000)[0] == 1
+    # ... engagements within 2 deg: the time; exact ties: the first candidate
+    assert ch([_m(1.0, 0.010, 99, 200), _m(1.0, 0.012, 100.5, 190)], 1000)[0] == 1
+    assert ch([_m(1.0, 0.01, 90, 100), _m(1.0, 0.01, 90, 100)], 1000)[0] == 0
+    # the tolerance scales with the pocket area: on 200 mm^2 (0.5 mm^2) the smaller uncut wins
+    assert ch([_m(1.5, 0.006, 95, 200), _m(0.5, 0.014, 90, 100)], 200)[0] == 1
+    i, why = ch([_m(10.1, 0.011, 174.5, 196), _m(2.0, 0.011, 100.6, 185), _m(0.5, 0.03, 90, 180)], 960)
+    assert i == 1 and why["uncut_beyond_unreachable_mm2"]["kept"] == [1, 2]
+    assert why["share_above_theta_plus5"]["kept"] == [1] and why["clean"] == [False, True, False]
+    with pytest.raises(ValueError, match="time_s"):
+        ch([{"uncut_beyond_unreachable_mm2": 1, "share_above_theta_plus5": 0, "max_engagement_deg": 60}], 100)
+    with pytest.raises(ValueError, match="at least one"):
+        ch([], 100)
 
 
 def test_hybrid_stays_in_region_and_gcode_roundtrips(planned):
@@ -135,15 +194,21 @@ def test_angular_lobes_split_an_l_but_not_a_bar():
 
 
 def test_l_shaped_pocket_from_json():
-    """Third shape (data/jacso2021/l_pocket.json): the start hole in the corner square, two legs.
-    With max_wall_share 0.5 (the centre laps clear the corner square) the legs become two arms of CE
-    trochoids: engagement bounded, uncut area = the five sharp corners (5 r^2 (1 - pi/4)) plus a
-    small remainder, links cut nothing, G-code round trip."""
+    """Third shape (data/jacso2021/l_pocket.json), default settings: the start hole in the corner
+    square, two legs. "auto" rejects max_wall_share 0.3 (3 laps leave the corner square's far
+    corner as a wedge: several mm^2 uncut, engagement near a full slot) and takes 0.5 (the laps
+    clear the corner square, the legs are two arms of CE trochoids): engagement bounded, uncut area
+    = the five sharp corners (5 r^2 (1 - pi/4)) plus a small remainder, links cut nothing, G-code
+    round trip."""
     from cnclab.paths import data_path
 
     job = pk.load_pocket(data_path("jacso2021", "l_pocket.json"))
-    hp = pk.hybrid_path(job, 0.1, max_wall_share=0.5)
+    hp = pk.hybrid_path(job, 0.1)
     T, s = pk.evaluate_strategy(hp, job, 0.1, feed_control=True)
+    c = hp.info["wall_share_candidates"]
+    assert hp.info["max_wall_share"] == 0.5 and hp.info["wall_share_choice"]["clean"] == [False, True]
+    assert c[0]["uncut_beyond_unreachable_mm2"] > c[1]["uncut_beyond_unreachable_mm2"] + 0.0025 * job.polygon.area
+    assert c[0]["max_engagement_deg"] > 150 and c[0]["laps"] < c[1]["laps"]
     assert len(hp.info["arms"]) == 2
     angles = sorted(round(a["angle_deg"] / 10) * 10 for a in hp.info["arms"])
     assert angles == [0, 90]                                       # one arm per leg

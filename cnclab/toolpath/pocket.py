@@ -43,8 +43,8 @@ from shapely import affinity
 from shapely.geometry import LineString, Point, Polygon
 
 __all__ = ["PocketJob", "load_pocket", "star_polygon", "design_star", "medial_axis", "arm_branches", "arm_regions",
-           "StrategyPath", "centre_lap", "hybrid_path", "contour_parallel_path", "zigzag_path", "evaluate_strategy",
-           "to_gcode_moves", "gcode_roundtrip_error"]
+           "StrategyPath", "centre_lap", "hybrid_path", "choose_candidate", "contour_parallel_path", "zigzag_path",
+           "evaluate_strategy", "to_gcode_moves", "gcode_roundtrip_error"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -403,18 +403,132 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
     return clamp_to_region(resample_path(res.P, step_mm), allowed)
 
 
+WALL_SHARE_CANDIDATES = (0.3, 0.5)
+
+
 def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=200,
-                spacing_mm=0.25, max_rounds=3, arm_min_area_mm2=1.0, max_wall_share=0.3):
+                spacing_mm=0.25, max_rounds=3, arm_min_area_mm2=1.0, max_wall_share="auto",
+                wall_share_candidates=WALL_SHARE_CANDIDATES, stop_when_clean=False):
     """Jacsó §4 hybrid path on ``job`` (see the module docstring). Returns a :class:`StrategyPath`
     with ``info`` holding the medial axis, the arms, the number of laps and periods per arm.
 
     Centre: the first lap starts touching the start hole (reached by a non-cutting link from its
     centre), every further lap starts where the previous one ended (:func:`centre_lap`), as long
-    as a lap stays clear of the final contour (a lap clamped to the wall would turn abruptly there). Arms: constant-engagement trochoidal periods with explicit
-    roll-in / roll-out (:func:`cnclab.toolpath.trochoidal.ce_period`, radius ``job.roll_radius``)
-    in each arm's frame (the front ignores material behind the start-hole centre, which belongs to
-    another arm or a later round), joined by straight links through the cleared region.
+    as at most ``max_wall_share`` of a lap runs along the final contour (clamped to the wall; a
+    lap beyond it stops the centre and the arms take over). Arms: constant-engagement trochoidal
+    periods with explicit roll-in / roll-out (:func:`cnclab.toolpath.trochoidal.ce_period`, radius
+    ``job.roll_radius``) in each arm's frame (the front ignores material behind the start-hole
+    centre, which belongs to another arm or a later round), joined by straight links through the
+    cleared region.
+
+    ``max_wall_share`` (fraction in (0, 1], or ``"auto"``, the default): with ``"auto"`` the path
+    is planned for every value of ``wall_share_candidates`` (ascending), each plan is cut through
+    the dixel simulator (:func:`evaluate_strategy` at ``resolution_mm``, feed control on) and the
+    winner is chosen by :func:`choose_candidate` (uncut area beyond the unreachable corners, then
+    share above theta + 5 deg, then maximum engagement, then time, each with a tolerance). A
+    candidate whose centre would stop at the same lap as the previous one gives the identical path
+    and is not planned again (``"same as"`` in its record). ``stop_when_clean`` stops at the first
+    candidate that is clean by :func:`choose_candidate`'s ``clean`` test (cheaper, but the later
+    candidates are not seen). ``info`` then holds ``max_wall_share`` (the chosen value),
+    ``wall_share_candidates`` (one metrics dict per candidate) and ``wall_share_choice`` (the
+    reasons, stage by stage).
     """
+    if isinstance(max_wall_share, str):
+        if max_wall_share != "auto":
+            raise ValueError(f"max_wall_share must be a number in (0, 1] or 'auto', got {max_wall_share!r}")
+    else:
+        v = float(max_wall_share)
+        if not 0 < v <= 1:
+            raise ValueError(f"max_wall_share must be a number in (0, 1] or 'auto', got {max_wall_share!r}")
+        return _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds,
+                                arm_min_area_mm2, v)
+    import time
+
+    cands = sorted(float(c) for c in wall_share_candidates)
+    if not cands or not all(0 < c <= 1 for c in cands):
+        raise ValueError(f"wall_share_candidates must be numbers in (0, 1], got {wall_share_candidates!r}")
+    paths, rows = [], []
+    for w in cands:
+        prev = paths[-1] if paths else None
+        stop = prev.info["stop_lap_wall_share"] if prev is not None else None
+        if prev is not None and not (stop is not None and stop <= w):
+            # the previous plan's centre stopped for a reason this value does not change (the
+            # rejected lap ran along the wall on more than w, or no lap was rejected): same path
+            paths.append(prev)
+            rows.append(dict(rows[-1], max_wall_share=w, same_as=rows[-1]["max_wall_share"], plan_s=0.0))
+            continue
+        t0 = time.perf_counter()
+        hp = _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds,
+                              arm_min_area_mm2, w)
+        t1 = time.perf_counter()
+        _, s = evaluate_strategy(hp, job, resolution_mm, feed_control=True)
+        paths.append(hp)
+        rows.append({"max_wall_share": w, "same_as": None, "laps": hp.info["laps"], "arms": len(hp.info["arms"]),
+                     "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"],
+                     "share_above_theta_plus5": s["share_above_theta_plus5"],
+                     "max_engagement_deg": s["max_engagement_deg"], "time_s": s["time_s"],
+                     "plan_s": t1 - t0, "evaluate_s": time.perf_counter() - t1})
+        if stop_when_clean and choose_candidate(rows[-1:], job.polygon.area, job.theta_deg)[1]["clean"][0]:
+            break
+    i, why = choose_candidate(rows, job.polygon.area, job.theta_deg)
+    hp = paths[i]
+    hp.info.update(max_wall_share=cands[i], wall_share_candidates=rows, wall_share_choice=why)
+    return hp
+
+
+def choose_candidate(metrics, pocket_area_mm2, theta_deg=60.0, uncut_tol_frac=0.0025, share_tol=0.0025,
+                     eng_tol_deg=2.0, clean_max_eng_margin_deg=50.0, clean_max_share=0.02):
+    """Pick one of several planned paths from their simulated metrics (lexicographic, with tolerances).
+
+    ``metrics``: list of dicts with ``uncut_beyond_unreachable_mm2`` (mm^2),
+    ``share_above_theta_plus5`` (fraction of the cutting length), ``max_engagement_deg`` and
+    ``time_s``. Successive filters, each keeping the candidates within a tolerance of the best:
+
+    1. uncut area beyond the unreachable corners, within ``uncut_tol_frac`` x pocket area
+       (0.25 %: 2.4 mm^2 on a 960 mm^2 pocket; this area moves by 0.3-0.4 mm^2 between 0.1 and
+       0.05 mm dixels, a missed arm corner leaves several mm^2);
+    2. share above theta + 5 deg, within ``share_tol`` (0.25 percentage points);
+    3. maximum engagement, within ``eng_tol_deg`` (2 deg);
+    4. the shortest machining time (first of equals: the smaller, earlier candidate).
+
+    Returns ``(index, reasons)``; ``reasons`` holds the indices kept after each stage and
+    ``clean`` (per candidate: uncut beyond unreachable within the stage-1 tolerance of zero, share
+    above theta + 5 at most ``clean_max_share``, maximum engagement below theta +
+    ``clean_max_eng_margin_deg``).
+
+    >>> m = [{"uncut_beyond_unreachable_mm2": 10.1, "share_above_theta_plus5": 0.011,
+    ...       "max_engagement_deg": 174.5, "time_s": 196.2},
+    ...      {"uncut_beyond_unreachable_mm2": 2.0, "share_above_theta_plus5": 0.011,
+    ...       "max_engagement_deg": 100.6, "time_s": 184.8}]
+    >>> choose_candidate(m, 960.0)[0]
+    1
+    """
+    if not metrics:
+        raise ValueError("metrics must hold at least one candidate")
+    keys = ("uncut_beyond_unreachable_mm2", "share_above_theta_plus5", "max_engagement_deg", "time_s")
+    for j, m in enumerate(metrics):
+        for k in keys:
+            if k not in m or not np.isfinite(float(m[k])):
+                raise ValueError(f"metrics[{j}]: '{k}' missing or not finite")
+    tol_uncut = uncut_tol_frac * float(pocket_area_mm2)
+    keep = list(range(len(metrics)))
+    why = {}
+    for key, tol in zip(keys[:3], (tol_uncut, share_tol, eng_tol_deg)):
+        best = min(float(metrics[j][key]) for j in keep)
+        keep = [j for j in keep if float(metrics[j][key]) <= best + tol]
+        why[key] = {"best": best, "tolerance": tol, "kept": list(keep)}
+    i = min(keep, key=lambda j: (float(metrics[j]["time_s"]), j))
+    why["time_s"] = {"best": float(metrics[i]["time_s"]), "kept": [i]}
+    why["clean"] = [bool(float(m["uncut_beyond_unreachable_mm2"]) <= tol_uncut
+                         and float(m["share_above_theta_plus5"]) <= clean_max_share
+                         and float(m["max_engagement_deg"]) < theta_deg + clean_max_eng_margin_deg)
+                    for m in metrics]
+    return i, why
+
+
+def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds, arm_min_area_mm2,
+                     max_wall_share):
+    """:func:`hybrid_path` for one numeric ``max_wall_share``."""
     from cnclab.simulation.common import simulate
     from cnclab.simulation.dixel import Stock
 
@@ -427,7 +541,7 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
     # 1. open centre: chained constant-engagement laps
     E = c + np.array([0.5 * job.start_hole_diameter - r, 0.0])       # touches the hole wall
     segs = [(_link(c, E, None, resolution_mm), "link", "centre")]
-    laps = 0
+    laps, stop_share = 0, None
     domain = pocket.buffer(-2 * resolution_mm)   # 2 rows: wall slivers must not join the cleared region
     for _ in range(int(max_laps)):
         try:
@@ -436,6 +550,7 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
             break
         on_wall = shapely.distance(shapely.points(P), allowed.exterior) < 1e-6
         if on_wall.mean() > max_wall_share:
+            stop_share = float(on_wall.mean())
             break               # this lap would run along the final contour: the arms take over
         df = simulate(stock, P, r, job.a_p, job.feed)
         if float(df.removed_mm2.sum()) < 1e-6:
@@ -494,7 +609,8 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
                 world.append(W)
             stock = _apply_world(stock, world, r)
     info = {"laps": laps, "arms": arms_done, "periods_per_arm": periods, "rounds": rounds,
-            "medial_axis": medial_axis(pocket, spacing_mm)}
+            "medial_axis": medial_axis(pocket, spacing_mm), "max_wall_share": max_wall_share,
+            "stop_lap_wall_share": stop_share}
     return StrategyPath.build(segs, "hybrid (Jacsó §4)", info)
 
 

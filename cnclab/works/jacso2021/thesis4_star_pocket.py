@@ -119,18 +119,17 @@ def trochoid_sweep(resolution_mm=None):
                          feed_mm_min=t["v_f_printed_mm_min"], link_feed_mm_min=t["link_feed_mm_min"])
 
 
-USER_POCKETS = (("rectangle 40 x 24", "rectangle_pocket.json", {}),
-                ("L-shape", "l_pocket.json", {}),
-                ("L-shape, max_wall_share 0.5", "l_pocket.json", {"max_wall_share": 0.5}))
+USER_POCKETS = (("rectangle 40 x 24", "rectangle_pocket.json"), ("L-shape", "l_pocket.json"))
 
 
 @functools.cache
 def user_pockets(resolution_mm=None):
-    """The hybrid path on the user-pocket examples of ``data/jacso2021`` (rectangle, L-shape with the
-    default and a larger ``max_wall_share``), evaluated with feed control.
+    """The hybrid path with default settings (``max_wall_share="auto"``) on the user-pocket
+    examples of ``data/jacso2021`` (rectangle, L-shape), evaluated with feed control.
 
     Returns ``(summaries DataFrame indexed by case, {case: (job, path, table)})``; the summary adds
-    ``uncut_beyond_unreachable_mm2`` = uncut area minus the corners the tool cannot reach.
+    ``uncut_beyond_unreachable_mm2`` = uncut area minus the corners the tool cannot reach and the
+    chosen ``max_wall_share``.
     """
     import pandas as pd
 
@@ -138,12 +137,29 @@ def user_pockets(resolution_mm=None):
 
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     rows, out = [], {}
-    for case, fname, kw in USER_POCKETS:
+    for case, fname in USER_POCKETS:
         job = pk.load_pocket(data_path("jacso2021", fname))
-        hp = pk.hybrid_path(job, res, **kw)
+        hp = pk.hybrid_path(job, res)
         T, s = pk.evaluate_strategy(hp, job, res, feed_control=True)
         s.update(case=case, laps=hp.info["laps"], arms=len(hp.info["arms"]),
+                 max_wall_share=hp.info["max_wall_share"],
                  uncut_beyond_unreachable_mm2=s["uncut_area_mm2"] - s["unreachable_area_mm2"])
         rows.append(s)
         out[case] = (job, hp, T)
     return pd.DataFrame(rows).set_index("case"), out
+
+
+def wall_share_candidates(resolution_mm=None):
+    """The ``max_wall_share="auto"`` choice on the star and the user pockets: one row per shape and
+    candidate (metrics from :func:`cnclab.toolpath.pocket.hybrid_path`'s ``info``), ``chosen``
+    marks the winner of :func:`cnclab.toolpath.pocket.choose_candidate`."""
+    import pandas as pd
+
+    kw = {} if resolution_mm is None else {"resolution_mm": resolution_mm}     # same cache keys as the notebook
+    paths = {"star": star_strategies(**kw)[1]["hybrid"][0]}
+    paths.update({case: hp for case, (_, hp, _) in user_pockets(**kw)[1].items()})
+    rows = []
+    for case, hp in paths.items():
+        for m in hp.info["wall_share_candidates"]:
+            rows.append(dict(m, shape=case, chosen=m["max_wall_share"] == hp.info["max_wall_share"]))
+    return pd.DataFrame(rows).set_index(["shape", "max_wall_share"])
