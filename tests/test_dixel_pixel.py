@@ -200,3 +200,28 @@ def test_dixel_engagement_bad_options():
     for b in ("polyline", "linear"):
         assert st.engagement((5, 12), 3, (1, 0), boundary=b).angle_deg == pytest.approx(
             math.degrees(math.acos(1 - 1 / 3)), abs=0.05)
+
+
+def test_simulate_runs_equals_simulating_each_run_on_one_stock():
+    """simulate_runs = simulate per run between rapids, in order, on the same stock; bad flags refused."""
+    import pytest as _pytest
+    from shapely.geometry import box as _box
+
+    from cnclab.simulation import dixel as _dixel
+
+    xs = np.arange(0.0, 12.0, 0.1)
+    P = np.r_[np.c_[xs, np.full_like(xs, 1.0)], np.c_[xs[::-1], np.full_like(xs, 2.5)], [[5.0, 2.5]]]
+    rapid = np.zeros(len(P), bool)
+    rapid[len(xs)] = True                       # lift between the two passes
+    rapid[-1] = True                            # a lone last point: a run of 1, skipped
+    T = _dixel.simulate_runs(_dixel.Stock.from_polygon(_box(0, 0, 12, 6), 0.05), P, rapid, 1.5, 2, 300)
+    st = _dixel.Stock.from_polygon(_box(0, 0, 12, 6), 0.05)
+    a = _dixel.simulate(st, P[:len(xs)], 1.5, 2, 300)
+    b = _dixel.simulate(st, P[len(xs):-1], 1.5, 2, 300)
+    assert len(T) == len(P) - 1
+    assert np.array_equal(T.point.to_numpy(), np.arange(len(P) - 1))
+    assert np.flatnonzero(T.plunge.to_numpy()).tolist() == [0, len(xs)]
+    np.testing.assert_allclose(T.removed_mm2.to_numpy(), np.r_[a.removed_mm2, b.removed_mm2])
+    np.testing.assert_allclose(T.engagement_deg.to_numpy(), np.r_[a.engagement_deg, b.engagement_deg])
+    with _pytest.raises(ValueError, match="rapid"):
+        _dixel.simulate_runs(st, P, rapid[:-1], 1.5, 2, 300)

@@ -438,6 +438,45 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     return df
 
 
+def simulate_runs(stock: StockBase, centres, rapid, tool_radius, a_p, feed_mm_min, **kwargs):
+    """:func:`simulate` a path that contains rapid moves, on one stock, in path order.
+
+    ``rapid[i]`` True means point i is reached by a rapid (the tool is lifted clear of the stock):
+    each run of points from one rapid landing to the next is simulated on its own (runs of fewer
+    than 2 points cut nothing and are skipped); keyword arguments go to :func:`simulate`.
+    Returns one DataFrame: the columns of :func:`simulate` for every simulated point plus
+    ``point`` (its index into ``centres``) and ``plunge`` (True at the first point of each run,
+    where the tool comes down onto the path).
+
+    >>> import numpy as np
+    >>> from shapely.geometry import box
+    >>> from cnclab.simulation.dixel import Stock
+    >>> P = np.c_[np.r_[np.arange(0, 10, 0.5), np.arange(0, 10, 0.5)], np.r_[np.zeros(20), np.full(20, 6.0)]]
+    >>> T = simulate_runs(Stock.from_polygon(box(0, -5, 10, 10), 0.1), P, np.arange(40) == 20, 2, 1, 100)
+    >>> int(T.plunge.sum()), int(T.point.iloc[20])               # two runs; the second starts at point 20
+    (2, 20)
+    """
+    import pandas as pd
+
+    P = np.asarray(centres, dtype=float)
+    rapid = np.asarray(rapid, dtype=bool)
+    if rapid.shape != (len(P),):
+        raise ValueError(f"rapid must have one flag per point ({len(P)}), got shape {rapid.shape}")
+    starts = np.r_[0, np.flatnonzero(rapid[1:]) + 1]
+    stops = np.r_[starts[1:], len(P)]
+    tables = []
+    for a, b in zip(starts, stops):
+        if b - a < 2:
+            continue
+        df = simulate(stock, P[a:b], tool_radius, a_p, feed_mm_min, **kwargs)
+        df["point"] = np.arange(a, b)
+        df["plunge"] = np.arange(a, b) == a
+        tables.append(df)
+    if not tables:
+        raise ValueError("the path has no run of >= 2 points between rapids: nothing to simulate")
+    return pd.concat(tables, ignore_index=True)
+
+
 def _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z, out, kw):
     """The reference loop of :func:`simulate` (a Python loop over the steps calling
     ``stock.engagement(..., **kw)`` and ``stock.cut_disk(..., **kw)``): fills the arrays ``out``."""

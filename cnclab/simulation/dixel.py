@@ -36,9 +36,9 @@ import math
 import numpy as np
 
 from .common import (Engagement, StockBase, _check_radius, _check_xy, _refine_transitions, _resolve_backend,
-                     simulate, strip_area)
+                     simulate, simulate_runs, strip_area)
 
-__all__ = ["Stock", "simulate", "Engagement", "scanline_intervals"]
+__all__ = ["Stock", "simulate", "simulate_runs", "Engagement", "scanline_intervals"]
 
 
 def _rings(polygon):

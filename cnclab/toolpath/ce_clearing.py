@@ -614,7 +614,6 @@ def evaluate_path(path: ClearingPath, pocket, tool_radius: float, theta_deg: flo
                     ("rapid_mm_min", rapid_mm_min)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise ValueError(f"{name} must be > 0 mm/min, got {v!r}")
-    import pandas as pd
 
     from cnclab.simulation import dixel
 
@@ -632,18 +631,8 @@ def evaluate_path(path: ClearingPath, pocket, tool_radius: float, theta_deg: flo
     Q = np.vstack([P[:1], P[seg - 1] + t[:, None] * (P[seg] - P[seg - 1])])
     KQ = np.r_[K[:1], K[seg]]
     stock = dixel.Stock.from_polygon(pocket, h)
-    rapid = KQ == "rapid"
-    starts = np.r_[0, np.flatnonzero(rapid)]
-    stops = np.r_[np.flatnonzero(rapid), len(Q)]
-    tables = []
-    for a, b in zip(starts, stops):
-        if b - a < 2:
-            continue
-        df = dixel.simulate(stock, Q[a:b], r, a_p, feed_mm_min)
-        df["kind"] = KQ[a:b]
-        df["plunge"] = np.r_[True, np.zeros(b - a - 1, bool)]
-        tables.append(df)
-    T = pd.concat(tables, ignore_index=True)
+    T = dixel.simulate_runs(stock, Q, KQ == "rapid", r, a_p, feed_mm_min)
+    T["kind"] = KQ[T.point.to_numpy()]
     T["s"] = np.cumsum(T.ds.to_numpy())
     rem, ds = T.removed_mm2.to_numpy(), T.ds.to_numpy()
     eng = T.engagement_deg.to_numpy()

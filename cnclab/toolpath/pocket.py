@@ -851,27 +851,17 @@ def evaluate_strategy(path: StrategyPath, job: PocketJob, resolution_mm=0.05, fe
     minimum V / MRR_nom and the MRR error over the "cut" segments
     (:func:`cnclab.cutting.feed_control.mrr_error_windowed`, windows of ``mrr_window_mm``).
     """
-    import pandas as pd
-
     from cnclab.cutting.feed_control import controlled_feed, mrr_error_windowed
     from cnclab.simulation import dixel
 
     p = _resample_strategy(path, resolution_mm)
     stock = dixel.Stock.from_polygon(job.polygon.difference(job.start_hole()), resolution_mm)
-    P, rapid = p.points, p.rapid
-    starts = np.r_[0, np.flatnonzero(rapid)]
-    ends = np.r_[np.flatnonzero(rapid), len(P)]
-    tables = []
-    for a, b in zip(starts, ends):
-        if b - a < 2:
-            continue
-        df = dixel.simulate(stock, P[a:b], job.tool_radius, job.a_p, job.feed, f_z=job.f_z, teeth=job.teeth)
-        df["kind"] = p.kinds[a:b]
-        if a > 0:
-            df.loc[df.index[0], "kind"] = "link"           # the plunge after a rapid
-        df["phase"] = p.phase[a:b]
-        tables.append(df)
-    T = pd.concat(tables, ignore_index=True)
+    T = dixel.simulate_runs(stock, p.points, p.rapid, job.tool_radius, job.a_p, job.feed, f_z=job.f_z,
+                            teeth=job.teeth)
+    idx = T.point.to_numpy()
+    # the plunge after a rapid is a link
+    T["kind"] = np.where(T.plunge.to_numpy() & (idx > 0), "link", np.asarray(p.kinds, dtype=object)[idx])
+    T["phase"] = np.asarray(p.phase, dtype=object)[idx]
     kinds = T.kind.to_numpy()
     rem = T.removed_mm2.to_numpy()
     T["link_cuts"] = (kinds == "link") & (rem > link_tol_mm2)
