@@ -32,6 +32,15 @@ def _npmod(a, b):
     return a % b
 
 
+@njit(cache=True, inline="always")
+def _angle_range(f0, f1, front_only):
+    """Feed direction angle psi0 (rad) and the measured range (lo, hi) of angles from it (rad):
+    the front half-circle (-pi/2, pi/2) or the whole circle (-pi, pi)."""
+    if front_only:
+        return math.atan2(f1, f0), -_PI / 2, _PI / 2
+    return math.atan2(f1, f0), -_PI, _PI
+
+
 # ---------------------------------------------------------------------------------------------
 # dixel
 # ---------------------------------------------------------------------------------------------
@@ -413,11 +422,7 @@ def _dixel_engagement_front(A, B, y0, h, cx, cy, r, psi0, m, j_lo, polyline, bis
 @njit(cache=True)
 def dixel_engagement(A, B, y0, h, cx, cy, r, f0, f1, front_only, polyline, bisections):
     """Port of ``dixel.Stock.engagement`` (method="rows"): (k, 2) engaged intervals (rad, from feed)."""
-    psi0 = math.atan2(f1, f0)
-    if front_only:
-        lo, hi = -_PI / 2, _PI / 2
-    else:
-        lo, hi = -_PI, _PI
+    psi0, lo, hi = _angle_range(f0, f1, front_only)
     empty = np.empty((0, 2))
     j_lo = int(math.ceil((cy - r - y0) / h - 0.5))
     j_hi = int(math.floor((cy + r - y0) / h - 0.5))
@@ -666,11 +671,7 @@ def pixel_cut(grid, x0, y0, h, cx, cy, r):
 @njit(cache=True)
 def pixel_engagement(grid, x0, y0, h, cx, cy, r, f0, f1, front_only, n_samples, bisections):
     """Port of ``StockBase.engagement`` on the pixel grid: (k, 2) engaged intervals (rad)."""
-    psi0 = math.atan2(f1, f0)
-    if front_only:
-        lo, hi = -_PI / 2, _PI / 2
-    else:
-        lo, hi = -_PI, _PI
+    psi0, lo, hi = _angle_range(f0, f1, front_only)
     empty = np.empty((0, 2))
     if n_samples <= 0:
         n_samples = max(181, int(math.ceil((hi - lo) * r / (0.5 * h))) + 1)
