@@ -740,6 +740,15 @@ def _chip(iv, f_z):
     return f_z * cmax, f_z * s / theta
 
 
+@njit(cache=True, inline="always")
+def _cut_one(model, A, B, grid, x0, y0, h, cx, cy, r):
+    """Cut one disk (model 0 dixel, 1 pixel): removed area (mm^2), or -1 when a dixel row ran out
+    of interval capacity (nothing changed: grow and retry)."""
+    if model == 0:
+        return dixel_cut(A, B, y0, h, cx, cy, r)
+    return pixel_cut(grid, x0, y0, h, cx, cy, r) * (h * h)
+
+
 @njit(cache=True)
 def simulate_path(model, A, B, grid, x0, y0, h, P, d, ds, s, r, lag, central, front_only, polyline,
                   bisections, n_samples, f_z, i_start, k_start, fd0, fd1, eng, ent, ext, rem, hmax, havg):
@@ -756,13 +765,10 @@ def simulate_path(model, A, B, grid, x0, y0, h, P, d, ds, s, r, lag, central, fr
             fd0 = d[i - 1, 0]
             fd1 = d[i - 1, 1]
         while k < i and s[i] - s[k] > lag:
-            if model == 0:
-                v = dixel_cut(A, B, y0, h, P[k, 0], P[k, 1], r)
-                if v < 0:
-                    return i, k, fd0, fd1
-                rem[k] = v
-            else:
-                rem[k] = pixel_cut(grid, x0, y0, h, P[k, 0], P[k, 1], r) * (h * h)
+            v = _cut_one(model, A, B, grid, x0, y0, h, P[k, 0], P[k, 1], r)
+            if v < 0:
+                return i, k, fd0, fd1
+            rem[k] = v
             k += 1
         g0 = fd0
         g1 = fd1
@@ -797,13 +803,10 @@ def simulate_path(model, A, B, grid, x0, y0, h, P, d, ds, s, r, lag, central, fr
             ext[i] = np.nan
     i = n
     while k < n:
-        if model == 0:
-            v = dixel_cut(A, B, y0, h, P[k, 0], P[k, 1], r)
-            if v < 0:
-                return i, k, fd0, fd1
-            rem[k] = v
-        else:
-            rem[k] = pixel_cut(grid, x0, y0, h, P[k, 0], P[k, 1], r) * (h * h)
+        v = _cut_one(model, A, B, grid, x0, y0, h, P[k, 0], P[k, 1], r)
+        if v < 0:
+            return i, k, fd0, fd1
+        rem[k] = v
         k += 1
     return i, k, fd0, fd1
 
@@ -817,11 +820,8 @@ def cut_path(model, A, B, grid, x0, y0, h, P, r, k_start, rem):
     the cut alone without per-call overhead.
     """
     for k in range(k_start, P.shape[0]):
-        if model == 0:
-            v = dixel_cut(A, B, y0, h, P[k, 0], P[k, 1], r)
-            if v < 0:
-                return k
-            rem[k] = v
-        else:
-            rem[k] = pixel_cut(grid, x0, y0, h, P[k, 0], P[k, 1], r) * (h * h)
+        v = _cut_one(model, A, B, grid, x0, y0, h, P[k, 0], P[k, 1], r)
+        if v < 0:
+            return k
+        rem[k] = v
     return P.shape[0]
