@@ -3,7 +3,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 
 from cnclab.toolpath import gcode
 from cnclab.toolpath.gcode import GcodeError, Move, parse_gcode, path_lengths, write_gcode
@@ -91,15 +91,17 @@ def test_save_is_atomic_and_refuses_input(tmp_path):
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.tuples(st.floats(-500, 500), st.floats(-500, 500), st.floats(-50, 50),
                           st.sampled_from(["G0", "G1"]), st.floats(1, 5000)), min_size=1, max_size=30))
+@example([(0.0, 0.0, 0.0005, "G0", 1.0)])     # a rounding tie: written as 0.001, np.round gives 0.0
 def test_round_trip_property(pts):
     moves = [Move(m, x, y, z, feed=None if m == "G0" else f) for x, y, z, m, f in pts]
     text = write_gcode(moves, decimals=3)
     again = parse_gcode(text)
     assert write_gcode(again, decimals=3) == text
-    # every parsed point is within half a unit of the last digit of the original
-    orig = {tuple(np.round(mv.xyz, 3)) for mv in moves}
+    # every parsed point is within half a unit of the last digit of an original point (the writer's
+    # decimal formatting and np.round may break ties like 0.0005 differently, so compare distances)
+    orig = np.array([mv.xyz for mv in moves], dtype=float)
     for mv in again:
-        assert tuple(np.round(mv.xyz, 3)) in orig
+        assert np.min(np.max(np.abs(orig - np.asarray(mv.xyz, float)), axis=1)) <= 0.5e-3 + 1e-9
 
 
 # ---------------------------------------------------------------- zig-zag (Hoang Table 1)
