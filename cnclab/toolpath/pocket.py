@@ -339,20 +339,6 @@ def _rot(geom_or_pts, angle_deg, origin):
     return affinity.rotate(geom_or_pts, angle_deg, origin=tuple(origin))
 
 
-def _wedge(center, angle_deg, half_width_deg, radius):
-    a = np.radians(angle_deg + np.linspace(-half_width_deg, half_width_deg, 33))
-    c = np.asarray(center, float)
-    return Polygon(np.vstack([c, c + radius * np.c_[np.cos(a), np.sin(a)]]))
-
-
-def _straight_link(E, S, allowed, via):
-    """Straight link E -> S if it stays in ``allowed``, else E -> via -> S."""
-    guard = allowed.buffer(1e-6)
-    if guard.contains(LineString([E, S])):
-        return np.vstack([E, S])
-    return np.vstack([E, via, S])
-
-
 def _label_lap(eng, theta_deg, margin_deg=5.0):
     """Kinds of a centre lap from its simulated engagement: the leading run below theta - margin
     is the lap's roll-in (Thesis III transition from the previous lap's end), the trailing run
