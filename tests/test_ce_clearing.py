@@ -116,9 +116,11 @@ def test_gcode_round_trip():
     assert ramp and np.all(np.diff(ramp[: len(ramp) // 2]) <= 1e-12)   # helical ramp goes down
 
 
-def test_clamp_inside_respects_islands():
+def test_clamp_to_region_respects_islands():
+    from cnclab.toolpath.constant_engagement import clamp_to_region
+
     ring = box(0, 0, 10, 10).difference(box(4, 4, 6, 6))
-    P = cc.clamp_inside([[5.0, 4.5], [12.0, 5.0], [1.0, 1.0]], ring)
+    P = clamp_to_region([[5.0, 4.5], [12.0, 5.0], [1.0, 1.0]], ring)
     assert P.tolist() == [[5.0, 4.0], [10.0, 5.0], [1.0, 1.0]]
 
 

@@ -18,7 +18,7 @@ Algorithm (:func:`ce_clearing`):
    Thesis III path (engagement ``theta_deg``, midpoint direction) is traced from where the previous
    lap ended, so laps chain like a spiral. Tool centres are kept in the seed's *cell* (the part of
    the allowed region geodesically nearest to the seed, :func:`geodesic_cells`; islands included,
-   :func:`clamp_inside`): the pass is limited by the final contour and, across a neck, by the
+   :func:`~cnclab.toolpath.constant_engagement.clamp_to_region`): the pass is limited by the final contour and, across a neck, by the
    neighbouring cell. The limit acts *within* the lap (``wall="gate"``): a stretch pushed onto the
    final contour is kept only while a trial cut holds the engagement at or below
    ``theta_deg + gate_margin_deg``; otherwise the lap ends where it meets the final contour and
@@ -62,7 +62,10 @@ import shapely
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
-__all__ = ["ClearingPath", "KINDS", "CUTTING_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "clamp_inside", "helical_entry", "ce_clearing",
+from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
+                                  resample_path, thesis3_path)
+
+__all__ = ["ClearingPath", "KINDS", "CUTTING_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "helical_entry", "ce_clearing",
            "evaluate_path", "to_moves", "path_from_programme"]
 
 #: Segment kinds of a :class:`ClearingPath`; ``link`` and ``rapid`` are not meant to cut.
@@ -128,29 +131,18 @@ def default_seeds(allowed, seed_clearance_ratio: float = 0.6) -> list[tuple]:
     return seeds
 
 
-def clamp_inside(P, allowed):
-    """Project the points ``P`` (N, 2) mm lying outside ``allowed`` onto its nearest boundary point
-    (outer ring *or* island ring); points inside are unchanged.
-
-    >>> from shapely.geometry import box
-    >>> ring = box(0, 0, 10, 10).difference(box(4, 4, 6, 6))
-    >>> clamp_inside([[5.0, 4.5], [12.0, 5.0]], ring).round(6).tolist()
-    [[5.0, 4.0], [10.0, 5.0]]
-    """
-    P = np.array(P, float)
-    inside = shapely.contains_xy(allowed, P[:, 0], P[:, 1])
-    if not inside.all():
-        lines = shapely.shortest_line(allowed.boundary, shapely.points(P[~inside]))
-        P[~inside] = shapely.get_coordinates(lines)[0::2]
-    return P
+def _true_runs(mask):
+    """(start, stop) index pairs of the maximal runs of True in the boolean array ``mask``."""
+    e = np.flatnonzero(np.diff(np.r_[0, np.asarray(mask).astype(int), 0]))
+    return list(zip(e[0::2], e[1::2]))
 
 
 def _resample(P, step):
-    d = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
-    if d[-1] <= 0:
+    """Polyline samples every <= ``step`` mm (a zero-length path stays one point)."""
+    P = np.asarray(P, float)
+    if not np.any(np.diff(P, axis=0)):
         return P[:1].copy()
-    u = np.linspace(0, d[-1], max(int(math.ceil(d[-1] / step)), 1) + 1)
-    return np.c_[np.interp(u, d, P[:, 0]), np.interp(u, d, P[:, 1])]
+    return resample_path(P, step, spline=False)
 
 
 def helical_entry(seed_xy, entry_radius_mm: float, tool_radius: float, step_mm: float = 0.2):
@@ -169,19 +161,14 @@ def helical_entry(seed_xy, entry_radius_mm: float, tool_radius: float, step_mm: 
 
 
 def _touch_start(contour, E, r):
-    """Contour parameter t0 where a lap from ``E`` starts, and the start point P0 (|P0 - c(t0)| <= r)."""
-    T = contour.t_max - contour.t_min
-    tt = np.linspace(contour.t_min, contour.t_max, max(int(T / 0.02), 200), endpoint=False)
-    d = np.hypot(*(contour.point(tt) - np.asarray(E)).T)
-    i = int(np.argmin(d))
-    if d[i] > r:
-        C = contour.point(tt[i])[0]
-        return tt[i], C + r * (np.asarray(E) - C) / d[i]
-    # last contour point, going forward from the nearest one, still under the tool (as pocket.centre_lap)
-    fwd = np.r_[i:len(tt), 0:i]
-    run = d[fwd] <= r
-    j = fwd[int(np.argmin(run)) - 1] if not run.all() else i
-    return tt[j], np.asarray(E, float)
+    """Contour parameter t0 where a lap from ``E`` starts, and the start point P0 (|P0 - c(t0)| <= r):
+    :func:`~cnclab.toolpath.constant_engagement.lap_start`, with ``E`` moved to within r of the
+    contour when it is farther."""
+    t_near, d_near, t_join = lap_start(contour, E, r)
+    if d_near > r:
+        C = contour.point(t_near)[0]
+        return t_near, C + r * (np.asarray(E) - C) / d_near
+    return t_join, np.asarray(E, float)
 
 
 def _lap(stock, domain, seed, E, r, theta_deg, cell, dt, step, wall="trim"):
@@ -193,8 +180,6 @@ def _lap(stock, domain, seed, E, r, theta_deg, cell, dt, step, wall="trim"):
     into material. ``wall="clamp"`` (previous behaviour, kept for comparison): every centre outside
     ``cell`` is pushed back onto its nearest boundary point, one run.
     """
-    from .constant_engagement import ShiftedContour, cleared_boundary_contour, resample_path, thesis3_path
-
     c = cleared_boundary_contour(stock, seed, domain)
     t0, P0 = _touch_start(c, E, r)
     shifted = ShiftedContour(c, t0)
@@ -210,15 +195,14 @@ def _lap(stock, domain, seed, E, r, theta_deg, cell, dt, step, wall="trim"):
     if wall in ("clamp", "gate"):
         if wall == "clamp" and np.hypot(*(P0 - np.asarray(E))) > 1e-9:
             P = np.vstack([E, P])
-        Q = clamp_inside(P, cell)
+        Q = clamp_to_region(P, cell)
         moved = np.hypot(*(Q - P).T) > 1e-9
         return [Q] if wall == "clamp" else (Q, moved)
     if wall != "trim":
         raise ValueError(f"wall must be 'trim', 'gate' or 'clamp', got {wall!r}")
     inside = shapely.contains_xy(cell, P[:, 0], P[:, 1])
     runs = []
-    edges = np.flatnonzero(np.diff(np.r_[0, inside.astype(int), 0]))
-    for a, b in zip(edges[0::2], edges[1::2]):            # P[a:b] inside
+    for a, b in _true_runs(inside):                       # P[a:b] inside
         run = P[a:b]
         ends = []
         for i_out, i_in, at_start in ((a - 1, a, True), (b, b - 1, False)):
@@ -242,8 +226,7 @@ def _gate(stock, Q, moved, r, limit_deg, a_p, feed_mm_min):
 
     eng = simulate(stock, Q, r, a_p, feed_mm_min, copy=True).engagement_deg.to_numpy()
     keep = np.ones(len(Q), bool)
-    edges = np.flatnonzero(np.diff(np.r_[0, moved.astype(int), 0]))
-    for a, b in zip(edges[0::2], edges[1::2]):            # Q[a:b] on the wall
+    for a, b in _true_runs(moved):                        # Q[a:b] on the wall
         if np.nanmax(np.r_[eng[a:min(b + 1, len(Q))], 0.0]) > limit_deg:
             keep[a:b] = False
             if a > 0:
@@ -253,8 +236,7 @@ def _gate(stock, Q, moved, r, limit_deg, a_p, feed_mm_min):
                 if b - 1 == a:
                     keep[a] = False
     runs = []
-    edges = np.flatnonzero(np.diff(np.r_[0, keep.astype(int), 0]))
-    for a, b in zip(edges[0::2], edges[1::2]):
+    for a, b in _true_runs(keep):
         if b - a >= 2:
             runs.append(Q[a:b])
     return runs

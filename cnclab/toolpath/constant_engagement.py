@@ -377,17 +377,52 @@ def cleared_boundary_contour(stock, seed_xy, domain_polygon, min_spacing_mm=None
     return SplineContour(pts, closed=True)
 
 
+def lap_start(contour, start_xy, tool_radius, spacing: float = 0.02):
+    """Where a lap around ``contour`` begun with the tool centre at ``start_xy`` (mm) joins it.
+
+    The contour is sampled every ``spacing`` of its parameter (at least 200 samples). Returns
+    ``(t_nearest, d_nearest, t_join)``: the parameter of the sample nearest to ``start_xy``, its
+    distance (mm), and the parameter of the last sample, going forward from the nearest one, that
+    is still under the tool (within max(r, d_nearest) of ``start_xy``) — the lap continues from
+    there, so it blends in from the previous one without a radial plunge.
+    """
+    T = contour.t_max - contour.t_min
+    tt = np.linspace(contour.t_min, contour.t_max, max(int(T / spacing), 200), endpoint=False)
+    d = np.hypot(*(contour.point(tt) - np.asarray(start_xy)).T)
+    i = int(np.argmin(d))
+    fwd = np.r_[i:len(tt), 0:i]
+    run = d[fwd] <= max(tool_radius, d[i] + 1e-6)
+    j = fwd[int(np.argmin(run)) - 1] if not run.all() else i
+    return float(tt[i]), float(d[i]), float(tt[j])
+
+
 def clamp_to_region(P, allowed_polygon):
-    """Project path points outside ``allowed_polygon`` onto its boundary (the final-contour limit)."""
+    """Project path points (N, 2, mm) outside ``allowed_polygon`` onto its nearest boundary point
+    (the final-contour limit): outer ring or island ring; a MultiPolygon works too. Points inside
+    are unchanged; returns a new array.
+
+    >>> from shapely.geometry import box
+    >>> ring = box(0, 0, 10, 10).difference(box(4, 4, 6, 6))     # an island in the middle
+    >>> clamp_to_region([[5.0, 4.5], [12.0, 5.0]], ring).round(6).tolist()
+    [[5.0, 4.0], [10.0, 5.0]]
+    """
     import shapely
 
-    P = np.asarray(P, float).copy()
+    P = np.array(P, float)
     inside = shapely.contains_xy(allowed_polygon, P[:, 0], P[:, 1])
     if not inside.all():
-        ring = allowed_polygon.exterior
         pts = shapely.points(P[~inside])
-        proj = shapely.line_interpolate_point(ring, shapely.line_locate_point(ring, pts))
-        P[~inside] = shapely.get_coordinates(proj)
+        best, dist = None, None
+        for part in shapely.get_parts(allowed_polygon):
+            for ring in (part.exterior, *part.interiors):
+                proj = shapely.line_interpolate_point(ring, shapely.line_locate_point(ring, pts))
+                d = shapely.distance(proj, pts)
+                if best is None:
+                    best, dist = proj, d
+                else:
+                    closer = d < dist
+                    best, dist = np.where(closer, proj, best), np.where(closer, d, dist)
+        P[~inside] = shapely.get_coordinates(best)
     return P
 
 

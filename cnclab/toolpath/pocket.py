@@ -364,20 +364,12 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
     from the previous one (engagement 0 -> theta, no radial plunge) and closes on its own start.
     Tool centres are clamped to ``allowed``. Returns the (n, 2) centre points (mm).
     """
-    from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, resample_path,
-                                      thesis3_path)
+    from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
+                                      resample_path, thesis3_path)
 
     r = tool_radius
     c = cleared_boundary_contour(stock, seed_xy, domain)
-    T = c.t_max - c.t_min
-    tt = np.linspace(c.t_min, c.t_max, max(int(T / 0.02), 200), endpoint=False)
-    d = np.hypot(*(c.point(tt) - np.asarray(start_xy)).T)
-    i = int(np.argmin(d))
-    # the entry point: last contour point, going forward from the nearest one, inside the tool circle
-    fwd = np.r_[i:len(tt), 0:i]
-    run = d[fwd] <= max(r, d[i] + 1e-6)
-    j = fwd[int(np.argmin(run)) - 1] if not run.all() else i
-    shifted = ShiftedContour(c, tt[j])
+    shifted = ShiftedContour(c, lap_start(c, start_xy, r)[2])
     for h in (dt, dt / 2, dt / 4):
         try:
             res = thesis3_path(shifted, r, theta_deg, h, method="midpoint", P0=np.asarray(start_xy, float))
