@@ -300,12 +300,10 @@ class StockBase:
         edges = _refine_transitions(self._contains, c, r, psi0, psi[k], psi[k + 1], m[k], bisections)
         # build engaged intervals: start at lo if m[0], edges alternate rising/falling
         bounds = np.concatenate([[lo] if m[0] else [], edges, [hi] if m[-1] else []])
-        iv = bounds.reshape(-1, 2)
-        ang = float(np.sum(iv[:, 1] - iv[:, 0]))
-        return Engagement(math.degrees(ang), math.degrees(iv[0, 0]), math.degrees(iv[-1, 1]), iv)
+        return self._engagement_from_intervals(bounds.reshape(-1, 2))
 
     def _engagement_from_intervals(self, iv) -> Engagement:
-        """:class:`Engagement` of engaged intervals (k, 2) (rad) returned by a compiled kernel."""
+        """:class:`Engagement` of engaged intervals (k, 2) (rad, from the feed direction, sorted)."""
         if iv.shape[0] == 0:
             return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
         ang = float((iv[:, 1] - iv[:, 0]).sum())

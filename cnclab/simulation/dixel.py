@@ -436,11 +436,7 @@ class Stock(StockBase):
             edges = np.sort(np.concatenate(parts))
         bounds = np.concatenate([pe[:1] if ins[0] else [], edges, pe[-1:] if ins[-1] else []])
         iv = np.minimum(np.maximum(bounds.reshape(-1, 2), lo), hi)
-        iv = iv[iv[:, 1] > iv[:, 0]]
-        if iv.size == 0:
-            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
-        ang = float((iv[:, 1] - iv[:, 0]).sum())
-        return Engagement(math.degrees(ang), math.degrees(iv[0, 0]), math.degrees(iv[-1, 1]), iv)
+        return self._engagement_from_intervals(iv[iv[:, 1] > iv[:, 0]])
 
     def _rows_of_disk(self, cy: float, r: float):
         h = self.resolution_mm
