@@ -259,10 +259,9 @@ def move_statistics(dense, result, a_e: float) -> dict:
     v = np.diff(Q, axis=0)
     L = np.linalg.norm(v, axis=1)
     feed = ~result.jump[1:]
-    a = np.degrees(np.arctan2(v[:, 1], v[:, 0])) % 90.0
-    diag = np.abs(a - 45.0) < 22.5
-    j = result.jump
     h = np.arctan2(v[:, 1], v[:, 0])
+    diag = np.abs(np.degrees(h) % 90.0 - 45.0) < 22.5
+    j = result.jump
     turn = np.abs(np.angle(np.exp(1j * np.diff(h))))
     both = feed[1:] & feed[:-1]
     return {"jumps": int(j.sum()), "long_feed_moves": int(np.sum(feed & (L > 1.5 * a_e))),
