@@ -36,7 +36,7 @@ import math
 import numpy as np
 
 from .common import (Engagement, StockBase, _check_radius, _check_xy, _refine_transitions, _resolve_backend,
-                     simulate, simulate_runs, strip_area)
+                     simulate, simulate_runs)
 
 __all__ = ["Stock", "simulate", "simulate_runs", "Engagement", "scanline_intervals"]
 
