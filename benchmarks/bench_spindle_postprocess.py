@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from cnclab.cutting.spindle_control import insert_spindle_records, spindle_schedule
+from cnclab.nc.spindle_control import insert_spindle_records, spindle_schedule
 from cnclab.geometry.freeform_part import FreeformPart, freeform_part_mesh
 from cnclab.geometry.mesh import FacetLocator, read_stl, write_stl
-from cnclab.toolpath import apt
+from cnclab.nc import apt
 from cnclab.toolpath.reorder import reorder_path
 
 

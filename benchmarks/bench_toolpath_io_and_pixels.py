@@ -12,7 +12,7 @@ from shapely.geometry import box
 
 from cnclab.simulation import pixel
 from cnclab.toolpath import constant_mrr as cm
-from cnclab.toolpath import gcode
+from cnclab.nc import gcode
 
 
 def _time(fn, repeat=3):

@@ -11,7 +11,7 @@ import sys
 COMMANDS = {
     "claims": ("cnclab.claims", "compute every ledger row; --work W, --json, --report DIR"),
     "reproduce": ("cnclab.reproduce", "execute every notebook, export HTML/figures, write the claims report"),
-    "spindle": ("cnclab.cli_spindle", "constant-v_c spindle/feed post-processing of an APT file against an STL"),
+    "spindle": ("cnclab.nc.cli_spindle", "constant-v_c spindle/feed post-processing of an APT file against an STL"),
     "nb": ("cnclab.notebook_tools", "notebook housekeeping: from-py, strip, list"),
 }
 

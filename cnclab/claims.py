@@ -24,13 +24,22 @@ missing_input   NOT_DERIVABLE only: which input the seed does not give
 slow            1 if computing the claim takes long (skipped by the tests in fast mode)
 notebook        the notebook (relative to ``notebooks/``) that shows the claim
 note            free text: for DIFFERS the explanation, otherwise context
+reconstructed_by NOT_DERIVABLE only (optional): dotted function giving what the reconstruction yields
+                (partial evidence), reported as ``reconstructed_value`` beside the paper value
 
 Status semantics (what "holds" means)
 -------------------------------------
-MATCH           the reproduced value lies within tolerance of the paper value (for an
-                :class:`Interval`, the paper value lies inside the interval widened by the tolerance)
+MATCH           a result the seed prints, computed from the seed's inputs by an independent route, lies
+                within tolerance of the paper value (for an :class:`Interval`, the paper value lies
+                inside the interval widened by the tolerance)
 DIFFERS         the reproduced (consistent) value is *outside* tolerance, and the alternative that
                 explains the printed number is *inside* it
+DISCREPANT      outside tolerance and no explanation found; the note says what was tried. Holds only
+                while the discrepancy persists (value still outside tolerance)
+CONSISTENT      a printed number that restates other printed numbers (arithmetic check); holds when
+                within tolerance; counted apart from reproduced results
+INPUT           a printed value the reproduction takes as input or builds in (design target, program
+                condition); never counted as reproduced; with computed_by it must be within tolerance
 NOT_DERIVABLE   no function; ``missing_input`` names what the seed does not give
 """
 from __future__ import annotations
@@ -50,8 +59,10 @@ from .paths import CLAIMS_CSV, WORK_IDS
 
 COLUMNS = ("claim_id", "work", "seed_file", "location", "quantity", "unit", "paper_value", "rtol",
            "atol", "tolerance_basis", "status", "computed_by", "alt_computed_by", "missing_input",
-           "slow", "notebook", "note")
-STATUSES = ("MATCH", "DIFFERS", "NOT_DERIVABLE")
+           "slow", "notebook", "note", "reconstructed_by")
+STATUSES = ("MATCH", "DIFFERS", "DISCREPANT", "CONSISTENT", "INPUT", "NOT_DERIVABLE")
+#: statuses whose rows are reproduced results (the headline); the others are counted apart
+REPRODUCED = ("MATCH", "DIFFERS")
 SEED_FILES = {
     "jacso2021": "000_690a1ed8f09fd780.txt",
     "kim_yang2006": "002_d412f01ccb8e936f.txt",
@@ -107,6 +118,7 @@ class Claim:
     slow: bool
     notebook: str
     note: str
+    reconstructed_by: str = ""
     line: int = 0  # line in the CSV file (1-based, header is line 1)
 
     def holds_within(self, value) -> bool:
@@ -164,7 +176,7 @@ def load(path: Path | str = CLAIMS_CSV) -> list[Claim]:
                 if r[col] and not _DOTTED.match(r[col]):
                     raise LedgerError(f"{where}: column {col!r} is not a dotted name: {r[col]!r}")
             st = r["status"]
-            if st in ("MATCH", "DIFFERS") and not r["computed_by"]:
+            if st in ("MATCH", "DIFFERS", "DISCREPANT", "CONSISTENT") and not r["computed_by"]:
                 raise LedgerError(f"{where}: {st} row needs computed_by")
             if st == "DIFFERS" and not (r["alt_computed_by"] and r["note"]):
                 raise LedgerError(f"{where}: DIFFERS row needs alt_computed_by (the explanation) and a note")
@@ -172,6 +184,12 @@ def load(path: Path | str = CLAIMS_CSV) -> list[Claim]:
                 raise LedgerError(f"{where}: NOT_DERIVABLE row needs missing_input and no computed_by")
             if st != "DIFFERS" and r["alt_computed_by"]:
                 raise LedgerError(f"{where}: alt_computed_by only belongs to DIFFERS rows")
+            if st == "DISCREPANT" and not r["note"]:
+                raise LedgerError(f"{where}: DISCREPANT row needs a note saying what was tried")
+            if r["reconstructed_by"] and st != "NOT_DERIVABLE":
+                raise LedgerError(f"{where}: reconstructed_by only belongs to NOT_DERIVABLE rows")
+            if r["reconstructed_by"] and not _DOTTED.match(r["reconstructed_by"]):
+                raise LedgerError(f"{where}: column 'reconstructed_by' is not a dotted name")
             rows.append(Claim(
                 claim_id=cid, work=r["work"], seed_file=r["seed_file"], location=r["location"],
                 quantity=r["quantity"], unit=r["unit"],
@@ -180,7 +198,7 @@ def load(path: Path | str = CLAIMS_CSV) -> list[Claim]:
                 tolerance_basis=r["tolerance_basis"], status=st, computed_by=r["computed_by"],
                 alt_computed_by=r["alt_computed_by"], missing_input=r["missing_input"],
                 slow=r["slow"] in ("1", "true", "True", "yes"), notebook=r["notebook"], note=r["note"],
-                line=i))
+                reconstructed_by=r["reconstructed_by"], line=i))
             if rows[-1].rtol < 0 or rows[-1].atol < 0:
                 raise LedgerError(f"{where}: tolerances must be >= 0")
     return rows
@@ -233,6 +251,7 @@ class Result:
     claim: Claim
     reproduced: Any = None      # float, Interval or None
     alt: Any = None             # DIFFERS: value under the explanation
+    reconstructed: Any = None   # NOT_DERIVABLE: what the reconstruction gives (reconstructed_by)
     ok: bool = False
     skipped: bool = False
     error: str = ""
@@ -275,6 +294,15 @@ def evaluate(claim: Claim, skip_slow: bool = False) -> Result:
     res = Result(claim)
     if claim.status == "NOT_DERIVABLE":
         res.ok = bool(claim.missing_input) and not claim.computed_by
+        if claim.reconstructed_by and not (skip_slow and claim.slow):
+            try:
+                res.reconstructed = _scalar(resolve(claim.reconstructed_by)())
+            except Exception as exc:  # reported, never hidden
+                res.error = f"{type(exc).__name__}: {exc}"
+                res.ok = False
+        return res
+    if claim.status == "INPUT" and not claim.computed_by:
+        res.ok = True
         return res
     if skip_slow and claim.slow:
         res.skipped = True
@@ -283,8 +311,10 @@ def evaluate(claim: Claim, skip_slow: bool = False) -> Result:
     try:
         res.reproduced = _scalar(resolve(claim.computed_by)())
         inside = claim.holds_within(res.reproduced)
-        if claim.status == "MATCH":
+        if claim.status in ("MATCH", "CONSISTENT", "INPUT"):
             res.ok = bool(inside)
+        elif claim.status == "DISCREPANT":
+            res.ok = not inside
         else:  # DIFFERS
             res.alt = _scalar(resolve(claim.alt_computed_by)())
             res.ok = bool((not inside) and claim.holds_within(res.alt))

@@ -1,9 +1,9 @@
-"""APT CL parser/writer (cnclab.toolpath.apt): round trip, dialect, bad input naming file and line."""
+"""APT CL parser/writer (cnclab.nc.apt): round trip, dialect, bad input naming file and line."""
 import numpy as np
 import pytest
 
 from cnclab.paths import data_path
-from cnclab.toolpath import apt
+from cnclab.nc import apt
 
 EXCERPT = """$$-> MFGNO / MFG0002
 PARTNO / MFG0002
@@ -163,7 +163,7 @@ def test_fast_and_careful_parsers_agree_on_state_errors(text, line):
 
 
 def test_bulk_insertion_equals_record_insertion():
-    from cnclab.cutting import spindle_control as sc
+    from cnclab.nc import spindle_control as sc
     from cnclab.geometry.freeform_part import FreeformPart, freeform_part_mesh
 
     part = FreeformPart()

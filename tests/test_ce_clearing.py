@@ -9,7 +9,7 @@ from scipy.spatial import cKDTree
 from shapely.geometry import box
 
 from cnclab.toolpath import ce_clearing as cc
-from cnclab.toolpath import gcode
+from cnclab.nc import gcode
 
 R, THETA, H = 5.0, math.degrees(math.acos(1 - 3 / 5)), 0.25
 POCKETS = {"plain": box(0, 0, 40, 30), "island": box(0, 0, 60, 40).difference(box(25, 15, 35, 25))}

@@ -7,7 +7,7 @@ from shapely.geometry import LineString, Point, box
 
 from cnclab.simulation import pixel
 from cnclab.toolpath import constant_mrr as cm
-from cnclab.toolpath import gcode
+from cnclab.nc import gcode
 
 
 def test_eq4_reference_hand_computed():

@@ -88,7 +88,7 @@ def test_rz_in_text_values_fall_inside_thesis4_ranges():
 
 
 def test_files_are_written_and_read_back():
-    from cnclab.toolpath import apt
+    from cnclab.nc import apt
     from cnclab.geometry.mesh import read_stl
     p = ch7_9.zigzag_apt(0.0)
     assert apt.read_apt(p).to_text() == open(p).read()
@@ -96,7 +96,7 @@ def test_files_are_written_and_read_back():
 
 
 def test_reordered_apt_round_trip_visits_every_point_once():
-    from cnclab.toolpath import apt
+    from cnclab.nc import apt
     cases, dense, orders = ch7_9.reorder_cases()
     path = ch7_9.reordered_apt(1)
     prog = apt.read_apt(path)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import shapely
 
+from cnclab.nc.gcode import gcode_roundtrip_error
 from cnclab.toolpath import pocket as pk
 
 RECT = {"polygon": [[0, 0], [40, 0], [40, 24], [0, 24]], "start_hole": {"center": [20, 12], "diameter": 11},
@@ -100,7 +101,7 @@ def test_hybrid_stays_in_region_and_gcode_roundtrips(planned):
     # tool centres never leave the region (1 µm: spline resampling of the clamped laps)
     assert shapely.distance(shapely.points(hp.points), job.allowed()).max() < 1e-3
     assert s["removed_volume_mm3"] == pytest.approx(job.volume_mm3() - job.a_p * s["uncut_area_mm2"], rel=0.02)
-    dmax, dlen, _ = pk.gcode_roundtrip_error(hp, job, feeds=None)
+    dmax, dlen, _ = gcode_roundtrip_error(hp, job, feeds=None)
     assert dmax < 1e-4 and dlen < 1e-2
 
 
@@ -218,5 +219,5 @@ def test_l_shaped_pocket_from_json():
     assert s["share_above_theta_plus5"] < 0.015
     assert s["link_removed_mm3"] < 0.01 * job.volume_mm3()
     assert shapely.distance(shapely.points(hp.points), job.allowed()).max() < 1e-3
-    dmax, dlen, _ = pk.gcode_roundtrip_error(hp, job)
+    dmax, dlen, _ = gcode_roundtrip_error(hp, job)
     assert dmax < 1e-4 and dlen < 1e-2

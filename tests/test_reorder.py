@@ -53,8 +53,9 @@ def test_reorder_bad_input():
 
 
 def test_reordered_program_links_segments_by_rapids():
-    from cnclab.toolpath import apt
-    from cnclab.toolpath.reorder import ReorderResult, reordered_program
+    from cnclab.nc import apt
+    from cnclab.nc.apt import reordered_program
+    from cnclab.toolpath.reorder import ReorderResult
 
     P = np.array([[0, 0, 1.0], [1, 0, 1], [2, 0, 1], [10, 10, 2], [11, 10, 2]])
     r = ReorderResult(np.array([0, 1, 2, 3, 4]), np.array([False, False, False, True, False]), np.ones(5))

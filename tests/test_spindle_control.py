@@ -1,14 +1,14 @@
-"""Spindle-speed post-processor (cnclab.cutting.spindle_control) and the `spindle` CLI."""
+"""Spindle-speed post-processor (cnclab.nc.spindle_control) and the `spindle` CLI."""
 import numpy as np
 import pytest
 
 from cnclab.__main__ import main as cli
-from cnclab.cutting import spindle_control as sc
+from cnclab.nc import spindle_control as sc
 from cnclab.cutting.speeds import spindle_speed
 from cnclab.geometry.freeform_part import tessellate_heightfield
 from cnclab.geometry.mesh import write_stl
 from cnclab.paths import data_path
-from cnclab.toolpath import apt
+from cnclab.nc import apt
 
 STL = data_path("mgherony2024", "sample_ch8_part.stl")
 APT = data_path("mgherony2024", "sample_ch8_zigzag_Af0.apt")
@@ -86,7 +86,7 @@ def test_cli_writes_apt_and_gcode_and_refuses_bad_input(tmp_path, capsys):
     rc = cli(["spindle", str(STL), str(APT), "-o", str(out), "--vc", "63", "--fz", "0.125", "--teeth", "2",
               "--ap", "0.3", "--ae", "1", "--gcode", str(ngc)])
     assert rc == 0 and "inserted SPINDL" in capsys.readouterr().out
-    from cnclab.toolpath.gcode import parse_gcode
+    from cnclab.nc.gcode import parse_gcode
     moves = parse_gcode(ngc.read_text(), str(ngc))
     feeds = [m for m in moves if m.motion == "G1"]
     assert max(m.spindle for m in feeds) == pytest.approx(spindle_speed(63, 2 * np.sqrt(0.3 * 9.7)), abs=0.5)

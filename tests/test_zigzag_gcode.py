@@ -1,12 +1,12 @@
-"""G-code writer/parser (cnclab.toolpath.gcode) and the Hoang zig-zag generator."""
+"""G-code writer/parser (cnclab.nc.gcode) and the Hoang zig-zag generator."""
 import math
 
 import numpy as np
 import pytest
 from hypothesis import example, given, settings, strategies as st
 
-from cnclab.toolpath import gcode
-from cnclab.toolpath.gcode import GcodeError, Move, parse_gcode, path_lengths, write_gcode
+from cnclab.nc import gcode
+from cnclab.nc.gcode import GcodeError, Move, parse_gcode, path_lengths, write_gcode
 
 
 def _program():

@@ -41,7 +41,7 @@ The result is a :class:`ClearingPath` (points + per-point kind of the segment en
 feed), ``"link"`` (linking feed) or ``"rapid"``). :func:`evaluate_path` cuts any
 such path through one fresh dixel stock and reports engagement / MRR maxima, the share of the
 cutting length above theta + 5 deg, cutting / linking lengths, time and uncut area;
-:func:`to_moves` exports G-code moves (:mod:`cnclab.toolpath.gcode`).
+:func:`to_moves` exports G-code moves (:mod:`cnclab.nc.gcode`).
 
 >>> from shapely.geometry import box
 >>> path = ce_clearing(box(0, 0, 40, 30), tool_radius=5, theta_deg=66.42, resolution_mm=0.25)
@@ -671,7 +671,7 @@ def to_moves(path: ClearingPath, z_cut: float, z_clear: float, feed: float, spin
     to ``z_cut`` (G1 points) followed by the same circle flat at ``z_cut``; a rapid segment becomes
     retract-G0-plunge; a ``"link"`` segment is G1 at ``z_cut`` and ``link_feed`` (mm/min, default
     ``feed``); everything else is G1 at ``z_cut`` and ``feed``."""
-    from .gcode import Move
+    from .path import Move
 
     if not z_cut < 0 < z_clear:
         raise ValueError(f"z_cut must be < 0 < z_clear (mm), got {z_cut!r}, {z_clear!r}")

@@ -12,7 +12,7 @@ Pipeline (all lengths mm, feed mm/min, spindle rpm, MRR mm³/min):
    extends it by the same length while the extension is still excessive, and inserts a return path
    to the segment start; the original segment is then re-checked (and cut);
 3. §3.3 post-step: :func:`fit_arcs` replaces runs of short segments by G2/G3 circular moves;
-   :func:`passes_to_moves` writes the program (:mod:`cnclab.toolpath.gcode`).
+   :func:`passes_to_moves` writes the program (:mod:`cnclab.nc.gcode`).
 
 Eq. 4, the reference pixel count of one tool advance ``Δs`` (feed per tooth) at step length ``s``
 (radial depth) on pixels of side ``p``: ``(Δs/p)·(s/p)``. The paper does **not** give the tooth count
@@ -37,7 +37,7 @@ import math
 import numpy as np
 from shapely.geometry import Point, Polygon
 
-from .gcode import Move
+from .path import Move
 
 __all__ = ["DEFAULT_TEETH", "ASSUMED_CURRENT_MODEL", "feed_per_tooth", "reference_pixel_count",
            "linear_motion", "cut_linear", "modify_path", "ModifiedPath", "spiral_entry", "fit_arcs",

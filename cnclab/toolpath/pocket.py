@@ -44,7 +44,7 @@ from shapely.geometry import LineString, Point, Polygon
 
 __all__ = ["PocketJob", "load_pocket", "star_polygon", "design_star", "medial_axis", "arm_branches", "arm_regions",
            "StrategyPath", "centre_lap", "hybrid_path", "choose_candidate", "contour_parallel_path", "zigzag_path",
-           "evaluate_strategy", "to_gcode_moves", "gcode_roundtrip_error"]
+           "evaluate_strategy", "to_gcode_moves"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -887,7 +887,7 @@ def to_gcode_moves(path: StrategyPath, job: PocketJob, feeds=None, z_cut=None, z
     """RS274/NGC moves: G0 to the start above the part, plunge, then G1 per segment at the cutting
     feed (or ``feeds[i]`` mm/min per point, e.g. the controlled feed), links at the linking feed,
     rapid jumps as retract-G0-plunge. ``z_cut`` defaults to -a_p."""
-    from .gcode import Move
+    from .path import Move
 
     z = -job.a_p if z_cut is None else z_cut
     S = job.spindle_rpm
@@ -903,22 +903,3 @@ def to_gcode_moves(path: StrategyPath, job: PocketJob, feeds=None, z_cut=None, z
         mv.append(Move("G1", P[i, 0], P[i, 1], z, feed=f, spindle=S))
     mv.append(Move("G0", P[-1, 0], P[-1, 1], z_clear, spindle=S))
     return mv
-
-
-def gcode_roundtrip_error(path: StrategyPath, job: PocketJob, feeds=None, decimals=4):
-    """Write the G-code, parse it back and compare: (max point distance mm, feed-length difference
-    mm, text) — the parsed program must reproduce the path within the written decimals."""
-    from .gcode import parse_gcode, path_lengths, write_gcode
-
-    moves = to_gcode_moves(path, job, feeds, decimals=decimals)
-    text = write_gcode(moves, header="cnclab " + path.name.replace("(", "").replace(")", ""), decimals=decimals)
-    back = parse_gcode(text, source=path.name)
-    cut_back = np.array([[m.x, m.y] for m in back if m.motion == "G1" and abs(m.z + job.a_p) < 1e-9])
-    keep = np.r_[True, np.hypot(*np.diff(path.points, axis=0).T) > 10 ** -decimals]
-    ref = path.points[keep]
-    # every written cutting-depth point must lie on the path within rounding
-    from scipy.spatial import cKDTree
-
-    d, _ = cKDTree(ref).query(cut_back)
-    dl = abs(path_lengths(back)["feed"] - path_lengths(moves)["feed"])
-    return float(d.max()), float(dl), text

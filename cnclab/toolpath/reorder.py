@@ -29,7 +29,7 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["densify", "neighbour_sets", "ReorderResult", "reorder_path", "path_metrics", "reordered_program"]
+__all__ = ["densify", "neighbour_sets", "ReorderResult", "reorder_path", "path_metrics"]
 
 NEIGHBOUR_RULES = ("knn", "radius", "unvisited")
 
@@ -136,7 +136,7 @@ def reorder_path(points, normals, *, tool_diameter: float, a_p: float, k: int = 
         raise ValueError(f"neighbours must be one of {NEIGHBOUR_RULES}, got {neighbours!r}")
     if adjacent_mm is not None and not adjacent_mm > 0:
         raise ValueError(f"adjacent_mm must be > 0 mm or None, got {adjacent_mm}")
-    from ..cutting.spindle_control import working_diameters
+    from ..cutting.spindle_model import working_diameters
 
     P = np.asarray(points, float)
     N = len(P)
@@ -249,28 +249,3 @@ def path_metrics(points, d_eff, v_c: float = 63.0, jump=None) -> dict:
             "dn_min": float(dn.min()), "dn_max": float(dn.max()), "dn_mean": float(dn.mean()),
             "dD_p99": float(np.percentile(dd, 99)), "dn_p99": float(np.percentile(dn, 99)),
             "jumps": 0 if jump is None else int(np.sum(jump))}
-
-
-def reordered_program(points, result: ReorderResult, *, feed_mm_min: float, spindle_rpm: float,
-                      tool_diameter: float, clearance_z: float, partno: str = "CNCLAB_REORDERED",
-                      decimals: int = 3):
-    """An APT program visiting ``points`` (N, 3, mm) in ``result.order``: feed moves between
-    neighbours, and at every jump a retract to ``clearance_z`` (mm), a rapid over the next point and a
-    rapid plunge onto it (the tool lifts; no material is cut on a jump).
-
-    >>> P = np.array([[0, 0, 0], [1, 0, 0], [5, 5, 0.0]])
-    >>> r = ReorderResult(np.array([0, 1, 2]), np.array([False, False, True]), np.ones(3))
-    >>> prog = reordered_program(P, r, feed_mm_min=500, spindle_rpm=2000, tool_diameter=10, clearance_z=30)
-    >>> cl = prog.cl_points(); cl.rapid.tolist()
-    [True, True, False, True, True, True, True]
-    """
-    from .apt import cl_program
-
-    P = np.asarray(points, float)
-    order = np.asarray(result.order)
-    if P.ndim != 2 or P.shape[1] != 3 or len(order) != len(P):
-        raise ValueError(f"points must be (N, 3) with N = len(result.order), got {P.shape}, {len(order)}")
-    cuts = np.flatnonzero(np.asarray(result.jump, bool))
-    segs = np.split(P[order], cuts[cuts > 0])
-    return cl_program(segs, feed_mm_min, spindle_rpm, tool_diameter, clearance_z, partno=partno,
-                      decimals=decimals, link="rapid")

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from .gcode import Move
+from .path import Move
 
 __all__ = ["hoang_table1_points", "zigzag_points", "zigzag_program", "n_passes_covering"]
 

@@ -16,7 +16,8 @@ import pandas as pd
 from ...cutting import scallop_volume as sv
 from ...paths import data_path
 from ...simulation.heightfield import HeightField
-from ...toolpath import gcode, zigzag
+from ...nc import gcode
+from ...toolpath import zigzag
 
 ROWS = tuple(f"r{i}" for i in range(1, 9))
 

@@ -27,7 +27,7 @@ import pandas as pd
 
 from ...runtime import pick
 from ...toolpath import ce_clearing as cc
-from ...toolpath import gcode
+from ...nc import gcode
 from . import constant_mrr_pocket as ky
 
 PATHS = ("original", "modified", "constant engagement")

@@ -17,7 +17,8 @@ from ...paths import data_path
 from ...runtime import pick
 from ...simulation import dixel, pixel
 from ...toolpath import constant_mrr as cm
-from ...toolpath import gcode, offsets
+from ...nc import gcode
+from ...toolpath import offsets
 
 Z_CUT_BELOW_TOP = True   # cutting height z = -a_p below the stock top z = 0
 

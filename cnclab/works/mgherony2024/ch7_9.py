@@ -20,7 +20,7 @@ from ...geometry.freeform_part import FreeformPart, freeform_part_mesh
 from ...geometry.mesh import FacetLocator, machined_surface_mask, read_stl, write_stl
 from ...paths import build_dir, data_path
 from ...runtime import pick
-from ...toolpath import apt
+from ...nc import apt
 from ...toolpath.dropcutter import zigzag_finishing_path
 
 DIRECTIONS = (0.0, 22.5, 45.0, 67.5, 90.0)
@@ -77,7 +77,7 @@ def zigzag_apt(feed_angle_deg: float, a_e: float = 0.25, step_mm: float | None =
 @functools.cache
 def schedule(feed_angle_deg: float, point: str = "thesis", a_e: float = 0.25, accel_rpm_s: float | None = None):
     """Post-process the A_f zig-zag (read from disk) against the STL (read from disk), Table 7-1 data."""
-    from ...cutting.spindle_control import spindle_schedule
+    from ...nc.spindle_control import spindle_schedule
 
     tp = parameters()["table7_1"]
     cl = apt.read_apt(zigzag_apt(feed_angle_deg, a_e)).cl_points()
@@ -137,7 +137,7 @@ def vc_min_at_2000() -> float:
 @functools.cache
 def analytic_deff_range(feed_angle_deg: float = 0.0, point: str = "max") -> tuple[float, float]:
     """(min, max) working diameter (mm) over the reconstructed part's exact normals (fine grid)."""
-    from ...cutting.spindle_control import working_diameters
+    from ...cutting.spindle_model import working_diameters
 
     P = part()
     x, y = np.meshgrid(np.linspace(0, 50, 401), np.linspace(0, 50, 401))
@@ -218,7 +218,7 @@ def ch9_points(step_mm: float | None = None):
 
 def original_deff(direction: str = "move", step_mm: float | None = None) -> np.ndarray:
     """D_eff (mm) along the original path: A_f = direction of each move ("move") or 90 deg ("constant")."""
-    from ...cutting.spindle_control import feed_directions, working_diameters
+    from ...cutting.spindle_model import feed_directions, working_diameters
 
     t = parameters()["table9_1"]
     dense, nrm, _ = ch9_points(step_mm)
@@ -329,7 +329,7 @@ def deff_direction_spread(step_mm: float | None = None) -> dict:
     """Why the move reading keeps its heading: over the sloped points of the chapter 9 cloud, the median
     spread (max - min, mm) of D_eff over the 8 grid directions 0, 45, ..., 315 deg, against the median
     non-zero |Delta D_eff| between consecutive points of the original path at the constant A_f = 90."""
-    from ...cutting.spindle_control import working_diameters
+    from ...cutting.spindle_model import working_diameters
 
     t = parameters()["table9_1"]
     dense, nrm, _ = ch9_points(step_mm)
@@ -344,7 +344,7 @@ def deff_direction_spread(step_mm: float | None = None) -> dict:
 def reordered_apt(case: int = 1, direction: str = "move") -> str:
     """Write the Table 9-2 ``case`` reordered path as an APT file into build/ (jumps: retract, rapid,
     plunge) and return its path; Table 9-1 feed and n = 2000 rpm."""
-    from ...toolpath.reorder import reordered_program
+    from ...nc.apt import reordered_program
 
     t = parameters()["table9_1"]
     _, dense, orders = reorder_cases(direction)

@@ -552,3 +552,27 @@ def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: fl
     for i, r in enumerate(recs, start=1):
         r.line = i
     return AptProgram(recs, partno)
+
+
+def reordered_program(points, result, *, feed_mm_min: float, spindle_rpm: float,
+                      tool_diameter: float, clearance_z: float, partno: str = "CNCLAB_REORDERED",
+                      decimals: int = 3):
+    """An APT program visiting ``points`` (N, 3, mm) in ``result.order``: feed moves between
+    neighbours, and at every jump a retract to ``clearance_z`` (mm), a rapid over the next point and a
+    rapid plunge onto it (the tool lifts; no material is cut on a jump).
+
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [5, 5, 0.0]])
+    >>> from cnclab.toolpath.reorder import ReorderResult
+    >>> r = ReorderResult(np.array([0, 1, 2]), np.array([False, False, True]), np.ones(3))
+    >>> prog = reordered_program(P, r, feed_mm_min=500, spindle_rpm=2000, tool_diameter=10, clearance_z=30)
+    >>> cl = prog.cl_points(); cl.rapid.tolist()
+    [True, True, False, True, True, True, True]
+    """
+    P = np.asarray(points, float)
+    order = np.asarray(result.order)
+    if P.ndim != 2 or P.shape[1] != 3 or len(order) != len(P):
+        raise ValueError(f"points must be (N, 3) with N = len(result.order), got {P.shape}, {len(order)}")
+    cuts = np.flatnonzero(np.asarray(result.jump, bool))
+    segs = np.split(P[order], cuts[cuts > 0])
+    return cl_program(segs, feed_mm_min, spindle_rpm, tool_diameter, clearance_z, partno=partno,
+                      decimals=decimals, link="rapid")

@@ -61,61 +61,13 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from ..fileio import atomic_write
+from ..toolpath.path import MOTIONS, Move
 
 __all__ = ["Move", "GcodeError", "write_gcode", "save_gcode", "parse_gcode", "load_gcode",
-           "sample_arc", "to_polyline", "path_lengths", "linear_moves"]
-
-MOTIONS = ("G0", "G1", "G2", "G3")
-
+           "sample_arc", "to_polyline", "path_lengths", "linear_moves", "gcode_roundtrip_error"]
 
 class GcodeError(ValueError):
     """Malformed G-code; the message starts with ``source:line``."""
-
-
-@dataclasses.dataclass(frozen=True)
-class Move:
-    """One motion block: absolute end point [mm], arc centre offsets [mm], feed [mm/min], spindle [rpm].
-
-    ``motion`` is ``"G0"``, ``"G1"``, ``"G2"`` (CW) or ``"G3"`` (CCW). ``i, j`` are the arc-centre
-    offsets from the *start* point (arcs only). ``feed`` is required for G1/G2/G3.
-    """
-
-    motion: str
-    x: float
-    y: float
-    z: float
-    i: float | None = None
-    j: float | None = None
-    feed: float | None = None
-    spindle: float | None = None
-
-    def __post_init__(self):
-        if self.motion not in MOTIONS:
-            raise ValueError(f"motion must be one of {MOTIONS}, got {self.motion!r}")
-        for name in ("x", "y", "z"):
-            v = getattr(self, name)
-            if v is None or not math.isfinite(float(v)):
-                raise ValueError(f"{name} must be a finite coordinate in mm, got {v!r}")
-            object.__setattr__(self, name, float(v))
-        if self.motion in ("G2", "G3"):
-            if self.i is None or self.j is None:
-                raise ValueError(f"{self.motion} needs both arc centre offsets i and j (mm)")
-            object.__setattr__(self, "i", float(self.i))
-            object.__setattr__(self, "j", float(self.j))
-        elif self.i is not None or self.j is not None:
-            raise ValueError(f"i/j only belong to arcs (G2/G3), got motion {self.motion}")
-        if self.motion != "G0" and (self.feed is None or not (float(self.feed) > 0)):
-            raise ValueError(f"{self.motion} needs a feed > 0 in mm/min, got {self.feed!r}")
-        if self.feed is not None:
-            object.__setattr__(self, "feed", float(self.feed))
-        if self.spindle is not None:
-            if not float(self.spindle) >= 0:
-                raise ValueError(f"spindle must be >= 0 rpm, got {self.spindle!r}")
-            object.__setattr__(self, "spindle", float(self.spindle))
-
-    @property
-    def xyz(self) -> np.ndarray:
-        return np.array([self.x, self.y, self.z])
 
 
 def _fmt(v: float, decimals: int) -> str:
@@ -395,3 +347,22 @@ def linear_moves(points, feed: float, spindle: float | None = None, z: float | N
             raise ValueError("z (mm) is required for 2-D points")
         p = np.column_stack([p, np.full(len(p), float(z))])
     return [Move("G1", *row, feed=feed, spindle=spindle) for row in p]
+
+
+def gcode_roundtrip_error(path, job, feeds=None, decimals=4):
+    """Write the G-code, parse it back and compare: (max point distance mm, feed-length difference
+    mm, text) — the parsed program must reproduce the path within the written decimals."""
+    from ..toolpath.pocket import to_gcode_moves
+
+    moves = to_gcode_moves(path, job, feeds, decimals=decimals)
+    text = write_gcode(moves, header="cnclab " + path.name.replace("(", "").replace(")", ""), decimals=decimals)
+    back = parse_gcode(text, source=path.name)
+    cut_back = np.array([[m.x, m.y] for m in back if m.motion == "G1" and abs(m.z + job.a_p) < 1e-9])
+    keep = np.r_[True, np.hypot(*np.diff(path.points, axis=0).T) > 10 ** -decimals]
+    ref = path.points[keep]
+    # every written cutting-depth point must lie on the path within rounding
+    from scipy.spatial import cKDTree
+
+    d, _ = cKDTree(ref).query(cut_back)
+    dl = abs(path_lengths(back)["feed"] - path_lengths(moves)["feed"])
+    return float(d.max()), float(dl), text

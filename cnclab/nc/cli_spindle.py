@@ -12,7 +12,8 @@ import sys
 
 
 def main(argv=None) -> int:
-    from .cutting.spindle_control import POINT_RULES, postprocess_files
+    from ..cutting.spindle_model import POINT_RULES
+    from .spindle_control import postprocess_files
 
     ap = argparse.ArgumentParser(prog="python -m cnclab spindle", description=__doc__.split("\n\n")[1])
     ap.add_argument("stl", help="surface STL (ASCII or binary, mm)")

@@ -29,14 +29,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cutting.spindle_model import POINT_RULES, apply_acceleration_limit, feed_directions, working_diameters
 from ..geometry.mesh import FacetLocator, TriMesh, machined_surface_mask
-from ..toolpath.apt import AptProgram, CLPoints, fedrat, spindl
+from .apt import AptProgram, CLPoints, fedrat, spindl
 
 __all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
            "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files",
            "POINT_RULES"]
 
-POINT_RULES = ("max", "1", "2", "thesis")
 
 
 @dataclasses.dataclass
@@ -92,72 +92,6 @@ class SpindleSchedule:
                 "vc_within_5pct_share": self.within_share(0.05)}
 
 
-def feed_directions(xyz, start=None) -> np.ndarray:
-    """Feed direction (deg, atan2 of eq 7-3) of the motion ending at each point; zero-xy moves inherit
-    the next (or previous) non-zero direction. ``start`` is the position before the first point."""
-    p = np.asarray(xyz, float)
-    prev = np.vstack([p[:1] if start is None else np.asarray(start, float)[None], p[:-1]])
-    d = p[:, :2] - prev[:, :2]
-    ok = np.hypot(d[:, 0], d[:, 1]) > 1e-9
-    ang = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
-    if not ok.any():
-        return np.zeros(len(p))
-    idx = np.where(ok, np.arange(len(p)), len(p))
-    nxt = np.minimum.accumulate(idx[::-1])[::-1]          # next valid index
-    idx2 = np.where(ok, np.arange(len(p)), -1)
-    prv = np.maximum.accumulate(idx2)                     # previous valid index
-    src = np.where(nxt < len(p), nxt, prv)
-    return ang[src]
-
-
-def working_diameters(normals, A_f, tool_diameter: float, a_p: float, point: str = "max",
-                      nominal_feed_deg: float | None = None):
-    """Working diameter (mm) for facet normals (M, 3) and feed directions A_f (deg, (M,)).
-
-    Returns ``(d_eff, A_N1, A_N2)`` with the eq 5-3 angles (deg). ``point``: see module docstring.
-    """
-    from ..geometry.ball_end import angles_from_normal, tangent_point_diameters
-
-    if point not in POINT_RULES:
-        raise ValueError(f"point must be one of {POINT_RULES}, got {point!r}")
-    n = np.asarray(normals, float)
-    n = n * np.where(n[:, 2:3] < 0, -1.0, 1.0)  # a 3-axis tool sees the upward side
-    a1, a2 = angles_from_normal(n)
-    d1, d2 = tangent_point_diameters(tool_diameter, a_p, a1, a2, A_f)
-    if point == "max":
-        d = np.maximum(d1, d2)
-    elif point == "1":
-        d = d1
-    elif point == "2":
-        d = d2
-    else:
-        nom = float(np.median(A_f) if nominal_feed_deg is None else nominal_feed_deg) % 180.0
-        d = d1 if nom <= 45.0 + 1e-9 or nom > 135.0 else d2
-    return np.asarray(d, float), a1, a2
-
-
-def apply_acceleration_limit(n_target, seg_len, f_z: float, teeth: int, accel_rpm_s: float,
-                             n0: float | None = None) -> np.ndarray:
-    """Causal spindle-speed sequence following ``n_target`` (rpm) with |dn/dt| <= accel (rpm/s).
-
-    The time of the motion ending at point j is seg_len_j / v_f with v_f = f_z z n_{j-1} (mm/min),
-    i.e. the feed stays synchronised with the spindle (constant f_z).
-    """
-    if not accel_rpm_s > 0:
-        raise ValueError(f"accel_rpm_s must be > 0 rpm/s, got {accel_rpm_s}")
-    nt = np.asarray(n_target, float)
-    L = np.asarray(seg_len, float)
-    out = np.empty_like(nt)
-    cur = float(nt[0] if n0 is None else n0)
-    k = f_z * teeth / 60.0  # mm/s per rpm
-    for j in range(len(nt)):
-        dt = L[j] / (k * cur) if cur > 0 else 0.0
-        step = accel_rpm_s * dt
-        cur = min(max(nt[j], cur - step), cur + step)
-        out[j] = cur
-    return out
-
-
 def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: float, v_c: float,
                      f_z: float, teeth: int, feed_direction_deg: float | None = None,
                      facet_rule: str = "centroid", point: str = "max", n_max: float | None = None,
@@ -170,7 +104,7 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
     feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule 'centroid' | 'nearest';
     point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s).
     """
-    from .speeds import feed_speed, spindle_speed
+    from ..cutting.speeds import feed_speed, spindle_speed
 
     for name, v in (("tool_diameter", tool_diameter), ("a_p", a_p), ("v_c", v_c), ("f_z", f_z)):
         if not (np.isfinite(v) and v > 0):
@@ -230,7 +164,7 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
 
     Bulk GOTO runs of a parsed file are split only where a record is inserted (no per-point objects).
     """
-    from ..toolpath.apt import _GotoRun
+    from .apt import _GotoRun
 
     if rpm_threshold < 0 or vf_threshold < 0:
         raise ValueError(f"thresholds must be >= 0, got {rpm_threshold}, {vf_threshold}")
@@ -293,10 +227,10 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
 
 
 def to_gcode_moves(program: AptProgram):
-    """RS274/NGC moves (:class:`cnclab.toolpath.gcode.Move`) of an APT program: G0 rapids, G1 feeds
+    """RS274/NGC moves (:class:`cnclab.nc.gcode.Move`) of an APT program: G0 rapids, G1 feeds
     with the F and S in force."""
-    from ..toolpath.apt import _GotoRun
-    from ..toolpath.gcode import Move
+    from .apt import _GotoRun
+    from .gcode import Move
 
     moves = []
     f = s = None
@@ -328,8 +262,8 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
     """
     from ..fileio import atomic_write
     from ..geometry.mesh import read_stl
-    from ..toolpath.apt import read_apt
-    from ..toolpath.gcode import write_gcode
+    from .apt import read_apt
+    from .gcode import write_gcode
 
     t0 = time.perf_counter()
     steps = ["read STL", "read APT", "working diameter", "write"]
