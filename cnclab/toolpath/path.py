@@ -1,7 +1,27 @@
-"""The tool-path model shared by every planner.
+"""The tool-path model shared by every planner: :class:`ToolPath`, :class:`Tool` and :class:`Move`.
 
-:class:`Move` is one motion block of a program (G0/G1/G2/G3, absolute end point, arc centre offsets,
-feed, spindle). Units: mm, mm/min, rpm.
+A :class:`ToolPath` is a sequence of moves of the tool reference point (the tool tip on its axis;
+for a flat end mill the centre of its end face), stored as arrays. Move ``k`` goes from point
+``k-1`` to point ``k``; move 0 is the first positioning to ``xyz[0]`` (a rapid from the safe height
+unless its kind says otherwise). Every planner returns a ToolPath; the G-code/APT writers and the
+evaluator take one. One move vocabulary (:data:`KINDS`):
+
+=========  ==================================================================================
+rapid      G0 positioning (only at/above the clearance plane or inside proven-cleared area)
+helix      helical entry (an arc move with decreasing z)
+ramp       linear ramp entry (xy and decreasing z)
+plunge     straight-down feed move (no xy); allowed only into air or cleared area
+cut        cutting move at depth
+link       feed move at depth through cleared area (no material expected)
+retract    feed or rapid move with increasing z (to the clearance plane)
+=========  ==================================================================================
+
+Free ``tag`` strings (``"roll-in"``, ``"roll-out"``, ``"cleanup"``, ``"finish"``...) qualify a move.
+Arcs: ``arc`` is 0 (line), 2 (G2, clockwise) or 3 (G3, counter-clockwise) with an absolute xy
+``arc_center``; z varies linearly along an arc (helix).
+
+:class:`Move` is one motion block of a program (G0/G1/G2/G3, absolute end point, arc centre offsets
+from the start point, feed, spindle). Units everywhere: mm, mm/min, rpm.
 """
 from __future__ import annotations
 
@@ -10,7 +30,7 @@ import math
 
 import numpy as np
 
-__all__ = ["MOTIONS", "Move"]
+__all__ = ["MOTIONS", "Move", "KINDS", "ENTRY_KINDS", "Tool", "ToolPath", "arc_geometry", "sample_arc"]
 
 MOTIONS = ("G0", "G1", "G2", "G3")
 
@@ -59,3 +79,314 @@ class Move:
     @property
     def xyz(self) -> np.ndarray:
         return np.array([self.x, self.y, self.z])
+
+
+KINDS = ("rapid", "helix", "ramp", "plunge", "cut", "link", "retract")
+ENTRY_KINDS = ("helix", "ramp", "plunge")
+_KIND_INDEX = {k: i for i, k in enumerate(KINDS)}
+
+
+def arc_geometry(start, end, center_xy, ccw: bool):
+    """Arc from ``start`` to ``end`` (x, y[, z], mm) about ``center_xy``: returns
+    ``(cx, cy, radius, start_angle_rad, sweep_rad)``; sweep > 0 counter-clockwise. Equal start and
+    end points give a full circle.
+
+    >>> cx, cy, r, a0, sw = arc_geometry((1, 0), (0, 1), (0, 0), ccw=True)
+    >>> round(r, 12), round(sw / math.pi, 12)
+    (1.0, 0.5)
+    """
+    cx, cy = float(center_xy[0]), float(center_xy[1])
+    r = math.hypot(start[0] - cx, start[1] - cy)
+    a0 = math.atan2(start[1] - cy, start[0] - cx)
+    a1 = math.atan2(end[1] - cy, end[0] - cx)
+    sweep = (a1 - a0) % (2 * math.pi) if ccw else -((a0 - a1) % (2 * math.pi))
+    if abs(sweep) < 1e-12:  # same start and end: full circle
+        sweep = 2 * math.pi if ccw else -2 * math.pi
+    return cx, cy, r, a0, sweep
+
+
+def sample_arc(start, end, center_xy, ccw: bool, max_segment: float = 0.5) -> np.ndarray:
+    """Points (n, 3) mm along the arc or helix from ``start`` to ``end`` (both included), segments at
+    most ``max_segment`` mm long along the arc.
+
+    >>> p = sample_arc((1, 0, 0), (-1, 0, 0), (0, 0), ccw=True, max_segment=0.1)
+    >>> bool(np.allclose(np.hypot(p[:, 0], p[:, 1]), 1)), bool(p[:, 1].min() >= -1e-12)
+    (True, True)
+    """
+    if not max_segment > 0:
+        raise ValueError(f"max_segment must be > 0 mm, got {max_segment}")
+    start = np.asarray(start, float)
+    end = np.asarray(end, float)
+    cx, cy, r, a0, sweep = arc_geometry(start, end, center_xy, ccw)
+    n = max(2, int(math.ceil(abs(sweep) * r / max_segment)) + 1)
+    t = np.linspace(0.0, 1.0, n)
+    ang = a0 + sweep * t
+    pts = np.column_stack([cx + r * np.cos(ang), cy + r * np.sin(ang), start[2] + (end[2] - start[2]) * t])
+    pts[-1] = end
+    return pts
+
+
+@dataclasses.dataclass(frozen=True)
+class Tool:
+    """A milling tool: ``diameter`` (mm), ``corner_radius`` (mm; 0 flat end, diameter/2 ball end),
+    ``flutes`` (teeth), ``number`` (the T word of the program).
+
+    >>> Tool(6.0).radius
+    3.0
+    """
+
+    diameter: float
+    corner_radius: float = 0.0
+    flutes: int = 2
+    number: int = 1
+
+    def __post_init__(self):
+        if not (math.isfinite(self.diameter) and self.diameter > 0):
+            raise ValueError(f"tool diameter must be a finite number > 0 mm, got {self.diameter!r}")
+        if not (0 <= self.corner_radius <= 0.5 * self.diameter):
+            raise ValueError(f"tool corner_radius must be in [0, diameter/2] mm, got {self.corner_radius!r}")
+        if int(self.flutes) != self.flutes or self.flutes < 1:
+            raise ValueError(f"tool flutes must be a positive integer, got {self.flutes!r}")
+        if int(self.number) != self.number or self.number < 0:
+            raise ValueError(f"tool number must be a non-negative integer, got {self.number!r}")
+
+    @property
+    def radius(self) -> float:
+        return 0.5 * self.diameter
+
+
+def _col(v, n, fill, dtype, name):
+    if v is None:
+        return np.full(n, fill, dtype=dtype)
+    a = np.asarray(v, dtype=dtype)
+    if a.ndim == 0:
+        a = np.full(n, a, dtype=dtype)
+    if a.shape != (n,):
+        raise ValueError(f"{name} must have one value per point ({n}), got shape {a.shape}")
+    return a.copy()
+
+
+@dataclasses.dataclass(eq=False)
+class ToolPath:
+    """Moves of the tool reference point (see the module docstring). Arrays, one entry per move:
+
+    ``xyz`` (N, 3) end points (mm); ``kind`` (N,) indices into :data:`KINDS`; ``tag`` (N,) strings;
+    ``feed`` (N,) mm/min (NaN for rapids); ``spindle`` (N,) rpm in force (NaN: not set);
+    ``arc`` (N,) 0 line / 2 G2 / 3 G3; ``arc_center`` (N, 2) absolute xy centre (NaN for lines);
+    ``tool`` a :class:`Tool` (or None); ``info`` free metadata (planner, parameters, timings).
+
+    Build with :meth:`build`:
+
+    >>> p = ToolPath.build([[0, 0, 5], [0, 0, 0], [10, 0, 0]], kind=["rapid", "plunge", "cut"], feed=100)
+    >>> p.lengths()["cut_mm"], p.kinds().tolist()
+    (10.0, ['rapid', 'plunge', 'cut'])
+    """
+
+    xyz: np.ndarray
+    kind: np.ndarray
+    tag: np.ndarray
+    feed: np.ndarray
+    spindle: np.ndarray
+    arc: np.ndarray
+    arc_center: np.ndarray
+    tool: Tool | None = None
+    info: dict = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self):
+        self.xyz = np.asarray(self.xyz, float).reshape(-1, 3)
+        n = len(self.xyz)
+        self.kind = _col(self.kind, n, _KIND_INDEX["cut"], np.int8, "kind")
+        self.tag = _col(self.tag, n, "", object, "tag")
+        self.feed = _col(self.feed, n, np.nan, float, "feed")
+        self.spindle = _col(self.spindle, n, np.nan, float, "spindle")
+        self.arc = _col(self.arc, n, 0, np.int8, "arc")
+        ac = np.full((n, 2), np.nan) if self.arc_center is None else np.asarray(self.arc_center, float)
+        if ac.shape != (n, 2):
+            raise ValueError(f"arc_center must be (N, 2) with N = {n}, got {ac.shape}")
+        self.arc_center = ac.copy()
+        if not np.all(np.isfinite(self.xyz)):
+            raise ValueError("xyz: every coordinate must be finite (mm)")
+        if np.any((self.kind < 0) | (self.kind >= len(KINDS))):
+            raise ValueError(f"kind: indices must be in [0, {len(KINDS)})")
+        if not np.all(np.isin(self.arc, (0, 2, 3))):
+            raise ValueError("arc must be 0 (line), 2 (G2) or 3 (G3)")
+        bad_arc = (self.arc != 0) & ~np.all(np.isfinite(self.arc_center), axis=1)
+        if bad_arc.any():
+            raise ValueError(f"arc_center missing for arc move {int(np.flatnonzero(bad_arc)[0])}")
+        feedmove = self.kind != _KIND_INDEX["rapid"]
+        badf = feedmove & ~(self.feed > 0)
+        if badf.any():
+            k = int(np.flatnonzero(badf)[0])
+            raise ValueError(f"feed must be > 0 mm/min for feed move {k} ({KINDS[self.kind[k]]}), got {self.feed[k]}")
+        if np.any(self.arc[~feedmove] != 0):
+            raise ValueError("a rapid move cannot be an arc")
+
+    # -- construction ------------------------------------------------------------------------
+    @classmethod
+    def build(cls, points, kind="cut", tag="", feed=None, spindle=None, arc=None, arc_center=None,
+              tool: Tool | None = None, info: dict | None = None) -> "ToolPath":
+        """A path from points (N, 3) or (N, 2) (z = 0) and per-point or scalar attributes; ``kind``
+        is a name of :data:`KINDS` or a sequence of names. Rapids get NaN feed."""
+        P = np.asarray(points, float)
+        if P.ndim != 2 or P.shape[1] not in (2, 3):
+            raise ValueError(f"points must be (N, 2) or (N, 3) mm, got shape {P.shape}")
+        if P.shape[1] == 2:
+            P = np.column_stack([P, np.zeros(len(P))])
+        n = len(P)
+        names = [kind] * n if isinstance(kind, str) else list(kind)
+        if len(names) != n:
+            raise ValueError(f"kind must have one entry per point ({n}), got {len(names)}")
+        try:
+            k = np.array([_KIND_INDEX[x] for x in names], np.int8)
+        except KeyError as exc:
+            raise ValueError(f"kind must be one of {KINDS}, got {exc.args[0]!r}") from None
+        f = _col(feed, n, np.nan, float, "feed")
+        f[k == _KIND_INDEX["rapid"]] = np.nan
+        return cls(P, k, tag, f, spindle, arc, arc_center, tool, dict(info or {}))
+
+    @classmethod
+    def concat(cls, paths, tool: Tool | None = None, info: dict | None = None) -> "ToolPath":
+        """Join paths end to end (the first move of each path continues from the previous end)."""
+        paths = list(paths)
+        if not paths:
+            raise ValueError("concat needs at least one path")
+        tool = tool if tool is not None else paths[0].tool
+        return cls(np.vstack([p.xyz for p in paths]), np.concatenate([p.kind for p in paths]),
+                   np.concatenate([p.tag for p in paths]), np.concatenate([p.feed for p in paths]),
+                   np.concatenate([p.spindle for p in paths]), np.concatenate([p.arc for p in paths]),
+                   np.vstack([p.arc_center for p in paths]), tool,
+                   dict(info if info is not None else paths[0].info))
+
+    def __len__(self) -> int:
+        return len(self.xyz)
+
+    def kinds(self) -> np.ndarray:
+        """Kind names per move (array of str)."""
+        return np.array(KINDS, dtype=object)[self.kind]
+
+    def is_kind(self, *names: str) -> np.ndarray:
+        """Boolean mask of the moves whose kind is one of ``names``."""
+        return np.isin(self.kind, [_KIND_INDEX[n] for n in names])
+
+    # -- geometry ----------------------------------------------------------------------------
+    def segment_lengths(self) -> np.ndarray:
+        """Length (mm) of every move (move 0: 0); arcs and helices exact."""
+        L = np.zeros(len(self))
+        if len(self) < 2:
+            return L
+        d = np.diff(self.xyz, axis=0)
+        L[1:] = np.linalg.norm(d, axis=1)
+        for k in np.flatnonzero(self.arc[1:] != 0) + 1:
+            _, _, r, _, sweep = arc_geometry(self.xyz[k - 1], self.xyz[k], self.arc_center[k], self.arc[k] == 3)
+            L[k] = math.hypot(abs(sweep) * r, self.xyz[k, 2] - self.xyz[k - 1, 2])
+        return L
+
+    def lengths(self) -> dict:
+        """Length per kind, ``{"<kind>_mm": ..., "feed_mm": all but rapids, "total_mm": ...}``."""
+        L = self.segment_lengths()
+        out = {f"{k}_mm": float(L[self.kind == i].sum()) for i, k in enumerate(KINDS)}
+        out["feed_mm"] = float(L[self.kind != _KIND_INDEX["rapid"]].sum())
+        out["total_mm"] = float(L.sum())
+        return out
+
+    def time_s(self, rapid_mm_min: float) -> dict:
+        """Motion time (s) of the path as a program describes it: every feed move at its feed, every
+        rapid at ``rapid_mm_min`` (no acceleration, as RS274 canonical totals), per kind and total."""
+        if not (math.isfinite(rapid_mm_min) and rapid_mm_min > 0):
+            raise ValueError(f"rapid_mm_min must be a finite number > 0 mm/min, got {rapid_mm_min!r}")
+        L = self.segment_lengths()
+        rate = np.where(self.kind == _KIND_INDEX["rapid"], rapid_mm_min, self.feed)
+        t = np.where(L > 0, 60.0 * L / rate, 0.0)
+        out = {f"{k}_s": float(t[self.kind == i].sum()) for i, k in enumerate(KINDS)}
+        out["total_s"] = float(t.sum())
+        return out
+
+    def polyline(self, max_segment: float = 0.5):
+        """Sampled points: ``(points (M, 3) mm, move (M,) index of the move each point belongs to)``;
+        arcs are sampled with chords of at most ``max_segment`` mm, lines are kept as they are (use
+        :meth:`resample` to subdivide lines)."""
+        pts, idx = [self.xyz[:1]], [np.zeros(min(1, len(self)), int)]
+        arcs = np.flatnonzero(self.arc != 0)
+        prev = 1
+        for k in arcs:
+            if k == 0:
+                continue
+            pts.append(self.xyz[prev:k]); idx.append(np.arange(prev, k))
+            s = sample_arc(self.xyz[k - 1], self.xyz[k], self.arc_center[k], self.arc[k] == 3, max_segment)[1:]
+            pts.append(s); idx.append(np.full(len(s), k))
+            prev = k + 1
+        pts.append(self.xyz[prev:]); idx.append(np.arange(prev, len(self)))
+        return np.vstack(pts), np.concatenate(idx)
+
+    def resample(self, max_step: float) -> "ToolPath":
+        """The same path with every move split into pieces at most ``max_step`` mm long (arcs become
+        line pieces on the arc); kind, tag, feed and spindle are inherited by the pieces."""
+        if not (math.isfinite(max_step) and max_step > 0):
+            raise ValueError(f"max_step must be a finite number > 0 mm, got {max_step!r}")
+        P, src = self.polyline(max_step)
+        out_p, out_i = [P[:1]], [src[:1]]
+        for j in range(1, len(P)):
+            n = max(1, int(math.ceil(np.linalg.norm(P[j] - P[j - 1]) / max_step)))
+            t = np.arange(1, n + 1)[:, None] / n
+            out_p.append(P[j - 1] + t * (P[j] - P[j - 1])); out_i.append(np.full(n, src[j]))
+        Q, I = np.vstack(out_p), np.concatenate(out_i)
+        return ToolPath(Q, self.kind[I], self.tag[I], self.feed[I], self.spindle[I], None, None,
+                        self.tool, dict(self.info))
+
+    # -- program moves -----------------------------------------------------------------------
+    def to_moves(self) -> list[Move]:
+        """The path as program blocks: rapids as G0, feed moves as G1 (G2/G3 for arcs, with I/J from
+        the start point), with feed and spindle."""
+        out = []
+        for k in range(len(self)):
+            x, y, z = self.xyz[k]
+            sp = None if not np.isfinite(self.spindle[k]) else float(self.spindle[k])
+            if self.kind[k] == _KIND_INDEX["rapid"]:
+                out.append(Move("G0", x, y, z, spindle=sp))
+            elif self.arc[k] and k > 0:
+                cx, cy = self.arc_center[k]
+                out.append(Move(f"G{int(self.arc[k])}", x, y, z, i=cx - self.xyz[k - 1, 0],
+                                j=cy - self.xyz[k - 1, 1], feed=float(self.feed[k]), spindle=sp))
+            else:
+                out.append(Move("G1", x, y, z, feed=float(self.feed[k]), spindle=sp))
+        return out
+
+    @classmethod
+    def from_moves(cls, moves, start=None, tool: Tool | None = None, info: dict | None = None,
+                   z_tol: float = 1e-6) -> "ToolPath":
+        """A path from program blocks, kinds classified from the geometry: G0 rapid; feed moves with
+        rising z retract; falling z: helix (arc), plunge (no xy motion) or ramp; level: cut (the
+        evaluator tells cuts from links by the material). ``start`` (x, y, z) is where the tool is
+        before the first move (it then becomes point 0, a rapid)."""
+        moves = list(moves)
+        pts, kind, feed, spin, arc, ctr = [], [], [], [], [], []
+        cur = None
+        if start is not None:
+            cur = np.asarray(start, float)
+            pts.append(cur); kind.append("rapid"); feed.append(np.nan); spin.append(np.nan)
+            arc.append(0); ctr.append((np.nan, np.nan))
+        for mv in moves:
+            end = mv.xyz
+            sp = np.nan if mv.spindle is None else mv.spindle
+            if mv.motion == "G0":
+                kd = "rapid"
+            elif cur is None:
+                kd = "cut"
+            elif end[2] > cur[2] + z_tol:
+                kd = "retract"
+            elif end[2] < cur[2] - z_tol:
+                kd = "helix" if mv.motion in ("G2", "G3") else (
+                    "plunge" if math.hypot(*(end[:2] - cur[:2])) <= z_tol else "ramp")
+            else:
+                kd = "cut"
+            pts.append(end); kind.append(kd); spin.append(sp)
+            feed.append(np.nan if mv.motion == "G0" else mv.feed)
+            if mv.motion in ("G2", "G3") and cur is not None:
+                arc.append(int(mv.motion[1])); ctr.append((cur[0] + mv.i, cur[1] + mv.j))
+            else:
+                arc.append(0); ctr.append((np.nan, np.nan))
+            cur = end
+        if not pts:
+            return cls(np.zeros((0, 3)), None, None, None, None, None, None, tool, dict(info or {}))
+        return cls.build(np.array(pts), kind=kind, feed=np.array(feed, float), spindle=np.array(spin, float),
+                         arc=np.array(arc), arc_center=np.array(ctr, float), tool=tool, info=info)
