@@ -146,6 +146,21 @@ def fig9_last_pass_y() -> float:
     return max(m.y for m in moves)
 
 
+def fig9_stop_y() -> float:
+    """Y [mm] of the pass before the covering one (Fig. 9 prints 'N106 X100 Y49.7497'): 50 S_z."""
+    moves, _ = table3_program(covering=True, decimals=4)
+    ys = sorted({round(m.y, 6) for m in moves})
+    return float(ys[-2])
+
+
+def table3_traditional_rapid() -> float:
+    """Toolpath minus machining length [mm] of the printed Table 3 traditional column: the rapid
+    return, which restates the last Y of the commercial program (Fig. 9 a 'it should be N107 Y49.995')
+    if, as in the constant volume program, the only rapid is the return from the last pass."""
+    t = _table3_setup()["table3"]
+    return t["traditional_toolpath_length_mm"] - t["traditional_machining_length_mm"]
+
+
 # ---------------------------------------------------------------- height-field check
 def uncut_volume_per_cell(scallop_height: float, tool_radius: float, forward_step: float,
                           resolution: float = 0.005, discrete: bool = False) -> float:
