@@ -74,3 +74,22 @@ def test_dixel_data_grows_linearly_pixel_data_quadratically():
     # log-log fit over 5 resolutions 0.2..0.01 mm; ceil() rounding gives ~1 % scatter
     assert t13.dixel_data_exponent() == pytest.approx(1.0, abs=0.05)
     assert t13.pixel_data_exponent() == pytest.approx(2.0, abs=0.05)
+
+
+def test_thesis3_explicit_algorithm_as_printed_on_a_convex_arc():
+    """Steps 0-5 exactly as printed (explicit Euler, constant Δt, polyline) turning a ρ = 8 mm disk at
+    θ = 60° (r = 3 mm): the path stays at the Thesis I offset ρ − s + r up to a first-order error."""
+    import numpy as np
+
+    from cnclab.geometry.contours import Arc
+    from cnclab.toolpath import constant_engagement as ce
+
+    errs = []
+    for dt in (0.2, 0.1, 0.05):
+        arc = Arc((0, 0), 8.0, 0, -300)          # cw: the material (the disk) on the right
+        P0, d = ce.arc_start_point(arc, 3.0, 60.0, "convex")
+        res = ce.thesis3_path(arc, 3.0, 60.0, dt, method="euler", P0=P0)
+        errs.append(float(np.max(np.abs(np.hypot(*res.P.T) - d))))
+    assert errs[0] / errs[1] == pytest.approx(2.0, rel=0.05)   # first order in Δt
+    assert errs[1] / errs[2] == pytest.approx(2.0, rel=0.05)
+    assert errs[2] < 0.011                                       # 0.0097 mm at Δt = 0.05 mm
