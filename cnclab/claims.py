@@ -504,6 +504,9 @@ def headline(summary=None):
 
     if summary is None:
         summary = latest_summary()
+    cols = ["reproduced", *STATUSES, "rows", "hold", "skipped"]
+    if summary.empty:
+        return pd.DataFrame(columns=cols, index=pd.Index([], name="work"))
     counts = summary.pivot_table(index="work", columns="status", values="rows", aggfunc="sum",
                                  fill_value=0).reindex(columns=list(STATUSES), fill_value=0)
     out = pd.DataFrame(index=counts.index)
