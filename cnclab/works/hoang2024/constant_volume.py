@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 
 import numpy as np
 import pandas as pd
@@ -151,6 +152,14 @@ def fig9_stop_y() -> float:
     moves, _ = table3_program(covering=True, decimals=4)
     ys = sorted({round(m.y, 6) for m in moves})
     return float(ys[-2])
+
+
+def commercial_last_y() -> float:
+    """Last pass Y [mm] of a zig-zag with the commercial run's printed 1 mm horizontal step over the
+    printed 50 mm width (passes at 0, 1, ..., 50): restates Fig. 9 a's 'N107 Y50'."""
+    s = _table3_setup()
+    w, step = s["workpiece_mm"]["width"], s["commercial_cam"]["horizontal_step_mm"]
+    return float(math.ceil(w / step - 1e-9) * step)
 
 
 def table3_traditional_rapid() -> float:
