@@ -15,12 +15,13 @@ unit            unit of ``paper_value`` (``-`` for dimensionless, ``%`` for perc
 paper_value     the number as printed (float)
 rtol, atol      tolerance: holds when ``|reproduced - paper| <= atol + rtol*|paper|``
 tolerance_basis why that tolerance (e.g. "printed to 2 decimals")
-status          MATCH | DIFFERS | NOT_DERIVABLE
+status          MATCH | DIFFERS | DISCREPANT | CONSISTENT | INPUT | NOT_DERIVABLE (see below)
 computed_by     dotted name of a zero-argument function returning the value; ``name[key]`` indexes
                 the function's result (a mapping, Series or sequence) with ``key``
 alt_computed_by DIFFERS only: function reproducing the *printed* number under the explanation
                 (the typo, the slipped unit or convention); it must match ``paper_value``
-missing_input   NOT_DERIVABLE only: which input the seed does not give
+missing_input   NOT_DERIVABLE only: which input the seed does not give, quoting (in “…” or "…") the
+                seed sentence that shows it is measured or not given (enforced for ``QUOTED_WORKS``)
 slow            1 if computing the claim takes long (skipped by the tests in fast mode)
 notebook        the notebook (relative to ``notebooks/``) that shows the claim
 note            free text: for DIFFERS the explanation, otherwise context
@@ -40,7 +41,13 @@ CONSISTENT      a printed number that restates other printed numbers (arithmetic
                 within tolerance; counted apart from reproduced results
 INPUT           a printed value the reproduction takes as input or builds in (design target, program
                 condition); never counted as reproduced; with computed_by it must be within tolerance
-NOT_DERIVABLE   no function; ``missing_input`` names what the seed does not give
+NOT_DERIVABLE   no function; ``missing_input`` names what the seed does not give and quotes the seed
+                sentence; a ``reconstructed_by`` value (partial evidence) is computed and reported
+                beside the paper value but decides nothing
+
+Only MATCH and DIFFERS rows are reproduced results (``REPRODUCED``); :func:`headline` counts the
+other statuses apart. A number the seed does not print (an inverse residual of 0, a simulated
+θ = 60° for an input θ = 60°) is no row at all: such checks are unit tests.
 """
 from __future__ import annotations
 
@@ -69,7 +76,62 @@ SEED_FILES = {
     "hoang2024": "003_216a87306e3bb9cf.txt",
     "mgherony2024": "004_6087ee43271ee0e7.txt",
 }
+#: works whose NOT_DERIVABLE rows must quote the seed in ``missing_input`` (all works once every
+#: work's rows carry their quotes)
+QUOTED_WORKS = frozenset({"jacso2021", "kim_yang2006", "hoang2024"})
+_QUOTE = re.compile(r'[“"]([^“”"]{12,})[”"]')
 _DOTTED = re.compile(r"^[A-Za-z_][\w]*(\.[A-Za-z_]\w*)+(\[[^\[\]]+\])?$")
+
+
+def quotes(text: str) -> list[str]:
+    """The quoted seed excerpts (“…” or "…", at least 12 characters) in a ``missing_input`` text.
+
+    >>> quotes('the time was measured: “The machining time was 134 s”')
+    ['The machining time was 134 s']
+    """
+    return [m.group(1).strip() for m in _QUOTE.finditer(text)]
+
+
+_NUM_PLAIN = re.compile(r"\d+(?:[.,]\d+)*")
+_NUM_GROUPED = re.compile(r"\d{1,3}(?:[ \u00a0\u2009\u202f]\d{3})+(?:[.,]\d+)?")
+
+
+def printed_numbers(text: str) -> set[float]:
+    """Every number a text prints, in each reading of its separators (unsigned).
+
+    ``2098``, ``2 098`` and ``2,098`` read as 2098; a single comma also as a decimal comma
+    (``1147,5`` → 1147.5, ``5270,744`` → 5270.744 and 5270744).
+
+    >>> sorted(printed_numbers("V = 2 098 mm, MRR = 1147,5"))
+    [2.0, 98.0, 1147.5, 2098.0, 11475.0]
+    """
+    out: set[float] = set()
+    tokens = [m.group(0) for m in _NUM_PLAIN.finditer(text)]
+    tokens += [m.group(0) for m in _NUM_GROUPED.finditer(text)]
+    for tok in tokens:
+        t = re.sub(r"[ \u00a0\u2009\u202f]", "", tok)
+        readings = {t.replace(",", "")}
+        if t.count(",") == 1 and "." not in t:
+            readings.add(t.replace(",", "."))
+        for r in readings:
+            if r.count(".") <= 1:
+                out.add(float(r))
+    return out
+
+
+def is_printed(value: float, text: str) -> bool:
+    """True when ``|value|`` is among :func:`printed_numbers` of ``text`` (to 1e-9 relative).
+
+    >>> is_printed(5270.744, "| 5275,540 | 5325,535 | 5270,744 |"), is_printed(0.5, "θ = 60°")
+    (True, False)
+    """
+    v = abs(float(value))
+    return any(abs(n - v) <= 1e-9 * max(1.0, v) for n in printed_numbers(text))
+
+
+def normalize_text(text: str) -> str:
+    """Collapse whitespace and drop markdown emphasis (``*``) for comparing quotes with a seed."""
+    return re.sub(r"\s+", " ", text.replace("*", "")).strip()
 
 
 class LedgerError(ValueError):
@@ -170,7 +232,8 @@ def load(path: Path | str = CLAIMS_CSV) -> list[Claim]:
             if r["status"] not in STATUSES:
                 raise LedgerError(f"{where}: column 'status' must be one of {STATUSES}, got {r['status']!r}")
             for col in ("location", "quantity", "unit", "tolerance_basis"):
-                if not r[col] and not (col == "tolerance_basis" and r["status"] == "NOT_DERIVABLE"):
+                if not r[col] and not (col == "tolerance_basis" and (
+                        r["status"] == "NOT_DERIVABLE" or (r["status"] == "INPUT" and not r["computed_by"]))):
                     raise LedgerError(f"{where}: column {col!r} is empty")
             for col in ("computed_by", "alt_computed_by"):
                 if r[col] and not _DOTTED.match(r[col]):
@@ -182,6 +245,9 @@ def load(path: Path | str = CLAIMS_CSV) -> list[Claim]:
                 raise LedgerError(f"{where}: DIFFERS row needs alt_computed_by (the explanation) and a note")
             if st == "NOT_DERIVABLE" and (r["computed_by"] or not r["missing_input"]):
                 raise LedgerError(f"{where}: NOT_DERIVABLE row needs missing_input and no computed_by")
+            if st == "NOT_DERIVABLE" and r["work"] in QUOTED_WORKS and not quotes(r["missing_input"]):
+                raise LedgerError(f"{where}: NOT_DERIVABLE row must quote in missing_input (in “…”) the "
+                                  f"seed sentence showing the input is measured or not given")
             if st != "DIFFERS" and r["alt_computed_by"]:
                 raise LedgerError(f"{where}: alt_computed_by only belongs to DIFFERS rows")
             if st == "DISCREPANT" and not r["note"]:
@@ -276,7 +342,8 @@ class Result:
         return {"claim_id": c.claim_id, "work": c.work, "seed_file": c.seed_file,
                 "location": c.location, "quantity": c.quantity, "unit": c.unit,
                 "paper_value": c.paper_value, "reproduced_value": enc(self.reproduced),
-                "alt_value": enc(self.alt), "abs_error": self.abs_error, "rel_error": self.rel_error,
+                "alt_value": enc(self.alt), "reconstructed_value": enc(self.reconstructed),
+                "abs_error": self.abs_error, "rel_error": self.rel_error,
                 "rtol": c.rtol, "atol": c.atol, "status": c.status, "ok": self.ok,
                 "skipped": self.skipped, "error": self.error, "computed_by": c.computed_by,
                 "note": c.note}
@@ -367,7 +434,7 @@ def results_frame(results: list[Result]):
         rows.append({
             "claim": c.claim_id, "location": c.location, "quantity": c.quantity, "unit": c.unit,
             "paper": c.paper_value, "reproduced": _fmt(r.reproduced),
-            "alternative": _fmt(r.alt), "tolerance": f"±({c.atol:g} + {c.rtol:g}·|paper|)",
+            "reconstructed": _fmt(r.reconstructed), "alternative": _fmt(r.alt), "tolerance": f"±({c.atol:g} + {c.rtol:g}·|paper|)",
             "status": c.status,
             "holds": "skipped" if r.skipped else ("yes" if r.ok else ("ERROR" if r.error else "NO")),
             "note": (r.error or c.note),
@@ -419,6 +486,44 @@ def latest_summary():
     return out
 
 
+def headline(summary=None):
+    """The headline: one row per work, reproduced results (MATCH + DIFFERS) apart from the rest.
+
+    ``summary`` is a :func:`summary_frame` (or :func:`latest_summary`) frame; by default
+    :func:`latest_summary`. Columns: ``reproduced`` (MATCH + DIFFERS), one column per status with
+    its row count, ``rows``, ``hold`` and ``skipped``; a last row ``all`` sums the works.
+
+    >>> import pandas as pd
+    >>> s = pd.DataFrame({"work": ["w", "w"], "status": ["MATCH", "INPUT"], "rows": [3, 2],
+    ...                   "hold": [3, 2], "skipped": [0, 0]})
+    >>> h = headline(s)
+    >>> int(h.loc["w", "reproduced"]), int(h.loc["w", "INPUT"]), int(h.loc["all", "rows"])
+    (3, 2, 5)
+    """
+    import pandas as pd
+
+    if summary is None:
+        summary = latest_summary()
+    cols = ["reproduced", *STATUSES, "rows", "hold", "skipped"]
+    if summary.empty:
+        return pd.DataFrame(columns=cols, index=pd.Index([], name="work"))
+    counts = summary.pivot_table(index="work", columns="status", values="rows", aggfunc="sum",
+                                 fill_value=0).reindex(columns=list(STATUSES), fill_value=0)
+    out = pd.DataFrame(index=counts.index)
+    out["reproduced"] = counts[list(REPRODUCED)].sum(axis=1)
+    for st in STATUSES:
+        out[st] = counts[st]
+    tot = summary.groupby("work")[["rows", "hold", "skipped"]].sum()
+    out = out.join(tot)
+    order = [w for w in WORK_IDS if w in out.index] + [w for w in out.index if w not in WORK_IDS]
+    out = out.loc[order]
+    out.loc["all"] = out.sum()
+    out = out.astype(int)
+    out.index.name = "work"
+    out.attrs.update(getattr(summary, "attrs", {}))
+    return out
+
+
 def write_report(results: list[Result], outdir: Path) -> tuple[Path, Path]:
     """Write ``claims.csv`` and ``claims.md`` into ``outdir`` (atomically)."""
     from .fileio import atomic_write
@@ -427,30 +532,37 @@ def write_report(results: list[Result], outdir: Path) -> tuple[Path, Path]:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["claim_id", "work", "seed_file", "location", "quantity", "unit", "paper_value",
-                "reproduced_value", "alt_value", "rtol", "atol", "status", "holds", "note"])
+                "reproduced_value", "reconstructed_value", "alt_value", "rtol", "atol", "status",
+                "holds", "note"])
     for r in results:
         c = r.claim
         w.writerow([c.claim_id, c.work, c.seed_file, c.location, c.quantity, c.unit, c.paper_value,
-                    _fmt(r.reproduced), _fmt(r.alt), c.rtol, c.atol, c.status,
+                    _fmt(r.reproduced), _fmt(r.reconstructed), _fmt(r.alt), c.rtol, c.atol, c.status,
                     "skipped" if r.skipped else r.ok, r.error or c.note])
     p_csv = atomic_write(outdir / "claims.csv", buf.getvalue())
-    md = ["# cnclab claims report", ""]
-    summ = summary_frame(results)
-    md += ["| work | status | rows | hold | skipped |", "|---|---|---|---|---|"]
-    for _, s in summ.iterrows():
-        md.append(f"| {s.work} | {s.status} | {s.rows} | {s.hold} | {s.skipped} |")
+    md = ["# cnclab claims report", "",
+          "Rows per work and status. Reproduced results are the MATCH and DIFFERS rows only; "
+          "CONSISTENT (arithmetic on printed numbers), INPUT (taken as input or built in), "
+          "NOT_DERIVABLE (an input is absent) and DISCREPANT (no explanation found) are counted apart.",
+          ""]
+    head = headline(summary_frame(results))
+    cols = list(head.columns)
+    md += ["| work | " + " | ".join(cols) + " |", "|---" * (len(cols) + 1) + "|"]
+    for work, s in head.iterrows():
+        md.append(f"| {work} | " + " | ".join(str(s[c]) for c in cols) + " |")
     md.append("")
     for work in WORK_IDS:
         rs = [r for r in results if r.claim.work == work]
         if not rs:
             continue
-        md += [f"## {work}", "", "| claim | location | paper | reproduced | alternative | tolerance | status | holds |",
-               "|---|---|---|---|---|---|---|---|"]
+        md += [f"## {work}", "", "| claim | location | paper | reproduced | reconstructed | alternative | "
+               "tolerance | status | holds |", "|---|---|---|---|---|---|---|---|---|"]
         for r in rs:
             c = r.claim
             holds = "skipped" if r.skipped else ("yes" if r.ok else "**NO**")
             md.append(f"| {c.claim_id} | {c.location} | {c.paper_value:g} {c.unit} | {_fmt(r.reproduced)} | "
-                      f"{_fmt(r.alt)} | ±({c.atol:g}+{c.rtol:g}·p) | {c.status} | {holds} |")
+                      f"{_fmt(r.reconstructed)} | {_fmt(r.alt)} | ±({c.atol:g}+{c.rtol:g}·p) | {c.status} | "
+                      f"{holds} |")
         md.append("")
     p_md = atomic_write(outdir / "claims.md", "\n".join(md) + "\n")
     return p_csv, p_md
@@ -484,7 +596,7 @@ def main(argv: list[str] | None = None) -> int:
                                "display.max_colwidth", 60):
             print(results_frame(results).drop(columns=["note"]).to_string(index=False))
         print()
-        print(summary_frame(results).to_string(index=False))
+        print(headline(summary_frame(results)).to_string())
     if args.report:
         for p in write_report(results, Path(args.report)):
             print(f"wrote {p}")

@@ -66,7 +66,7 @@ def run_all(only: str | None = None) -> int:
     print("computing the claims ledger ...", flush=True)
     results = claims.evaluate_all(claims.load(), progress=True)
     p_csv, p_md = claims.write_report(results, out)
-    print(claims.summary_frame(results).to_string(index=False))
+    print(claims.headline(claims.summary_frame(results)).to_string())
     print(f"wrote {p_csv} and {p_md}")
     if INDEX_NOTEBOOK in nbs:  # last: it shows the report just written
         run(len(nbs), INDEX_NOTEBOOK)

@@ -85,6 +85,88 @@ def test_evaluate_match_and_differs(tmp_path):
     assert not claims.evaluate(d2).ok
 
 
+def test_status_semantics_discrepant_consistent_input(tmp_path):
+    def ev(**over):
+        return claims.evaluate(claims.load(ledger(tmp_path, **over))[0])
+
+    one = "tests.test_claims_machinery.val_one"
+    # DISCREPANT holds only while the value stays outside the tolerance
+    assert ev(status="DISCREPANT", paper_value="2.0", computed_by=one, note="tried x").ok
+    assert not ev(status="DISCREPANT", paper_value="1.0", computed_by=one, note="tried x").ok
+    # CONSISTENT and INPUT (with a function) hold only within tolerance
+    for st in ("CONSISTENT", "INPUT"):
+        assert ev(status=st, paper_value="1.0", computed_by=one).ok
+        assert not ev(status=st, paper_value="1.5", computed_by=one).ok
+    # NOT_DERIVABLE: the reconstruction is computed and reported, an error is not hidden
+    r = ev(status="NOT_DERIVABLE", computed_by="", missing_input="measured",
+           reconstructed_by="tests.test_claims_machinery.val_two")
+    assert r.ok and r.reconstructed == 2.0 and r.reproduced is None
+    assert r.to_json()["reconstructed_value"] == 2.0
+    assert claims.results_frame([r]).loc[0, "reconstructed"] == "2"
+    bad = ev(status="NOT_DERIVABLE", computed_by="", missing_input="measured",
+             reconstructed_by="tests.test_claims_machinery.raises")
+    assert not bad.ok and "boom" in bad.error
+
+
+@pytest.mark.parametrize("over, msg", [
+    (dict(status="DISCREPANT", computed_by="tests.test_claims_machinery.val_one"), "what was tried"),
+    (dict(status="CONSISTENT", computed_by=""), "computed_by"),
+    (dict(reconstructed_by="tests.test_claims_machinery.val_two"), "reconstructed_by"),
+    (dict(status="MATCH", alt_computed_by="tests.test_claims_machinery.val_two"), "alt_computed_by"),
+])
+def test_status_rules_enforced_by_load(tmp_path, over, msg):
+    with pytest.raises(claims.LedgerError, match=msg):
+        claims.load(ledger(tmp_path, **over))
+
+
+def test_not_derivable_must_quote_the_seed_in_quoted_works(tmp_path):
+    row = dict(claim_id="hoang2024.test.x", work="hoang2024", seed_file=claims.SEED_FILES["hoang2024"],
+               status="NOT_DERIVABLE", computed_by="")
+    assert "hoang2024" in claims.QUOTED_WORKS
+    with pytest.raises(claims.LedgerError, match="quote"):
+        claims.load(ledger(tmp_path, missing_input="the commercial program", **row))
+    with pytest.raises(claims.LedgerError, match="quote"):  # too short to be a sentence
+        claims.load(ledger(tmp_path, missing_input='the program: "CAD/CAM"', **row))
+    c = claims.load(ledger(tmp_path, missing_input="the program: “using commercial CAD/CAM software”", **row))[0]
+    assert claims.quotes(c.missing_input) == ["using commercial CAD/CAM software"]
+
+
+def test_printed_number_forms():
+    text = "V = 2 098 mm3; MRR 1147,5; lengths | 5270,744 | and 1,234 and Y49.7497"
+    for v in (2098, 1147.5, 5270.744, 1234, 1.234, 49.7497, -49.7497):
+        assert claims.is_printed(v, text), v
+    for v in (2099, 1147.0, 49.7494, 0.5):
+        assert not claims.is_printed(v, text), v
+
+
+def test_headline_keeps_reproduced_apart(tmp_path):
+    rows = [dict(BASE, claim_id=f"mgherony2024.t.{i}", status=st, computed_by=cb, note="n",
+                 alt_computed_by=alt, missing_input=mi)
+            for i, (st, cb, alt, mi) in enumerate([
+                ("MATCH", "tests.test_claims_machinery.val_one", "", ""),
+                ("DIFFERS", "tests.test_claims_machinery.val_two", "tests.test_claims_machinery.val_one", ""),
+                ("CONSISTENT", "tests.test_claims_machinery.val_one", "", ""),
+                ("INPUT", "", "", ""),
+                ("NOT_DERIVABLE", "", "", "measured"),
+                ("DISCREPANT", "tests.test_claims_machinery.val_two", "", "")])]
+    p = tmp_path / "h.csv"
+    with open(p, "w", newline="") as fh:
+        w = csv.DictWriter(fh, HEADER)
+        w.writeheader()
+        w.writerows(rows)
+    res = claims.evaluate_all(claims.load(p))
+    assert all(r.ok for r in res)
+    h = claims.headline(claims.summary_frame(res))
+    row = h.loc["mgherony2024"]
+    assert row["reproduced"] == 2 and row["MATCH"] == 1 and row["DIFFERS"] == 1
+    assert row["CONSISTENT"] == row["INPUT"] == row["NOT_DERIVABLE"] == row["DISCREPANT"] == 1
+    assert row["rows"] == 6 and row["hold"] == 6 and h.loc["all", "rows"] == 6
+    _, md = claims.write_report(res, tmp_path / "out")
+    text = md.read_text()
+    assert text.index("| work | reproduced |") < text.index("## mgherony2024")
+    assert "reconstructed" in text
+
+
 def test_indexed_computed_by(tmp_path):
     c = claims.load(ledger(tmp_path, computed_by="tests.test_claims_machinery.mapping[b]",
                            paper_value="2"))[0]
@@ -103,6 +185,10 @@ def val_two():
 
 def mapping():
     return {"a": 1.0, "b": 2.0}
+
+
+def raises():
+    raise RuntimeError("boom")
 
 
 def test_cli_json_keys():

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 
 import numpy as np
 import pandas as pd
@@ -144,6 +145,29 @@ def fig9_last_pass_y() -> float:
     """Y [mm] of the last pass of the covering program (Fig. 9 'N107 X100, Y50.744')."""
     moves, _ = table3_program(covering=True, decimals=3)
     return max(m.y for m in moves)
+
+
+def fig9_stop_y() -> float:
+    """Y [mm] of the pass before the covering one (Fig. 9 prints 'N106 X100 Y49.7497'): 50 S_z."""
+    moves, _ = table3_program(covering=True, decimals=4)
+    ys = sorted({round(m.y, 6) for m in moves})
+    return float(ys[-2])
+
+
+def commercial_last_y() -> float:
+    """Last pass Y [mm] of a zig-zag with the commercial run's printed 1 mm horizontal step over the
+    printed 50 mm width (passes at 0, 1, ..., 50): restates Fig. 9 a's 'N107 Y50'."""
+    s = _table3_setup()
+    w, step = s["workpiece_mm"]["width"], s["commercial_cam"]["horizontal_step_mm"]
+    return float(math.ceil(w / step - 1e-9) * step)
+
+
+def table3_traditional_rapid() -> float:
+    """Toolpath minus machining length [mm] of the printed Table 3 traditional column: the rapid
+    return, which restates the last Y of the commercial program (Fig. 9 a 'it should be N107 Y49.995')
+    if, as in the constant volume program, the only rapid is the return from the last pass."""
+    t = _table3_setup()["table3"]
+    return t["traditional_toolpath_length_mm"] - t["traditional_machining_length_mm"]
 
 
 # ---------------------------------------------------------------- height-field check
