@@ -377,7 +377,7 @@ def ann_seed_table(model: str, n_seeds: int = N_SEEDS, trainer: str = "lm",
     scaled = (stats - printed).abs() / tol
     out = stats.astype(float).copy()
     out["worst_error_in_tol"] = scaled.max(axis=1)
-    out["whole_row"] = scaled.max(axis=1) <= 1.0
+    out["whole_row"] = (scaled.max(axis=1) <= 1.0).astype(object)   # object: the two summary rows hold NaN
     out.index = [f"seed {i}" for i in stats.index]
     out.loc["printed", list(ROW_STATS)] = printed
     out.loc["percentile", list(ROW_STATS)] = [percentile_among(stats[c], printed[c]) for c in ROW_STATS]
