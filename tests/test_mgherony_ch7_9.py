@@ -145,3 +145,13 @@ def test_reconstructed_n_min_is_the_steepest_working_diameter():
     assert abs(ch7_9.schedule(0.0).n.min() / ch7_9.n_min_reconstruction() - 1) < 0.01
     assert ch7_9.n_min_reconstruction() < ch7_9.horizontal_n_rpm()
 
+
+
+def test_chapter10_counts_the_stated_thesis_points(monkeypatch):
+    from cnclab.works.mgherony2024 import ch10
+    t = ch10.theses()
+    assert ch10.thesis_point_count() == len(t["theses"]) == 5 and t["announced_count"] == 7
+    gap = {**t, "theses": [x for x in t["theses"] if x["number"] != 3]}
+    monkeypatch.setattr(ch10, "theses", lambda: gap)
+    with pytest.raises(ValueError, match="not 1..n"):
+        ch10.thesis_point_count()
