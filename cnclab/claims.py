@@ -78,7 +78,7 @@ SEED_FILES = {
 }
 #: works whose NOT_DERIVABLE rows must quote the seed in ``missing_input`` (all works once every
 #: work's rows carry their quotes)
-QUOTED_WORKS = frozenset({"jacso2021", "kim_yang2006", "hoang2024"})
+QUOTED_WORKS = frozenset(WORK_IDS)
 _QUOTE = re.compile(r'[“"]([^“”"]{12,})[”"]')
 _DOTTED = re.compile(r"^[A-Za-z_][\w]*(\.[A-Za-z_]\w*)+(\[[^\[\]]+\])?$")
 

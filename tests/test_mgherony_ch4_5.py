@@ -146,3 +146,35 @@ def test_fig5_6_bottom_to_top_larger():
 def test_surface_map_symmetry_between_points():
     AN1, AN2, r1, r2 = ch4_5.surface_map(1.0, 30)
     assert np.allclose(r1, r2[:, ::-1])                               # "the two diagrams are symmetrical"
+
+
+def test_points_1_and_2_share_extremes_and_switch():
+    """§5.5 "The minimum and maximum values of the D_eff1 and D_eff2 are the same" and §5.4 "the working
+    diameter at point 1 with A_f = 180° matches the working diameter at point 2 with A_f = 0°" (statements,
+    formerly ledger rows with an unprinted paper value 0): point 1 at A_f + 180° is point 2 at A_f."""
+    from cnclab.geometry.ball_end import tangent_point_diameters
+
+    e = ch4_5.ap1_extremes()
+    assert abs(e["p1_deff_min"] - e["p2_deff_min"]) < 1e-9 and abs(e["p1_deff_max"] - e["p2_deff_max"]) < 1e-9
+    assert ch4_5.fig5_8_ranges()["switch_identity"] < 1e-9
+    rng = np.random.default_rng(5)
+    a1, a2, af = rng.uniform(0, 360, 50), rng.uniform(-60, 60, 50), rng.uniform(0, 360, 50)
+    for ap in (0.3, 1.0):
+        d1_shift = tangent_point_diameters(10.0, ap, a1, a2, af + 180.0)[0]
+        d2 = tangent_point_diameters(10.0, ap, a1, a2, af)[1]
+        np.testing.assert_allclose(d1_shift, d2, atol=1e-9)
+    # the two points are not the same point: they differ away from the symmetric cases
+    d1, d2 = tangent_point_diameters(10.0, 1.0, a1, a2, af)
+    assert np.max(np.abs(d1 - d2)) > 0.5
+
+
+def test_eq5_1_as_printed_exceeds_the_tool_and_corrected_is_the_chord():
+    from cnclab.geometry.ball_end import eq5_1_as_printed_diameter, horizontal_effective_diameter
+
+    ap = np.linspace(0.01, 4.99, 50)
+    # as printed (with '+') the "diameter" exceeds the 10 mm tool for every 0 < a_p < D/2
+    assert np.all(eq5_1_as_printed_diameter(10.0, ap) > 10.0)
+    assert ch4_5.eq5_1_as_printed_ch4() == pytest.approx(2 * math.sqrt(25 + 4.7 ** 2))
+    # corrected: the chord of the ball at depth a_p, 2 sqrt(a_p (D - a_p)), equal to D at a_p = D/2
+    np.testing.assert_allclose(horizontal_effective_diameter(10.0, ap), 2 * np.sqrt(ap * (10.0 - ap)))
+    assert horizontal_effective_diameter(10.0, 5.0) == pytest.approx(10.0)

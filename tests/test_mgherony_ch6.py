@@ -3,6 +3,7 @@ import hashlib
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from cnclab.claims import Interval
@@ -97,3 +98,45 @@ def test_printed_tables_are_complete():
 def test_ann_runs_rejects_unknown_model():
     with pytest.raises(ValueError, match="model must be"):
         ch6.ann_runs("a3")
+
+
+def test_r1_is_the_mean_of_the_r2_fits_on_the_balanced_plan():
+    """Every D level has the same (a_p, A_N2, A_f) design, so the pooled r1 fit's shared coefficients are the mean
+    of the four per-D fits, and its constant + coef_D·mean(D) is the mean of their constants (fitted, not printed)."""
+    r1 = ch6.r1_fit().params
+    fits = ch6.r2_fits()
+    for term in r1.index:
+        if term in ("Constant", "D"):
+            continue
+        assert r1[term] == pytest.approx(np.mean([f.params[term] for f in fits.values()]), rel=1e-9, abs=1e-12)
+    mean_const = np.mean([f.params["Constant"] for f in fits.values()])
+    assert r1["Constant"] + r1["D"] * np.mean(list(fits)) == pytest.approx(mean_const, rel=1e-9)
+    # and the printed tables obey the same identity within their rounding (ledger rows ch6.r1_mean_of_r2.*)
+    printed = ch6.printed_r1_coefficients()
+    for term, v in ch6.r1_from_printed_r2_means().items():
+        assert abs(v - printed[term]) < 6e-4
+
+
+def test_percentile_among():
+    assert ch6.percentile_among([1, 2, 3, 4], 0.5) == 0.0
+    assert ch6.percentile_among([1, 2, 3, 4], 9) == 100.0
+    assert ch6.percentile_among([1, 2, 3, 4], 2.5) == 50.0
+    assert ch6.percentile_among([1, 2, 2, 4], 2) == 50.0          # ties count half
+
+
+def test_ann_seed_table_judges_whole_rows():
+    t = ch6.ann_seed_table("a1", n_seeds=2, max_epochs=3)      # tiny training: far from the printed row
+    seeds = t.drop(index=["printed", "percentile"])
+    assert list(seeds.index) == ["seed 0", "seed 1"]
+    assert t.loc["printed", "range"] == 2.601 and t.loc["printed", "r_train"] == 0.99512
+    assert not seeds["whole_row"].astype(bool).any()
+    worst = ((seeds[list(ch6.ROW_STATS)].astype(float) - t.loc["printed", list(ch6.ROW_STATS)].astype(float)).abs()
+             / pd.Series(ch6.ROW_TOLERANCE)).max(axis=1)
+    np.testing.assert_allclose(seeds["worst_error_in_tol"].astype(float), worst)
+    assert set(t.loc["percentile", list(ch6.ROW_STATS)]) <= {0.0, 25.0, 50.0, 75.0, 100.0}
+
+
+def test_dataset_rows_and_r1_display():
+    assert ch6.dataset_rows() == 4 * 4 * 13 * 13
+    printed = ch6.printed_r1_coefficients()
+    assert list(printed)[:3] == ["const", "D", "ap"] and printed["AN2_5_Af3"] == -4.363

@@ -77,10 +77,13 @@ def test_two_hidden_layers_and_first_order_trainers():
 
 def test_early_stopping_counts_validation_failures():
     X, Y = _toy(120, seed=2)
-    net = train_mlp(X, Y + np.random.default_rng(0).normal(0, 0.5, Y.shape), hidden=(10,), seed=0,
-                    max_epochs=500, max_fail=3)
-    if net.stop_reason == "validation_stop":
-        assert len(net.history) - 1 == net.best_epoch + 3
+    # heavy noise + a 10-neuron net on 84 training rows: LM overfits, validation error rises -> early stop
+    noisy = Y + np.random.default_rng(0).normal(0, 0.5, Y.shape)
+    for max_fail in (3, 5):
+        net = train_mlp(X, noisy, hidden=(10,), seed=0, max_epochs=500, max_fail=max_fail)
+        assert net.stop_reason == "validation_stop", net.stop_reason       # must stop early, not run out
+        assert len(net.history) - 1 == net.best_epoch + max_fail        # exactly max_fail failures after the best
+        assert net.history["val_mse"].iloc[net.best_epoch] == net.history["val_mse"].min()
 
 
 @pytest.mark.parametrize("kw, word", [

@@ -174,3 +174,33 @@ def ideal_vs_measured(profile_periods: int = 25) -> pd.DataFrame:
                      "Rt_ideal_um": p["Rt"], "Ra_um": r.Ra_um, "Rz_um": r.Rz_um,
                      "Ra_share": p["Ra"] / r.Ra_um, "Rz_share": p["Rz"] / r.Rz_um})
     return pd.DataFrame(rows).set_index("part")
+
+
+# ------------------------------------------------------------------------------ ledger audit (issue 13)
+#: eqs 3-11 / 3-12 as printed: C(RE, p) = c0 + c_RE·RE + c_p·p
+PRINTED_HYBRID = {"Ra": (1.94, -1.68, 11.6), "Rz": (0.24, -0.37, 3.45)}
+
+
+def eq3_1_as_printed_ch_um() -> pd.Series:
+    """Eq 3-1 *as printed*, RE² = (f/2)² + RE·CH, solved for CH (µm) for the turned parts T1…T6:
+    CH = (RE² − f²/4)/RE ≈ RE (hundreds of µm). The geometry of Fig 3-1 is RE² = (f/2)² + (RE − CH)²,
+    whose small-CH form is eq 3-2 (the Table 3-4 column)."""
+    t = parts()[parts().process == "turning"]
+    return 1000 * (t.RE_mm ** 2 - t.spacing_mm ** 2 / 4) / t.RE_mm
+
+
+def hybrid_printed_r2_pct() -> dict:
+    """Eqs 3-11/3-12 evaluated with the *printed* coefficients: the coefficient of determination (%) of
+    C(RE, p) against the measured C of the ten parts, ``<Rx>.as_printed`` (C = Rx/CH, eq 3-10 as printed)
+    and ``<Rx>.inverse`` (C = CH/Rx, the reading the coefficients come from)."""
+    df = parts()
+    ch = df.CH_um.to_numpy()
+    out = {}
+    for resp, (c0, c_re, c_p) in PRINTED_HYBRID.items():
+        C = c0 + c_re * df.RE_mm.to_numpy() + c_p * df.p_mm.to_numpy()
+        rx = df[f"{resp}_um"].to_numpy()
+        for form, target in (("as_printed", rx / ch), ("inverse", ch / rx)):
+            ss_res = np.sum((target - C) ** 2)
+            ss_tot = np.sum((target - target.mean()) ** 2)
+            out[f"{resp}.{form}"] = float(100 * (1 - ss_res / ss_tot))
+    return out

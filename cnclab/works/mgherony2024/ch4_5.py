@@ -397,3 +397,41 @@ def surface_map(a_p: float, A_f: float, step: float = 2.5):
     AN1, AN2 = angle_grid(step, step)
     r1, r2 = paper_deff_radius_valued(D, a_p, AN1, AN2, A_f)
     return AN1, AN2, r1, r2
+
+
+# ------------------------------------------------------------------------------ ledger audit (issue 13)
+def ch4_cx_cutting_speed_at_15mm_truncated() -> float:
+    """Explanation of §4.3's "70 m/min": the CX measuring point y = ±15 mm runs at 70.9 m/min, printed
+    truncated to whole m/min as the thesis prints 5877.8 rpm as 5877 (Sec. 7.3)."""
+    return float(np.floor(ch4_cx_cutting_speed_at_15mm()))
+
+
+def table5_1_printed_values() -> dict:
+    """Table 5-1 as printed for A_f = 30°, point 1 (the §5.5 text restates it): ``deff_min``, ``deff_max``
+    (mm), ``vc_min``, ``vc_max`` (m/min)."""
+    r = table5_1_printed()
+    r = r[(r.A_f_deg == 30) & (r.point == 1)].iloc[0]
+    return {"deff_min": float(r.deff_min_mm), "deff_max": float(r.deff_max_mm),
+            "vc_min": float(r.vc_min_m_min), "vc_max": float(r.vc_max_m_min)}
+
+
+def nominal_cutting_speed_from_printed() -> float:
+    """§5.5: v_c = π·D·n/1000 (m/min) from the printed D = 10 mm and n = 3820 1/min."""
+    return nominal_cutting_speed_ch5()
+
+
+def variation_ratio_D10_to_D6(milling: str = "down") -> float:
+    """§5.3 "similar ranges" vs Thesis 1 "larger for larger D": the true working-diameter variation over
+    one chip removal (a_e = 1, Fig 5-7 settings) for D = 10 over D = 6 (down milling)."""
+    s = similar_vs_larger_summary()
+    s = s[s.milling == milling].set_index("D_mm")
+    return float(s.loc[10.0, "variation_mm"] / s.loc[6.0, "variation_mm"])
+
+
+def thesis1_larger_for_larger_D_and_down() -> float:
+    """Thesis 1 "This variation is larger for larger nominal tool diameters and down milling technology":
+    1.0 when the variation (a_e = 1) grows with D for both up and down milling and down > up at every D."""
+    s = similar_vs_larger_summary()
+    up = s[s.milling == "up"].sort_values("D_mm").variation_mm.to_numpy()
+    down = s[s.milling == "down"].sort_values("D_mm").variation_mm.to_numpy()
+    return float(bool(np.all(np.diff(up) > 0) and np.all(np.diff(down) > 0) and np.all(down > up)))

@@ -443,3 +443,79 @@ def ch9_delta_minima() -> dict:
     o, c = deltas("original"), deltas(1)
     return {"dD_original": float(o["dD"].min()), "dD_case1": float(c["dD"].min()),
             "dn_original": float(o["dn"].min()), "dn_case1": float(c["dn"].min())}
+
+
+# ------------------------------------------------------------------------------ ledger audit (issue 13)
+def n_min_reconstruction() -> float:
+    """Lowest controlled spindle speed (rpm, eq 7-4) on the reconstructed part, A_f = 0: v_c = 63 at the
+    largest working diameter over the exact normals (the printed 3002 needs the thesis's unpublished part)."""
+    t = parameters()["table7_1"]
+    return float(spindle_speed(t["v_c"], analytic_deff_range(0.0)[1]))
+
+
+def vf_max_printed_mm_min() -> float:
+    """Sec. 7.3's printed highest feed (1469 mm/min), restated as 'reaching 1500' in the same paragraph."""
+    return float(parameters()["ch7_text"]["vf_max"])
+
+
+def vf_ratio_from_printed() -> float:
+    """Sec. 7.3 'three times greater than the nominal feed rate' from the printed numbers: 1469 / 500."""
+    return float(parameters()["ch7_text"]["vf_max"] / parameters()["table7_1"]["v_f"])
+
+
+def vc_nominal_from_printed_n() -> float:
+    """v_c (m/min, eq 5-6) from Table 7-1's printed D = 10 mm and n = 2000 rpm: 62.83 (printed 63)."""
+    t = parameters()["table7_1"]
+    return float(cutting_speed(t["D"], t["n"]))
+
+
+@functools.cache
+def ch9_delta_maxima() -> dict:
+    """max |Delta D_eff| (mm) and max |Delta n| (rpm) of the original path and of case 1 (Figs 9-9 ... 9-12),
+    reconstruction, Sec. 9.2 reading, jump moves excluded."""
+    o, c = deltas("original"), deltas(1)
+    return {"dD_original": float(o["dD"].max()), "dD_case1": float(c["dD"].max()),
+            "dn_original": float(o["dn"].max()), "dn_case1": float(c["dn"].max())}
+
+
+def ch9_dn_max_reduction() -> float:
+    """Thesis 5 / Sec. 9.3: case 1 max |Delta n| as a fraction of the original's, reconstruction (printed: 128/622)."""
+    m = ch9_delta_maxima()
+    return m["dn_case1"] / m["dn_original"]
+
+
+def ch8_direction_reconstruction() -> dict:
+    """Chapter 8 per-direction n_min, n_max (rpm) and path lengths (mm) of the STL + APT pipeline, keys
+    ``n_min_<A_f>``, ``n_max_<A_f>``, ``path_<A_f>``, plus ``integral_diff_pct`` (max/min controlled
+    spindle integral over the five directions, minus 1, in %)."""
+    df = direction_table()
+    out = {}
+    for r in df.itertuples():
+        out[f"n_min_{r.A_f:g}"] = float(r.n_min)
+        out[f"n_max_{r.A_f:g}"] = float(r.n_max)
+        out[f"path_{r.A_f:g}"] = float(r.path_mm)
+    ig = df.integral_controlled
+    out["integral_diff_pct"] = float(100 * (ig.max() / ig.min() - 1))
+    return out
+
+
+def ch9_reorder_reconstruction() -> dict:
+    """Table 9-2 on the reconstruction (Sec. 9.2 reading): ``case<k>.distance`` (mm) and ``case<k>.jumps``."""
+    tab = reorder_cases()[0].set_index("case")
+    out = {}
+    for c in (1, 2, 3, 4):
+        out[f"case{c}.distance"] = float(tab.loc[c, "distance_mm"])
+        out[f"case{c}.jumps"] = float(tab.loc[c, "jumps"])
+    return out
+
+
+def start_point_height_text_mm() -> float:
+    """z (mm) of the reconstructed part at the Sec. 9.3 text's start coordinates (28.5, 43.919)."""
+    return start_point_height_mm("text")
+
+
+def printed_values() -> dict:
+    """Printed chapter 7-8 numbers that other printed numbers restate (Thesis 4 restates ch. 8):
+    ``ch8_n_min_min``, ``ch8_n_max_max`` (rpm)."""
+    p = parameters()
+    return {"ch8_n_min_min": float(min(p["ch8_n_min"])), "ch8_n_max_max": float(max(p["ch8_n_max"]))}
