@@ -9,7 +9,8 @@ __all__ = ["thesis1", "ce_growth", "trochoid", "kim_yang", "hoang", "working_dia
 
 
 def _fig(w=9.0, h=3.8, ncols=2, **kw):
-    fig = Figure(figsize=(w, h), layout="constrained")
+    fig = Figure(figsize=(w, h))
+    fig.subplots_adjust(left=0.08, right=0.97, bottom=0.14, top=0.9, wspace=0.3)   # fixed: fast redraws
     return fig, fig.subplots(1, ncols, **kw) if ncols > 1 else fig.subplots()
 
 
@@ -93,13 +94,15 @@ def kim_yang(sc):
 
 
 def hoang(sc):
-    fig, (a, b) = _fig()
+    fig, (a, b) = _fig(w=10)
+    fig.subplots_adjust(wspace=0.65)                   # room for the bar labels
     for ball in sc["balls"]:
         a.plot(*ball.T, "0.5", lw=1)
     a.fill_between(sc["ridge_x"], 0, sc["ridge_z"], color="C1", alpha=0.6, label="scallop section")
     a.axhline(0, color="k", lw=0.8)
-    a.set_aspect("equal"); a.set(xlabel="x [mm]", ylabel="z [mm]", ylim=(-0.1 * sc["Sz"], 0.6 * sc["Sz"]),
-                                 title=f"S_z = {sc['Sz']:.4f} mm, S_c = {sc['drawn_peak_mm']:.4f} mm")
+    h = sc["drawn_peak_mm"]
+    a.set(xlabel="x [mm]", ylabel="z [mm] (vertical scale stretched)", ylim=(-0.3 * h, 2.5 * h),
+          xlim=(-0.9 * sc["Sz"], 0.9 * sc["Sz"]), title=f"S_z = {sc['Sz']:.4f} mm, S_c = {h:.4f} mm")
     a.legend(fontsize=7)
     names = ("Fr_consistent", "Fr_v1", "Fr_v2", "Fr_printed_convention")
     b.barh(range(4), [sc[n] for n in names], color=["C0", "C2", "C4", "0.6"])
@@ -109,7 +112,8 @@ def hoang(sc):
 
 
 def working_diameter(sc):
-    fig = Figure(figsize=(9, 4.2), layout="constrained")
+    fig = Figure(figsize=(9, 4.2))
+    fig.subplots_adjust(left=0.02, right=0.97, bottom=0.14, top=0.9, wspace=0.2)
     a = fig.add_subplot(1, 2, 1, projection="3d")
     b = fig.add_subplot(1, 2, 2)
     R = sc["D"] / 2

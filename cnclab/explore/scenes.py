@@ -302,7 +302,7 @@ def working_diameter_scene(D, a_p, A_N1, A_N2, A_f, a_e, milling="up", n=181):
             "feed_dir": np.array([math.cos(math.radians(A_f)), math.sin(math.radians(A_f)), 0.0])}
 
 
-def cusp_scene(feed_mm, corner_radius_mm, n_periods=4, n=4001):
+def cusp_scene(feed_mm, corner_radius_mm, n_periods=10, n=10001):
     """Cusp height (exact eq. and eq 3-2 approximation) and the ideal profile's Ra, Rz (mm) for a feed
     (mm/rev) and corner radius (mm); curves of CH vs feed for this radius."""
     ch = float(cusp.cusp_height_turning(feed_mm, corner_radius_mm, exact=True))
