@@ -148,7 +148,9 @@ def _notebooks(build: Path, site: Path) -> list[dict]:
         dest = site / "notebooks" / rel.with_suffix(".html")
         dest.parent.mkdir(parents=True, exist_ok=True)
         nb = nbformat.read(p, as_version=4)
-        dest.write_text(offline_notebook_html(nb), encoding="utf-8")
+        # links between notebooks (the index) point at the exported pages of this site
+        text = re.sub(r'href="(?!https?:)([^"#]+)\.ipynb(#[^"]*)?"', r'href="\1.html\2"', offline_notebook_html(nb))
+        dest.write_text(text, encoding="utf-8")
         title = next((c.source.splitlines()[0].lstrip("# ").strip() for c in nb.cells
                       if c.cell_type == "markdown" and c.source.strip()), rel.stem)
         rows.append({"rel": rel.as_posix(), "href": f"notebooks/{rel.with_suffix('.html').as_posix()}",

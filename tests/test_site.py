@@ -20,7 +20,8 @@ from cnclab.paths import DATA_DIR, NOTEBOOKS_DIR  # noqa: E402
 
 def _executed_notebook():
     nb = nbformat.v4.new_notebook()
-    nb.cells = [nbformat.v4.new_markdown_cell("# Thesis I — a synthetic notebook\nWith $\\theta$ in TeX."),
+    nb.cells = [nbformat.v4.new_markdown_cell("# Thesis I — a synthetic notebook\nWith $\\theta$ in TeX. "
+                                              "[next](../hoang2024/next.ipynb), [doi](https://doi.org/10.1/x.ipynb)"),
                 nbformat.v4.new_code_cell("1 + 1")]
     nb.cells[1].outputs = [nbformat.v4.new_output("execute_result", {"text/plain": "2"}, execution_count=1)]
     nb.metadata["widgets"] = {"application/vnd.jupyter.widget-state+json": {"version_major": 2, "version_minor": 0,
@@ -69,6 +70,8 @@ def test_site_has_works_reading_order_notebooks_figures_and_claims(small_build):
         assert (index.parent / h).is_file(), h
     assert text.count("data-status='MATCH'") == 1 and text.count("data-status='DIFFERS'") == 1
     assert "id='fw'" in text and "id='fs'" in text               # the filters
+    page = (index.parent / "notebooks/jacso2021/thesis1_engagement_formulas.html").read_text()
+    assert 'href="../hoang2024/next.html"' in page and 'href="https://doi.org/10.1/x.ipynb"' in page
 
 
 def test_site_has_no_external_reference_anywhere(small_build):
