@@ -224,6 +224,7 @@ def test_offline_site_loads_follows_links_and_stays_local(driver):
     time.sleep(1.0)
     driver.save_screenshot(str(SCREENS / "site_figure.png"))
     seen += _requests(driver)
+    driver.get(index.as_uri())
     views = [a.get_attribute("href") for a in driver.find_elements(By.CSS_SELECTOR, ".gallery a")
              if a.get_attribute("href").endswith(".html")]
     if views:                                        # a 3D view page (plotly.js inlined) renders offline
