@@ -6,13 +6,15 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.cnclab-installed
 JOBS ?= 2
 
-.PHONY: reproduce test venv claims bench strip clean help
+.PHONY: reproduce test venv claims bench strip clean help browser-test site
 
 help:
 	@echo "make reproduce   execute every notebook, write build/ (figures, HTML, claims report)"
 	@echo "make test        unit + claims tests and every notebook in fast mode (CNCLAB_FAST=1)"
 	@echo "make bench       run benchmarks/ and print their tables"
 	@echo "make claims      print the claims ledger with freshly computed values"
+	@echo "make site        build the offline site build/site/index.html from what build/ holds"
+	@echo "make browser-test  JupyterLab explorer + offline site in headless Chromium (screens in build/screens)"
 
 venv: $(STAMP)
 
@@ -30,6 +32,17 @@ reproduce: $(STAMP)
 
 test: $(STAMP)
 	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --durations=15 tests
+
+site: $(STAMP)
+	$(PY) -m cnclab site
+
+# Real-browser tests (tests_browser/, not collected by `make test`): Debian chromium + chromedriver.
+browser-test: $(STAMP)
+	@if ! command -v chromium >/dev/null || ! command -v chromedriver >/dev/null; then \
+		echo ">> installing chromium and chromium-driver (Debian)"; \
+		apt-get update && apt-get install -y --no-install-recommends chromium chromium-driver; \
+	fi
+	CNCLAB_FAST=1 $(PY) -m pytest -p no:randomly -n 0 -v tests_browser
 
 claims: $(STAMP)
 	$(PY) -m cnclab claims

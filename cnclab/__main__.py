@@ -13,6 +13,7 @@ COMMANDS = {
     "reproduce": ("cnclab.reproduce", "execute every notebook, export HTML/figures, write the claims report"),
     "spindle": ("cnclab.nc.cli_spindle", "constant-v_c spindle/feed post-processing of an APT file against an STL"),
     "nb": ("cnclab.notebook_tools", "notebook housekeeping: from-py, strip, list"),
+    "site": ("cnclab.site", "build the offline site build/site/index.html from what build/ holds"),
 }
 
 

@@ -6,6 +6,7 @@ import sys
 import time
 from pathlib import Path
 
+from . import site
 from .fileio import atomic_write
 from .notebook_tools import INDEX_NOTEBOOK, list_notebooks
 from .paths import NOTEBOOKS_DIR, build_dir
@@ -75,6 +76,7 @@ def run_all(only: str | None = None) -> int:
         print(f"{len(failures)} notebook(s) failed: {', '.join(failures)}")
     if bad:
         print(f"{len(bad)} claim(s) do not hold: {', '.join(bad[:30])}")
+    site.build_site(out)
     print(f"reproduce finished in {time.perf_counter() - t_start:.0f} s")
     return 1 if (failures or bad) else 0
 
