@@ -98,12 +98,12 @@ def test_status_semantics_discrepant_consistent_input(tmp_path):
         assert ev(status=st, paper_value="1.0", computed_by=one).ok
         assert not ev(status=st, paper_value="1.5", computed_by=one).ok
     # NOT_DERIVABLE: the reconstruction is computed and reported, an error is not hidden
-    r = ev(status="NOT_DERIVABLE", computed_by="", missing_input="measured",
+    r = ev(status="NOT_DERIVABLE", computed_by="", missing_input="measured: “the forces were measured on the machine”",
            reconstructed_by="tests.test_claims_machinery.val_two")
     assert r.ok and r.reconstructed == 2.0 and r.reproduced is None
     assert r.to_json()["reconstructed_value"] == 2.0
     assert claims.results_frame([r]).loc[0, "reconstructed"] == "2"
-    bad = ev(status="NOT_DERIVABLE", computed_by="", missing_input="measured",
+    bad = ev(status="NOT_DERIVABLE", computed_by="", missing_input="measured: “the forces were measured on the machine”",
              reconstructed_by="tests.test_claims_machinery.raises")
     assert not bad.ok and "boom" in bad.error
 
@@ -147,7 +147,7 @@ def test_headline_keeps_reproduced_apart(tmp_path):
                 ("DIFFERS", "tests.test_claims_machinery.val_two", "tests.test_claims_machinery.val_one", ""),
                 ("CONSISTENT", "tests.test_claims_machinery.val_one", "", ""),
                 ("INPUT", "", "", ""),
-                ("NOT_DERIVABLE", "", "", "measured"),
+                ("NOT_DERIVABLE", "", "", "measured: “the forces were measured on the machine”"),
                 ("DISCREPANT", "tests.test_claims_machinery.val_two", "", "")])]
     p = tmp_path / "h.csv"
     with open(p, "w", newline="") as fh:
