@@ -514,10 +514,11 @@ def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: fl
                clearance_z: float, partno: str = "CNCLAB", decimals: int = 3, link: str = "feed") -> AptProgram:
     """An APT program cutting each pass (list of (M, 3) arrays of tool-tip points, mm) in order.
 
-    The tool rapids above the first point at ``clearance_z`` and down to it, then feeds through all
-    passes in order, and retracts at the end. ``link="feed"``: consecutive passes are linked by a feed
-    move (a zig-zag); ``"rapid"``: by a retract to ``clearance_z``, a rapid over the next pass start and
-    a rapid plunge onto it. Header as in Sec. 7.2.2 (``OUTPUT_ON_TIP``: the points are tool-tip positions).
+    The tool rapids to ``clearance_z`` above the first point and *feeds* down onto it (never a rapid
+    onto the part), then feeds through all passes in order, and retracts at the end. ``link="feed"``:
+    consecutive passes are linked by a feed move (a zig-zag); ``"rapid"``: by a rapid retract straight
+    up to ``clearance_z``, a rapid over the next pass start at ``clearance_z`` and a feed down onto it.
+    Header as in Sec. 7.2.2 (``OUTPUT_ON_TIP``: the points are tool-tip positions).
     """
     if feed_mm_min <= 0 or spindle_rpm <= 0:
         raise ValueError(f"feed_mm_min and spindle_rpm must be > 0, got {feed_mm_min}, {spindle_rpm}")
@@ -535,18 +536,18 @@ def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: fl
     recs += [_word("RAPID", "RAPID"), _word("FROM / " + ", ".join(_format_num(v, decimals) for v in
                                                                     (p0[0], p0[1], clearance_z)),
                                              "FROM", [str(p0[0]), str(p0[1]), str(clearance_z)])]
-    feed_set = False
+    top = max(float(p[:, 2].max()) for p in passes)
+    if not clearance_z > top:
+        raise ValueError(f"clearance_z must be above every point of the passes ({top:g} mm), got {clearance_z}")
     for k, p in enumerate(passes):
         if k == 0 or link == "rapid":
             if k > 0:
                 q = passes[k - 1][-1]
                 recs += [_word("RAPID", "RAPID"), goto(q[0], q[1], clearance_z, decimals)]
             recs += [_word("RAPID", "RAPID"), goto(p[0, 0], p[0, 1], clearance_z, decimals)]
-            recs += [_word("RAPID", "RAPID"), goto(*p[0], decimals=decimals)]
-        if not feed_set:
+        if k == 0:
             recs.append(fedrat(feed_mm_min))
-            feed_set = True
-        recs += [goto(*q, decimals=decimals) for q in p[(1 if k == 0 or link == "rapid" else 0):]]
+        recs += [goto(*q, decimals=decimals) for q in p]  # the first GOTO feeds down onto the pass
     last = passes[-1][-1]
     recs += [_word("RAPID", "RAPID"), goto(last[0], last[1], clearance_z, decimals), _word("FINI", "FINI")]
     for i, r in enumerate(recs, start=1):
@@ -558,15 +559,15 @@ def reordered_program(points, result, *, feed_mm_min: float, spindle_rpm: float,
                       tool_diameter: float, clearance_z: float, partno: str = "CNCLAB_REORDERED",
                       decimals: int = 3):
     """An APT program visiting ``points`` (N, 3, mm) in ``result.order``: feed moves between
-    neighbours, and at every jump a retract to ``clearance_z`` (mm), a rapid over the next point and a
-    rapid plunge onto it (the tool lifts; no material is cut on a jump).
+    neighbours, and at every jump a rapid retract to ``clearance_z`` (mm), a rapid over the next point
+    and a feed down onto it (the tool lifts; no material is cut on a jump).
 
     >>> P = np.array([[0, 0, 0], [1, 0, 0], [5, 5, 0.0]])
     >>> from cnclab.toolpath.reorder import ReorderResult
     >>> r = ReorderResult(np.array([0, 1, 2]), np.array([False, False, True]), np.ones(3))
     >>> prog = reordered_program(P, r, feed_mm_min=500, spindle_rpm=2000, tool_diameter=10, clearance_z=30)
     >>> cl = prog.cl_points(); cl.rapid.tolist()
-    [True, True, False, True, True, True, True]
+    [True, False, False, True, True, False, True]
     """
     P = np.asarray(points, float)
     order = np.asarray(result.order)
