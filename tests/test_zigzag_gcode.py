@@ -7,6 +7,7 @@ from hypothesis import example, given, settings, strategies as st
 
 from cnclab.nc import gcode
 from cnclab.nc.gcode import GcodeError, Move, parse_gcode, path_lengths, write_gcode
+from cnclab.nc.program import check_program
 
 
 def _program():
@@ -144,5 +145,8 @@ def test_table3_accounting_and_gcode_round_trip():
     y_last = round(51 * sz, 3)
     assert L["feed"] == pytest.approx(52 * 100 + y_last + 20, abs=1e-9)
     assert L["rapid"] == pytest.approx(y_last, abs=1e-9)   # rapid return; the tool starts at (0,0,10)
-    assert write_gcode(moves, header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"],
-                       decimals=3) == text
+    # the written program is machine-safe: spindle on before the plunge, no rapid below Z10, M5 M30
+    chk = check_program(text, clearance_z=10.0)
+    assert chk.ok, chk.errors
+    assert text.index("S8000 M3") < text.index("\nG1 ")
+    assert text.rstrip().endswith("M5\nM30\n%")

@@ -341,6 +341,9 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
         coords: dict[str, float] = {}
         new_motion = None
         gset = set()
+        for letter, num in words:  # T is selected before M6 acts, wherever it stands in the block
+            if letter == "T":
+                selected_tool = int(float(num))
         for letter, num in words:
             if letter == "G":
                 code = _gnum(num)
@@ -404,7 +407,7 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
                     raise GcodeError(f"{where}: word S{num}: spindle speed must be >= 0 rpm")
                 spindle = float(num)
             elif letter == "T":
-                selected_tool = int(float(num))
+                pass
             elif letter in "NHPDQ":
                 if letter in "PQ" and "64" not in gset:
                     raise GcodeError(f"{where}: word {letter}{num} only accepted with G64")

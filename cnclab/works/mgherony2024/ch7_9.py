@@ -74,6 +74,20 @@ def zigzag_apt(feed_angle_deg: float, a_e: float = 0.25, step_mm: float | None =
     return str(path)
 
 
+def sample_ch8_apt() -> apt.AptProgram:
+    """The committed sample CL file ``data/mgherony2024/sample_ch8_zigzag_Af0.apt`` (its recipe): the
+    test part on a 2 mm grid, drop-cut zig-zag (D = 10 ball, a_e = 1 mm, A_f = 0, 2 mm step), Table 7-1
+    n and v_f, approach at Z30 and feed down (:func:`cnclab.nc.apt.cl_program`)."""
+    tp = parameters()["table7_1"]
+    passes = zigzag_finishing_path(surface_mesh(2.0), tp["D"], 1.0, 0.0, step=2.0)
+    return apt.cl_program(passes, tp["v_f"], tp["n"], tp["D"], clearance_z=30.0, partno="SAMPLE_CH8_AF0")
+
+
+def write_sample_ch8_apt(path=None):
+    """Regenerate the sample CL file (default: its place in data/mgherony2024/) atomically."""
+    return apt.write_apt(path or data_path("mgherony2024", "sample_ch8_zigzag_Af0.apt"), sample_ch8_apt())
+
+
 @functools.cache
 def schedule(feed_angle_deg: float, point: str = "thesis", a_e: float = 0.25, accel_rpm_s: float | None = None):
     """Post-process the A_f zig-zag (read from disk) against the STL (read from disk), Table 7-1 data."""
