@@ -287,7 +287,7 @@ def _strip_comments(line: str) -> str:
     return _split_comments(line, "<line>")[0]
 
 
-_TOOL_DIA = re.compile(r"(?:\bD\s*=?\s*|diam(?:eter)?\s*[=:]?\s*)([0-9]*\.?[0-9]+)\s*(mm)?", re.I)
+_TOOL_DIA = re.compile(r"(?:\bD\s*=?\s*|diam(?:eter)?\s*[=:]?\s*)([0-9]*\.?[0-9]+)\s*(mm|in\b|inch|\")?", re.I)
 
 
 def _gnum(num: str) -> str:
@@ -327,7 +327,9 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
             m = _TOOL_DIA.search(c)
             if m and prog.tool_diameter is None and ("tool" in c.lower() or re.match(r"\s*T\d", c, re.I)
                                                      or "diam" in c.lower()):
-                prog.tool_diameter = float(m.group(1))
+                unit = (m.group(2) or "").lower()
+                inch = unit.startswith("in") or unit == '"' or (not unit and scale != 1.0)
+                prog.tool_diameter = float(m.group(1)) * (MM_PER_INCH if inch else 1.0)
         body = body.strip()
         if not body or body == "%":
             continue
