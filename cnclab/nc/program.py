@@ -111,8 +111,10 @@ def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None,
         if not (above or straight_up or _is_cleared(path.tag[k])):
             raise ValueError(f"move {k}: rapid from z {a[2]:g} to z {b[2]:g} mm below the clearance plane "
                              f"z {clearance_z:g} mm, not marked as inside cleared area (tag 'cleared')")
+    # the moves the writer adds go to the clearance plane rounded *up* to the written precision
+    cz = math.ceil(clearance_z * 10 ** decimals - 1e-6) / 10 ** decimals
     x0, y0, z0 = xyz[0]
-    moves = [Move("G0", x0, y0, clearance_z, spindle=spindle_rpm)]
+    moves = [Move("G0", x0, y0, max(cz, z0), spindle=spindle_rpm)]
     comments = [""]
     first_feed = next((float(f) for f in path.feed if np.isfinite(f)), None)
     if z0 < clearance_z - _TOL:
@@ -124,8 +126,6 @@ def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None,
                                  "whose feed could take the tool down")
             feed0 = float(path.feed[0]) if np.isfinite(path.feed[0]) else first_feed
             moves.append(Move("G1", x0, y0, z0, feed=feed0, spindle=spindle_rpm)); comments.append("")
-    elif z0 > clearance_z + _TOL:
-        moves.append(Move("G0", x0, y0, z0, spindle=spindle_rpm)); comments.append("")
     for k, mv in enumerate(path.to_moves()):
         if k == 0:
             continue
@@ -134,7 +134,7 @@ def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None,
                         and _is_cleared(path.tag[k]) else "")
     xe, ye, ze = xyz[-1]
     if ze < clearance_z:
-        moves.append(Move("G0", xe, ye, clearance_z, spindle=spindle_rpm)); comments.append("")
+        moves.append(Move("G0", xe, ye, cz, spindle=spindle_rpm)); comments.append("")
     hdr = [f"cnclab program: mm, clearance plane Z{clearance_z:g} mm, stock top Z{top_z:g} mm"]
     hdr += [header] if isinstance(header, str) and header else list(header or [])
     start = [START_BLOCK]
