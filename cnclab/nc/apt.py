@@ -20,7 +20,7 @@ Dialect
 Speed: runs of plain ``GOTO / x, y, z`` lines (the bulk of a CL file) are located with one regular
 expression, checked strictly with numpy (one '/', two commas, exactly one number token per field) and
 converted with ``numpy.fromstring`` (the same correctly rounded conversion as ``float``); they stay in
-bulk (:class:`_GotoRun`) until ``AptProgram.records`` is accessed. Any line that does not pass the
+bulk (:class:`GotoRun`) until ``AptProgram.records`` is accessed. Any line that does not pass the
 check goes through the careful per-line parser, so records, text and error messages are identical to
 ``parse_apt(..., fast=False)`` (tested). About 7-8x faster on 1e6 points (benchmarks/bench_spindle_postprocess.py).
 
@@ -127,7 +127,7 @@ class CLPoints:
         return len(self.xyz)
 
 
-class _GotoRun:
+class GotoRun:
     """A run of M consecutive plain ``GOTO / x, y, z`` lines parsed in bulk (internal).
 
     ``text`` is the exact physical text of the M lines, ``xyz`` (M, 3) their values (mm), ``line`` the
@@ -153,10 +153,10 @@ class _GotoRun:
             self._starts = np.concatenate([[0], nl + 1])
         return self._starts
 
-    def slice(self, a: int, b: int) -> "_GotoRun":
+    def slice(self, a: int, b: int) -> "GotoRun":
         """Lines a..b-1 as a new run."""
         st = self.starts()
-        return _GotoRun(self.text[st[a]:st[b]], self.xyz[a:b], self.line + a, st[a:b + 1] - st[a])
+        return GotoRun(self.text[st[a]:st[b]], self.xyz[a:b], self.line + a, st[a:b + 1] - st[a])
 
     def records(self) -> list:
         st = self.starts().tolist()
@@ -179,7 +179,7 @@ class AptProgram:
 
     def __init__(self, records=(), source: str = "<apt>"):
         self._items = list(records)
-        self._bulk = any(isinstance(r, _GotoRun) for r in self._items)
+        self._bulk = any(isinstance(r, GotoRun) for r in self._items)
         self.source = source
 
     @property
@@ -188,7 +188,7 @@ class AptProgram:
         if self._bulk:
             flat = []
             for it in self._items:
-                if isinstance(it, _GotoRun):
+                if isinstance(it, GotoRun):
                     flat.extend(it.records())
                 else:
                     flat.append(it)
@@ -204,7 +204,7 @@ class AptProgram:
         return self._items
 
     def __len__(self):
-        return sum(len(it) if isinstance(it, _GotoRun) else 1 for it in self._items)
+        return sum(len(it) if isinstance(it, GotoRun) else 1 for it in self._items)
 
     def __eq__(self, other):
         return isinstance(other, AptProgram) and self.source == other.source and self.records == other.records
@@ -216,7 +216,7 @@ class AptProgram:
     def tool_diameter(self) -> float | None:
         """Cutter diameter (mm) from ``CUTTER/d`` (also inside a ``$$->`` comment), or None."""
         for r in self._items:
-            if isinstance(r, _GotoRun):
+            if isinstance(r, GotoRun):
                 continue
             if r.word == "CUTTER" and r.values:
                 return r.values[0]
@@ -251,7 +251,7 @@ class AptProgram:
                 buf.clear()
 
         for r in self._items:
-            if isinstance(r, _GotoRun):
+            if isinstance(r, GotoRun):
                 flush()
                 m = len(r)
                 ra = np.zeros(m, bool)
@@ -485,7 +485,7 @@ def parse_apt(text: str, source: str = "<apt>", fast: bool = True) -> AptProgram
                 raise AptError(f"{source}:{line_no + 1}: feed motion (GOTO) before any FEDRAT")
             st.pending_rapid = False
             st.n_goto += len(xyz)
-            items.append(_GotoRun(run_text, xyz, line_no))
+            items.append(GotoRun(run_text, xyz, line_no))
             line_no += len(xyz)
             pos = e
     _parse_careful(text[pos:].splitlines(keepends=True), line_no, items, st, source)
