@@ -6,13 +6,14 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.cnclab-installed
 JOBS ?= 2
 
-.PHONY: reproduce test venv claims bench strip clean help
+.PHONY: reproduce test venv claims bench strip clean help gcode-check
 
 help:
 	@echo "make reproduce   execute every notebook, write build/ (figures, HTML, claims report)"
 	@echo "make test        unit + claims tests and every notebook in fast mode (CNCLAB_FAST=1)"
 	@echo "make bench       run benchmarks/ and print their tables"
 	@echo "make claims      print the claims ledger with freshly computed values"
+	@echo "make gcode-check run every written NC program through LinuxCNC's rs274 (installs it if missing)"
 
 venv: $(STAMP)
 
@@ -30,6 +31,13 @@ reproduce: $(STAMP)
 
 test: $(STAMP)
 	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --durations=15 tests
+
+# every program `python -m cnclab programs` writes (fast mode when build/gcode is missing) through
+# LinuxCNC's rs274: accepted, feed length/time within 0.1 %, safe rapids, spindle on before cutting
+gcode-check: $(STAMP)
+	@command -v rs274 >/dev/null || (apt-get update && apt-get install -y --no-install-recommends linuxcnc-uspace)
+	@test -f build/gcode/manifest.json || CNCLAB_FAST=1 $(PY) -m cnclab programs || true  # failures are in the manifest
+	$(PY) -m cnclab.nc.gcode_check build/gcode
 
 claims: $(STAMP)
 	$(PY) -m cnclab claims

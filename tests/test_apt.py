@@ -118,7 +118,7 @@ def _both(text):
 ])
 def test_fast_and_careful_parsers_give_identical_records(text):
     fast, careful = _both(text)
-    assert any(isinstance(it, apt._GotoRun) for it in fast.items())  # the bulk path was taken
+    assert any(isinstance(it, apt.GotoRun) for it in fast.items())  # the bulk path was taken
     assert fast.to_text() == careful.to_text() == text
     cf, cc = fast.cl_points(), careful.cl_points()
     for name in ("xyz", "rapid", "feed", "spindle", "record", "line", "start"):
