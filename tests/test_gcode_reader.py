@@ -153,7 +153,7 @@ def test_tool_from_comment_and_inch_diameter():
 
 
 def test_lines_after_program_end_are_not_executed():
-    moves = parse_gcode("G0 X0 Y0 Z5\nM30\nG0 X100 Y100 Z5\n")
+    moves = parse_gcode("G0 X0 Y0 Z5\nM30\nG0 X100 Y100 Z5\nG1 X7 F1\n")
     assert len(moves) == 1
 
 

@@ -283,10 +283,6 @@ def _split_comments(line: str, where: str):
     return "".join(out), comments
 
 
-def _strip_comments(line: str) -> str:
-    return _split_comments(line, "<line>")[0]
-
-
 _TOOL_DIA = re.compile(r"(?:\bD\s*=?\s*|diam(?:eter)?\s*[=:]?\s*)([0-9]*\.?[0-9]+)\s*(mm|in\b|inch|\")?", re.I)
 
 
@@ -321,6 +317,8 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
     selected_tool = None
     skipped_partial = 0
     for ln, raw in enumerate(text.splitlines(), start=1):
+        if prog.end_word is not None:
+            break  # M2/M30 ends the program; later lines are not executed (as in LinuxCNC)
         where = f"{source}:{ln}"
         body, cmts = _split_comments(raw, where)
         for c in cmts:
@@ -425,8 +423,6 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
         if not has_xyz and not any(a in coords for a in "IJR"):
             if new_motion in ("G2", "G3"):
                 raise GcodeError(f"{where}: word {new_motion}: arc without an end point")
-            if prog.end_word is not None:
-                break  # M2/M30 ends the program; later lines are not executed
             continue
         if motion is None:
             w = next(a for a in "XYZIJR" if a in coords)
