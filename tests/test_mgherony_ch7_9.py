@@ -104,10 +104,13 @@ def test_reordered_apt_round_trip_visits_every_point_once():
     cl = prog.cl_points()
     cut = cl.xyz[cl.xyz[:, 2] < 29.0]                     # below the 30 mm clearance plane
     np.testing.assert_allclose(cut, dense[orders[1].order], atol=5e-4)
-    plunges = cl.rapid & (cl.xyz[:, 2] < 29.0)
-    assert plunges.sum() == orders[1].n_jumps + 1         # first approach + one plunge per jump
+    low = cl.xyz[:, 2] < 29.0
+    assert not (cl.rapid & low).any()                     # never a rapid onto the part
+    approach = low & np.r_[False, ~low[:-1]]              # fed down from the clearance plane
+    assert approach.sum() == orders[1].n_jumps + 1        # first approach + one per jump
     # every feed move joins two neighbours: no feed move longer than the k-NN reach of a jump-free step
-    feed_moves = np.linalg.norm(np.diff(cl.xyz, axis=0), axis=1)[~cl.rapid[1:]]
+    on_part = ~cl.rapid[1:] & low[1:] & low[:-1]          # feed moves between points on the part
+    feed_moves = np.linalg.norm(np.diff(cl.xyz, axis=0), axis=1)[on_part]
     assert feed_moves.max() < 3 * ch7_9.parameters()["table9_1"]["a_e"]
 
 
