@@ -212,3 +212,34 @@ def test_writer_arc_check_uses_the_written_precision():
     for d in (2, 3, 4, 6):
         back = parse_gcode(write_gcode(mv, decimals=d))
         assert back[-1].motion == "G3"
+
+
+# ---------------------------------------------------------------- make gcode-check logic
+def test_gcode_check_rows_from_committed_canonical_output(tmp_path, monkeypatch):
+    """The check of `make gcode-check` on one program, rs274 replaced by its committed output: passes;
+    a program whose feed differs from rs274's by more than 0.1 % fails and says so."""
+    import json
+    import shutil
+
+    from cnclab.nc import gcode_check
+
+    prog = tmp_path / "hoang2024" / "t3.ngc"
+    prog.parent.mkdir()
+    shutil.copy(NC / "hoang2024_table3.ngc", prog)
+    path = ToolPath.from_moves(parse_gcode(prog.read_text()))
+    man = {"rapid_mm_min": 10000.0, "programs": {
+        "hoang2024/t3": {"file": "hoang2024/t3.ngc", "clearance_z": 10.0, "top_z": 0.0,
+                         "path_time_s": path.time_s(10000)["total_s"]},
+        "x/missing": {"error": "move 4: rapid below the clearance plane"}}}
+    (tmp_path / "manifest.json").write_text(json.dumps(man))
+    canon = (NC / "hoang2024_table3.canon").read_text()
+    monkeypatch.setattr(gcode_check, "run_rs274", lambda f: canon)
+    rows, ok = gcode_check.check_all(tmp_path)
+    assert not ok                                     # the unwritten program fails the run
+    good = rows[0]
+    assert good["ok"] and abs(good["d_feed_pct"]) < 1e-6 and good["rapids_below_clearance"] == 0, good
+    assert rows[1]["problem"].startswith("not written")
+    # the same program with one feed move lengthened by 10 mm: rs274's totals no longer agree
+    prog.write_text(prog.read_text().replace("X100.000\n", "X110.000\n", 1))
+    rows, ok = gcode_check.check_all(tmp_path)
+    assert not rows[0]["ok"] and "feed length differs from rs274" in rows[0]["problem"]
