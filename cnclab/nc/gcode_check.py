@@ -65,9 +65,9 @@ def check_all(root="build/gcode") -> tuple[list, bool]:
         problems += [e for e in chk.errors if "plunge into material" not in e][:3]
         if not canon.spindle_on_before_feed:
             problems.append("rs274: spindle not on before the first feed")
-        row.update(ok=not problems, feed_mm=round(canon.feed_mm, 3), d_feed_pct=round(100 * d_len, 5),
-                   feed_s=round(canon.feed_s, 3), d_time_pct=round(100 * d_time, 5),
-                   path_vs_program_pct=round(100 * d_path, 4), rapids_below_clearance=chk.rapids_below_clearance,
+        row.update(ok=not problems, feed_mm=round(canon.feed_mm, 3), d_feed_pct=round(100 * d_len, 5) + 0.0,
+                   feed_s=round(canon.feed_s, 3), d_time_pct=round(100 * d_time, 5) + 0.0,
+                   path_vs_program_pct=round(100 * d_path, 4) + 0.0, rapids_below_clearance=chk.rapids_below_clearance,
                    plunges_below_top=chk.plunges_into_material, entries=chk.entries, problem="; ".join(problems))
         ok_all &= not problems
         rows.append(row)

@@ -84,9 +84,10 @@ def _mgherony(angle):
         moves = apt_to_moves(read_apt(ch7_9.zigzag_apt(angle)))
         path = path_from_moves(moves, tool=Tool(tp["D"], corner_radius=0.5 * tp["D"], flutes=tp["teeth"]))
         hdr = [f"Mgherony 2024 ch. 8 drop-cut zig-zag finishing, A_f = {angle:g} deg, D{tp['D']:g} ball"]
-        text = write_program(path, clearance_z=30.0, spindle_rpm=tp["n"], top_z=float(path.xyz[:, 2].max()),
-                             header=hdr)
-        return text, {"clearance_z": 30.0, "top_z": float(path.xyz[:, 2].max()), "path": path}
+        on_part = path.xyz[(~path.is_kind("rapid")) & (path.xyz[:, 2] < 30.0), 2]
+        top = float(on_part.max())   # the part's highest CL point: the stock top of a finishing path
+        text = write_program(path, clearance_z=30.0, spindle_rpm=tp["n"], top_z=top, header=hdr)
+        return text, {"clearance_z": 30.0, "top_z": top, "path": path}
     return make
 
 
