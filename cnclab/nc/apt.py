@@ -40,6 +40,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+
 from ..fileio import atomic_write
 
 __all__ = ["AptError", "AptRecord", "AptProgram", "CLPoints", "parse_apt", "read_apt", "write_apt",
