@@ -129,3 +129,14 @@ def test_bad_parameters():
         write_program(_pocket_path("cleared"), clearance_z=5)
     with pytest.raises(ValueError, match="clearance_z"):
         write_program(_pocket_path("cleared"), clearance_z=-1, spindle_rpm=100)
+
+
+def test_plunge_tagged_cleared_is_written_as_such():
+    pts = [[0, 0, 5], [0, 0, -2], [10, 0, -2], [10, 0, 5]]
+    p = ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], tag=["", "cleared", "", ""], feed=300)
+    text = write_program(p, clearance_z=5, spindle_rpm=5000)
+    assert "G1 Z-2.0000 F300.0 (cleared)" in text
+    assert check_program(text, clearance_z=5).ok
+    untagged = write_program(ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], feed=300),
+                             clearance_z=5, spindle_rpm=5000)
+    assert check_program(untagged, clearance_z=5).plunges_into_material == 1

@@ -10,7 +10,8 @@
   the path's :meth:`~cnclab.toolpath.path.ToolPath.time_s`;
 * rapids only at or above ``clearance_z``, or straight up (a retract), or where the path marks the
   move as inside cleared area (tag containing ``"cleared"``, written as a ``(cleared)`` comment on the
-  block — the evaluator proves it); any other rapid below the clearance plane is refused
+  block, as on any other move the path tags ``cleared`` (e.g. a plunge into cleared area) — the
+  evaluator proves it); any other rapid below the clearance plane is refused
   (``ValueError`` naming the move index). The first point is reached from the clearance plane by
   a feed move when it lies below it (never a rapid onto the part);
 * the end: a rapid straight up to ``clearance_z``, ``M5``, ``M30``.
@@ -130,8 +131,7 @@ def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None,
         if k == 0:
             continue
         moves.append(dataclasses.replace(mv, spindle=spindle_rpm))
-        comments.append(CLEARED if rapid[k] and min(xyz[k - 1, 2], xyz[k, 2]) < clearance_z - _TOL
-                        and _is_cleared(path.tag[k]) else "")
+        comments.append(CLEARED if _is_cleared(path.tag[k]) else "")
     xe, ye, ze = xyz[-1]
     if ze < clearance_z:
         moves.append(Move("G0", xe, ye, cz, spindle=spindle_rpm)); comments.append("")
