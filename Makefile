@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.cnclab-installed
 JOBS ?= 2
 
-.PHONY: reproduce test venv claims bench strip clean help browser-test site
+.PHONY: reproduce test venv claims bench strip clean help browser-test site gcode-check
 
 help:
 	@echo "make reproduce   execute every notebook, write build/ (figures, HTML, claims report)"
@@ -15,6 +15,7 @@ help:
 	@echo "make claims      print the claims ledger with freshly computed values"
 	@echo "make site        build the offline site build/site/index.html from what build/ holds"
 	@echo "make browser-test  JupyterLab explorer + offline site in headless Chromium (screens in build/screens)"
+	@echo "make gcode-check run every written NC program through LinuxCNC's rs274 (installs it if missing)"
 
 venv: $(STAMP)
 
@@ -43,6 +44,13 @@ browser-test: $(STAMP)
 		apt-get update && apt-get install -y --no-install-recommends chromium chromium-driver; \
 	fi
 	CNCLAB_FAST=1 $(PY) -m pytest -p no:randomly -n 0 -v tests_browser
+
+# every program `python -m cnclab programs` writes (fast mode when build/gcode is missing) through
+# LinuxCNC's rs274: accepted, feed length/time within 0.1 %, safe rapids, spindle on before cutting
+gcode-check: $(STAMP)
+	@command -v rs274 >/dev/null || (apt-get update && apt-get install -y --no-install-recommends linuxcnc-uspace)
+	@test -f build/gcode/manifest.json || CNCLAB_FAST=1 $(PY) -m cnclab programs || true  # failures are in the manifest
+	$(PY) -m cnclab.nc.gcode_check build/gcode
 
 claims: $(STAMP)
 	$(PY) -m cnclab claims

@@ -46,7 +46,7 @@ def main(argv):
     pr = apt.read_apt(tmp / "path.apt")
     cl = pr.cl_points()
     t2 = time.perf_counter()
-    n_bulk = sum(len(it) for it in pr.items() if isinstance(it, apt._GotoRun))
+    n_bulk = sum(len(it) for it in pr.items() if isinstance(it, apt.GotoRun))
     s = spindle_schedule(m, cl, tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2, feed_direction_deg=0)
     t3 = time.perf_counter()
     new, _ = insert_spindle_records(pr, cl, s)

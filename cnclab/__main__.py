@@ -14,6 +14,9 @@ COMMANDS = {
     "spindle": ("cnclab.nc.cli_spindle", "constant-v_c spindle/feed post-processing of an APT file against an STL"),
     "nb": ("cnclab.notebook_tools", "notebook housekeeping: from-py, strip, list"),
     "site": ("cnclab.site", "build the offline site build/site/index.html from what build/ holds"),
+    "analyze": ("cnclab.nc.cli_analyze", "score any G-code program on a pocket job (summary, traces, engagement map)"),
+    "plan": ("cnclab.nc.cli_plan", "plan a pocket job and write a machine-safe program"),
+    "programs": ("cnclab.works.programs", "write every program the collection produces to build/gcode/<work>/"),
 }
 
 

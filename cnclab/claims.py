@@ -62,7 +62,9 @@ import time
 from pathlib import Path
 from typing import Any, Iterable
 
-from .paths import CLAIMS_CSV, WORK_IDS
+from .fileio import atomic_write
+from .paths import CLAIMS_CSV, WORK_IDS, build_dir
+from .runtime import fast_mode
 
 COLUMNS = ("claim_id", "work", "seed_file", "location", "quantity", "unit", "paper_value", "rtol",
            "atol", "tolerance_basis", "status", "computed_by", "alt_computed_by", "missing_input",
@@ -444,8 +446,6 @@ def results_frame(results: list[Result]):
 
 def table(notebook: str | None = None, work: str | None = None, prefix: str | None = None):
     """Compute and tabulate the claims shown by a notebook (its last cell calls this)."""
-    from .runtime import fast_mode
-
     res = evaluate_all(select(load(), work=work, notebook=notebook, prefix=prefix),
                        skip_slow=fast_mode())
     return results_frame(res)
@@ -468,9 +468,6 @@ def latest_summary():
     """Summary per work and status: from ``build/claims.csv`` if it is newer than the ledger (and its
     notebooks' recipes were just computed by ``make reproduce``), otherwise computed now."""
     import pandas as pd
-
-    from .paths import build_dir
-    from .runtime import fast_mode
 
     report = build_dir() / "claims.csv"
     if report.exists() and report.stat().st_mtime >= CLAIMS_CSV.stat().st_mtime:
@@ -526,8 +523,6 @@ def headline(summary=None):
 
 def write_report(results: list[Result], outdir: Path) -> tuple[Path, Path]:
     """Write ``claims.csv`` and ``claims.md`` into ``outdir`` (atomically)."""
-    from .fileio import atomic_write
-
     outdir = Path(outdir)
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")

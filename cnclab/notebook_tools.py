@@ -14,6 +14,7 @@ from pathlib import Path
 
 from .fileio import atomic_write
 from .paths import NOTEBOOKS_DIR
+from .works import WORKS
 
 INDEX_NOTEBOOK = NOTEBOOKS_DIR / "00_index.ipynb"
 
@@ -95,8 +96,6 @@ def from_py(src: Path, dst: Path) -> Path:
 
 def index_markdown() -> str:
     """Markdown links to every notebook, grouped by work (rendered by ``00_index.ipynb``)."""
-    from .works import WORKS
-
     lines = []
     for work, info in WORKS.items():
         nbs = sorted((NOTEBOOKS_DIR / work).glob("*.ipynb"))

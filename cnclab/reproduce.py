@@ -10,6 +10,7 @@ from . import site
 from .fileio import atomic_write
 from .notebook_tools import INDEX_NOTEBOOK, list_notebooks
 from .paths import NOTEBOOKS_DIR, build_dir
+from .works import programs as nc_programs
 
 
 def execute_notebook(path: Path, timeout: int = 3600, env: dict | None = None):
@@ -76,9 +77,10 @@ def run_all(only: str | None = None) -> int:
         print(f"{len(failures)} notebook(s) failed: {', '.join(failures)}")
     if bad:
         print(f"{len(bad)} claim(s) do not hold: {', '.join(bad[:30])}")
+    prog_rc = 0 if only else nc_programs.main([])  # every NC program -> build/gcode/<work>/ (issue 12)
     site.build_site(out)
     print(f"reproduce finished in {time.perf_counter() - t_start:.0f} s")
-    return 1 if (failures or bad) else 0
+    return 1 if (failures or bad or prog_rc) else 0
 
 
 def main(argv=None) -> int:

@@ -49,13 +49,24 @@ def test_sample_file_round_trip():
     assert len(prog.cl_points()) > 1000
 
 
+def test_sample_file_is_its_recipe():
+    """The committed sample CL file is exactly what its recipe writes (approach at Z30, feed down)."""
+    from cnclab.works.mgherony2024.ch7_9 import sample_ch8_apt
+
+    text = data_path("mgherony2024", "sample_ch8_zigzag_Af0.apt").read_text()
+    assert sample_ch8_apt().to_text() == text
+    cl = apt.parse_apt(text).cl_points()
+    assert cl.xyz[cl.rapid, 2].min() == 30   # no rapid below the clearance plane
+
+
 def test_generated_program_parses_back():
     passes = [np.array([[0, 0, 1.0], [5, 0, 1.5]]), np.array([[5, 1, 1.5], [0, 1, 1.0]])]
     prog = apt.cl_program(passes, 500, 2000, 10, 30)
     back = apt.parse_apt(prog.to_text())
     cl = back.cl_points()
     feed = cl.xyz[~cl.rapid]
-    np.testing.assert_allclose(feed, np.vstack(passes)[1:])
+    np.testing.assert_allclose(feed, np.vstack(passes))   # the first point too: fed down onto, never rapid
+    assert cl.xyz[cl.rapid, 2].min() == 30
 
 
 @pytest.mark.parametrize("text, msg", [
@@ -107,7 +118,7 @@ def _both(text):
 ])
 def test_fast_and_careful_parsers_give_identical_records(text):
     fast, careful = _both(text)
-    assert any(isinstance(it, apt._GotoRun) for it in fast.items())  # the bulk path was taken
+    assert any(isinstance(it, apt.GotoRun) for it in fast.items())  # the bulk path was taken
     assert fast.to_text() == careful.to_text() == text
     cf, cc = fast.cl_points(), careful.cl_points()
     for name in ("xyz", "rapid", "feed", "spindle", "record", "line", "start"):

@@ -63,7 +63,11 @@ def test_reordered_program_links_segments_by_rapids():
     cl = apt.parse_apt(prog.to_text()).cl_points()
     low = cl.xyz[:, 2] < 29
     np.testing.assert_allclose(cl.xyz[low], P)
-    assert cl.rapid[low].tolist() == [True, False, False, True, False]
+    # every point on the part is reached by a feed move; each segment start from straight above at Z30
+    assert cl.rapid[low].tolist() == [False] * 5
+    starts = np.flatnonzero(low & np.r_[True, ~low[:-1]])
+    for k in starts:
+        assert cl.rapid[k - 1] and cl.xyz[k - 1, 2] == 30 and np.allclose(cl.xyz[k - 1, :2], cl.xyz[k, :2])
     with pytest.raises(ValueError, match="points must be"):
         reordered_program(P[:3], r, feed_mm_min=500, spindle_rpm=2000, tool_diameter=10, clearance_z=30)
 

@@ -7,6 +7,7 @@ from hypothesis import example, given, settings, strategies as st
 
 from cnclab.nc import gcode
 from cnclab.nc.gcode import GcodeError, Move, parse_gcode, path_lengths, write_gcode
+from cnclab.nc.program import check_program
 
 
 def _program():
@@ -38,8 +39,8 @@ def test_lengths_of_arcs_and_helix():
 
 def test_sample_arc_on_circle_and_direction():
     start = (10.0, 0.0, 0.0)
-    cw = gcode.sample_arc(start, Move("G2", 0, -10, 0, i=-10, j=0, feed=1), max_segment=0.2)
-    ccw = gcode.sample_arc(start, Move("G3", 0, -10, 0, i=-10, j=0, feed=1), max_segment=0.2)
+    cw = gcode.sample_move(start, Move("G2", 0, -10, 0, i=-10, j=0, feed=1), max_segment=0.2)
+    ccw = gcode.sample_move(start, Move("G3", 0, -10, 0, i=-10, j=0, feed=1), max_segment=0.2)
     assert np.allclose(np.hypot(cw[:, 0], cw[:, 1]), 10)
     assert cw[:, 1].max() <= 1e-9            # CW from +X to -Y stays in the lower half (quarter)
     assert ccw[:, 1].max() == pytest.approx(10, abs=0.01)   # CCW goes the long way (3/4 circle)
@@ -48,16 +49,18 @@ def test_sample_arc_on_circle_and_direction():
 
 
 @pytest.mark.parametrize("text, fragment", [
-    ("G0 X0 Y0 Z0\nG1 X1 Q5 F100\n", "t.nc:2: unknown word Q5"),
-    ("G20\n", "t.nc:1: G20"),
-    ("G91 G0 X1\n", "t.nc:1: G91"),
-    ("G0 X0 Y0\n", "t.nc:1: position of Z is unknown"),
-    ("G0 X0 Y0 Z0\nG1 X5\n", "t.nc:2: G1 feed move with no feed F"),
-    ("G0 X0 Y0 Z0\nG2 X2 Y0 F100\n", "t.nc:2: G2 arc needs centre offsets I and J"),
-    ("G0 X0 Y0 Z0\nG2 X3 Y0 I1 J0 F100\n", "t.nc:2: arc start radius"),
-    ("G0 X0 Y0 Z0\nG2 X2 Y0 R1 F100\n", "t.nc:2: R-format"),
-    ("G0 X0 Y0 Z0\nM7\n", "t.nc:2: unknown or unsupported word M7"),
+    ("G0 X0 Y0 Z0\nG1 X1 Q5 F100\n", "t.nc:2: word Q5 only accepted with G64"),
+    ("G18\n", "t.nc:1: word G18"),
+    ("G91 G0 X1\n", "t.nc:1: word X: incremental .G91. move from an unknown X"),
+    ("G1 X0 Y0 F100\n", "t.nc:1: word G1: position of Z is unknown"),
+    ("G0 X0 Y0 Z0\nG1 X5\n", "t.nc:2: word G1: G1 feed move with no feed F"),
+    ("G0 X0 Y0 Z0\nG2 X2 Y0 F100\n", "t.nc:2: word G2: arc needs centre offsets I and J"),
+    ("G0 X0 Y0 Z0\nG2 X3 Y0 I1 J0 F100\n", "t.nc:2: word I: arc start radius"),
+    ("G0 X0 Y0 Z0\nG2 X2 Y0 R0.5 F100\n", "t.nc:2: word R0.5: radius smaller than half the chord"),
+    ("G0 X0 Y0 Z0\nM98\n", "t.nc:2: unknown or unsupported word M98"),
+    ("G0 X0 Y0 Z0\nG81 X1 Y1 Z-1 R1 F100\n", "t.nc:2: word G81: canned cycles"),
     ("G0 X0 Y0 Z0 @\n", "t.nc:1: cannot read"),
+    ("G0 X0 Y0 Z0\nG1 X1 E5 F100\n", "t.nc:2: unknown word E5"),
 ])
 def test_bad_input_names_source_and_line(text, fragment):
     with pytest.raises(GcodeError, match=fragment.replace("(", r"\(")):
@@ -142,5 +145,8 @@ def test_table3_accounting_and_gcode_round_trip():
     y_last = round(51 * sz, 3)
     assert L["feed"] == pytest.approx(52 * 100 + y_last + 20, abs=1e-9)
     assert L["rapid"] == pytest.approx(y_last, abs=1e-9)   # rapid return; the tool starts at (0,0,10)
-    assert write_gcode(moves, header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"],
-                       decimals=3) == text
+    # the written program is machine-safe: spindle on before the plunge, no rapid below Z10, M5 M30
+    chk = check_program(text, clearance_z=10.0)
+    assert chk.ok, chk.errors
+    assert text.index("S8000 M3") < text.index("\nG1 ")
+    assert text.rstrip().endswith("M5\nM30\n%")

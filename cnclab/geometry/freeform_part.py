@@ -27,6 +27,7 @@ import dataclasses
 
 import numpy as np
 
+from .cylinder_parts import CylinderPart
 from .mesh import TriMesh
 
 __all__ = ["FreeformPart", "tessellate_heightfield", "freeform_part_mesh", "cylinder_part_mesh"]
@@ -167,8 +168,6 @@ def cylinder_part_mesh(kind: str, cell_mm: float = 0.5, **kwargs) -> TriMesh:
     >>> bool((m.normals[:, 2] > 0).all())
     True
     """
-    from .cylinder_parts import CylinderPart
-
     if not cell_mm > 0:
         raise ValueError(f"cell_mm must be > 0 mm, got {cell_mm}")
     part = CylinderPart(kind, **kwargs)

@@ -20,7 +20,7 @@ Dialect
 Speed: runs of plain ``GOTO / x, y, z`` lines (the bulk of a CL file) are located with one regular
 expression, checked strictly with numpy (one '/', two commas, exactly one number token per field) and
 converted with ``numpy.fromstring`` (the same correctly rounded conversion as ``float``); they stay in
-bulk (:class:`_GotoRun`) until ``AptProgram.records`` is accessed. Any line that does not pass the
+bulk (:class:`GotoRun`) until ``AptProgram.records`` is accessed. Any line that does not pass the
 check goes through the careful per-line parser, so records, text and error messages are identical to
 ``parse_apt(..., fast=False)`` (tested). About 7-8x faster on 1e6 points (benchmarks/bench_spindle_postprocess.py).
 
@@ -40,6 +40,8 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+
+from ..fileio import atomic_write
 
 __all__ = ["AptError", "AptRecord", "AptProgram", "CLPoints", "parse_apt", "read_apt", "write_apt",
            "goto", "spindl", "fedrat", "cl_program"]
@@ -126,7 +128,7 @@ class CLPoints:
         return len(self.xyz)
 
 
-class _GotoRun:
+class GotoRun:
     """A run of M consecutive plain ``GOTO / x, y, z`` lines parsed in bulk (internal).
 
     ``text`` is the exact physical text of the M lines, ``xyz`` (M, 3) their values (mm), ``line`` the
@@ -152,10 +154,10 @@ class _GotoRun:
             self._starts = np.concatenate([[0], nl + 1])
         return self._starts
 
-    def slice(self, a: int, b: int) -> "_GotoRun":
+    def slice(self, a: int, b: int) -> "GotoRun":
         """Lines a..b-1 as a new run."""
         st = self.starts()
-        return _GotoRun(self.text[st[a]:st[b]], self.xyz[a:b], self.line + a, st[a:b + 1] - st[a])
+        return GotoRun(self.text[st[a]:st[b]], self.xyz[a:b], self.line + a, st[a:b + 1] - st[a])
 
     def records(self) -> list:
         st = self.starts().tolist()
@@ -178,7 +180,7 @@ class AptProgram:
 
     def __init__(self, records=(), source: str = "<apt>"):
         self._items = list(records)
-        self._bulk = any(isinstance(r, _GotoRun) for r in self._items)
+        self._bulk = any(isinstance(r, GotoRun) for r in self._items)
         self.source = source
 
     @property
@@ -187,7 +189,7 @@ class AptProgram:
         if self._bulk:
             flat = []
             for it in self._items:
-                if isinstance(it, _GotoRun):
+                if isinstance(it, GotoRun):
                     flat.extend(it.records())
                 else:
                     flat.append(it)
@@ -203,7 +205,7 @@ class AptProgram:
         return self._items
 
     def __len__(self):
-        return sum(len(it) if isinstance(it, _GotoRun) else 1 for it in self._items)
+        return sum(len(it) if isinstance(it, GotoRun) else 1 for it in self._items)
 
     def __eq__(self, other):
         return isinstance(other, AptProgram) and self.source == other.source and self.records == other.records
@@ -215,7 +217,7 @@ class AptProgram:
     def tool_diameter(self) -> float | None:
         """Cutter diameter (mm) from ``CUTTER/d`` (also inside a ``$$->`` comment), or None."""
         for r in self._items:
-            if isinstance(r, _GotoRun):
+            if isinstance(r, GotoRun):
                 continue
             if r.word == "CUTTER" and r.values:
                 return r.values[0]
@@ -250,7 +252,7 @@ class AptProgram:
                 buf.clear()
 
         for r in self._items:
-            if isinstance(r, _GotoRun):
+            if isinstance(r, GotoRun):
                 flush()
                 m = len(r)
                 ra = np.zeros(m, bool)
@@ -484,7 +486,7 @@ def parse_apt(text: str, source: str = "<apt>", fast: bool = True) -> AptProgram
                 raise AptError(f"{source}:{line_no + 1}: feed motion (GOTO) before any FEDRAT")
             st.pending_rapid = False
             st.n_goto += len(xyz)
-            items.append(_GotoRun(run_text, xyz, line_no))
+            items.append(GotoRun(run_text, xyz, line_no))
             line_no += len(xyz)
             pos = e
     _parse_careful(text[pos:].splitlines(keepends=True), line_no, items, st, source)
@@ -505,8 +507,6 @@ def read_apt(path) -> AptProgram:
 
 def write_apt(path, program: AptProgram, inputs=()) -> Path:
     """Write a program atomically; ``inputs`` are never overwritten."""
-    from ..fileio import atomic_write
-
     return atomic_write(path, program.to_text(), inputs=inputs)
 
 
@@ -514,10 +514,11 @@ def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: fl
                clearance_z: float, partno: str = "CNCLAB", decimals: int = 3, link: str = "feed") -> AptProgram:
     """An APT program cutting each pass (list of (M, 3) arrays of tool-tip points, mm) in order.
 
-    The tool rapids above the first point at ``clearance_z`` and down to it, then feeds through all
-    passes in order, and retracts at the end. ``link="feed"``: consecutive passes are linked by a feed
-    move (a zig-zag); ``"rapid"``: by a retract to ``clearance_z``, a rapid over the next pass start and
-    a rapid plunge onto it. Header as in Sec. 7.2.2 (``OUTPUT_ON_TIP``: the points are tool-tip positions).
+    The tool rapids to ``clearance_z`` above the first point and *feeds* down onto it (never a rapid
+    onto the part), then feeds through all passes in order, and retracts at the end. ``link="feed"``:
+    consecutive passes are linked by a feed move (a zig-zag); ``"rapid"``: by a rapid retract straight
+    up to ``clearance_z``, a rapid over the next pass start at ``clearance_z`` and a feed down onto it.
+    Header as in Sec. 7.2.2 (``OUTPUT_ON_TIP``: the points are tool-tip positions).
     """
     if feed_mm_min <= 0 or spindle_rpm <= 0:
         raise ValueError(f"feed_mm_min and spindle_rpm must be > 0, got {feed_mm_min}, {spindle_rpm}")
@@ -535,18 +536,18 @@ def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: fl
     recs += [_word("RAPID", "RAPID"), _word("FROM / " + ", ".join(_format_num(v, decimals) for v in
                                                                     (p0[0], p0[1], clearance_z)),
                                              "FROM", [str(p0[0]), str(p0[1]), str(clearance_z)])]
-    feed_set = False
+    top = max(float(p[:, 2].max()) for p in passes)
+    if not clearance_z > top:
+        raise ValueError(f"clearance_z must be above every point of the passes ({top:g} mm), got {clearance_z}")
     for k, p in enumerate(passes):
         if k == 0 or link == "rapid":
             if k > 0:
                 q = passes[k - 1][-1]
                 recs += [_word("RAPID", "RAPID"), goto(q[0], q[1], clearance_z, decimals)]
             recs += [_word("RAPID", "RAPID"), goto(p[0, 0], p[0, 1], clearance_z, decimals)]
-            recs += [_word("RAPID", "RAPID"), goto(*p[0], decimals=decimals)]
-        if not feed_set:
+        if k == 0:
             recs.append(fedrat(feed_mm_min))
-            feed_set = True
-        recs += [goto(*q, decimals=decimals) for q in p[(1 if k == 0 or link == "rapid" else 0):]]
+        recs += [goto(*q, decimals=decimals) for q in p]  # the first GOTO feeds down onto the pass
     last = passes[-1][-1]
     recs += [_word("RAPID", "RAPID"), goto(last[0], last[1], clearance_z, decimals), _word("FINI", "FINI")]
     for i, r in enumerate(recs, start=1):
@@ -558,15 +559,15 @@ def reordered_program(points, result, *, feed_mm_min: float, spindle_rpm: float,
                       tool_diameter: float, clearance_z: float, partno: str = "CNCLAB_REORDERED",
                       decimals: int = 3):
     """An APT program visiting ``points`` (N, 3, mm) in ``result.order``: feed moves between
-    neighbours, and at every jump a retract to ``clearance_z`` (mm), a rapid over the next point and a
-    rapid plunge onto it (the tool lifts; no material is cut on a jump).
+    neighbours, and at every jump a rapid retract to ``clearance_z`` (mm), a rapid over the next point
+    and a feed down onto it (the tool lifts; no material is cut on a jump).
 
     >>> P = np.array([[0, 0, 0], [1, 0, 0], [5, 5, 0.0]])
     >>> from cnclab.toolpath.reorder import ReorderResult
     >>> r = ReorderResult(np.array([0, 1, 2]), np.array([False, False, True]), np.ones(3))
     >>> prog = reordered_program(P, r, feed_mm_min=500, spindle_rpm=2000, tool_diameter=10, clearance_z=30)
     >>> cl = prog.cl_points(); cl.rapid.tolist()
-    [True, True, False, True, True, True, True]
+    [True, False, False, True, True, False, True]
     """
     P = np.asarray(points, float)
     order = np.asarray(result.order)

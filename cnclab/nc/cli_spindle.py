@@ -10,11 +10,11 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..cutting.spindle_model import POINT_RULES
+from .spindle_control import postprocess_files
+
 
 def main(argv=None) -> int:
-    from ..cutting.spindle_model import POINT_RULES
-    from .spindle_control import postprocess_files
-
     ap = argparse.ArgumentParser(prog="python -m cnclab spindle", description=__doc__.split("\n\n")[1])
     ap.add_argument("stl", help="surface STL (ASCII or binary, mm)")
     ap.add_argument("apt", help="APT CL file (UNITS/MM)")

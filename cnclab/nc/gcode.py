@@ -16,18 +16,34 @@ motion always states X, Y and Z; ``S.. M3`` is written when a spindle speed firs
 ``M5`` when it goes to ``None``; the program ends with ``M5 M30``. ``save_gcode`` writes atomically
 (:func:`cnclab.fileio.atomic_write`) and never overwrites a file given in ``inputs``.
 
-Parser — :func:`parse_gcode`: reads what the writer writes and common hand-written variants (``G00``/
-``G01``, line numbers ``N..``, ``( )`` and ``;`` comments, ``%`` lines, ``T``/``M6`` tool change,
-``M3/M4/M5/M8/M9/M2/M30``, ``G40 G49 G54 G80 G17 G21 G90 G94`` accepted as no-ops). It raises
-:class:`GcodeError` (a ``ValueError``) naming ``source:line`` for an unknown word, inches (``G20``),
-incremental mode (``G91``), R-format or non-XY arcs, an arc without ``I``/``J``, an arc whose start and end
-radii disagree, a feed move with no feed set, or a move whose position is not fully known yet.
+Reader — :func:`read_gcode` (:class:`GcodeProgram`), :func:`parse_gcode` (its moves),
+:func:`load_gcode` (a file), :func:`read_toolpath` (a :class:`ToolPath`). It reads the RS274/NGC
+subset real post-processors (FreeCAD's LinuxCNC and GRBL posts) and hand-written programs use:
+
+* ``N`` words, ``( )`` and ``;`` comments, ``%`` lines, upper/lower case, ``G00``/``G01`` forms;
+* ``G0 G1 G2 G3`` (motion modal; ``G80`` cancels it), F and S modal, helical arcs (an arc with a Z
+  change), arc centres ``I J`` (incremental, ``G91.1``, the default; absolute with ``G90.1``) or a
+  signed radius ``R`` (R > 0 the arc of at most 180°, R < 0 the larger one);
+* ``G90``/``G91`` absolute/incremental X Y Z; ``G20`` inches, **converted to mm** (every length and
+  F × 25.4; :attr:`GcodeProgram.converted_from_inch` and a warning say so), ``G21`` mm;
+* accepted with no effect on the tool-centre path: ``G17 G40 G43 (H) G49 G54–G59(.3) G61 G61.1 G64
+  (P Q) G80 G94``, ``T``, ``M6`` (tool number recorded), ``M0 M1 M7 M8 M9``; ``M3/M4`` spindle on,
+  ``M5`` off, ``M2/M30`` end (lines after them are not executed, as in LinuxCNC);
+* refused with a :class:`GcodeError` (a ``ValueError``) naming ``source:line`` and the word: G18/G19
+  (other arc planes, and K), canned cycles (G73 G76 G81–G89) and G98/G99, G4 dwell, G28/G30/G53/G92,
+  cutter compensation G41/G42 (and D), G93/G95 feed modes, parameters/expressions/O-words, an unknown
+  word, an arc without I/J/R, an arc whose start and end radius disagree, a feed move with no feed
+  set, or a feed move from a position not fully known.
+
+:func:`program_time` is the motion time of a program (feed moves at F, rapids at a stated rate, arcs
+and helices exact) — the same model as :meth:`ToolPath.time_s` and rs274's canonical totals
+(:mod:`cnclab.nc.rs274`).
 
 Round trip: ``write_gcode(parse_gcode(write_gcode(m)))`` equals ``write_gcode(m)`` exactly.
 
-Helpers: :func:`sample_arc` (arc → polyline points), :func:`to_polyline` (a whole program → points
-with a rapid/feed flag), :func:`path_lengths` (feed vs rapid length, arcs exact), :func:`linear_moves`
-(polyline → ``G1`` moves).
+Helpers: :func:`sample_move` (a move → points; arcs by :func:`cnclab.toolpath.path.sample_arc`),
+:func:`to_polyline` (a whole program → points with a rapid/feed flag), :func:`path_lengths` (feed vs
+rapid length, arcs exact), :func:`linear_moves` (polyline → ``G1`` moves).
 
 >>> moves = [Move("G0", 0, 0, 10), Move("G1", 0, 0, 0, feed=500, spindle=2000),
 ...          Move("G1", 10, 0, 0, feed=500, spindle=2000),
@@ -59,12 +75,15 @@ from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..fileio import atomic_write
-from ..toolpath.path import MOTIONS, Move
+from ..toolpath.path import Move, Tool, ToolPath, arc_geometry, sample_arc
+from ..toolpath.pocket import to_gcode_moves
 
-__all__ = ["Move", "GcodeError", "write_gcode", "save_gcode", "parse_gcode", "load_gcode",
-           "sample_arc", "to_polyline", "path_lengths", "linear_moves", "gcode_roundtrip_error"]
+__all__ = ["Move", "GcodeError", "GcodeProgram", "write_gcode", "save_gcode", "read_gcode", "parse_gcode",
+           "load_gcode", "read_toolpath", "program_time", "sample_move", "to_polyline", "path_lengths",
+           "linear_moves", "gcode_roundtrip_error", "MM_PER_INCH"]
 
 class GcodeError(ValueError):
     """Malformed G-code; the message starts with ``source:line``."""
@@ -77,12 +96,38 @@ def _fmt(v: float, decimals: int) -> str:
     return s
 
 
+#: bounds of written numbers: coordinates [mm], feeds [mm/min], spindle speeds [rpm]. A value beyond
+#: them is a unit or planning error (no 3-axis mill travels 10 m or feeds at 1 km/min).
+MAX_COORD_MM = 1.0e4
+MAX_FEED_MM_MIN = 1.0e6
+MAX_SPINDLE_RPM = 1.0e6
+
+
+def _check_value(k: int, word: str, v, bound: float, positive: bool = False) -> float:
+    if v is None or not math.isfinite(float(v)):
+        raise ValueError(f"move {k}: word {word} must be a finite number, got {word}{v!r}")
+    v = float(v)
+    if abs(v) > bound or (positive and v <= 0):
+        rng = f"(0, {bound:g}]" if positive else f"[-{bound:g}, {bound:g}]"
+        raise ValueError(f"move {k}: word {word}{v:g} out of range {rng}")
+    return v
+
+
 def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimals: int = 4,
-                feed_decimals: int = 1) -> str:
+                feed_decimals: int = 1, comments: Sequence[str] | None = None,
+                start_block: Sequence[str] = ("G21 G90 G17 G94",), end_block: Sequence[str] = ("M30",)) -> str:
     """RS274/NGC text of ``moves`` (see module docstring for the conventions).
 
     ``header``: comment text (a string with newlines or a list of lines), written as ``( ... )``;
-    ``decimals``: digits after the point for X Y Z I J [mm]; ``feed_decimals`` for F [mm/min] and S [rpm].
+    ``decimals``: digits after the point for X Y Z I J [mm]; ``feed_decimals`` for F [mm/min] and S
+    [rpm]; ``comments``: optional text per move, appended to its block as ``( ... )``;
+    ``start_block``/``end_block``: lines written before the first/after the last move (``M5`` is
+    written before the end block whenever the spindle is on).
+
+    Refuses (``ValueError`` naming the move index and word) a non-finite or out-of-range number
+    (:data:`MAX_COORD_MM`, :data:`MAX_FEED_MM_MIN`, :data:`MAX_SPINDLE_RPM`) and an arc whose start and
+    end radii, computed from the *written* numbers, differ by more than 2·10^-decimals mm (then the
+    file would not describe the arc the path means; a reader would refuse or distort it).
     """
     if not isinstance(decimals, int) or not 0 <= decimals <= 8:
         raise ValueError(f"decimals must be an int in [0, 8], got {decimals!r}")
@@ -92,12 +137,20 @@ def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimal
         if "(" in h or ")" in h:
             raise ValueError(f"header lines cannot contain parentheses, got {h!r}")
         lines.append(f"({h})")
-    lines.append("G21 G90 G17 G94")
+    lines += list(start_block)
     cur = {"X": None, "Y": None, "Z": None}
     motion = feed = spindle = None
+    arc_tol = 2.0 * 10.0 ** -decimals
     for k, mv in enumerate(moves):
         if not isinstance(mv, Move):
             raise ValueError(f"moves[{k}] must be a Move, got {type(mv).__name__}")
+        for ax, v in (("X", mv.x), ("Y", mv.y), ("Z", mv.z)):
+            _check_value(k, ax, v, MAX_COORD_MM)
+        if mv.motion != "G0":
+            _check_value(k, "F", mv.feed, MAX_FEED_MM_MIN, positive=True)
+        if mv.spindle is not None:
+            _check_value(k, "S", mv.spindle, MAX_SPINDLE_RPM)
+        start_w = dict(cur)
         axes = [(ax, _fmt(v, decimals)) for ax, v in (("X", mv.x), ("Y", mv.y), ("Z", mv.z))]
         axes = [(ax, s) for ax, s in axes if s != cur[ax]]
         if not axes and mv.motion in ("G0", "G1"):
@@ -114,16 +167,33 @@ def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimal
             words.append(ax + s)
             cur[ax] = s
         if mv.motion in ("G2", "G3"):
-            words += ["I" + _fmt(mv.i, decimals), "J" + _fmt(mv.j, decimals)]
+            iw, jw = _fmt(_check_value(k, "I", mv.i, MAX_COORD_MM), decimals), \
+                _fmt(_check_value(k, "J", mv.j, MAX_COORD_MM), decimals)
+            if start_w["X"] is None or start_w["Y"] is None:
+                raise ValueError(f"move {k}: word {mv.motion}: an arc cannot be the first move (start unknown)")
+            sx, sy = float(start_w["X"]), float(start_w["Y"])
+            r0 = math.hypot(float(iw), float(jw))
+            r1 = math.hypot(float(cur["X"]) - sx - float(iw), float(cur["Y"]) - sy - float(jw))
+            if r0 == 0 or abs(r0 - r1) > arc_tol:
+                raise ValueError(f"move {k}: word {mv.motion}: written arc start radius {r0:.6g} and end radius "
+                                 f"{r1:.6g} mm differ by more than {arc_tol:g} mm (2 units of the last "
+                                 "written digit)")
+            words += ["I" + iw, "J" + jw]
         if mv.motion != "G0":
             f = _fmt(mv.feed, feed_decimals)
             if f != feed:
                 words.append("F" + f)
                 feed = f
-        lines.append(" ".join(words))
+        line = " ".join(words)
+        if comments is not None and comments[k]:
+            c = str(comments[k])
+            if "(" in c or ")" in c:
+                raise ValueError(f"move {k}: comment cannot contain parentheses, got {c!r}")
+            line += f" ({c})"
+        lines.append(line)
     if spindle is not None:
         lines.append("M5")
-    lines += ["M30", "%"]
+    lines += list(end_block) + ["%"]
     return "\n".join(lines) + "\n"
 
 
@@ -133,166 +203,388 @@ def save_gcode(moves: Iterable[Move], path, header: str | Sequence[str] = "", de
     return atomic_write(path, write_gcode(moves, header=header, decimals=decimals), inputs=inputs)
 
 
-_WORD = re.compile(r"([A-Za-z])\s*([+-]?(?:\d+\.?\d*|\.\d+))")
-_NOOP_G = {"17", "21", "40", "49", "54", "80", "90", "94", "90.1", "91.1"}
-_NOOP_M = {"0", "1", "2", "6", "8", "9", "30"}
+# --------------------------------------------------------------------------------------------
+# reader
+# --------------------------------------------------------------------------------------------
+_WORD = re.compile(r"([A-Za-z])\s*([+-]?\s*(?:\d+\.?\d*|\.\d+))")
+MM_PER_INCH = 25.4
+#: G words accepted with no effect on the tool-centre path (cutter compensation off, tool length
+#: offset on/off — coordinates are the controlled point either way —, work offsets G54..G59.3 taken
+#: as identity, canned cycle cancel, absolute/incremental arc centres handled, feed per minute, path
+#: blending modes)
+_NOOP_G = {"17", "21", "40", "43", "49", "54", "55", "56", "57", "58", "59", "59.1", "59.2", "59.3",
+           "80", "94", "61", "61.1", "64"}
+_REFUSED_G = {
+    "4": "dwell G4 is not supported (program time would miss the pause)",
+    "18": "arc plane G18 (XZ) is not supported; only G17 (XY)",
+    "19": "arc plane G19 (YZ) is not supported; only G17 (XY)",
+    "28": "G28 (go to reference point) is not supported: the position after it is machine-specific",
+    "30": "G30 (go to reference point) is not supported: the position after it is machine-specific",
+    "53": "G53 (machine coordinates) is not supported",
+    "92": "G92 (coordinate system offset) is not supported",
+    "41": "cutter radius compensation G41 is not supported (the path would not be the tool centre)",
+    "42": "cutter radius compensation G42 is not supported (the path would not be the tool centre)",
+    "93": "inverse-time feed G93 is not supported; use G94 (mm/min)",
+    "95": "feed per revolution G95 is not supported; use G94 (mm/min)",
+    "98": "canned-cycle return mode G98 is not supported (canned cycles are not read)",
+    "99": "canned-cycle return mode G99 is not supported (canned cycles are not read)",
+}
+_CANNED = {"73", "76", "81", "82", "83", "84", "85", "86", "87", "88", "89"}
+_NOOP_M = {"0", "1", "6", "7", "8", "9"}
 
 
-def _strip_comments(line: str) -> str:
-    out, depth = [], 0
-    for ch in line:
-        if ch == "(":
-            depth += 1
-        elif ch == ")":
-            depth = max(depth - 1, 0)
-        elif ch == ";" and depth == 0:
-            break
-        elif depth == 0:
-            out.append(ch)
-    return "".join(out)
+@dataclasses.dataclass
+class GcodeProgram:
+    """A program read by :func:`read_gcode`.
 
-
-def parse_gcode(text: str, source: str = "<string>", arc_tolerance: float = 1e-3) -> list[Move]:
-    """Parse RS274/NGC text into :class:`Move` records (absolute mm; see module docstring).
-
-    ``source`` names the text in error messages (``source:line: ...``); ``arc_tolerance`` [mm] is the
-    largest accepted difference between an arc's start and end radius.
+    ``moves`` (absolute mm, :class:`Move`); ``lines`` the source line of each move (1-based);
+    ``comments`` the comment text on each move's line ('' if none); ``converted_from_inch``: the file
+    used ``G20`` and every length (X Y Z I J R, F) was multiplied by 25.4; ``warnings`` human-readable
+    notes (unit conversion, skipped partial positioning...); ``tool_number`` the T word of the last
+    ``M6`` (None if no tool change); ``tool_diameter`` [mm] from a comment such as ``(T1 D=6.0)`` or
+    ``(tool diameter 6 mm)`` when one is present; ``spindle_on_line`` line of the first M3/M4;
+    ``spindle_stop_line`` line of the last M5; ``end_word`` ``"M30"``/``"M2"`` or None; ``end_line``;
+    ``source`` the name used in messages.
     """
-    moves: list[Move] = []
-    pos: dict[str, float | None] = {"X": None, "Y": None, "Z": None}
+
+    moves: list
+    lines: list
+    comments: list
+    source: str = "<string>"
+    converted_from_inch: bool = False
+    warnings: list = dataclasses.field(default_factory=list)
+    tool_number: int | None = None
+    tool_diameter: float | None = None
+    spindle_on_line: int | None = None
+    spindle_stop_line: int | None = None
+    end_word: str | None = None
+    end_line: int | None = None
+
+
+def _split_comments(line: str, where: str):
+    out, comments, buf, depth = [], [], [], 0
+    for k, ch in enumerate(line):
+        if ch == "(":
+            if depth:
+                raise GcodeError(f"{where}: nested comment '(' (RS274 comments do not nest)")
+            depth, buf = 1, []
+        elif ch == ")" and depth:
+            depth = 0
+            comments.append("".join(buf).strip())
+        elif depth:
+            buf.append(ch)
+        elif ch == ";":
+            comments.append(line[k + 1:].strip())
+            break
+        else:
+            out.append(ch)
+    if depth:
+        raise GcodeError(f"{where}: comment '(' is not closed on this line")
+    return "".join(out), comments
+
+
+_TOOL_DIA = re.compile(r"(?:\bD\s*=?\s*|diam(?:eter)?\s*[=:]?\s*)([0-9]*\.?[0-9]+)\s*(mm|in\b|inch|\")?", re.I)
+
+
+def _gnum(num: str) -> str:
+    """Canonical form of a G/M number: '01' -> '1', '90.10' -> '90.1'."""
+    v = float(num)
+    return str(int(v)) if v == int(v) else f"{v:g}"
+
+
+def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002,
+               start=None) -> GcodeProgram:
+    """Read RS274/NGC text (the subset real posts write, see the module docstring) into a
+    :class:`GcodeProgram` of absolute-mm :class:`Move` records.
+
+    ``source`` names the text in errors (``source:line: word ...``); ``arc_tolerance`` [mm] is the
+    largest accepted difference between an arc's start and end radius (default 0.002 mm: a program
+    written with 3 decimals rounds each of I, J, X, Y by up to 0.0005 mm, so the two radii can differ
+    by up to 2·√2·0.0005 ≈ 0.0014 mm; arcs are also accepted within 0.1 % of their radius).
+    ``start`` (x, y, z) mm: the position before the program (rs274 starts at the origin); without it,
+    G0 moves before every axis is known only set the known axes (a ``G0 Z5`` first line), and a feed
+    move before that is an error.
+
+    >>> p = read_gcode("G20 G90\\nG0 X0 Y0 Z1\\nG1 Z0 F10\\nM30\\n", source="t.ngc")
+    >>> p.moves[-1].z, p.moves[-1].feed, p.converted_from_inch
+    (0.0, 254.0, True)
+    """
+    moves, lines, comments = [], [], []
+    prog = GcodeProgram(moves, lines, comments, source=source)
+    pos = {"X": None, "Y": None, "Z": None} if start is None else dict(zip("XYZ", map(float, start)))
     motion, feed, spindle, spindle_on = None, None, None, False
+    scale, absolute, arc_absolute = 1.0, True, False
+    selected_tool = None
+    skipped_partial = 0
     for ln, raw in enumerate(text.splitlines(), start=1):
+        if prog.end_word is not None:
+            break  # M2/M30 ends the program; later lines are not executed (as in LinuxCNC)
         where = f"{source}:{ln}"
-        body = _strip_comments(raw).strip()
+        body, cmts = _split_comments(raw, where)
+        for c in cmts:
+            m = _TOOL_DIA.search(c)
+            if m and prog.tool_diameter is None and ("tool" in c.lower() or re.match(r"\s*T\d", c, re.I)
+                                                     or "diam" in c.lower()):
+                unit = (m.group(2) or "").lower()
+                inch = unit.startswith("in") or unit == '"' or (not unit and scale != 1.0)
+                prog.tool_diameter = float(m.group(1)) * (MM_PER_INCH if inch else 1.0)
+        body = body.strip()
         if not body or body == "%":
             continue
+        if body.startswith("/"):
+            raise GcodeError(f"{where}: block delete '/' is not supported")
         rest = _WORD.sub(" ", body).strip()
         if rest:
-            raise GcodeError(f"{where}: cannot read {rest!r} in {raw.strip()!r}")
-        words = [(m.group(1).upper(), m.group(2)) for m in _WORD.finditer(body)]
+            raise GcodeError(f"{where}: cannot read {rest!r} in {raw.strip()!r} "
+                             "(parameters #, expressions [ ] and O-words are not supported)")
+        words = [(m.group(1).upper(), m.group(2).replace(" ", "")) for m in _WORD.finditer(body)]
         coords: dict[str, float] = {}
         new_motion = None
+        gset = set()
+        for letter, num in words:  # T is selected before M6 acts, wherever it stands in the block
+            if letter == "T":
+                selected_tool = int(float(num))
         for letter, num in words:
             if letter == "G":
-                code = num.lstrip("0") or "0"
-                code = code if "." not in code else code.rstrip("0").rstrip(".")
-                code = code if code else "0"
+                code = _gnum(num)
+                gset.add(code)
                 if code in ("0", "1", "2", "3"):
                     if new_motion is not None:
-                        raise GcodeError(f"{where}: two motion words in one block")
+                        raise GcodeError(f"{where}: word G{num}: two motion words in one block")
                     new_motion = "G" + code
                 elif code == "20":
-                    raise GcodeError(f"{where}: G20 (inches) is not supported; cnclab programs are in mm (G21)")
+                    scale = MM_PER_INCH
+                    if not prog.converted_from_inch:
+                        prog.converted_from_inch = True
+                        prog.warnings.append(f"{where}: G20 (inches): every length and feed converted "
+                                             "to mm (x 25.4)")
+                elif code == "21":
+                    scale = 1.0
+                elif code == "90":
+                    absolute = True
                 elif code == "91":
-                    raise GcodeError(f"{where}: G91 (incremental) is not supported; use G90 absolute")
-                elif code in ("18", "19"):
-                    raise GcodeError(f"{where}: G{code} arc plane is not supported; only G17 (XY)")
+                    absolute = False
+                elif code == "90.1":
+                    arc_absolute = True
+                elif code == "91.1":
+                    arc_absolute = False
+                elif code == "80":
+                    motion = None
+                elif code in _CANNED:
+                    raise GcodeError(f"{where}: word G{num}: canned cycles (G73, G76, G81-G89) are not "
+                                     "supported")
+                elif code in _REFUSED_G:
+                    raise GcodeError(f"{where}: word G{num}: {_REFUSED_G[code]}")
                 elif code not in _NOOP_G:
                     raise GcodeError(f"{where}: unknown or unsupported word G{num}")
             elif letter == "M":
-                code = num.lstrip("0") or "0"
+                code = _gnum(num)
                 if code in ("3", "4"):
                     spindle_on = True
-                elif code in ("5", "2", "30"):
-                    spindle_on = False if code == "5" else spindle_on
+                    if prog.spindle_on_line is None:
+                        prog.spindle_on_line = ln
+                elif code == "5":
+                    spindle_on = False
+                    prog.spindle_stop_line = ln
+                elif code in ("2", "30"):
+                    prog.end_word, prog.end_line = "M" + code, ln
+                elif code == "6":
+                    prog.tool_number = selected_tool
                 elif code not in _NOOP_M:
                     raise GcodeError(f"{where}: unknown or unsupported word M{num}")
-            elif letter in "XYZIJ":
+            elif letter in "XYZIJR":
                 if letter in coords:
-                    raise GcodeError(f"{where}: word {letter} given twice")
-                coords[letter] = float(num)
+                    raise GcodeError(f"{where}: word {letter}{num} given twice")
+                coords[letter] = float(num) * scale
+            elif letter == "K":
+                raise GcodeError(f"{where}: word K{num}: K belongs to arcs in G18/G19 planes; only G17 (XY) is read")
             elif letter == "F":
-                if float(num) <= 0:
-                    raise GcodeError(f"{where}: feed F must be > 0 mm/min, got {num}")
-                feed = float(num)
+                if not float(num) > 0:
+                    raise GcodeError(f"{where}: word F{num}: feed must be > 0 mm/min")
+                feed = float(num) * scale
             elif letter == "S":
+                if float(num) < 0:
+                    raise GcodeError(f"{where}: word S{num}: spindle speed must be >= 0 rpm")
                 spindle = float(num)
-            elif letter in "NT":
+            elif letter == "T":
                 pass
-            elif letter == "R":
-                raise GcodeError(f"{where}: R-format arcs are not supported; give I and J")
+            elif letter in "NHPDQ":
+                if letter in "PQ" and "64" not in gset:
+                    raise GcodeError(f"{where}: word {letter}{num} only accepted with G64")
+                if letter == "D":
+                    raise GcodeError(f"{where}: word D{num}: cutter compensation is not supported")
             else:
                 raise GcodeError(f"{where}: unknown word {letter}{num}")
+        if prog.end_word is not None and prog.end_line == ln and any(a in coords for a in "XYZ"):
+            raise GcodeError(f"{where}: word {prog.end_word}: motion in the program-end block")
         if new_motion is not None:
             motion = new_motion
         has_xyz = any(a in coords for a in "XYZ")
-        if not has_xyz and not ("I" in coords or "J" in coords):
+        if not has_xyz and not any(a in coords for a in "IJR"):
             if new_motion in ("G2", "G3"):
-                raise GcodeError(f"{where}: {new_motion} without an end point")
+                raise GcodeError(f"{where}: word {new_motion}: arc without an end point")
             continue
         if motion is None:
-            raise GcodeError(f"{where}: coordinates given before any motion word (G0/G1/G2/G3)")
-        start = dict(pos)
+            w = next(a for a in "XYZIJR" if a in coords)
+            raise GcodeError(f"{where}: word {w}: coordinates given with no motion mode (G0/G1/G2/G3) "
+                             "in force")
+        startp = dict(pos)
         for a in "XYZ":
             if a in coords:
-                pos[a] = coords[a]
+                if absolute:
+                    pos[a] = coords[a]
+                elif pos[a] is None:
+                    raise GcodeError(f"{where}: word {a}: incremental (G91) move from an unknown {a} position")
+                else:
+                    pos[a] = pos[a] + coords[a]
         unknown = [a for a in "XYZ" if pos[a] is None]
         if unknown:
-            raise GcodeError(f"{where}: position of {'/'.join(unknown)} is unknown (state every axis on the first move)")
+            if motion == "G0" and not any(a in coords for a in "IJR"):
+                skipped_partial += 1
+                continue
+            raise GcodeError(f"{where}: word {motion}: position of {'/'.join(unknown)} is unknown "
+                             "(state every axis on the first move)")
+        if any(startp[a] is None for a in "XYZ"):
+            startp = None  # the first fully known position: the start of the path
         i = j = None
         if motion in ("G2", "G3"):
-            if "I" not in coords and "J" not in coords:
-                raise GcodeError(f"{where}: {motion} arc needs centre offsets I and J")
-            if any(start[a] is None for a in "XY"):
-                raise GcodeError(f"{where}: arc start point unknown")
-            i, j = coords.get("I", 0.0), coords.get("J", 0.0)
+            if startp is None:
+                raise GcodeError(f"{where}: word {motion}: arc start point unknown")
+            sx, sy = startp["X"], startp["Y"]
+            if "R" in coords:
+                if "I" in coords or "J" in coords:
+                    raise GcodeError(f"{where}: word R: give either R or I/J, not both")
+                cx, cy = _center_from_radius((sx, sy), (pos["X"], pos["Y"]), coords["R"], motion == "G3",
+                                             where)
+            else:
+                if "I" not in coords and "J" not in coords:
+                    raise GcodeError(f"{where}: word {motion}: arc needs centre offsets I and J (or R)")
+                if arc_absolute:
+                    cx, cy = coords.get("I", sx), coords.get("J", sy)
+                else:
+                    cx, cy = sx + coords.get("I", 0.0), sy + coords.get("J", 0.0)
+            i, j = cx - sx, cy - sy
             r0 = math.hypot(i, j)
-            cx, cy = start["X"] + i, start["Y"] + j
             r1 = math.hypot(pos["X"] - cx, pos["Y"] - cy)
-            if r0 == 0 or abs(r0 - r1) > arc_tolerance:
-                raise GcodeError(f"{where}: arc start radius {r0:.6g} and end radius {r1:.6g} mm differ "
-                                 f"by more than {arc_tolerance} mm")
-        elif "I" in coords or "J" in coords:
-            raise GcodeError(f"{where}: I/J given with {motion} (only arcs G2/G3 take them)")
+            if r0 == 0 or abs(r0 - r1) > max(arc_tolerance, 1e-3 * r0):
+                w = "R" if "R" in coords else ("I" if "I" in coords else "J")
+                raise GcodeError(f"{where}: word {w}: arc start radius {r0:.6g} and end radius {r1:.6g} mm "
+                                 f"differ by more than {max(arc_tolerance, 1e-3 * r0):.3g} mm")
+        elif any(a in coords for a in "IJR"):
+            w = next(a for a in "IJR" if a in coords)
+            raise GcodeError(f"{where}: word {w}: I/J/R given with {motion} (only arcs G2/G3 take them)")
         if motion != "G0" and feed is None:
-            raise GcodeError(f"{where}: {motion} feed move with no feed F set")
+            raise GcodeError(f"{where}: word {motion}: {motion} feed move with no feed F set")
         moves.append(Move(motion, pos["X"], pos["Y"], pos["Z"], i=i, j=j,
                           feed=feed if motion != "G0" else None,
                           spindle=spindle if spindle_on else None))
-    return moves
+        lines.append(ln)
+        comments.append(" ".join(cmts))
+    if skipped_partial:
+        prog.warnings.append(f"{source}: {skipped_partial} rapid(s) before X, Y and Z were all known "
+                             "(start position unknown) were not turned into moves")
+    return prog
+
+
+def _center_from_radius(s, e, R, ccw, where):
+    """Arc centre (mm) from start ``s``, end ``e`` and the RS274 signed radius ``R`` (R > 0: the arc
+    of at most 180°, R < 0: the larger one)."""
+    dx, dy = e[0] - s[0], e[1] - s[1]
+    d = math.hypot(dx, dy)
+    if d == 0:
+        raise GcodeError(f"{where}: word R: an R-format arc cannot be a full circle (start = end); use I/J")
+    r = abs(R)
+    if r < 0.5 * d:
+        if 0.5 * d - r > 1e-3 * max(r, 1.0):
+            raise GcodeError(f"{where}: word R{R:g}: radius smaller than half the chord ({0.5 * d:.6g} mm)")
+        r = 0.5 * d
+    h = math.sqrt(max(r * r - 0.25 * d * d, 0.0))
+    nx, ny = -dy / d, dx / d  # left normal of the chord
+    side = 1.0 if ccw else -1.0
+    if R < 0:
+        side = -side
+    return 0.5 * (s[0] + e[0]) + side * h * nx, 0.5 * (s[1] + e[1]) + side * h * ny
+
+
+def parse_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002, start=None) -> list[Move]:
+    """Parse RS274/NGC text into :class:`Move` records (absolute mm); :func:`read_gcode` with only
+    the moves. Errors are :class:`GcodeError` naming ``source:line`` and the word."""
+    return read_gcode(text, source=source, arc_tolerance=arc_tolerance, start=start).moves
+
+
+def _read_text(path_or_text):
+    if isinstance(path_or_text, Path) or (isinstance(path_or_text, str) and "\n" not in path_or_text
+                                          and len(path_or_text) < 4096 and Path(path_or_text).is_file()):
+        p = Path(path_or_text)
+        return p.read_text(encoding="utf-8"), str(p)
+    if isinstance(path_or_text, str) and "\n" not in path_or_text:
+        raise OSError(f"{path_or_text}: no such G-code file")
+    return str(path_or_text), "<string>"
 
 
 def load_gcode(path) -> list[Move]:
-    """Parse a G-code file (read-only); errors name the file and line."""
+    """Parse a G-code file (read-only); errors name the file, line and word."""
     p = Path(path)
     return parse_gcode(p.read_text(encoding="utf-8"), source=str(p))
 
 
-def _arc_geometry(start: np.ndarray, mv: Move):
-    cx, cy = start[0] + mv.i, start[1] + mv.j
-    r = math.hypot(mv.i, mv.j)
-    a0 = math.atan2(start[1] - cy, start[0] - cx)
-    a1 = math.atan2(mv.y - cy, mv.x - cx)
-    if mv.motion == "G3":
-        sweep = (a1 - a0) % (2 * math.pi)
-    else:
-        sweep = -((a0 - a1) % (2 * math.pi))
-    if abs(sweep) < 1e-12:  # same start and end: full circle
-        sweep = 2 * math.pi if mv.motion == "G3" else -2 * math.pi
-    return cx, cy, r, a0, sweep
+def read_toolpath(path_or_text, tool: Tool | None = None, start=None, arc_tolerance: float = 0.002) -> ToolPath:
+    """A :class:`ToolPath` from a program file (path) or program text (a string with newlines).
+
+    Move kinds come from :meth:`ToolPath.from_moves` (rapid, retract, helix/ramp/plunge, cut). The
+    tool: ``tool`` if given, else a :class:`Tool` with the diameter found in a comment and the M6
+    tool number (None when the program states no diameter). ``info`` records the source, the unit
+    conversion flag, warnings, source line per move and comments.
+    """
+    text, source = _read_text(path_or_text)
+    prog = read_gcode(text, source=source, arc_tolerance=arc_tolerance, start=start)
+    if tool is None and prog.tool_diameter is not None:
+        tool = Tool(prog.tool_diameter, number=prog.tool_number or 1)
+    info = {"source": source, "converted_from_inch": prog.converted_from_inch,
+            "warnings": list(prog.warnings), "tool_number": prog.tool_number, "end_word": prog.end_word,
+            "spindle_on_line": prog.spindle_on_line}
+    path = ToolPath.from_moves(prog.moves, start=start, tool=tool, info=info)
+    lines = ([0] if start is not None else []) + list(prog.lines)
+    path.info["line"] = np.asarray(lines, int)
+    return path
 
 
-def sample_arc(start, mv: Move, max_segment: float = 0.5) -> np.ndarray:
-    """Points [mm] along the arc (or helix) ``mv`` from ``start`` (x, y, z), including both ends.
+def program_time(moves: Sequence[Move], rapid_mm_min: float, start=None) -> dict:
+    """Motion time and length of a program: feed moves at their F, rapids at ``rapid_mm_min``,
+    arcs and helices exact, no acceleration (the RS274 canonical model; equals
+    :meth:`ToolPath.time_s` of ``ToolPath.from_moves(moves, start)``).
 
-    Segments are at most ``max_segment`` mm long along the arc. Returns an (n, 3) array.
+    Returns ``{"feed_mm", "rapid_mm", "feed_s", "rapid_s", "total_s"}``. ``start`` (x, y, z) mm is
+    the position before the first move (rs274 starts at the origin); without it the first move only
+    positions.
 
-    >>> p = sample_arc((1, 0, 0), Move("G3", -1, 0, 0, i=-1, j=0, feed=100), max_segment=0.1)
+    >>> program_time([Move("G0", 0, 0, 5), Move("G1", 0, 0, 0, feed=300),
+    ...               Move("G1", 10, 0, 0, feed=600)], rapid_mm_min=6000)["feed_s"]
+    2.0
+    """
+    path = ToolPath.from_moves(moves, start=start)
+    L = path.segment_lengths()
+    t = path.time_s(rapid_mm_min)
+    rapid = path.is_kind("rapid")
+    feed_s = t["total_s"] - t["rapid_s"]
+    return {"feed_mm": float(L[~rapid].sum()), "rapid_mm": float(L[rapid].sum()),
+            "feed_s": float(feed_s), "rapid_s": float(t["rapid_s"]), "total_s": float(t["total_s"])}
+
+
+def sample_move(start, mv: Move, max_segment: float = 0.5) -> np.ndarray:
+    """Points (n, 3) mm along the move ``mv`` from ``start`` (x, y, z), both ends included; arcs and
+    helices sampled by :func:`cnclab.toolpath.path.sample_arc` (chords at most ``max_segment`` mm).
+
+    >>> p = sample_move((1, 0, 0), Move("G3", -1, 0, 0, i=-1, j=0, feed=100), max_segment=0.1)
     >>> bool(np.allclose(np.hypot(p[:, 0], p[:, 1]), 1)), bool(p[:, 1].min() >= -1e-12)
     (True, True)
     """
-    if max_segment <= 0:
+    if not max_segment > 0:
         raise ValueError(f"max_segment must be > 0 mm, got {max_segment}")
     start = np.asarray(start, float)
     if mv.motion not in ("G2", "G3"):
         return np.vstack([start, mv.xyz])
-    cx, cy, r, a0, sweep = _arc_geometry(start, mv)
-    n = max(2, int(math.ceil(abs(sweep) * r / max_segment)) + 1)
-    t = np.linspace(0.0, 1.0, n)
-    ang = a0 + sweep * t
-    pts = np.column_stack([cx + r * np.cos(ang), cy + r * np.sin(ang), start[2] + (mv.z - start[2]) * t])
-    pts[-1] = mv.xyz
-    return pts
+    return sample_arc(start, mv.xyz, (start[0] + mv.i, start[1] + mv.j), mv.motion == "G3", max_segment)
 
 
 def to_polyline(moves: Sequence[Move], start=None, max_segment: float = 0.5):
@@ -306,7 +598,7 @@ def to_polyline(moves: Sequence[Move], start=None, max_segment: float = 0.5):
     cur = moves[0].xyz if start is None else np.asarray(start, float)
     pts, flags = [cur[None, :]], [np.array([False])]
     for mv in moves if start is not None else moves[1:]:
-        seg = sample_arc(cur, mv, max_segment)[1:]
+        seg = sample_move(cur, mv, max_segment)[1:]
         pts.append(seg)
         flags.append(np.full(len(seg), mv.motion == "G0"))
         cur = mv.xyz
@@ -325,7 +617,7 @@ def path_lengths(moves: Sequence[Move], start=None) -> dict:
             cur = mv.xyz
             continue
         if mv.motion in ("G2", "G3"):
-            _, _, r, _, sweep = _arc_geometry(cur, mv)
+            _, _, r, _, sweep = arc_geometry(cur, mv.xyz, (cur[0] + mv.i, cur[1] + mv.j), mv.motion == "G3")
             length = math.hypot(abs(sweep) * r, mv.z - cur[2])
         else:
             length = float(np.linalg.norm(mv.xyz - cur))
@@ -352,8 +644,6 @@ def linear_moves(points, feed: float, spindle: float | None = None, z: float | N
 def gcode_roundtrip_error(path, job, feeds=None, decimals=4):
     """Write the G-code, parse it back and compare: (max point distance mm, feed-length difference
     mm, text) — the parsed program must reproduce the path within the written decimals."""
-    from ..toolpath.pocket import to_gcode_moves
-
     moves = to_gcode_moves(path, job, feeds, decimals=decimals)
     text = write_gcode(moves, header="cnclab " + path.name.replace("(", "").replace(")", ""), decimals=decimals)
     back = parse_gcode(text, source=path.name)
@@ -361,8 +651,6 @@ def gcode_roundtrip_error(path, job, feeds=None, decimals=4):
     keep = np.r_[True, np.hypot(*np.diff(path.points, axis=0).T) > 10 ** -decimals]
     ref = path.points[keep]
     # every written cutting-depth point must lie on the path within rounding
-    from scipy.spatial import cKDTree
-
     d, _ = cKDTree(ref).query(cut_back)
     dl = abs(path_lengths(back)["feed"] - path_lengths(moves)["feed"])
     return float(d.max()), float(dl), text

@@ -29,9 +29,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cutting.speeds import feed_speed, spindle_speed
 from ..cutting.spindle_model import POINT_RULES, apply_acceleration_limit, feed_directions, working_diameters
-from ..geometry.mesh import FacetLocator, TriMesh, machined_surface_mask
-from .apt import AptProgram, CLPoints, fedrat, spindl
+from ..fileio import atomic_write
+from ..geometry.mesh import FacetLocator, TriMesh, machined_surface_mask, read_stl
+from ..toolpath.path import Move
+from .apt import AptProgram, CLPoints, GotoRun, fedrat, read_apt, spindl
+from .gcode import write_gcode
 
 __all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
            "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files",
@@ -104,7 +108,6 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
     feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule 'centroid' | 'nearest';
     point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s).
     """
-    from ..cutting.speeds import feed_speed, spindle_speed
 
     for name, v in (("tool_diameter", tool_diameter), ("a_p", a_p), ("v_c", v_c), ("f_z", f_z)):
         if not (np.isfinite(v) and v > 0):
@@ -164,7 +167,6 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
 
     Bulk GOTO runs of a parsed file are split only where a record is inserted (no per-point objects).
     """
-    from .apt import _GotoRun
 
     if rpm_threshold < 0 or vf_threshold < 0:
         raise ValueError(f"thresholds must be >= 0, got {rpm_threshold}, {vf_threshold}")
@@ -194,7 +196,7 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
     k = 0   # index into the expanded record list
     j = 0   # next target
     for it in program.items():
-        if isinstance(it, _GotoRun):
+        if isinstance(it, GotoRun):
             m = len(it)
             j1 = int(np.searchsorted(tgt, k + m, side="left"))
             a = 0
@@ -229,14 +231,12 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
 def to_gcode_moves(program: AptProgram):
     """RS274/NGC moves (:class:`cnclab.nc.gcode.Move`) of an APT program: G0 rapids, G1 feeds
     with the F and S in force."""
-    from .apt import _GotoRun
-    from .gcode import Move
 
     moves = []
     f = s = None
     rapid = False
     for r in program.items():
-        if isinstance(r, _GotoRun):
+        if isinstance(r, GotoRun):
             for x, y, z in r.xyz.tolist():
                 moves.append(Move("G0", x, y, z, spindle=s) if rapid else Move("G1", x, y, z, feed=f, spindle=s))
                 rapid = False
@@ -260,10 +260,6 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
 
     Inputs are never overwritten; nothing is written when any step fails. Returns a summary dict.
     """
-    from ..fileio import atomic_write
-    from ..geometry.mesh import read_stl
-    from .apt import read_apt
-    from .gcode import write_gcode
 
     t0 = time.perf_counter()
     steps = ["read STL", "read APT", "working diameter", "write"]

@@ -186,7 +186,7 @@ def _contains_any(kind, A, B, grid, x0, y0, h, x, y):
 
 @njit(cache=True)
 def _refine(kind, A, B, grid, x0, y0, h, cx, cy, r, psi0, a_in, b_in, ma_in, nq, bisections, out, n_out):
-    """Port of :func:`.common._refine_transitions` (n_sub = 256); appends the transitions to ``out``."""
+    """Port of :func:`.common.refine_transitions` (n_sub = 256); appends the transitions to ``out``."""
     n_sub = 256
     rounds = int(math.ceil(bisections / math.log2(n_sub))) - 1
     # first round: every transition in every bracket

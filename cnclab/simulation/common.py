@@ -64,7 +64,7 @@ def get_backend() -> str:
     return _BACKEND[0]
 
 
-def _resolve_backend(backend) -> str:
+def resolve_backend(backend) -> str:
     if backend is None:
         return _BACKEND[0]
     if backend not in BACKENDS:
@@ -86,14 +86,14 @@ class Engagement(NamedTuple):
     intervals: np.ndarray
 
 
-def _check_radius(tool_radius) -> float:
+def check_radius(tool_radius) -> float:
     r = float(tool_radius)
     if not (math.isfinite(r) and r > 0):
         raise ValueError(f"tool_radius must be a positive finite length in mm, got {tool_radius!r}")
     return r
 
 
-def _check_xy(xy, name: str) -> np.ndarray:
+def check_xy(xy, name: str) -> np.ndarray:
     a = np.asarray(xy, dtype=float)
     if a.shape != (2,) or not (math.isfinite(a[0]) and math.isfinite(a[1])):
         raise ValueError(f"{name} must be a finite (x, y) pair in mm, got {xy!r}")
@@ -181,7 +181,7 @@ def _unit_grid(n: int) -> np.ndarray:
     return u
 
 
-def _refine_transitions(contains, c, r, psi0, a, b, ma, bisections=16, n_sub=256):
+def refine_transitions(contains, c, r, psi0, a, b, ma, bisections=16, n_sub=256):
     """All material/air transitions on the tool circle inside angle brackets [a, b] (rad).
 
     ``ma`` is the state (in material?) at each ``a``; the state at ``b`` is its negation. Each
@@ -265,7 +265,7 @@ class StockBase:
         """Engagement of the tool circumference with the material (before cutting at ``center_xy``).
 
         The circumference (front half by default) is sampled every ~resolution/2 of arc length, each
-        material/air transition is refined on the membership test (:func:`_refine_transitions`:
+        material/air transition is refined on the membership test (:func:`refine_transitions`:
         the bracket shrunk by >= 2**bisections), and the engaged arcs are summed. Returns :class:`Engagement` (angles in degrees, intervals in radians).
 
         >>> from shapely.geometry import box
@@ -274,9 +274,9 @@ class StockBase:
         >>> round(st.engagement((5, 12), 3, (1, 0)).angle_deg)    # s = 1 mm: acos(1 - 1/3)
         48
         """
-        c = _check_xy(center_xy, "center_xy")
-        r = _check_radius(tool_radius)
-        f = _check_xy(feed_direction_xy, "feed_direction_xy")
+        c = check_xy(center_xy, "center_xy")
+        r = check_radius(tool_radius)
+        f = check_xy(feed_direction_xy, "feed_direction_xy")
         nf = math.hypot(*f)
         if nf == 0:
             raise ValueError("feed_direction_xy must be a non-zero vector")
@@ -297,7 +297,7 @@ class StockBase:
                               np.array([[lo, hi]]))
         k = np.flatnonzero(m[1:] != m[:-1])          # transition between psi[k] and psi[k+1]
         # all transitions in each bracket, refined by >= 2**bisections (a few vectorised rounds)
-        edges = _refine_transitions(self._contains, c, r, psi0, psi[k], psi[k + 1], m[k], bisections)
+        edges = refine_transitions(self._contains, c, r, psi0, psi[k], psi[k + 1], m[k], bisections)
         # build engaged intervals: start at lo if m[0], edges alternate rising/falling
         bounds = np.concatenate([[lo] if m[0] else [], edges, [hi] if m[-1] else []])
         return self._engagement_from_intervals(bounds.reshape(-1, 2))
@@ -394,7 +394,7 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
         raise ValueError(f"centres must be an (N, 2) array with N >= 2 (mm), got shape {P.shape}")
     if not np.all(np.isfinite(P)):
         raise ValueError("centres must be finite")
-    r = _check_radius(tool_radius)
+    r = check_radius(tool_radius)
     for name, v in (("a_p", a_p), ("feed_mm_min", feed_mm_min)):
         if not (math.isfinite(float(v)) and float(v) > 0):
             raise ValueError(f"{name} must be positive, got {v!r}")
@@ -419,7 +419,7 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
         raise ValueError(f"lag_mm must be >= 0, got {lag_mm!r}")
     s_cum = np.cumsum(ds)
     fz = math.nan if f_z is None else float(f_z)
-    be = _resolve_backend(backend)
+    be = resolve_backend(backend)
     plain = stock._plain()
     compiled = (be == "numba" and plain
                 and stock._simulate_compiled(P, d, ds, s_cum, r, lag, central, front_only, fz,

@@ -35,13 +35,14 @@ import math
 
 import numpy as np
 
-from .common import (Engagement, StockBase, _check_radius, _check_xy, _refine_transitions, _resolve_backend,
+from .common import (Engagement, StockBase, check_radius, check_xy, refine_transitions, resolve_backend,
                      simulate, simulate_runs)
 
 __all__ = ["Stock", "simulate", "simulate_runs", "Engagement", "scanline_intervals"]
 
 
-def _rings(polygon):
+def rings(polygon):
+    """Coordinate arrays (mm) of every exterior and interior ring of a shapely polygon or multipolygon."""
     from shapely.geometry import MultiPolygon, Polygon
 
     if isinstance(polygon, Polygon):
@@ -52,11 +53,11 @@ def _rings(polygon):
         raise ValueError(f"polygon must be a shapely Polygon or MultiPolygon, got {type(polygon).__name__}")
     if polygon.is_empty or not polygon.is_valid:
         raise ValueError("polygon must be a valid, non-empty shapely polygon")
-    rings = []
+    out = []
     for p in polys:
-        rings.append(np.asarray(p.exterior.coords, float))
-        rings += [np.asarray(i.coords, float) for i in p.interiors]
-    return rings
+        out.append(np.asarray(p.exterior.coords, float))
+        out += [np.asarray(i.coords, float) for i in p.interiors]
+    return out
 
 
 def scanline_intervals(polygon, y0: float, h: float, n_rows: int):
@@ -66,7 +67,7 @@ def scanline_intervals(polygon, y0: float, h: float, n_rows: int):
     (rows, a, b) arrays sorted by (row, a).
     """
     rows_l, xs_l = [], []
-    for ring in _rings(polygon):
+    for ring in rings(polygon):
         p, q = ring[:-1], ring[1:]
         ylo = np.minimum(p[:, 1], q[:, 1])
         yhi = np.maximum(p[:, 1], q[:, 1])
@@ -164,7 +165,7 @@ class Stock(StockBase):
         h = float(resolution_mm)
         if not (math.isfinite(h) and h > 0):
             raise ValueError(f"resolution_mm must be a positive length in mm, got {resolution_mm!r}")
-        _rings(polygon)
+        rings(polygon)
         minx, miny, maxx, maxy = polygon.bounds
         y0 = miny - float(margin_mm)
         n_rows = int(math.ceil((maxy + float(margin_mm) - y0) / h))
@@ -326,16 +327,16 @@ class Stock(StockBase):
         ``backend``: "numba" (compiled port, :func:`._kernels.dixel_engagement`), "numpy" (this
         code, the reference) or None (default of :func:`.common.set_backend`).
         """
-        be = _resolve_backend(backend)
+        be = resolve_backend(backend)
         if method == "sample":
             return super().engagement(center_xy, tool_radius, feed_direction_xy, front_only, **kw)
         if method != "rows":
             raise ValueError(f"method must be 'rows' or 'sample', got {method!r}")
         if kw.get("boundary", "polyline") not in ("polyline", "linear"):
             raise ValueError(f"boundary must be 'polyline' or 'linear', got {kw['boundary']!r}")
-        c = _check_xy(center_xy, "center_xy")
-        r = _check_radius(tool_radius)
-        f = _check_xy(feed_direction_xy, "feed_direction_xy")
+        c = check_xy(center_xy, "center_xy")
+        r = check_radius(tool_radius)
+        f = check_xy(feed_direction_xy, "feed_direction_xy")
         if math.hypot(*f) == 0:
             raise ValueError("feed_direction_xy must be a non-zero vector")
         if be == "numba":
@@ -431,7 +432,7 @@ class Stock(StockBase):
             else:
                 test = self._contains
             if kw_.size:
-                parts.append(_refine_transitions(test, c, r, psi0, p0[kw_], p1[kw_], ins[k[kw_]],
+                parts.append(refine_transitions(test, c, r, psi0, p0[kw_], p1[kw_], ins[k[kw_]],
                                                  kw.get("bisections", 16)))
             edges = np.sort(np.concatenate(parts))
         bounds = np.concatenate([pe[:1] if ins[0] else [], edges, pe[-1:] if ins[-1] else []])
@@ -460,7 +461,7 @@ class Stock(StockBase):
         >>> j.tolist(), round(float(np.sum(2 * w * 0.5)) / math.pi, 12)
         ([8, 9, 10, 11], 1.0)
         """
-        r = _check_radius(tool_radius)
+        r = check_radius(tool_radius)
         j0, j1, w = self._rows_of_disk(float(cy), r)
         return np.arange(j0, j1, dtype=np.int64), w
 
@@ -472,9 +473,9 @@ class Stock(StockBase):
         ``backend="numpy"``: vectorised over the rows (the reference); "numba": the compiled loop
         :func:`._kernels.dixel_cut`; None: the default of :func:`.common.set_backend`.
         """
-        cx, cy = _check_xy(center_xy, "center_xy")
-        r = _check_radius(tool_radius)
-        if _resolve_backend(backend) == "numba":
+        cx, cy = check_xy(center_xy, "center_xy")
+        r = check_radius(tool_radius)
+        if resolve_backend(backend) == "numba":
             from . import _kernels as K
 
             while True:

@@ -23,8 +23,8 @@ import math
 
 import numpy as np
 
-from .common import Engagement, StockBase, _check_radius, _check_xy, _resolve_backend, simulate
-from .dixel import _rings, scanline_intervals
+from .common import Engagement, StockBase, check_radius, check_xy, resolve_backend, simulate
+from .dixel import rings, scanline_intervals
 
 __all__ = ["Stock", "simulate", "Engagement"]
 
@@ -43,7 +43,7 @@ class Stock(StockBase):
         h = float(resolution_mm)
         if not (math.isfinite(h) and h > 0):
             raise ValueError(f"resolution_mm must be a positive length in mm, got {resolution_mm!r}")
-        _rings(polygon)
+        rings(polygon)
         minx, miny, maxx, maxy = polygon.bounds
         m = float(margin_mm)
         x0, y0 = minx - m, miny - m
@@ -100,14 +100,14 @@ class Stock(StockBase):
         ``backend``: "numpy" (the sampling reference of :class:`StockBase`), "numba" (its compiled
         port :func:`._kernels.pixel_engagement`) or None (default of :func:`.common.set_backend`).
         """
-        if _resolve_backend(backend) == "numpy":
+        if resolve_backend(backend) == "numpy":
             return super().engagement(center_xy, tool_radius, feed_direction_xy, front_only, n_samples,
                                       bisections)
         from . import _kernels as K
 
-        c = _check_xy(center_xy, "center_xy")
-        r = _check_radius(tool_radius)
-        f = _check_xy(feed_direction_xy, "feed_direction_xy")
+        c = check_xy(center_xy, "center_xy")
+        r = check_radius(tool_radius)
+        f = check_xy(feed_direction_xy, "feed_direction_xy")
         if math.hypot(*f) == 0:
             raise ValueError("feed_direction_xy must be a non-zero vector")
         iv = K.pixel_engagement(self.grid, self.x0, self.y0, self.resolution_mm, float(c[0]), float(c[1]), r,
@@ -121,9 +121,9 @@ class Stock(StockBase):
         ``backend``: "numpy" (vectorised over the bounding window, the reference), "numba" (the
         compiled per-row loop :func:`._kernels.pixel_cut`) or None (default of :func:`.common.set_backend`).
         """
-        cx, cy = _check_xy(center_xy, "center_xy")
-        r = _check_radius(tool_radius)
-        if _resolve_backend(backend) == "numba":
+        cx, cy = check_xy(center_xy, "center_xy")
+        r = check_radius(tool_radius)
+        if resolve_backend(backend) == "numba":
             from . import _kernels as K
 
             return int(K.pixel_cut(self.grid, self.x0, self.y0, self.resolution_mm, float(cx), float(cy), r))

@@ -18,9 +18,14 @@ from ...cutting import scallop_volume as sv
 from ...paths import data_path
 from ...simulation.heightfield import HeightField
 from ...nc import gcode
+from ...nc.program import write_program
 from ...toolpath import zigzag
+from ...toolpath.path import Tool, ToolPath
 
 ROWS = tuple(f"r{i}" for i in range(1, 9))
+#: spindle speed [rpm] of the written Table 3 program: a placeholder (the paper gives none, as for the
+#: feed; no length depends on it) so that the program starts the spindle before cutting
+TABLE3_SPINDLE_RPM = 8000.0
 
 
 @functools.cache
@@ -106,8 +111,10 @@ def table3_program(covering: bool = True, decimals: int = 3) -> tuple[list, str]
 
     ``covering=True``: passes until the last one lies at y ≥ 50 mm (52 passes, Fig. 9's
     "N107 X100 Y50.744"); ``False``: the Table 1 loop as printed (``for i = 1:n/2``).
-    Plunge (0,0,10)→(0,0,0) and retract at feed, rapid back to (0,0,10). Feed 500 mm/min is a
-    placeholder (the paper gives none; lengths do not depend on it).
+    Plunge (0,0,10)→(0,0,0) and retract at feed, rapid back to (0,0,10). Feed 500 mm/min and
+    spindle :data:`TABLE3_SPINDLE_RPM` are placeholders (the paper gives none; lengths do not depend
+    on them). Written by :func:`cnclab.nc.program.write_program` (start block, ``S.. M3`` before
+    cutting, ``M5 M30``); clearance plane z = 10 mm (the printed approach height).
     """
     s = _table3_setup()
     row = table2_recomputed().loc[f"r{s['table2_row_used']}"]
@@ -117,8 +124,10 @@ def table3_program(covering: bool = True, decimals: int = 3) -> tuple[list, str]
     else:
         pts = zigzag.hoang_table1_points(0.0, 0.0, w, L, row.Sz, row.Fr_printed_convention)
     moves = zigzag.zigzag_program(pts, z_cut=0.0, z_clear=10.0, feed=500.0)
-    text = gcode.write_gcode(moves, header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"],
-                             decimals=decimals)
+    rt = float(table2_printed().loc[f"r{s['table2_row_used']}", "RT_mm"])  # ball radius [mm]
+    path = ToolPath.from_moves(moves, tool=Tool(2 * rt, corner_radius=rt))
+    text = write_program(path, clearance_z=10.0, spindle_rpm=TABLE3_SPINDLE_RPM, top_z=0.0,
+                         header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"], decimals=decimals)
     return gcode.parse_gcode(text, source="table3.nc"), text
 
 

@@ -14,6 +14,7 @@ import numpy as np
 from cnclab.geometry import engagement as eng
 from cnclab.geometry.contours import Arc, Blob
 from cnclab.toolpath import constant_engagement as ce
+from cnclab.simulation import dixel, pixel
 
 R_TOOL = 3.0          # mm, Ø6 mm tool of Table 4.1
 THETA = 60.0          # deg, engagement angle of Table 4.1
@@ -90,8 +91,6 @@ def simulated_constant_curvature(kind: str, resolution_mm: float = 0.02, rho: fl
     """
     from shapely import affinity
     from shapely.geometry import Point, box
-
-    from cnclab.simulation import dixel
 
     r, h = R_TOOL, resolution_mm
     s = float(eng.stepover_thesis1(THETA, rho, r, kind))
@@ -204,8 +203,6 @@ def dixel_data_exponent() -> float:
     """Fitted exponent k of (elements touched per disk cut) ~ resolution^-k, dixel model (rows of the stock)."""
     from shapely.geometry import box
 
-    from cnclab.simulation import dixel
-
     hs = np.array([0.2, 0.1, 0.05, 0.02, 0.01])
     n = []
     for h in hs:
@@ -219,8 +216,6 @@ def pixel_data_exponent() -> float:
     """Same for the pixel model (pixels whose centres fall in the disk)."""
     from shapely.geometry import box
 
-    from cnclab.simulation import pixel
-
     hs = np.array([0.2, 0.1, 0.05, 0.02, 0.01])
     n = []
     for h in hs:
@@ -232,8 +227,6 @@ def pixel_data_exponent() -> float:
 def dixel_disk_area_ratio() -> float:
     """Modelled dixel disk area / (pi r^2) at a coarse 0.25 mm resolution (exact by construction)."""
     from shapely.geometry import box
-
-    from cnclab.simulation import dixel
 
     st = dixel.Stock.from_polygon(box(0, 0, 10, 10), 0.25)
     return st.cut_disk((5.0, 5.13), R_TOOL) / (math.pi * R_TOOL ** 2)
@@ -275,8 +268,6 @@ def engagement_error(model: str, case, resolution_mm: float, feed_direction: str
     ``model``: "dixel" or "pixel". The last step is excluded (no central difference there).
     Returns ``(errors array, per-step DataFrame)``.
     """
-    from cnclab.simulation import dixel, pixel
-
     mod = {"dixel": dixel, "pixel": pixel}[model]
     _, poly, P, th = case
     df = mod.simulate(mod.Stock.from_polygon(poly, resolution_mm), P, R_TOOL, 1.0, 1000.0,

@@ -18,6 +18,9 @@ import math
 
 from cnclab.paths import data_path
 from cnclab.runtime import pick
+from cnclab.toolpath.pocket import load_pocket
+from cnclab.toolpath import pocket as pk
+from cnclab.toolpath.trochoidal import compare_patterns, pattern_sweep
 
 
 @functools.cache
@@ -43,8 +46,6 @@ def mrr_nominal() -> float:
 @functools.cache
 def star_job():
     """The designed star pocket job (:class:`cnclab.toolpath.pocket.PocketJob`)."""
-    from cnclab.toolpath.pocket import load_pocket
-
     return load_pocket(data_path("jacso2021", "star_pocket.json"))
 
 
@@ -99,8 +100,6 @@ def star_strategies(resolution_mm=None):
     """
     import pandas as pd
 
-    from cnclab.toolpath import pocket as pk
-
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     job = star_job()
     hp = pk.hybrid_path(job, res)
@@ -134,8 +133,6 @@ def hybrid_mrr_error_pct() -> float:
 @functools.cache
 def trochoid_comparison(width_mm=12.0, theta_max_deg=60.0, resolution_mm=None):
     """Thesis IV: the three patterns at one engagement limit (Ø6 tool, links at 1500 mm/min)."""
-    from cnclab.toolpath.trochoidal import compare_patterns
-
     t = table41()
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     return compare_patterns(width_mm, 0.5 * t["tool_diameter_mm"], theta_max_deg, res, a_p=t["a_p_mm"],
@@ -149,8 +146,6 @@ def trochoid_sweep(resolution_mm=None):
     Fast mode: W/r = 4, theta_max in {45, 60} deg; full: W/r in {3, 4, 5, 6} x theta_max in
     {30, 45, 60, 75, 90} deg. Gains are reported with links at 1500 mm/min and with every move at
     the cutting feed (``mrr_gain_same_feed_vs_*``)."""
-    from cnclab.toolpath.trochoidal import pattern_sweep
-
     t = table41()
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     wr = pick((3.0, 4.0, 5.0, 6.0), (4.0,))
@@ -172,8 +167,6 @@ def user_pockets(resolution_mm=None):
     chosen ``max_wall_share``.
     """
     import pandas as pd
-
-    from cnclab.toolpath import pocket as pk
 
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     rows, out = [], {}

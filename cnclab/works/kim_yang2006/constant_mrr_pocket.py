@@ -103,7 +103,7 @@ def _cut_polylines(moves, max_segment):
     polys, cur, prev = [], [], None
     for mv in moves:
         if prev is not None and mv.z < 0 and prev[2] < 0:
-            seg = gcode.sample_arc(prev, mv, max_segment)[1:]
+            seg = gcode.sample_move(prev, mv, max_segment)[1:]
             cur.extend(seg[:, :2])
         elif mv.z < 0:
             cur = [mv.xyz[:2]]

@@ -31,11 +31,13 @@ import pandas as pd
 
 from ... import __version__
 from ...analysis import response_surface as rs
-from ...analysis.doe import full_factorial
+from ...analysis.doe import full_factorial, interaction_means, main_effects
 from ...analysis.error_stats import STAT_NAMES, difference_stats
 from ...claims import Interval
 from ...fileio import atomic_write
 from ...paths import DATA_DIR, data_path
+from ...geometry.ball_end import tangent_point_diameters
+from ...analysis.mlp import train_mlp
 
 # ----------------------------------------------------------------------------------- Table 6-1
 #: Table 6-1 levels, in the printed order (the plan's first factor varies slowest).
@@ -66,8 +68,6 @@ def working_diameters(D, a_p, A_N2, A_f_rel, sign: float = 1.0, offset_deg: floa
     >>> round(float(d1), 4), round(float(d2), 4)
     (3.4117, 3.4117)
     """
-    from ...geometry.ball_end import tangent_point_diameters
-
     return tangent_point_diameters(D, a_p, sign * np.asarray(A_f_rel, dtype=float) + offset_deg, A_N2, 0.0)
 
 
@@ -306,8 +306,6 @@ def ann_runs(model: str, n_seeds: int = N_SEEDS, trainer: str = "lm", max_epochs
 
     Returns a tuple of :class:`cnclab.analysis.mlp.TrainedMLP`.
     """
-    from ...analysis.mlp import train_mlp
-
     if model not in ARCHITECTURES:
         raise ValueError(f"model must be one of {list(ARCHITECTURES)}, got {model!r}")
     df = dataset()
@@ -465,8 +463,6 @@ def surrogate_features(df: pd.DataFrame) -> np.ndarray:
 @functools.cache
 def surrogate_runs(n_seeds: int = 3, hidden: tuple = (20, 20), max_epochs: int = 400) -> tuple:
     """Train the surrogate: features of :func:`surrogate_features` → tanh (20, 20) → ``D_eff/D``; LM."""
-    from ...analysis.mlp import train_mlp
-
     df = dataset()
     X, Y = surrogate_features(df), df[list(OUTPUTS)].to_numpy() / df[["D"]].to_numpy()
     return tuple(train_mlp(X, Y, hidden=hidden, activation="tansig", trainer="lm", seed=s,
@@ -534,8 +530,6 @@ def fig_main_effects(df: pd.DataFrame | None = None, response: str = "D_eff1"):
     """Figure 6-2: mean working diameter at each level of each factor (MiniTab main-effects plot)."""
     import matplotlib.pyplot as plt
 
-    from ...analysis.doe import main_effects
-
     df = dataset() if df is None else df
     me = main_effects(df, INPUTS, response)
     fig, axes = plt.subplots(1, 4, figsize=(11, 3), sharey=True)
@@ -551,8 +545,6 @@ def fig_main_effects(df: pd.DataFrame | None = None, response: str = "D_eff1"):
 def fig_interactions(df: pd.DataFrame | None = None, response: str = "D_eff1"):
     """Figure 6-3: interaction plot matrix (row factor on x, one line per level of the column factor)."""
     import matplotlib.pyplot as plt
-
-    from ...analysis.doe import interaction_means
 
     df = dataset() if df is None else df
     n = len(INPUTS)

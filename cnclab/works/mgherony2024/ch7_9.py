@@ -14,14 +14,19 @@ import json
 import numpy as np
 import pandas as pd
 
+from ...claims import Interval
 from ...cutting.speeds import cutting_speed, feed_speed, spindle_speed
+from ...cutting.spindle_model import feed_directions, working_diameters
 from ...geometry.ball_end import horizontal_effective_diameter, tangent_point_diameters
 from ...geometry.freeform_part import FreeformPart, freeform_part_mesh
 from ...geometry.mesh import FacetLocator, machined_surface_mask, read_stl, write_stl
+from ...nc import apt
+from ...nc.apt import reordered_program
+from ...nc.spindle_control import spindle_schedule
 from ...paths import build_dir, data_path
 from ...runtime import pick
-from ...nc import apt
 from ...toolpath.dropcutter import zigzag_finishing_path
+from ...toolpath.reorder import ReorderResult, densify, path_metrics, reorder_path
 
 DIRECTIONS = (0.0, 22.5, 45.0, 67.5, 90.0)
 
@@ -74,11 +79,23 @@ def zigzag_apt(feed_angle_deg: float, a_e: float = 0.25, step_mm: float | None =
     return str(path)
 
 
+def sample_ch8_apt() -> apt.AptProgram:
+    """The committed sample CL file ``data/mgherony2024/sample_ch8_zigzag_Af0.apt`` (its recipe): the
+    test part on a 2 mm grid, drop-cut zig-zag (D = 10 ball, a_e = 1 mm, A_f = 0, 2 mm step), Table 7-1
+    n and v_f, approach at Z30 and feed down (:func:`cnclab.nc.apt.cl_program`)."""
+    tp = parameters()["table7_1"]
+    passes = zigzag_finishing_path(surface_mesh(2.0), tp["D"], 1.0, 0.0, step=2.0)
+    return apt.cl_program(passes, tp["v_f"], tp["n"], tp["D"], clearance_z=30.0, partno="SAMPLE_CH8_AF0")
+
+
+def write_sample_ch8_apt(path=None):
+    """Regenerate the sample CL file (default: its place in data/mgherony2024/) atomically."""
+    return apt.write_apt(path or data_path("mgherony2024", "sample_ch8_zigzag_Af0.apt"), sample_ch8_apt())
+
+
 @functools.cache
 def schedule(feed_angle_deg: float, point: str = "thesis", a_e: float = 0.25, accel_rpm_s: float | None = None):
     """Post-process the A_f zig-zag (read from disk) against the STL (read from disk), Table 7-1 data."""
-    from ...nc.spindle_control import spindle_schedule
-
     tp = parameters()["table7_1"]
     cl = apt.read_apt(zigzag_apt(feed_angle_deg, a_e)).cl_points()
     return spindle_schedule(read_stl(part_stl()), cl, tool_diameter=tp["D"], a_p=tp["a_p"], v_c=tp["v_c"],
@@ -137,8 +154,6 @@ def vc_min_at_2000() -> float:
 @functools.cache
 def analytic_deff_range(feed_angle_deg: float = 0.0, point: str = "max") -> tuple[float, float]:
     """(min, max) working diameter (mm) over the reconstructed part's exact normals (fine grid)."""
-    from ...cutting.spindle_model import working_diameters
-
     P = part()
     x, y = np.meshgrid(np.linspace(0, 50, 401), np.linspace(0, 50, 401))
     nrm = P.normal_at(x.ravel(), y.ravel())
@@ -204,8 +219,6 @@ def ch9_points(step_mm: float | None = None):
 
     Returns ``(dense (N, 3) mm, normals (N, 3), {"corner": i, "middle": j})``.
     """
-    from ...toolpath.reorder import densify
-
     t = parameters()["table9_1"]
     cl = apt.read_apt(ch9_original_apt(step_mm)).cl_points()
     dense, _ = densify(cl.xyz[~cl.rapid], t["a_e"])
@@ -218,8 +231,6 @@ def ch9_points(step_mm: float | None = None):
 
 def original_deff(direction: str = "move", step_mm: float | None = None) -> np.ndarray:
     """D_eff (mm) along the original path: A_f = direction of each move ("move") or 90 deg ("constant")."""
-    from ...cutting.spindle_model import feed_directions, working_diameters
-
     t = parameters()["table9_1"]
     dense, nrm, _ = ch9_points(step_mm)
     af = np.full(len(dense), float(t["A_f"])) if direction == "constant" else feed_directions(dense)
@@ -233,8 +244,6 @@ def reorder_cases(direction: str = "move", step_mm: float | None = None, neighbo
     Default = the Sec. 9.2 reading: k nearest neighbours (visited ones tabu), D_eff of a neighbour for
     the direction of the move to it. Returns ``(table, dense points, {case: ReorderResult})``.
     """
-    from ...toolpath.reorder import ReorderResult, path_metrics, reorder_path
-
     t = parameters()["table9_1"]
     dense, nrm, starts = ch9_points(step_mm)
     d0 = original_deff(direction, step_mm)
@@ -329,8 +338,6 @@ def deff_direction_spread(step_mm: float | None = None) -> dict:
     """Why the move reading keeps its heading: over the sloped points of the chapter 9 cloud, the median
     spread (max - min, mm) of D_eff over the 8 grid directions 0, 45, ..., 315 deg, against the median
     non-zero |Delta D_eff| between consecutive points of the original path at the constant A_f = 90."""
-    from ...cutting.spindle_model import working_diameters
-
     t = parameters()["table9_1"]
     dense, nrm, _ = ch9_points(step_mm)
     slope = np.abs(nrm[:, 2]) < np.cos(np.radians(1.0))
@@ -344,8 +351,6 @@ def deff_direction_spread(step_mm: float | None = None) -> dict:
 def reordered_apt(case: int = 1, direction: str = "move") -> str:
     """Write the Table 9-2 ``case`` reordered path as an APT file into build/ (jumps: retract, rapid,
     plunge) and return its path; Table 9-1 feed and n = 2000 rpm."""
-    from ...nc.apt import reordered_program
-
     t = parameters()["table9_1"]
     _, dense, orders = reorder_cases(direction)
     prog = reordered_program(dense, orders[case], feed_mm_min=t["v_f"], spindle_rpm=parameters()["table7_1"]["n"],
@@ -386,8 +391,6 @@ def vf_peak_ratio() -> float:
 @functools.cache
 def vc_controlled_range():
     """Fig 7-18: actual cutting speed (m/min) after control over the A_f = 0 pipeline, as an Interval."""
-    from ...claims import Interval
-
     v = schedule(0.0).v_c_actual
     return Interval(float(v.min()), float(v.max()))
 
@@ -413,8 +416,6 @@ def thesis4_mean_ratio_hi_interval():
     """Thesis 4 highest per-direction mean-Rz ratio (%): the in-text extremes (controlled max 2.0 um and
     constant min 3.7 um, both at 0 deg) make the 0-deg ratio the highest; Interval over the rounding of
     the printed values to 0.1 um: [1.95/3.75, 2.05/3.65]."""
-    from ...claims import Interval
-
     rz = parameters()["ch8_rz"]
     c, k = rz["ctrl_mean_0deg"], rz["const_mean_0deg"]
     return Interval(100 * (c - 0.05) / (k + 0.05), 100 * (c + 0.05) / (k - 0.05))

@@ -1,0 +1,64 @@
+"""``python -m cnclab plan JOB.json -o PROGRAM.ngc [--strategy NAME]``
+
+Plan a pocket job with one of the collection's 2.5D strategies
+(:func:`cnclab.toolpath.planners.plan`, default constant engagement) and write it as a machine-safe
+program (:func:`cnclab.nc.program.write_program`: start block, ``T.. M6``, ``S.. M3`` before cutting,
+rapids only at the clearance plane or in cleared area, ``M5 M30``). The program is checked
+(:func:`cnclab.nc.program.check_program`) before it is written; the job file is never overwritten;
+the output is written atomically. Errors exit with code 2 and a message naming the file.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..fileio import atomic_write
+from .program import check_program, write_program
+
+try:  # toolpath-core's modules (issue 12); guarded until that branch is merged
+    from ..toolpath.job import load_job
+    from ..toolpath.planners import plan
+    _MISSING = None
+except ImportError as exc:  # pragma: no cover - depends on the merge state
+    load_job = plan = None
+    _MISSING = str(exc)
+
+__all__ = ["main", "plan_program"]
+
+
+def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False) -> Path:
+    """Plan ``job_file`` with ``strategy`` (None: the planner's default) and write the program to
+    ``out``; returns the output path. Raises ``ValueError`` when the written program fails the
+    static safety check (nothing is written then)."""
+    if load_job is None or plan is None:
+        raise RuntimeError("cnclab plan needs cnclab.toolpath.job and cnclab.toolpath.planners "
+                           f"(issue 12, toolpath-core), not available: {_MISSING}")
+    job_file, out = Path(job_file), Path(out)
+    job = load_job(job_file)
+    path = plan(job) if strategy is None else plan(job, strategy)
+    name = strategy or path.info.get("strategy", "default")
+    text = write_program(path, job, header=[f"cnclab plan {job_file.name} strategy {name}"])
+    chk = check_program(text, clearance_z=job.clearance_z, top_z=getattr(job, "top_z", 0.0), source=str(out))
+    unsafe = [e for e in chk.errors if "plunge into material" not in e]
+    if unsafe:
+        raise ValueError(f"{out}: the planned program fails the safety check: " + "; ".join(unsafe[:5]))
+    atomic_write(out, text, inputs=[job_file])
+    if not quiet:
+        print(f"wrote {out}: {len(path)} moves, strategy {name}, entries {chk.entries}, "
+              f"plunges below the stock top marked cleared or none: {chk.plunges_into_material == 0}")
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m cnclab plan", description=__doc__.split("\n\n")[1])
+    ap.add_argument("job", help="pocket job JSON (data/jacso2021/*.json format)")
+    ap.add_argument("-o", "--output", required=True, help="program to write (.ngc)")
+    ap.add_argument("--strategy", default=None, help="planner name (default: constant engagement)")
+    args = ap.parse_args(argv)
+    try:
+        plan_program(args.job, args.output, args.strategy)
+    except (ValueError, OSError, RuntimeError, KeyError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0

@@ -1,0 +1,148 @@
+"""``python -m cnclab programs [-o build/gcode] [--work W]``: every NC program the collection produces.
+
+Writes one RS274/NGC file per program to ``build/gcode/<work>/<name>.ngc``, all through the one
+safe writer :func:`cnclab.nc.program.write_program` (start block, tool change, ``S.. M3`` before the
+first cut, rapids only at the clearance plane or straight up, ``M5 M30``), and a
+``build/gcode/manifest.json`` with, per program, the clearance plane, stock top, rapid rate and the
+path's own time (:meth:`ToolPath.time_s`) that ``make gcode-check`` compares with LinuxCNC's
+``rs274``. Programs of every work and strategy:
+
+* hoang2024 — Table 3 constant-volume zig-zag (covering) and the Table 1 loop as printed;
+* kim_yang2006 — original and modified constant-MRR contour-parallel paths, constant-engagement
+  clearing of the same pocket;
+* jacso2021 — hybrid, contour-parallel and zig-zag on the star, rectangle and L pockets;
+* mgherony2024 — the ch. 8 drop-cut zig-zag finishing path at the five feed directions.
+
+A program whose path the writer refuses (a rapid below the clearance plane that the path does not
+mark as cleared, a non-finite number) is not written; its error goes into the manifest and the
+command exits with 1. Fast mode (``CNCLAB_FAST=1``) uses the coarse settings of the notebooks.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..fileio import atomic_write
+from ..nc.apt import read_apt
+from ..nc.program import path_from_moves, write_program
+from ..nc.spindle_control import to_gcode_moves as apt_to_moves
+from ..paths import build_dir, data_path
+from ..runtime import fast_mode, pick
+from ..toolpath import pocket as pk
+from ..toolpath.path import Tool, ToolPath
+from .hoang2024 import constant_volume as cv
+from .jacso2021 import thesis4_star_pocket as t4
+from .kim_yang2006 import ce_comparison as kyce
+from .kim_yang2006 import constant_mrr_pocket as ky
+from .mgherony2024 import ch7_9
+
+__all__ = ["PROGRAM_RECIPES", "write_programs", "main"]
+
+#: rapid traverse rate [mm/min] stated for every written program's time (the issue's 10 m/min)
+RAPID_MM_MIN = 10000.0
+
+
+def _hoang(covering):
+    def make():
+        moves, text = cv.table3_program(covering=covering, decimals=3)
+        return text, {"clearance_z": 10.0, "top_z": 0.0, "path": ToolPath.from_moves(moves)}
+    return make
+
+
+def _ky(which):
+    def make():
+        c = ky.conditions()
+        moves, _ = ky.program(which) if which != "ce" else kyce.ce_program()
+        path = path_from_moves(moves, tool=Tool(2 * ky.tool_radius()))
+        hdr = [f"Kim and Yang 2006 pocket 120 x 85 mm: {which} path, tool D{2 * ky.tool_radius():g} flat"]
+        text = write_program(path, clearance_z=5.0, spindle_rpm=c["spindle_rpm"], header=hdr)
+        return text, {"clearance_z": 5.0, "top_z": 0.0, "path": path}
+    return make
+
+
+def _jacso(job_file, strategy):
+    def make():
+        job = pk.load_pocket(data_path("jacso2021", job_file))
+        res = pick(0.05, 0.1)
+        sp = {"hybrid": lambda: pk.hybrid_path(job, res), "contour-parallel": lambda: pk.contour_parallel_path(job),
+              "zig-zag": lambda: pk.zigzag_path(job)}[strategy]()
+        path = path_from_moves(pk.to_gcode_moves(sp, job), tool=Tool(job.tool_diameter, flutes=job.teeth))
+        hdr = [f"Jacso 2021 section 4: {strategy} on {job_file}, tool D{job.tool_diameter:g} flat"]
+        text = write_program(path, clearance_z=5.0, spindle_rpm=job.spindle_rpm, header=hdr)
+        return text, {"clearance_z": 5.0, "top_z": 0.0, "path": path}
+    return make
+
+
+def _mgherony(angle):
+    def make():
+        tp = ch7_9.parameters()["table7_1"]
+        moves = apt_to_moves(read_apt(ch7_9.zigzag_apt(angle)))
+        path = path_from_moves(moves, tool=Tool(tp["D"], corner_radius=0.5 * tp["D"], flutes=tp["teeth"]))
+        hdr = [f"Mgherony 2024 ch. 8 drop-cut zig-zag finishing, A_f = {angle:g} deg, D{tp['D']:g} ball"]
+        on_part = path.xyz[(~path.is_kind("rapid")) & (path.xyz[:, 2] < 30.0), 2]
+        top = float(on_part.max())   # the part's highest CL point: the stock top of a finishing path
+        text = write_program(path, clearance_z=30.0, spindle_rpm=tp["n"], top_z=top, header=hdr)
+        return text, {"clearance_z": 30.0, "top_z": top, "path": path}
+    return make
+
+
+PROGRAM_RECIPES = {
+    "hoang2024": {"table3_constant_volume_zigzag": _hoang(True), "table1_loop_as_printed": _hoang(False)},
+    "kim_yang2006": {"constant_mrr_original": _ky("original"), "constant_mrr_modified": _ky("modified"),
+                     "constant_engagement": _ky("ce")},
+    "jacso2021": {f"{job[:-5]}_{s}": _jacso(job, s) for job in ("star_pocket.json", "rectangle_pocket.json",
+                                                                "l_pocket.json")
+                  for s in ("hybrid", "contour-parallel", "zig-zag")},
+    "mgherony2024": {f"ch8_zigzag_Af{a:g}": _mgherony(a) for a in ch7_9.DIRECTIONS},
+}
+
+
+def write_programs(outdir=None, works=None, quiet=False) -> dict:
+    """Write every program (or those of ``works``) under ``outdir`` (default ``build/gcode``);
+    returns the manifest ``{work/name: {...}}`` (also written as ``manifest.json``)."""
+    outdir = Path(outdir) if outdir is not None else build_dir() / "gcode"
+    manifest = {"rapid_mm_min": RAPID_MM_MIN, "fast_mode": fast_mode(), "programs": {}}
+    for work, recipes in PROGRAM_RECIPES.items():
+        if works and work not in works:
+            continue
+        for name, make in recipes.items():
+            key = f"{work}/{name}"
+            t0 = time.perf_counter()
+            try:
+                text, meta = make()
+            except ValueError as exc:
+                manifest["programs"][key] = {"error": str(exc)}
+                if not quiet:
+                    print(f"{key}: NOT WRITTEN: {exc}", file=sys.stderr)
+                continue
+            path = meta.pop("path")
+            f = atomic_write(outdir / work / f"{name}.ngc", text)
+            t = path.time_s(RAPID_MM_MIN)
+            L = path.lengths()
+            manifest["programs"][key] = {"file": str(f.relative_to(outdir)), **meta,
+                                         "path_feed_mm": L["feed_mm"], "path_time_s": t["total_s"],
+                                         "moves": len(path)}
+            if not quiet:
+                print(f"{key}: {len(path)} moves, feed {L['feed_mm']:.1f} mm, path time {t['total_s']:.1f} s "
+                      f"({time.perf_counter() - t0:.1f} s to plan)")
+    atomic_write(outdir / "manifest.json", json.dumps(manifest, indent=1) + "\n")
+    return manifest
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m cnclab programs", description=__doc__.split("\n\n")[0])
+    ap.add_argument("-o", "--outdir", default=None, help="output folder (default build/gcode)")
+    ap.add_argument("--work", action="append", default=None, help="only this work (repeatable)")
+    args = ap.parse_args(argv)
+    man = write_programs(args.outdir, args.work)
+    bad = [k for k, v in man["programs"].items() if "error" in v]
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,142 @@
+"""Machine-safe programs (cnclab.nc.program): start block, spindle, clearance rapids, end, checker."""
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from cnclab.nc.gcode import parse_gcode, program_time, read_gcode
+from cnclab.nc.program import START_BLOCK, check_program, save_program, write_program
+from cnclab.toolpath.path import Tool, ToolPath
+
+FREECAD = Path(__file__).parent / "fixtures" / "freecad"
+
+
+def _pocket_path(tag_rapid=""):
+    """Helix entry at (0,0), a cut, a rapid at depth (tagged or not), a cut, retract."""
+    pts = [[3, 0, 1], [3, 0, -0.75], [3, 0, -1.5], [13, 0, -1.5], [13, 5, -1.5], [20, 5, -1.5], [20, 5, 2]]
+    kind = ["rapid", "helix", "helix", "cut", "rapid", "cut", "retract"]
+    arc = [0, 3, 3, 0, 0, 0, 0]
+    ctr = [[np.nan] * 2, [0, 0], [0, 0], [np.nan] * 2, [np.nan] * 2, [np.nan] * 2, [np.nan] * 2]
+    tag = ["", "", "", "", tag_rapid, "", ""]
+    return ToolPath.build(pts, kind=kind, tag=tag, feed=400, arc=arc, arc_center=ctr, tool=Tool(6, number=3))
+
+
+def test_start_block_tool_spindle_and_end():
+    text = write_program(_pocket_path("cleared"), clearance_z=5, spindle_rpm=6366)
+    lines = text.splitlines()
+    assert lines[2] == START_BLOCK
+    assert lines[3] == "T3 M6"
+    assert lines[4] == "S6366 M3"
+    assert lines[5].startswith("G0 X3.0000 Y0.0000 Z5.0000")   # over the first point at the clearance plane
+    assert lines[6].startswith("G1 Z1.0000")                    # fed down to the first point, never rapid
+    assert lines[-3:] == ["M5", "M30", "%"]
+    chk = check_program(text, clearance_z=5)
+    assert chk.ok, chk.errors
+    # the feed down to the first point (z 5 -> 1) is a plunge in air; the helix turns are the entry
+    assert chk.entries == {"helix": 2, "ramp": 0, "plunge": 1} and chk.plunges_into_material == 0
+
+
+def test_rapid_below_clearance_needs_the_cleared_tag():
+    with pytest.raises(ValueError, match="move 4: rapid from z -1.5 to z -1.5 mm below the clearance plane"):
+        write_program(_pocket_path(""), clearance_z=5, spindle_rpm=6000)
+    text = write_program(_pocket_path("cleared"), clearance_z=5, spindle_rpm=6000)
+    assert "G0 Y5.0000 (cleared)" in text
+    # the checker refuses the same block without its mark
+    bad = text.replace(" (cleared)", "")
+    chk = check_program(bad, clearance_z=5)
+    assert chk.rapids_below_clearance == 1 and "word G0: rapid below the clearance plane" in chk.errors[0]
+
+
+def test_written_time_is_the_path_time():
+    """The program's time (read back, feed moves at F, rapids at the stated rate) equals the path's
+    ToolPath.time_s plus the approach/retract the writer adds (computed here by hand)."""
+    path = _pocket_path("cleared")
+    text = write_program(path, clearance_z=5, spindle_rpm=6000, decimals=6)
+    t = program_time(parse_gcode(text), rapid_mm_min=10000)
+    ts = path.time_s(10000)
+    feed_down = 60 * (5 - 1) / 400          # G1 from the clearance plane to the first point
+    retract_up = 60 * (5 - 2) / 10000       # final G0 from z 2 up to the clearance plane
+    assert t["total_s"] == pytest.approx(ts["total_s"] + feed_down + retract_up, rel=1e-9)
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("G21\nG0 X0 Y0 Z5\nG1 Z-1 F100\nM5\nM30\n", "feed move before the spindle is started"),
+    ("G21\nS1000 M3\nG0 X0 Y0 Z5\nG0 Z-1\nM5\nM30\n", "word G0: rapid below the clearance plane"),
+    ("G21\nS1000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 Z5\nM5\n", "no program end"),
+    ("G21\nS1000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 Z5\nM30\n", "the spindle is not stopped"),
+    ("G21\nS1000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 Z5\nM5\nM30\n", "plunge into material"),
+    ("G21\nS1000 M3\nG0 X0 Y0 Z1\nG1 X1 F100\nM5\nM30\n", "the first move ends below the clearance plane"),
+])
+def test_checker_finds_each_violation(text, fragment):
+    chk = check_program(text, clearance_z=5, source="c.ngc")
+    assert not chk.ok
+    assert any(fragment in e for e in chk.errors), chk.errors
+
+
+def test_checker_accepts_marked_plunge_and_counts_ramps():
+    text = ("G21\nS1000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100 (cleared: start hole)\nG1 X5 Z-2\nG2 X5 Y0 Z-3 I1 J0\n"
+            "G0 Z5\nM5\nM30\n")
+    chk = check_program(text, clearance_z=5)
+    assert chk.ok, chk.errors
+    assert chk.entries == {"helix": 1, "ramp": 1, "plunge": 1} and chk.plunges_into_material == 0
+
+
+def test_freecad_adaptive_rapids_at_depth_are_reported():
+    """FreeCAD Adaptive links inside the cleared area with G0 at the cutting depth (keep-tool-down);
+    the static checker cannot prove those are in cleared area and reports each of them (the
+    simulator must judge them: cnclab analyze). Everything else in the program is safe."""
+    text = (FREECAD / "star_pocket_adaptive_linuxcnc.ngc").read_text()
+    chk = check_program(text, clearance_z=3.0, source="star")
+    assert chk.spindle_on_before_cut and chk.end_word == "M2"
+    assert chk.rapids_below_clearance > 0
+    assert all("word G0: rapid below the clearance plane Z3 (z -3 -> -3 mm)" in e for e in chk.errors)
+    assert chk.entries["helix"] == 5 and chk.plunges_into_material == 0
+
+
+@given(st.lists(st.tuples(st.floats(-40, 40), st.floats(-40, 40)), min_size=1, max_size=12),
+       st.floats(0.2, 6), st.integers(4, 80).map(lambda q: q / 4), st.sampled_from([2, 3, 4]))
+@settings(max_examples=40, deadline=None)
+def test_written_programs_always_pass_the_checker(xy, depth, clear, decimals):
+    """Any path of ramp entry + cuts + retract is written as a program that passes the checker and
+    reads back to the same feed length (within the written precision). Clearance planes on a 0.25 mm
+    grid: written exactly at every precision."""
+    x0, y0 = xy[0]
+    pts = [[x0, y0, clear + 1], [x0 + 1, y0, -depth]] + [[x, y, -depth] for x, y in xy] + [[xy[-1][0], xy[-1][1], clear]]
+    kind = ["rapid", "ramp"] + ["cut"] * len(xy) + ["retract"]
+    path = ToolPath.build(pts, kind=kind, feed=500)
+    text = write_program(path, clearance_z=clear, spindle_rpm=10000, decimals=decimals)
+    chk = check_program(text, clearance_z=clear)
+    assert chk.ok, chk.errors
+    back = program_time(parse_gcode(text), rapid_mm_min=5000)
+    tol = len(pts) * 2 * math.sqrt(3) * 0.5 * 10.0 ** -decimals
+    assert back["feed_mm"] == pytest.approx(path.lengths()["feed_mm"], abs=tol)
+
+
+def test_save_program_is_atomic_and_never_overwrites_inputs(tmp_path):
+    job = tmp_path / "job.json"
+    job.write_text("{}")
+    with pytest.raises(ValueError, match="refusing to overwrite"):
+        save_program(_pocket_path("cleared"), job, clearance_z=5, spindle_rpm=6000, inputs=[job])
+    assert job.read_text() == "{}"
+    out = save_program(_pocket_path("cleared"), tmp_path / "p.ngc", clearance_z=5, spindle_rpm=6000)
+    assert read_gcode(out.read_text()).end_word == "M30"
+
+
+def test_bad_parameters():
+    with pytest.raises(ValueError, match="spindle_rpm"):
+        write_program(_pocket_path("cleared"), clearance_z=5)
+    with pytest.raises(ValueError, match="clearance_z"):
+        write_program(_pocket_path("cleared"), clearance_z=-1, spindle_rpm=100)
+
+
+def test_plunge_tagged_cleared_is_written_as_such():
+    pts = [[0, 0, 5], [0, 0, -2], [10, 0, -2], [10, 0, 5]]
+    p = ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], tag=["", "cleared", "", ""], feed=300)
+    text = write_program(p, clearance_z=5, spindle_rpm=5000)
+    assert "G1 Z-2.0000 F300.0 (cleared)" in text
+    assert check_program(text, clearance_z=5).ok
+    untagged = write_program(ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], feed=300),
+                             clearance_z=5, spindle_rpm=5000)
+    assert check_program(untagged, clearance_z=5).plunges_into_material == 1
