@@ -26,6 +26,8 @@ from ..simulation import pixel
 from ..toolpath import constant_engagement as ce
 from ..toolpath import constant_mrr as cm
 from ..toolpath import offsets, trochoidal
+from ..works.kim_yang2006 import constant_mrr_pocket as ky_pocket
+from ..works.mgherony2024 import ch7_9
 
 __all__ = ["thesis1_scene", "thesis1_curves", "CE_CONTOURS", "ce_contour", "ce_growth_scene",
            "TROCHOID_PATTERNS", "trochoid_scene", "kim_yang_scene", "hoang_scene",
@@ -192,9 +194,7 @@ def trochoid_scene(pattern, step_mm, width_mm, tool_radius_mm, theta_deg=60.0, n
 # ---------------------------------------------------------------------------------- Kim & Yang
 def kim_yang_pocket(scale=0.5) -> Polygon:
     """Kim & Yang's 120 x 85 mm test pocket (cnclab's design) scaled by ``scale`` about its origin."""
-    from ..works.kim_yang2006.constant_mrr_pocket import pocket
-
-    return affinity.scale(pocket(), scale, scale, origin=(0, 0))
+    return affinity.scale(ky_pocket.pocket(), scale, scale, origin=(0, 0))
 
 
 def _with_spiral_entry(p, pitch_mm):
@@ -320,8 +320,6 @@ def spindle_scene(feed_angle_deg, point="thesis"):
     """Chapter 8 spindle schedule along the zig-zag at feed direction ``feed_angle_deg`` (one of
     :data:`cnclab.works.mgherony2024.ch7_9.DIRECTIONS`), computed by the ch. 7-9 pipeline from the
     STL and APT files it writes (fast-mode resolution under ``CNCLAB_FAST=1``)."""
-    from ..works.mgherony2024 import ch7_9
-
     if float(feed_angle_deg) not in ch7_9.DIRECTIONS:
         raise ValueError(f"feed_angle_deg must be one of {ch7_9.DIRECTIONS} deg, got {feed_angle_deg!r}")
     sc = ch7_9.schedule(float(feed_angle_deg), point)

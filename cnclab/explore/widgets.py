@@ -21,6 +21,7 @@ import io
 import ipywidgets as W
 import numpy as np
 
+from ..works.mgherony2024.ch7_9 import DIRECTIONS
 from . import draw, scenes
 
 __all__ = ["Explorer", "slider", "choice", "thesis1_explorer", "ce_growth_explorer", "trochoid_explorer",
@@ -228,8 +229,6 @@ def cusp_explorer():
 
 def spindle_explorer():
     """Mgherony ch. 8: controlled spindle speed along the zig-zag for each feed direction."""
-    from ..works.mgherony2024.ch7_9 import DIRECTIONS
-
     def describe(sc):
         s = sc["summary"]
         return (f"A_f = {sc['feed_angle_deg']:g}°: n from <b>{s['n_min']:.0f}</b> to <b>{s['n_max']:.0f} rpm</b>, D_eff {s['d_eff_min']:.2f}–"
