@@ -40,7 +40,9 @@ Design (the ideas and where they come from; the code is cnclab's own)
 * **Finish**: one contour pass along every ring of the tool-centre region (outer rings
   counter-clockwise, islands clockwise: climb milling), started where the ring is already free of
   material, takes the thin rests the passes left against the walls (thinner than ``a_e`` where the
-  passes reached the walls).
+  passes reached the walls); it runs under the same engagement control with the target raised by
+  ``finish_margin_deg`` (8 deg: inside the theta + 10 deg bound) so that the corner wedges are
+  peeled instead of refused.
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
@@ -399,7 +401,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                       depth: float | None = None, start_hole=None, link_feed_mm_min: float = 1500.0,
                       clearance_z: float = 5.0, top_z: float = 0.0, spindle_rpm: float | None = None,
                       tool: Tool | None = None, resolution_mm: float | None = None, step_mm: float | None = None,
-                      helix_angle_deg: float = 5.0, finish: bool = True, source: str = "<pocket>",
+                      helix_angle_deg: float = 5.0, finish: bool = True, finish_margin_deg: float = 8.0, source: str = "<pocket>",
                       max_passes: int = 5000) -> ToolPath:
     """Engagement-controlled clearing of ``pocket`` (see the module docstring); a :class:`ToolPath`.
 
@@ -407,7 +409,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     level (mm); ``depth`` total depth (mm, default ``a_p``; levels of at most ``a_p``);
     ``start_hole`` None or (x, y, diameter) mm of a pre-drilled hole; feeds mm/min; z in mm
     (stock top ``top_z``); ``resolution_mm`` planning pixel (default r/60); ``step_mm`` path step
-    (default r/30); ``source`` names the job in error messages.
+    (default r/30); ``finish_margin_deg``: the wall-following finish is held at ``theta +
+    finish_margin_deg`` (it takes the wedges the passes could not reach at ``theta``); ``source``
+    names the job in error messages.
     """
     t_start = time.perf_counter()
     if not isinstance(pocket, (Polygon, MultiPolygon)) or pocket.is_empty or not pocket.is_valid:
@@ -432,6 +436,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             raise PlanningError(f"{source}: a region of the pocket (area {part.area:.1f} mm^2) is narrower "
                                 f"than the tool (diameter {2 * r:g} mm)")
     target = math.radians(theta_deg)
+    target_finish = math.radians(theta_deg + finish_margin_deg)
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
     n_samp = 90
     turn = math.radians(90.0)
@@ -463,11 +468,14 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 stats["retracts"] += 1
                 cur = None
 
-        def enter():
-            """Entry where the tool-centre region still has material within reach; False if none."""
+        def enter(banned=None):
+            """Entry where the tool-centre region still has material within reach: True; False if
+            none; None when the only place left is too narrow for a helix (it is then banned)."""
             nonlocal cur
             D, Ac = g.free_field()
             need = Ac & (D < r)       # tool disk touches material there
+            if banned is not None:
+                need &= ~banned
             if not need.any():
                 return False
             # the farthest point from the tool-centre region's boundary among those cells
@@ -480,6 +488,10 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             if comp:
                 rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
             rho = max(min(0.5 * r, 0.9 * rho_max - h), 0.0)
+            if rho < 0.02 and banned is not None and not (hole is not None and lev == 0 and stats["entries"] == 0):
+                rad = int(math.ceil(2 * r / g.hc))
+                banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+                return None
             retract()
             if hole is not None and lev == 0 and stats["entries"] == 0:
                 c = np.array(hole[:2])
@@ -554,7 +566,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             border = Ac & (D >= r_free) & (D < r_free + 1.5 * g.hc) & ~banned
             end = link_to(border, D, Ac, r_free) if border.any() else None
             if end is None:
-                if not (Ac & (D < r) & ~banned).any() or not enter():
+                if not (Ac & (D < r) & ~banned).any():
+                    break
+                if enter(banned) is False:
                     break
                 continue
             # heading: along the material boundary, material on the right
@@ -575,7 +589,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 add((q[0], q[1], z), "cut", feed_mm_min)
             cur = (float(P[-1, 0]), float(P[-1, 1]))
         if finish:
-            for part in shapely.get_parts(allowed):
+            for part in shapely.get_parts(allowed.buffer(-1.5 * h)):   # inside the grid mask
                 part = orient(part, 1.0)
                 for ring in [part.exterior, *part.interiors]:
                     R = np.asarray(ring.coords)[:-1]
@@ -610,7 +624,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     # the wall-following pass: the same engagement control, sliding along the wall
                     L_ring = float(np.hypot(*np.diff(Rs, axis=0).T).sum())
                     hd = math.atan2(Rs[1, 1] - Rs[0, 1], Rs[1, 0] - Rs[0, 0])
-                    P, _, _ = _pass(g.M, g.A, g.x0, g.y0, h, r, Rs[0, 0], Rs[0, 1], hd, target, ds, lag,
+                    P, _, _ = _pass(g.M, g.A, g.x0, g.y0, h, r, Rs[0, 0], Rs[0, 1], hd, target_finish, ds, lag,
                                     int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
                                     min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds)
                     for q in P[1:]:
