@@ -48,8 +48,10 @@ Design (the ideas and where they come from; the code is cnclab's own)
 
 >>> from shapely.geometry import box
 >>> tp = adaptive_clearing(box(0, 0, 24, 18), tool_radius=3, theta_deg=60, a_p=1, feed_mm_min=255)
->>> sorted(set(tp.kinds()) - {"rapid", "retract"})
-['cut', 'helix', 'link']
+>>> sorted(set(tp.kinds()))
+['cut', 'helix', 'link', 'plunge', 'rapid', 'retract']
+>>> bool(np.all(tp.xyz[tp.is_kind("plunge"), 2] >= 0.0))   # the only plunge ends on the stock top (air)
+True
 """
 from __future__ import annotations
 
