@@ -403,7 +403,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                       depth: float | None = None, start_hole=None, link_feed_mm_min: float = 1500.0,
                       clearance_z: float = 5.0, top_z: float = 0.0, spindle_rpm: float | None = None,
                       tool: Tool | None = None, resolution_mm: float | None = None, step_mm: float | None = None,
-                      helix_angle_deg: float = 5.0, finish: bool = True, finish_margin_deg: float = 8.0, source: str = "<pocket>",
+                      helix_angle_deg: float = 5.0, finish: bool = True, finish_margin_deg: float = 8.0, finish_laps: int = 3, source: str = "<pocket>",
                       max_passes: int = 5000) -> ToolPath:
     """Engagement-controlled clearing of ``pocket`` (see the module docstring); a :class:`ToolPath`.
 
@@ -413,7 +413,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     (stock top ``top_z``); ``resolution_mm`` planning pixel (default r/60); ``step_mm`` path step
     (default r/30); ``finish_margin_deg``: the wall-following finish is held at ``theta +
     finish_margin_deg`` (it takes the wedges the passes could not reach at ``theta``); ``source``
-    names the job in error messages.
+    names the job in error messages; ``finish_laps``: at most so many wall-following laps per ring,
+    a further lap only while material deeper than max(0.3 mm, a_e/4) is left along the ring.
     """
     t_start = time.perf_counter()
     if not isinstance(pocket, (Polygon, MultiPolygon)) or pocket.is_empty or not pocket.is_valid:
@@ -438,6 +439,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             raise PlanningError(f"{source}: a region of the pocket (area {part.area:.1f} mm^2) is narrower "
                                 f"than the tool (diameter {2 * r:g} mm)")
     target = math.radians(theta_deg)
+    a_e = r * (1 - math.cos(target))
     target_finish = math.radians(theta_deg + finish_margin_deg)
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
     n_samp = 90
@@ -592,46 +594,56 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             cur = (float(P[-1, 0]), float(P[-1, 1]))
         if finish:
             for part in shapely.get_parts(allowed.buffer(-1.5 * h)):   # inside the grid mask
+                wall = shapely.boundary(allowed.buffer(-1e-6))   # the exact tool-centre limit
                 part = orient(part, 1.0)
                 for ring in [part.exterior, *part.interiors]:
                     R = np.asarray(ring.coords)[:-1]
                     if len(R) < 3:
                         continue
                     Rs = _resample(np.vstack([R, R[:1]]), ds)[:-1]
-                    D, Ac = g.free_field()
-                    jj = np.clip(((Rs[:, 1] - g.y0) // g.hc).astype(int), 0, D.shape[0] - 1)
-                    ii = np.clip(((Rs[:, 0] - g.x0) // g.hc).astype(int), 0, D.shape[1] - 1)
-                    dm = D[jj, ii]
-                    if dm.min() > r + g.hc:      # nothing left along this ring
-                        continue
-                    k0 = int(np.argmax(dm))
-                    Rs = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
-                    goal = np.zeros_like(Ac)
-                    goal[jj[k0], ii[k0]] = True
-                    if cur is not None:
-                        Acx = Ac.copy(); Acx[jj[k0], ii[k0]] = True
-                        Dx = D.copy(); Dx[jj[k0], ii[k0]] = max(D[jj[k0], ii[k0]], r_free)
-                        e = link_to(goal, Dx, Acx, r_free)
-                    else:
-                        e = None
-                    if e is None:
-                        retract()
-                        add((Rs[0, 0], Rs[0, 1], clearance_z), "rapid")
-                        if dm[k0] >= r:          # free of material under the tool: feed down into cleared area
-                            add((Rs[0, 0], Rs[0, 1], z), "plunge", feed_mm_min, "cleared")
+                    for lap in range(finish_laps):   # repeated while the corner wedges are peeled
+                        D, Ac = g.free_field()
+                        jj = np.clip(((Rs[:, 1] - g.y0) // g.hc).astype(int), 0, D.shape[0] - 1)
+                        ii = np.clip(((Rs[:, 0] - g.x0) // g.hc).astype(int), 0, D.shape[1] - 1)
+                        dm = D[jj, ii]
+                        if dm.min() > (r + g.hc if lap == 0 else r - max(0.3, 0.25 * a_e)):
+                            break                # nothing (more) to take along this ring
+                        k0 = int(np.argmax(dm))
+                        Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
+                        goal = np.zeros_like(Ac)
+                        goal[jj[k0], ii[k0]] = True
+                        if cur is not None:
+                            Acx = Ac.copy(); Acx[jj[k0], ii[k0]] = True
+                            Dx = D.copy(); Dx[jj[k0], ii[k0]] = max(D[jj[k0], ii[k0]], r_free)
+                            e = link_to(goal, Dx, Acx, r_free)
                         else:
-                            raise PlanningError(f"{source}: no cleared place to start the finishing pass")
-                    else:
-                        add((Rs[0, 0], Rs[0, 1], z), "link", link_feed_mm_min)
-                    # the wall-following pass: the same engagement control, sliding along the wall
-                    L_ring = float(np.hypot(*np.diff(Rs, axis=0).T).sum())
-                    hd = math.atan2(Rs[1, 1] - Rs[0, 1], Rs[1, 0] - Rs[0, 0])
-                    P, _, _ = _pass(g.M, g.A, g.x0, g.y0, h, r, Rs[0, 0], Rs[0, 1], hd, target_finish, ds, lag,
-                                    int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
-                                    min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds)
-                    for q in P[1:]:
-                        add((q[0], q[1], z), "cut", feed_mm_min, "finish")
-                    cur = (float(P[-1, 0]), float(P[-1, 1]))
+                            e = None
+                        if e is None:
+                            retract()
+                            add((Rl[0, 0], Rl[0, 1], clearance_z), "rapid")
+                            if dm[k0] >= r:          # free of material under the tool: feed down into cleared area
+                                add((Rl[0, 0], Rl[0, 1], z), "plunge", feed_mm_min, "cleared")
+                            else:
+                                raise PlanningError(f"{source}: no cleared place to start the finishing pass")
+                        else:
+                            add((Rl[0, 0], Rl[0, 1], z), "link", link_feed_mm_min)
+                        # the wall-following pass: the same engagement control, sliding along the wall
+                        L_ring = float(np.hypot(*np.diff(Rl, axis=0).T).sum())
+                        hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
+                        P, _, _ = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
+                                        int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
+                                        min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds)
+                        # points the grid kept within 2 h of the wall go onto the exact wall
+                        # (the grid mask is shrunk by h/2 for safety: no skin is left on the walls)
+                        pp = shapely.points(P)
+                        near = shapely.distance(wall, pp) < 2.0 * h
+                        if near.any():
+                            snapped = shapely.line_interpolate_point(wall, shapely.line_locate_point(wall, pp[near]))
+                            P = P.copy()
+                            P[near] = shapely.get_coordinates(snapped)
+                        for q in P[1:]:
+                            add((q[0], q[1], z), "cut", feed_mm_min, "finish")
+                        cur = (float(P[-1, 0]), float(P[-1, 1]))
         retract()
     if not pts:
         raise PlanningError(f"{source}: nothing to machine")
