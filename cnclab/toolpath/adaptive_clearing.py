@@ -143,9 +143,10 @@ def _inside(Amask, x0, y0, h, x, y):
 def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len=1e18):
     """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end).
 
-    Returns (points (n, 2), removed area mm^2, reason): 0 left the region, 1 stuck (cannot lower
-    the engagement), 2 air, 3 step limit."""
+    Returns (points (n, 2), removed area mm^2, reason, engagement (n,) rad of each step): reason 0
+    left the region, 1 stuck (cannot lower the engagement), 2 air, 3 step limit."""
     P = np.empty((max_steps + 1, 2))
+    E = np.zeros(max_steps + 1)
     P[0, 0] = sx
     P[0, 1] = sy
     n = 1
@@ -215,13 +216,14 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             air = 0.0
         P[n, 0] = qx
         P[n, 1] = qy
+        E[n] = e
         s[n] = s[n - 1] + ds
         n += 1
         phi = psi
     while k_cut < n:
         removed += _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
         k_cut += 1
-    return P[:n].copy(), removed, reason
+    return P[:n].copy(), removed, reason, E[:n].copy()
 
 
 @njit(cache=True)
@@ -439,6 +441,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             raise PlanningError(f"{source}: a region of the pocket (area {part.area:.1f} mm^2) is narrower "
                                 f"than the tool (diameter {2 * r:g} mm)")
     target = math.radians(theta_deg)
+    air_rad = math.radians(0.5)   # a step whose front half meets less than 0.5 deg of material is air
     a_e = r * (1 - math.cos(target))
     target_finish = math.radians(theta_deg + finish_margin_deg)
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
@@ -583,14 +586,15 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 banned[j, i] = True
                 continue
             heading = math.atan2(gy, gx) - 0.5 * math.pi
-            P, removed, reason = _pass(g.M, g.A, g.x0, g.y0, h, r, cur[0], cur[1], heading, target, ds, lag,
+            P, removed, reason, E = _pass(g.M, g.A, g.x0, g.y0, h, r, cur[0], cur[1], heading, target, ds, lag,
                                        20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)))
             stats["passes"] += 1
             if removed < 0.2 * r * h or len(P) < 2:
                 rad = int(math.ceil(r / g.hc))
                 banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
-            for q in P[1:]:
-                add((q[0], q[1], z), "cut", feed_mm_min)
+            for q, e in zip(P[1:], E[1:]):
+                air_step = e < air_rad       # nothing in front of the tool: a link at the link feed
+                add((q[0], q[1], z), "link" if air_step else "cut", link_feed_mm_min if air_step else feed_mm_min)
             cur = (float(P[-1, 0]), float(P[-1, 1]))
         if finish:
             for part in shapely.get_parts(allowed.buffer(-1.5 * h)):   # inside the grid mask
@@ -630,7 +634,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         # the wall-following pass: the same engagement control, sliding along the wall
                         L_ring = float(np.hypot(*np.diff(Rl, axis=0).T).sum())
                         hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
-                        P, _, _ = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
+                        P, _, _, E = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
                                         int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
                                         min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds)
                         # points the grid kept within 2 h of the wall go onto the exact wall
@@ -641,8 +645,10 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                             snapped = shapely.line_interpolate_point(wall, shapely.line_locate_point(wall, pp[near]))
                             P = P.copy()
                             P[near] = shapely.get_coordinates(snapped)
-                        for q in P[1:]:
-                            add((q[0], q[1], z), "cut", feed_mm_min, "finish")
+                        for q, e in zip(P[1:], E[1:]):
+                            air_step = e < air_rad
+                            add((q[0], q[1], z), "link" if air_step else "cut",
+                                link_feed_mm_min if air_step else feed_mm_min, "finish")
                         cur = (float(P[-1, 0]), float(P[-1, 1]))
         retract()
     if not pts:
