@@ -442,9 +442,9 @@ def _strict_values(word: str, args, where: str) -> list:
         t = a.strip()
         if NUMBER_RE.fullmatch(t):
             vals.append(float(t))
+        elif _NONFINITE_RE.fullmatch(t):
+            raise AptError(f"{where}: {word} has a non-finite value {t!r}")
         elif word in ("GOTO", "FROM", "CIRCLE"):
-            if _NONFINITE_RE.fullmatch(t):
-                raise AptError(f"{where}: {word} has a non-finite value {t!r}")
             raise AptError(f"{where}: {word} value {a!r} is not a number")
         elif not _WORD_RE.fullmatch(t):
             raise AptError(f"{where}: {word} argument {a!r} is neither a number "

@@ -14,11 +14,15 @@ import math
 import sys
 import warnings
 
+from .apt import NUMBER_RE
+
 
 def _number(name, lo=None, lo_open=True, hi=None, kind=float):
     """argparse type: a finite number in the range (message names the option)."""
     def conv(text):
         try:
+            if not NUMBER_RE.fullmatch(text.strip()) and text.strip().lower() not in ("nan", "inf", "-inf", "+inf"):
+                raise ValueError(text)      # strict grammar: no '1_0', no hex, no full-width digits
             v = kind(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{name} must be {'an integer' if kind is int else 'a number'}, "
