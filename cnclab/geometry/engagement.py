@@ -191,7 +191,7 @@ def theta_kim_yang(s, R, tool_radius):
     r must be the tool radius (mm), R the machined corner radius (mm), s the path distance
     (stepover, mm). Identical to :func:`theta_concave` with rho = R - s.
 
-    >>> round(float(theta_kim_yang(1.5, 9.5, 3.0) - theta_concave(1.5, 8.0, 3.0)), 12)
+    >>> abs(round(float(theta_kim_yang(1.5, 9.5, 3.0) - theta_concave(1.5, 8.0, 3.0)), 12))
     0.0
     """
     _shapes(s=s, R=R, tool_radius=tool_radius)

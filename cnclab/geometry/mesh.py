@@ -306,7 +306,8 @@ def orient_facets(triangles, rule: str = "auto"):
         raise ValueError(f"orient must be 'auto' or 'keep', got {rule!r}")
     if F == 0:
         return tri, np.zeros(0, bool), info
-    _, vid = np.unique(tri.reshape(-1, 3), axis=0, return_inverse=True)
+    flat = np.ascontiguousarray(tri.reshape(-1, 3)) + 0.0          # + 0.0: -0.0 welds with 0.0
+    _, vid = np.unique(flat.view(np.dtype((np.void, 24))).ravel(), return_inverse=True)
     V = vid.reshape(F, 3)
     a = V.ravel()
     b = V[:, [1, 2, 0]].ravel()
