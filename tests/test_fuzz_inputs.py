@@ -42,7 +42,7 @@ from cnclab.nc import apt
 from cnclab.nc import spindle_control as sc
 
 OUTCOMES: collections.Counter = collections.Counter()
-FUZZ = settings(max_examples=120, deadline=None, derandomize=True, database=None,
+FUZZ = settings(max_examples=120, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 
@@ -181,6 +181,8 @@ def _stl_cases():
         "ascii overflow 1e999": (asc.replace(f"vertex {float(T[1, 0, 0])!r}", "vertex 1e999", 1), "error", r":\d+: non-finite"),
         "degenerate facet": (_ascii(np.concatenate([T, [[[0, 0, 0], [1, 1, 1], [2, 2, 2]]]])), "error", r":\d+: facet \d+ has zero area"),
         "binary degenerate": (_binary(np.concatenate([T, [[[0, 0, 0], [0, 0, 0], [1, 0, 0]]]])), "error", r"\(facet \d+\): facet \d+ has zero area"),
+        "binary duplicated facet": (_binary(np.concatenate([T, T[2:3]])), "error", r"\(facet \d+\): facet \d+ repeats facet 2"),
+        "ascii duplicated facet reversed": (_ascii(np.concatenate([T, T[2:3, ::-1]])), "error", r":\d+: facet \d+ repeats facet 2"),
         "empty file": (b"", "error", "empty STL"),
         "whitespace only": (b"  \n\n", "error", "empty STL"),
         "solid without facets": (b"solid x\nendsolid x\n", "error", "no facets"),
@@ -556,7 +558,7 @@ def _apt_mutation(draw):
     return "\n".join(lines)
 
 
-@settings(max_examples=250, deadline=None, derandomize=True, database=None,
+@settings(max_examples=250, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(text=_apt_mutation())
 def test_fuzz_apt(tmp_path_factory, text):
@@ -660,7 +662,7 @@ def test_api_bad_input_names_the_parameter(name):
     OUTCOMES[("api", "error")] += 1
 
 
-@settings(max_examples=80, deadline=None, derandomize=True, database=None)
+@settings(max_examples=80, deadline=None)
 @given(s=st.floats(0, 6), rho=st.one_of(st.floats(1e-3, 1e12), st.just(np.inf)), kind=st.sampled_from(["concave", "convex"]))
 def test_fuzz_engagement_never_nan(s, rho, kind):
     """Any (s, rho): an engagement angle in [0, 180] or a ValueError naming the domain; never NaN."""

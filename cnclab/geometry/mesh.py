@@ -389,15 +389,20 @@ def orient_facets(triangles, rule: str = "auto"):
         for c in cand:
             f = big[c]
             n = cross[f] / areas[f]
-            o = t2[f].T @ np.array([0.31, 0.33, 0.36])
-            d = n + 1e-4 * np.array([0.37, 0.59, 0.23])
-            up_hits = _ray_hits(o, d, t2, exclude=f)
-            down_hits = _ray_hits(o, -d, t2, exclude=f)
-            if up_hits % 2 != down_hits % 2:
-                turn[c] = up_hits % 2 == 1
+            o = t2[f].mean(axis=0)                       # independent of the vertex order
+            sgn = 1.0 if n @ _RAY_W >= 0 else -1.0       # canonical direction: same rays either winding
+            d = sgn * n + 1e-4 * _RAY_W
+            along = _ray_hits(o, d, t2, exclude=f)
+            against = _ray_hits(o, -d, t2, exclude=f)
+            if along % 2 != against % 2:                 # material on exactly one side
+                inside = along % 2 == 1 if sgn > 0 else against % 2 == 1
+                turn[c] = inside
     flip = flip ^ turn[comp]
     out = np.where(flip[:, None, None], tri[:, ::-1], tri)
     return out, flip, info
+
+
+_RAY_W = np.array([0.37, 0.59, 0.23]) / np.linalg.norm([0.37, 0.59, 0.23])
 
 
 def _ray_hits(o, d, tri, exclude=-1) -> int:
@@ -436,7 +441,9 @@ def read_stl(path, degenerate: str = "error", orient: str = "auto", orient_up: b
     orient_up : additionally flip every facet whose normal has N_z < 0 (open height fields with folds).
 
     Raises ``ValueError`` (:class:`STLError`) naming the file (and the line for ASCII, the facet for
-    binary) on an empty, truncated, oversized or garbled file, non-finite coordinates or zero-area facets.
+    binary) on an empty, truncated, oversized or garbled file, non-finite coordinates, zero-area
+    facets or repeated facets (same three corners; ``degenerate="drop"`` drops both kinds, counted in
+    ``info["dropped_degenerate"]`` / ``info["dropped_duplicate"]``).
 
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "t.stl"
@@ -477,6 +484,18 @@ def read_stl(path, degenerate: str = "error", orient: str = "auto", orient_up: b
         raise STLError(f"{where(k)}: {str(exc).split(': ', 1)[1]}") from None
     if mesh.info["dropped_degenerate"]:
         stored = stored[facet_areas(tri) > 1e-12 * max(float(np.ptp(tri.reshape(-1, 3), axis=0).max()), 1e-300) ** 2]
+    key = np.sort(np.ascontiguousarray(mesh.triangles + 0.0).view(np.dtype((np.void, 24))).reshape(-1, 3), axis=1)
+    _, first, inv = np.unique(key.view(np.dtype((np.void, 72))).ravel(), return_index=True, return_inverse=True)
+    dup = np.flatnonzero(first[inv.ravel()] != np.arange(len(key)))
+    if dup.size and degenerate == "error":
+        k, j = int(dup[0]), int(first[inv.ravel()[dup[0]]])
+        raise STLError(f"{where(k)}: facet {k} repeats facet {j} (same three corners; {dup.size} duplicate "
+                       "facet(s); pass degenerate='drop' to skip them)")
+    if dup.size:
+        keep = np.ones(len(key), bool)
+        keep[dup] = False
+        mesh.triangles, mesh.normals, stored = mesh.triangles[keep], mesh.normals[keep], stored[keep]
+    mesh.info["dropped_duplicate"] = int(dup.size)
     t2, flipped, oinfo = orient_facets(mesh.triangles, orient)
     mesh.triangles = t2
     mesh.normals = facet_normals(t2)
