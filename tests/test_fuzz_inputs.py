@@ -610,6 +610,10 @@ def _api_cases():
                                  r"v_c_m_min, diameter_mm"),
         "spindle_speed d=0": (lambda: __import__("cnclab.cutting.speeds", fromlist=["x"]).spindle_speed(63, 0), r"diameter_mm"),
         "feed_speed teeth 2.7": (lambda: __import__("cnclab.cutting.speeds", fromlist=["x"]).feed_speed(0.1, 2.7, 1000), r"teeth"),
+        "cusp_height_turning feed nan": (lambda: _cusp().cusp_height_turning(np.nan, 1.0), r"feed must be finite"),
+        "cusp_height_turning shapes": (lambda: _cusp().cusp_height_turning([0.1, 0.2], [1, 2, 3]), r"spacing and corner_radius"),
+        "cusp_height_zlevel A=180": (lambda: _cusp().cusp_height_zlevel(0.1, 1.0, 180), r"inclination A"),
+        "cusp spacing > 2 RE": (lambda: _cusp().cusp_height_from_spacing(3.0, 1.0), r"spacing must be <= 2"),
         "schedule teeth 2.7": (lambda: _sched(teeth=2.7), r"teeth"),
         "schedule v_c nan": (lambda: _sched(v_c=np.nan), r"v_c"),
         "schedule a_p -1": (lambda: _sched(a_p=-1), r"a_p"),
@@ -629,6 +633,11 @@ def _api_cases():
 
 _FLAT = (tessellate_heightfield(lambda x, y: 0 * x, (0, 20), (0, 20), 4, 4),
          apt.cl_program([np.array([[x, 10.0, 0.0] for x in np.linspace(2, 18, 9)])], 500, 2000, 10, 30))
+
+
+def _cusp():
+    from cnclab.geometry import cusp
+    return cusp
 
 
 def _sched(**kw):
