@@ -903,3 +903,21 @@ def test_error_is_printed_on_its_own_line(tmp_path, capsys):
     err_lines = [ln for ln in out.err.replace("\r", "\n").splitlines() if "error:" in ln]
     assert err_lines and all(ln.startswith("error:") for ln in err_lines), out.err
     OUTCOMES[("cli", "error")] += 1
+
+
+def test_path_surface_deviation_is_exact_on_a_closed_part():
+    """The part/path check's distance equals brute force over all facets (walls and bottom included)."""
+    from cnclab.geometry.freeform_part import FreeformPart, freeform_part_mesh
+    from cnclab.geometry.mesh import closest_point_on_triangles
+    m = freeform_part_mesh(FreeformPart(), 5.0, closed=True)
+    rng = np.random.default_rng(4)
+    P = rng.uniform([-20, -20, -10], [120, 120, 40], (60, 3))
+    cl = apt.CLPoints(P, np.zeros(60, bool), np.full(60, 500.0), np.full(60, np.nan), np.arange(60),
+                      np.arange(60), P[0])
+    g = sc.path_surface_deviation(m, cl, 5.0)
+    T = m.triangles
+    C = P + [0, 0, 5.0]
+    ref = np.array([np.linalg.norm(closest_point_on_triangles(c[None], T[:, 0], T[:, 1], T[:, 2]) - c, axis=1).min()
+                    for c in C]) - 5.0
+    np.testing.assert_allclose(g, ref, rtol=0, atol=1e-12)
+    OUTCOMES[("api", "correct")] += 1

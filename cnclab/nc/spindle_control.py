@@ -282,13 +282,15 @@ def to_gcode_moves(program: AptProgram):
 
 
 def path_surface_deviation(mesh: TriMesh, cl: CLPoints, tool_radius: float, *, output: str = "tip",
-                           max_points: int = 20000) -> np.ndarray:
+                           max_points: int = 2000) -> np.ndarray:
     """Gap (mm) between the ball of a ball-end mill at each feed CL point and the part surface.
 
     The ball centre is the CL point + (0, 0, ``tool_radius``) for ``output="tip"`` (APT
     ``OUTPUT_ON_TIP``) or the CL point itself for ``"centre"``; the gap is its exact distance to the
     nearest facet of ``mesh`` minus ``tool_radius``: 0 where the ball touches the surface, > 0 above
-    it, < 0 where it would gouge. At most ``max_points`` feed points, evenly spaced, are checked.
+    it, < 0 where it would gouge. At most ``max_points`` feed points, evenly spaced along the program,
+    are checked (2000 by default: a share estimated from them has a standard error <= 1.1 %, small
+    against the 20 % limit of :func:`postprocess_files`).
 
     >>> from cnclab.geometry.freeform_part import tessellate_heightfield
     >>> from cnclab.nc.apt import cl_program
@@ -307,10 +309,31 @@ def path_surface_deviation(mesh: TriMesh, cl: CLPoints, tool_radius: float, *, o
     if len(pts) > max_points:
         pts = pts[np.linspace(0, len(pts) - 1, max_points).round().astype(int)]
     c = pts + ([0.0, 0.0, tool_radius] if output == "tip" else 0.0)
-    loc = FacetLocator(mesh)
-    f = loc.nearest_facet(c)
-    T = mesh.triangles[f]
-    return np.linalg.norm(closest_point_on_triangles(c, T[:, 0], T[:, 1], T[:, 2]) - c, axis=1) - tool_radius
+    # exact distance to the mesh: facets much larger than the typical one (walls, bottom of a closed
+    # part) would make the KD-tree bound of FacetLocator.nearest_facet cover the whole mesh, so they
+    # are checked by brute force (in blocks) and the others through the locator
+    T = mesh.triangles
+    circ = np.linalg.norm(T - T.mean(axis=1)[:, None], axis=2).max(axis=1)
+    big = circ > 4.0 * float(np.median(circ))
+    best = np.full(len(c), np.inf)
+    if (~big).any():
+        small = mesh.subset(~big)
+        f = FacetLocator(small).nearest_facet(c)
+        S = small.triangles[f]
+        best = np.linalg.norm(closest_point_on_triangles(c, S[:, 0], S[:, 1], S[:, 2]) - c, axis=1)
+    B = T[big]
+    cb, rb = B.mean(axis=1), circ[big]
+    step = max(1, 2_000_000 // max(len(B), 1))
+    for a in range(0, len(c) if len(B) else 0, step):
+        q = c[a:a + step]
+        lower = np.linalg.norm(q[:, None] - cb[None], axis=2) - rb[None]     # bounding-sphere bound
+        i, j = np.nonzero(lower < best[a:a + step, None])
+        if i.size:
+            d = np.linalg.norm(closest_point_on_triangles(q[i], B[j, 0], B[j, 1], B[j, 2]) - q[i], axis=1)
+            m = np.full(len(q), np.inf)
+            np.minimum.at(m, i, d)
+            best[a:a + step] = np.minimum(best[a:a + step], m)
+    return best - tool_radius
 
 
 def _finite(name, v, lo=None, lo_open=True, hi=None, optional=False):
