@@ -7,10 +7,9 @@ nothing behind.
 
 * Permissions: the result gets the mode a plain ``open(path, "w")`` would give, ``0o666 & ~umask``
   (``tempfile.mkstemp`` creates 0600, which would otherwise survive the rename).
-* Signals: temporary files alive at any moment are registered; :func:`cleanup_on_signals` (used by
-  the command-line tools) turns SIGTERM (and SIGHUP) into ``SystemExit`` so the same cleanup runs as
-  for SIGINT (``KeyboardInterrupt``) and for errors, and removes any registered temporary file that
-  is still left when the signal arrives.
+* Signals: :func:`cleanup_on_signals` (used by the command-line tools) turns SIGTERM (and SIGHUP)
+  into ``SystemExit`` so the same cleanup runs as for SIGINT (``KeyboardInterrupt``) and for errors.
+  Temporary files in progress are registered (:func:`live_temporary_files`).
 * Several outputs of one run: :func:`atomic_write_many` writes all temporary files first and renames
   them only when every one is complete, so a failure on one target leaves no output at all.
 """
@@ -25,7 +24,7 @@ from pathlib import Path
 from typing import Iterator
 
 __all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "same_file",
-           "check_outputs"]
+           "check_outputs", "live_temporary_files"]
 
 _LIVE_TMP: set = set()
 _LOCK = threading.Lock()
@@ -185,17 +184,22 @@ def atomic_write_many(items, inputs=()) -> list:
 
 
 def _raise_exit(signum, frame):
-    for tmp in list(_LIVE_TMP):      # belt and braces: the unwinding below removes them too
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+    # the exception unwinds through atomic_output / atomic_write_many, which remove their temporary
+    # files and roll back renames already made (deleting files here could break that rollback)
     raise SystemExit(128 + signum)
+
+
+def live_temporary_files() -> list:
+    """Temporary files of atomic writes in progress (for diagnostics and tests)."""
+    with _LOCK:
+        return sorted(_LIVE_TMP)
 
 
 @contextlib.contextmanager
 def cleanup_on_signals(signals=("SIGTERM", "SIGHUP")):
-    """While active, the given signals raise ``SystemExit(128 + signum)`` (after removing registered
-    temporary files), so ``atomic_output`` cleans up as for an error. Main thread only; elsewhere a
-    no-op. SIGINT already raises ``KeyboardInterrupt``."""
+    """While active, the given signals raise ``SystemExit(128 + signum)``, so ``atomic_output`` and
+    ``atomic_write_many`` clean up as for an error. Main thread only; elsewhere a no-op. SIGINT
+    already raises ``KeyboardInterrupt``."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return

@@ -921,3 +921,26 @@ def test_path_surface_deviation_is_exact_on_a_closed_part():
                     for c in C]) - 5.0
     np.testing.assert_allclose(g, ref, rtol=0, atol=1e-12)
     OUTCOMES[("api", "correct")] += 1
+
+
+def test_atomic_write_many_rolls_back_on_a_failing_rename(tmp_path, monkeypatch):
+    """All or none, also when the second rename fails after the first succeeded: old content restored."""
+    from cnclab import fileio
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    a.write_text("old a")
+    real = os.replace
+    calls = []
+
+    def flaky(src, dst):
+        calls.append(dst)
+        if str(dst) == str(b):
+            raise OSError(f"{dst}: simulated rename failure")
+        return real(src, dst)
+
+    monkeypatch.setattr(fileio.os, "replace", flaky)
+    with pytest.raises(OSError, match="b.txt"):
+        fileio.atomic_write_many([(a, "new a"), (b, "new b")])
+    monkeypatch.setattr(fileio.os, "replace", real)
+    assert a.read_text() == "old a" and not b.exists()
+    assert sorted(os.listdir(tmp_path)) == ["a.txt"] and fileio.live_temporary_files() == []
+    OUTCOMES[("cli", "error")] += 1
