@@ -31,6 +31,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..fileio import atomic_output
+
 __all__ = ["TriMesh", "read_stl", "write_stl", "facet_normals", "facet_centroids", "facet_incentres",
            "facet_areas", "machined_surface_mask", "FacetLocator", "closest_point_on_triangles",
            "inclination_angles", "orient_facets", "STLError", "STLWarning"]
@@ -525,8 +527,6 @@ def write_stl(path, mesh: TriMesh, ascii: bool = False, inputs=()) -> Path:
     """
     from stl import mesh as stlmesh
     from stl.stl import Mode
-
-    from ..fileio import atomic_output
 
     data = np.zeros(mesh.n_facets, dtype=stlmesh.Mesh.dtype)
     data["vectors"] = mesh.triangles

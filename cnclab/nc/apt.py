@@ -59,6 +59,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..fileio import atomic_write
+
 __all__ = ["AptError", "AptRecord", "AptProgram", "CLPoints", "parse_apt", "read_apt", "write_apt",
            "goto", "spindl", "fedrat", "cl_program"]
 
@@ -683,8 +685,6 @@ def read_apt(path) -> AptProgram:
 
 def write_apt(path, program: AptProgram, inputs=()) -> Path:
     """Write a program atomically; ``inputs`` are never overwritten."""
-    from ..fileio import atomic_write
-
     return atomic_write(path, program.to_text(), inputs=inputs)
 
 

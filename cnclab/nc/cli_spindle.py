@@ -14,7 +14,10 @@ import math
 import sys
 import warnings
 
+from ..cutting.spindle_model import POINT_RULES
+from ..fileio import cleanup_on_signals
 from .apt import NUMBER_RE
+from .spindle_control import postprocess_files
 
 
 def _number(name, lo=None, lo_open=True, hi=None, kind=float):
@@ -38,10 +41,6 @@ def _number(name, lo=None, lo_open=True, hi=None, kind=float):
 
 
 def main(argv=None) -> int:
-    from ..cutting.spindle_model import POINT_RULES
-    from ..fileio import cleanup_on_signals
-    from .spindle_control import postprocess_files
-
     ap = argparse.ArgumentParser(prog="python -m cnclab spindle", description=__doc__.split("\n\n")[1])
     ap.add_argument("stl", help="surface STL (ASCII or binary, mm)")
     ap.add_argument("apt", help="APT CL file (UNITS/MM)")

@@ -31,9 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cutting.speeds import feed_speed, spindle_speed
 from ..cutting.spindle_model import POINT_RULES, apply_acceleration_limit, feed_directions, working_diameters
-from ..geometry.mesh import FacetLocator, TriMesh, machined_surface_mask
-from .apt import AptProgram, CLPoints, fedrat, spindl
+from ..fileio import atomic_write_many, check_outputs
+from ..geometry.mesh import FacetLocator, TriMesh, closest_point_on_triangles, machined_surface_mask, read_stl
+from ..toolpath.path import Move
+from .apt import AptProgram, CLPoints, _GotoRun, fedrat, read_apt, spindl
+from .gcode import write_gcode
 
 __all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
            "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files",
@@ -107,8 +111,6 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
     feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule 'centroid' | 'nearest';
     point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s).
     """
-    from ..cutting.speeds import feed_speed, spindle_speed
-
     for name, v in (("tool_diameter", tool_diameter), ("a_p", a_p), ("v_c", v_c), ("f_z", f_z)):
         if not (np.isfinite(v) and v > 0):
             raise ValueError(f"{name} must be > 0, got {v}")
@@ -171,8 +173,6 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
 
     Bulk GOTO runs of a parsed file are split only where a record is inserted (no per-point objects).
     """
-    from .apt import _GotoRun
-
     if not (rpm_threshold >= 0 and vf_threshold >= 0 and np.isfinite(rpm_threshold) and np.isfinite(vf_threshold)):
         raise ValueError(f"rpm_threshold and vf_threshold must be finite and >= 0, got {rpm_threshold}, {vf_threshold}")
     tgt = np.asarray(cl.record)[sched.index]
@@ -242,9 +242,6 @@ def to_gcode_moves(program: AptProgram):
     >>> to_gcode_moves(prog)[0]
     Move(motion='G2', x=0.0, y=-10.0, z=0.0, i=-10.0, j=0.0, feed=500.0, spindle=None)
     """
-    from .apt import _GotoRun
-    from ..toolpath.path import Move
-
     moves = []
     f = s = None
     rapid = False
@@ -303,8 +300,6 @@ def path_surface_deviation(mesh: TriMesh, cl: CLPoints, tool_radius: float, *, o
         raise ValueError(f"output must be 'tip' or 'centre', got {output!r}")
     if not (np.isfinite(tool_radius) and tool_radius > 0):
         raise ValueError(f"tool_radius must be a finite number > 0 mm, got {tool_radius!r}")
-    from ..geometry.mesh import closest_point_on_triangles
-
     pts = cl.xyz[~cl.rapid]
     if len(pts) > max_points:
         pts = pts[np.linspace(0, len(pts) - 1, max_points).round().astype(int)]
@@ -367,11 +362,6 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
     in the air such as lead-ins and links, while a path 50 mm above, 1000 mm away or on a part
     scaled x0.1 has nearly all points off.) Returns a summary dict.
     """
-    from ..fileio import atomic_write_many, check_outputs
-    from ..geometry.mesh import read_stl
-    from .apt import read_apt
-    from .gcode import write_gcode
-
     t0 = time.perf_counter()
     check_outputs([out_path, gcode_path], inputs=[stl_path, apt_path],
                   names=["out_path (-o)", "gcode_path (--gcode)"][:2])
