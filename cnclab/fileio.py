@@ -1,23 +1,89 @@
 """Safe output writing: atomic replace, never overwrite an input file.
 
-Every file cnclab writes goes through :func:`atomic_write` (or :func:`atomic_output`): the content
-is written to a temporary file in the destination folder and moved into place with
-:func:`os.replace`, so a reader never sees a partial file and a failure leaves nothing behind.
+Every file cnclab writes goes through :func:`atomic_write` (or :func:`atomic_output`,
+:func:`atomic_write_many`): the content is written to a temporary file in the destination folder and
+moved into place with :func:`os.replace`, so a reader never sees a partial file and a failure leaves
+nothing behind.
+
+* Permissions: the result gets the mode a plain ``open(path, "w")`` would give, ``0o666 & ~umask``
+  (``tempfile.mkstemp`` creates 0600, which would otherwise survive the rename).
+* Signals: :func:`cleanup_on_signals` (used by the command-line tools) turns SIGTERM (and SIGHUP)
+  into ``SystemExit`` so the same cleanup runs as for SIGINT (``KeyboardInterrupt``) and for errors.
+  Temporary files in progress are registered (:func:`live_temporary_files`).
+* Several outputs of one run: :func:`atomic_write_many` writes all temporary files first and renames
+  them only when every one is complete, so a failure on one target leaves no output at all.
 """
 from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import tempfile
+import threading
 from pathlib import Path
 from typing import Iterator
+
+__all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "same_file",
+           "check_outputs", "live_temporary_files"]
+
+_LIVE_TMP: set = set()
+_LOCK = threading.Lock()
+
+
+def _umask() -> int:
+    with _LOCK:
+        old = os.umask(0)
+        os.umask(old)
+    return old
+
+
+def same_file(a, b) -> bool:
+    """True if the paths name the same file (existing: same inode; else same absolute resolved path)."""
+    a, b = Path(a), Path(b)
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return a.resolve() == b.resolve()
 
 
 def _check_not_input(dest: Path, inputs) -> None:
     for src in inputs or ():
-        src = Path(src)
-        if src.exists() and dest.exists() and os.path.samefile(src, dest):
+        if same_file(src, dest):
             raise ValueError(f"refusing to overwrite the input file {src}: choose another output path")
+
+
+def check_outputs(outputs, inputs=(), names=None) -> None:
+    """ValueError if an output is an input or two outputs are the same file (names: option names)."""
+    outs = [Path(p) for p in outputs if p is not None]
+    names = names or [str(p) for p in outs]
+    for k, p in enumerate(outs):
+        _check_not_input(p, inputs)
+        for q, nq in zip(outs[:k], names[:k]):
+            if same_file(p, q):
+                raise ValueError(f"{names[k]} ({p}) and {nq} ({q}) name the same file: choose different outputs")
+
+
+def _mkstemp(dest: Path):
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent)
+    with _LOCK:
+        _LIVE_TMP.add(tmp)
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())
+    except BaseException:
+        os.close(fd)
+        _discard(tmp)
+        raise
+    return fd, tmp
+
+
+def _discard(tmp) -> None:
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(tmp)
+    with _LOCK:
+        _LIVE_TMP.discard(tmp)
 
 
 @contextlib.contextmanager
@@ -25,7 +91,8 @@ def atomic_output(path, mode: str = "w", inputs=(), **open_kwargs) -> Iterator:
     """Open a temporary file next to ``path``; on success move it to ``path`` atomically.
 
     ``inputs``: paths that must not be overwritten (ValueError if ``path`` is one of them).
-    On any exception the temporary file is removed and ``path`` is left untouched.
+    On any exception (also KeyboardInterrupt / SystemExit) the temporary file is removed and
+    ``path`` is left untouched. The result has mode ``0o666 & ~umask``.
 
     >>> import tempfile, pathlib
     >>> d = pathlib.Path(tempfile.mkdtemp())
@@ -36,17 +103,17 @@ def atomic_output(path, mode: str = "w", inputs=(), **open_kwargs) -> Iterator:
     """
     dest = Path(path)
     _check_not_input(dest, inputs)
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent)
+    fd, tmp = _mkstemp(dest)
     try:
         with os.fdopen(fd, mode, **open_kwargs) as fh:
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, dest)
+        with _LOCK:
+            _LIVE_TMP.discard(tmp)
     except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+        _discard(tmp)
         raise
 
 
@@ -57,3 +124,92 @@ def atomic_write(path, data, inputs=()) -> Path:
     with atomic_output(path, mode, inputs=inputs, **kwargs) as fh:
         fh.write(data)
     return Path(path)
+
+
+def atomic_write_many(items, inputs=()) -> list:
+    """Write several files together: all or none.
+
+    ``items``: (path, data) pairs (data str or bytes). Every output is checked against ``inputs``
+    and the others (no two outputs may be the same file), every temporary file is written and
+    synced, and only then are they renamed into place. Any failure before the renames removes
+    every temporary file and leaves all destinations untouched.
+
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> [p.name for p in atomic_write_many([(d / "a.txt", "A"), (d / "b.bin", b"B")])]
+    ['a.txt', 'b.bin']
+    """
+    items = [(Path(p), data) for p, data in items]
+    check_outputs([p for p, _ in items], inputs)
+    for dest, _ in items:
+        if dest.is_dir():
+            raise IsADirectoryError(f"{dest}: is a directory, not a file name for an output")
+    tmps, backups, done = [], [], []
+    try:
+        for dest, data in items:
+            fd, tmp = _mkstemp(dest)
+            tmps.append(tmp)
+            binary = isinstance(data, (bytes, bytearray))
+            with os.fdopen(fd, "wb" if binary else "w", **({} if binary else {"encoding": "utf-8",
+                                                                              "newline": ""})) as fh:
+                fh.write(data)
+                fh.flush()
+                os.fsync(fh.fileno())
+        for (dest, _), tmp in zip(items, tmps):
+            bak = None
+            if dest.exists():      # keep the old content until every rename succeeded (rollback)
+                bak = f"{tmp}.bak"
+                with _LOCK:
+                    _LIVE_TMP.add(bak)
+                os.link(dest, bak)
+            backups.append(bak)
+            os.replace(tmp, dest)
+            done.append(dest)
+            with _LOCK:
+                _LIVE_TMP.discard(tmp)
+    except BaseException:
+        for dest, bak in zip(done, backups):       # undo the renames already made
+            with contextlib.suppress(OSError):
+                if bak is not None:
+                    os.replace(bak, dest)
+                else:
+                    os.unlink(dest)
+        for tmp in tmps + [b for b in backups if b]:
+            _discard(tmp)
+        raise
+    for b in backups:
+        if b:
+            _discard(b)
+    return [p for p, _ in items]
+
+
+def _raise_exit(signum, frame):
+    # the exception unwinds through atomic_output / atomic_write_many, which remove their temporary
+    # files and roll back renames already made (deleting files here could break that rollback)
+    raise SystemExit(128 + signum)
+
+
+def live_temporary_files() -> list:
+    """Temporary files of atomic writes in progress (for diagnostics and tests)."""
+    with _LOCK:
+        return sorted(_LIVE_TMP)
+
+
+@contextlib.contextmanager
+def cleanup_on_signals(signals=("SIGTERM", "SIGHUP")):
+    """While active, the given signals raise ``SystemExit(128 + signum)``, so ``atomic_output`` and
+    ``atomic_write_many`` clean up as for an error. Main thread only; elsewhere a no-op. SIGINT
+    already raises ``KeyboardInterrupt``."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = {}
+    for name in signals:
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            old[sig] = signal.signal(sig, _raise_exit)
+    try:
+        yield
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)

@@ -1,10 +1,12 @@
 """STL I/O, normals, incentres, nearest facet, drop cutter, test part (cnclab.geometry.mesh & co)."""
+import warnings
+
 import numpy as np
 import pytest
 
 from cnclab.geometry.freeform_part import FreeformPart, freeform_part_mesh, tessellate_heightfield
-from cnclab.geometry.mesh import (FacetLocator, TriMesh, closest_point_on_triangles, facet_incentres,
-                                  machined_surface_mask, read_stl, write_stl)
+from cnclab.geometry.mesh import (FacetLocator, STLWarning, TriMesh, closest_point_on_triangles,
+                                  facet_incentres, machined_surface_mask, read_stl, write_stl)
 from cnclab.toolpath.dropcutter import drop_cutter_z, zigzag_finishing_path
 
 RNG = np.random.default_rng(0)
@@ -18,21 +20,35 @@ def _mesh(n=40):
 def test_stl_round_trip(tmp_path, ascii_):
     m = _mesh()
     p = write_stl(tmp_path / "a.stl", m, ascii=ascii_)
-    r = read_stl(p)
+    r = read_stl(p, orient="keep")          # the file's vertex order, as written
     assert r.info["format"] == ("ascii" if ascii_ else "binary")
     np.testing.assert_allclose(r.triangles, m.triangles, atol=1e-6)  # float32 storage
     np.testing.assert_allclose(r.normals, m.normals, atol=1e-5)
+    # default orientation rule: every facet it reverses is counted in info (and warned about)
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        auto = read_stl(p)
+    changed = np.abs(auto.triangles - r.triangles).max(axis=(1, 2)) > 0
+    assert auto.info["reoriented_facets"] == int(changed.sum()) == len(auto.triangles[changed])
+    assert bool(w) == bool(changed.any())
+    np.testing.assert_array_equal(auto.triangles[changed], r.triangles[changed][:, ::-1])
 
 
 def test_normals_recomputed_when_stored_wrong(tmp_path):
     txt = ("solid t\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
-           "facet normal 0 0 1\nouter loop\nvertex 0 0 1\nvertex 0 1 1\nvertex 1 0 1\nendloop\nendfacet\nendsolid t\n")
+           "facet normal 0 0 1\nouter loop\nvertex 5 0 1\nvertex 5 1 1\nvertex 6 0 1\nendloop\nendfacet\nendsolid t\n")
     (tmp_path / "t.stl").write_text(txt)
-    m = read_stl(tmp_path / "t.stl")
+    m = read_stl(tmp_path / "t.stl", orient="keep")
     assert m.normals.tolist() == [[0, 0, 1], [0, 0, -1]]
     assert m.info["stored_normals_missing"] == 1 and m.info["stored_normals_inconsistent"] == 1
-    up = read_stl(tmp_path / "t.stl", orient_up=True)
+    up = read_stl(tmp_path / "t.stl", orient="keep", orient_up=True)
     assert (up.normals[:, 2] == 1).all()
+    # default orientation rule: the second (clockwise, open) facet is turned upward and reported;
+    # its stored normal (0 0 1) then agrees with the re-oriented facet
+    with pytest.warns(STLWarning, match="1 of 2 facets re-oriented"):
+        auto = read_stl(tmp_path / "t.stl")
+    assert (auto.normals[:, 2] == 1).all() and auto.info["reoriented_facets"] == 1
+    assert auto.info["stored_normals_inconsistent"] == 0
 
 
 @pytest.mark.parametrize("bad, msg", [

@@ -32,6 +32,15 @@ def _arr(value, name: str, unit: str, *, positive: bool = False, nonneg: bool = 
     return a
 
 
+def _same_shape(**kw) -> None:
+    """ValueError naming the parameters when their shapes do not broadcast."""
+    try:
+        np.broadcast_shapes(*(np.shape(v) for v in kw.values()))
+    except ValueError:
+        got = ", ".join(f"{k} {np.shape(v)}" for k, v in kw.items())
+        raise ValueError(f"{', '.join(kw)} must have broadcastable shapes, got {got}") from None
+
+
 def cutting_speed(diameter_mm, n_rpm):
     """Cutting speed ``v_c = D·n·π/1000`` (m/min) at a (working) diameter (mm) and spindle speed (rpm).
 
@@ -42,6 +51,7 @@ def cutting_speed(diameter_mm, n_rpm):
     """
     d = _arr(diameter_mm, "diameter_mm", "mm", nonneg=True)
     n = _arr(n_rpm, "n_rpm", "rpm", nonneg=True)
+    _same_shape(diameter_mm=d, n_rpm=n)
     return d * n * np.pi / 1000.0
 
 
@@ -55,6 +65,7 @@ def spindle_speed(v_c_m_min, diameter_mm):
     """
     v = _arr(v_c_m_min, "v_c_m_min", "m/min", nonneg=True)
     d = _arr(diameter_mm, "diameter_mm", "mm", positive=True)
+    _same_shape(v_c_m_min=v, diameter_mm=d)
     return 1000.0 * v / (np.pi * d)
 
 
@@ -71,4 +82,5 @@ def feed_speed(f_z_mm, teeth, n_rpm):
     if np.any(z != np.round(z)):
         raise ValueError(f"teeth must be a positive integer, got {teeth!r}")
     n = _arr(n_rpm, "n_rpm", "rpm", nonneg=True)
+    _same_shape(f_z_mm=fz, teeth=z, n_rpm=n)
     return fz * z * n

@@ -129,6 +129,13 @@ def validate_model_inputs(D, a_p, A_N1=0.0, A_N2=0.0, A_f=0.0, a_e=None):
         if np.any(ae < 0):
             raise ValueError(f"a_e must be >= 0 mm (width of cut), got {ae[ae < 0].ravel()[0] if ae.ndim else ae}")
         out.append(ae)
+    names = ("D", "a_p", "A_N1", "A_N2", "A_f", "a_e")
+    try:
+        np.broadcast_shapes(*(o.shape for o in out))
+    except ValueError:
+        shapes = ", ".join(f"{n} {o.shape}" for n, o in zip(names, out))
+        raise ValueError(f"D, a_p, A_N1, A_N2, A_f{', a_e' if a_e is not None else ''} must have broadcastable "
+                         f"shapes (scalars or arrays of one shape), got {shapes}") from None
     return tuple(out)
 
 

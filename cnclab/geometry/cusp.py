@@ -47,6 +47,11 @@ def cusp_height_from_spacing(spacing, corner_radius, exact: bool = True):
     """
     s = _positive("spacing", spacing)
     re = _positive("corner_radius", corner_radius)
+    try:
+        np.broadcast_shapes(s.shape, re.shape)
+    except ValueError:
+        raise ValueError(f"spacing and corner_radius must have broadcastable shapes, got spacing {s.shape}, "
+                         f"corner_radius {re.shape}") from None
     if not exact:
         return s**2 / (8.0 * re)
     if np.any(s > 2.0 * re):
@@ -60,8 +65,9 @@ def cusp_height_turning(feed, corner_radius, exact: bool = True):
 
     ``exact=False`` is eq 3-2, ``CH = f²/(8·RE)``.
     """
-    if np.any(np.asarray(feed, dtype=float) <= 0):
-        raise ValueError(f"feed must be > 0 mm/rev, got {feed!r}")
+    f = np.asarray(feed, dtype=float)
+    if not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise ValueError(f"feed must be finite and > 0 mm/rev, got {feed!r}")
     return cusp_height_from_spacing(feed, corner_radius, exact)
 
 

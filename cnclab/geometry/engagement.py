@@ -53,10 +53,23 @@ def _theta(theta_deg):
 
 
 def _rho(rho):
-    p = np.asarray(rho, float)
+    """rho in (0, inf] mm; rho = inf is the straight-cut limit (handled in closed form, never NaN)."""
+    try:
+        p = np.asarray(rho, float)
+    except (TypeError, ValueError):
+        raise ValueError(f"rho (contour curvature radius) must be a number or array in mm, got {rho!r}") from None
     if np.any(~(p > 0)):
-        raise ValueError(f"rho (contour curvature radius) must be > 0 mm, got {rho!r}")
+        raise ValueError(f"rho (contour curvature radius) must be in (0, inf] mm (inf = straight cut), got {rho!r}")
     return p
+
+
+def _shapes(**kw):
+    """Check that the named array arguments broadcast; ValueError naming them otherwise."""
+    try:
+        return np.broadcast_shapes(*(np.shape(v) for v in kw.values()))
+    except ValueError:
+        got = ", ".join(f"{k} {np.shape(v)}" for k, v in kw.items())
+        raise ValueError(f"{', '.join(kw)} must have broadcastable shapes, got {got}") from None
 
 
 def _acos_checked(c, what):
@@ -86,6 +99,7 @@ def theta_concave(s, rho, tool_radius):
     >>> round(float(theta_concave(1.5, 1e9, 3.0)), 6)      # straight limit
     60.0
     """
+    _shapes(s=s, rho=rho, tool_radius=tool_radius)
     r = _r(tool_radius)
     s = _s(s, r)
     p = _rho(rho)
@@ -93,8 +107,11 @@ def theta_concave(s, rho, tool_radius):
     if np.any(d <= 0):
         raise ValueError("rho + s - r must be > 0 (tool centre inside the arc), got "
                          f"rho={rho!r}, s={s!r}, r={tool_radius!r}")
-    # rho^2 = d^2 + r^2 - 2 d r cos(pi - theta)  ->  cos(theta) = (rho^2 - d^2 - r^2) / (2 r d)
-    return _acos_checked((p * p - d * d - r * r) / (2 * r * d), "theta_concave")
+    # rho^2 = d^2 + r^2 - 2 d r cos(pi - theta)  ->  cos(theta) = (rho^2 - d^2 - r^2) / (2 r d), with
+    # rho^2 - d^2 = (r - s)(2 rho + s - r) (no cancellation, no overflow); rho = inf -> 1 - s/r
+    with np.errstate(invalid="ignore"):
+        c = ((r - s) * (2 * p + s - r) - r * r) / (2 * r * d)
+    return _acos_checked(np.where(np.isinf(p), 1.0 - s / r, c), "theta_concave")
 
 
 def theta_convex(s, rho, tool_radius):
@@ -103,14 +120,17 @@ def theta_convex(s, rho, tool_radius):
     >>> round(float(theta_convex(1.5, 1e9, 3.0)), 6)
     60.0
     """
+    _shapes(s=s, rho=rho, tool_radius=tool_radius)
     r = _r(tool_radius)
     s = _s(s, r)
     p = _rho(rho)
     d = p - s + r
     if np.any(d <= 0):
         raise ValueError(f"rho - s + r must be > 0, got rho={rho!r}, s={s!r}, r={tool_radius!r}")
-    # rho^2 = d^2 + r^2 - 2 d r cos(theta)
-    return _acos_checked((d * d + r * r - p * p) / (2 * r * d), "theta_convex")
+    # rho^2 = d^2 + r^2 - 2 d r cos(theta), with d^2 - rho^2 = (r - s)(2 rho - s + r); rho = inf -> 1 - s/r
+    with np.errstate(invalid="ignore"):
+        c = ((r - s) * (2 * p - s + r) + r * r) / (2 * r * d)
+    return _acos_checked(np.where(np.isinf(p), 1.0 - s / r, c), "theta_convex")
 
 
 def theta_arc(s, rho, tool_radius, kind: str):
@@ -150,12 +170,16 @@ def stepover_thesis1(theta_deg, rho, tool_radius, kind, k=None):
         if kind not in KIND_K:
             raise ValueError(f"kind must be 'concave', 'convex' or 'straight', got {kind!r}")
         k = KIND_K[kind]
+    _shapes(theta_deg=theta_deg, rho=rho, tool_radius=tool_radius)
     p = _rho(rho)
-    disc = p * p + r * r * (np.cos(t) ** 2 - 1)
-    if np.any(disc < -1e-12):
+    rs = r * np.sin(t)
+    if np.any(p < np.abs(rs) * (1 - 1e-12)):
         raise ValueError(f"rho must be >= r sin(theta) for a real stepover, got rho={rho!r} "
                          f"(rho_min={np.max(rho_min(theta_deg, tool_radius)):.6g} mm)")
-    s = r * (1 - np.cos(t)) + k * p - k * np.sqrt(np.maximum(disc, 0.0))
+    # k rho - k sqrt(rho^2 - r^2 sin^2) = k r^2 sin^2 / (rho + sqrt(...)): stable, 0 for rho = inf
+    with np.errstate(invalid="ignore", over="ignore"):
+        root = np.where(np.isinf(p), np.inf, np.sqrt(np.maximum((p - np.abs(rs)) * (p + np.abs(rs)), 0.0)))
+    s = r * (1 - np.cos(t)) + k * (rs * rs) / (p + root)
     if np.any(s < -1e-9) or np.any(s > 2 * r + 1e-9):
         raise ValueError(f"Thesis I gives s outside [0, 2r] for theta={theta_deg!r}, rho={rho!r}")
     return s
@@ -170,15 +194,34 @@ def theta_kim_yang(s, R, tool_radius):
     >>> abs(round(float(theta_kim_yang(1.5, 9.5, 3.0) - theta_concave(1.5, 8.0, 3.0)), 12))
     0.0
     """
+    _shapes(s=s, R=R, tool_radius=tool_radius)
     r = _r(tool_radius)
     s = _s(s, r)
-    R = np.asarray(R, float)
+    R = _rho(R)
     if np.any(R <= r):
-        raise ValueError(f"R (corner radius) must be > r (tool radius), got R={R!r}")
-    c = (2 * r * r + 2 * R * (s - r) - s * s) / (2 * r * (R - r))
+        raise ValueError(f"R (corner radius) must be in (r, inf] mm (r = tool radius; inf = straight cut), got R={R!r}")
+    # divide numerator and denominator by R: R = inf gives the straight limit (s - r)/r
+    c = ((2 * r * r - s * s) / R + 2 * (s - r)) / (2 * r * (1 - r / R))
     return 180.0 - _acos_checked(c, "theta_kim_yang")
 
 
 def kim_yang_to_jacso(s, R):
-    """Change of variables eq. 1 -> Thesis I: (rho, s) = (R - s, s); tool-centre radius R - r = rho + s - r."""
-    return np.asarray(R, float) - np.asarray(s, float), np.asarray(s, float)
+    """Change of variables eq. 1 -> Thesis I: (rho, s) = (R - s, s); tool-centre radius R - r = rho + s - r.
+
+    ``s`` >= 0 mm (finite), ``R`` > s mm (R = inf, a straight cut, gives rho = inf); a result rho <= 0
+    would be no contour at all, so R <= s is a ValueError.
+
+    >>> [float(v) for v in kim_yang_to_jacso(1.5, 9.5)]
+    [8.0, 1.5]
+    """
+    _shapes(s=s, R=R)
+    try:
+        s_ = np.asarray(s, float)
+        R_ = np.asarray(R, float)
+    except (TypeError, ValueError):
+        raise ValueError(f"s and R must be numbers or arrays in mm, got s={s!r}, R={R!r}") from None
+    if np.any(~np.isfinite(s_)) or np.any(s_ < 0):
+        raise ValueError(f"s (stepover) must be finite and >= 0 mm, got {s!r}")
+    if np.any(np.isnan(R_)) or np.any(R_ <= s_):
+        raise ValueError(f"R (machined corner radius) must be in (s, inf] mm so that rho = R - s > 0, got R={R!r}, s={s!r}")
+    return R_ - s_, s_

@@ -1,14 +1,18 @@
 """Triangle meshes for CAM: STL read/write, facet normals, incentres, nearest-facet lookup.
 
-STL files are read and written with numpy-stl (ASCII and binary, detected automatically). All
-lengths are in mm. A :class:`TriMesh` holds the corner coordinates ``triangles`` (F, 3, 3) and unit
+STL files are read by a strict reader of cnclab's own (binary recognised by its size, ASCII with
+every solid, errors naming file and line or facet; see :func:`read_stl`) and written with numpy-stl.
+All lengths are in mm. A :class:`TriMesh` holds the corner coordinates ``triangles`` (F, 3, 3) and unit
 facet ``normals`` (F, 3).
 
 Normals. The STL standard says the stored facet normal must agree with the counter-clockwise vertex
 order (right-hand rule), but many exporters write zeros or stale normals. cnclab therefore **always
 uses the normal recomputed from the vertex order**; the stored normals are only compared with it,
 and the number of stored normals that were missing (zero) or inconsistent (angle > 1 deg, or
-opposite) is reported in ``TriMesh.info``. ``read_stl(..., orient_up=True)`` additionally flips
+opposite) is reported in ``TriMesh.info``. Winding: :func:`read_stl` re-orients facets consistently
+(closed parts outward, open surfaces upward, :func:`orient_facets`) and reports the number flipped
+(``info["reoriented_facets"]`` and an :class:`STLWarning`), so a file wound clockwise does not change
+which facets count as the machined surface. ``read_stl(..., orient_up=True)`` additionally flips
 facets whose recomputed normal points downwards (N_z < 0) -- useful for open height-field surfaces
 written with mixed winding; closed solids should keep the default ``False``.
 
@@ -20,8 +24,8 @@ nearest facet in Euclidean distance (``nearest_facet``) and the true incentre (`
 from __future__ import annotations
 
 import dataclasses
-import io
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +35,7 @@ from ..fileio import atomic_output
 
 __all__ = ["TriMesh", "read_stl", "write_stl", "facet_normals", "facet_centroids", "facet_incentres",
            "facet_areas", "machined_surface_mask", "FacetLocator", "closest_point_on_triangles",
-           "inclination_angles"]
+           "inclination_angles", "orient_facets", "STLError", "STLWarning"]
 
 
 class STLError(ValueError):
@@ -149,120 +153,354 @@ def machined_surface_mask(normals, tol_deg: float = 1e-3) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- STL files
-_FLOAT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf|infinity)"
-_VERTEX_RE = re.compile(rf"^\s*vertex\s+({_FLOAT})\s+({_FLOAT})\s+({_FLOAT})\s*$", re.I)
+# Strict number grammar for ASCII STL: ASCII digits only, optional sign, decimal point, exponent;
+# 'nan'/'inf' are recognised only to be refused with a "non-finite" message.
+_NUM = r"[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?"
+_NUM_RE = re.compile(rf"^{_NUM}$", re.ASCII)
+_NONFINITE_RE = re.compile(r"^[-+]?(?:nan|inf|infinity)$", re.I)
 
 
-def _is_ascii_stl(raw: bytes) -> bool:
-    if not raw.lstrip()[:5].lower() == b"solid":
-        return False
-    if len(raw) >= 84:  # a binary file may start with "solid": trust the facet count if it fits
-        count = int(np.frombuffer(raw[80:84], "<u4")[0])
-        if 84 + 50 * count == len(raw):
-            return False
-    return b"facet" in raw[:4096].lower() or b"endsolid" in raw.lower()
+class STLWarning(UserWarning):
+    """An STL file was read but repaired (facets re-oriented); the message names the file and count."""
 
 
-def _check_ascii(text: str, path: Path) -> None:
-    """Line-level validation of an ASCII STL so that errors name the line (parsing itself is numpy-stl's)."""
-    state, n_vert, facet_line = "solid", 0, 0
-    lines = text.splitlines()
-    for i, line in enumerate(lines, start=1):
-        s = line.strip()
-        if not s:
+def _stl_numbers(parts, path, lineno, what):
+    vals = []
+    for p in parts:
+        if _NUM_RE.match(p):
+            vals.append(float(p))
+        elif _NONFINITE_RE.match(p):
+            raise STLError(f"{path}:{lineno}: non-finite {what} coordinate {p!r}")
+        else:
+            raise STLError(f"{path}:{lineno}: garbled {what} value {p!r} (need a decimal number)")
+    if len(vals) != 3:
+        raise STLError(f"{path}:{lineno}: garbled {what} line (need 3 numbers, got {len(vals)})")
+    vals = [float(v) for v in vals]
+    if not all(np.isfinite(vals)):
+        raise STLError(f"{path}:{lineno}: non-finite {what} coordinate (overflow)")
+    return vals
+
+
+def _parse_ascii_stl(text: str, path):
+    """Strict ASCII STL parser: every solid of the file; errors name file and line.
+
+    Returns (triangles (F, 3, 3), stored normals (F, 3), facet line numbers (F,), solid names).
+    """
+    tris, norms, flines, names = [], [], [], []
+    # states: 'top' (between solids), 'solid', 'facet' (after 'facet normal'), 'loop', 'endloop'
+    state = "top"
+    verts: list = []
+    facet_line = solid_line = 0
+    lineno = 0
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        parts = line.split()
+        if not parts:
             continue
-        low = s.lower()
-        kw = low.split()[0]
-        if kw == "vertex":
-            m = _VERTEX_RE.match(s)
-            if not m:
-                raise STLError(f"{path}:{i}: garbled vertex line {s[:60]!r} (need 'vertex x y z')")
-            vals = np.array([float(v) for v in m.groups()])
-            if not np.isfinite(vals).all():
-                raise STLError(f"{path}:{i}: non-finite vertex coordinate {s[:60]!r}")
-            n_vert += 1
-        elif kw == "facet":
-            facet_line, n_vert = i, 0
-            parts = s.split()
-            if len(parts) != 5 or parts[1].lower() != "normal":
-                raise STLError(f"{path}:{i}: garbled facet line {s[:60]!r} (need 'facet normal nx ny nz')")
-            try:
-                [float(p) for p in parts[2:]]
-            except ValueError:
-                raise STLError(f"{path}:{i}: garbled facet normal {s[:60]!r}") from None
-        elif kw == "endfacet":
-            if n_vert != 3:
-                raise STLError(f"{path}:{i}: facet starting on line {facet_line} has {n_vert} vertices, not 3")
-        elif kw not in ("solid", "endsolid", "outer", "endloop"):
-            raise STLError(f"{path}:{i}: unexpected text {s[:60]!r}")
-    if not any(l.strip().lower().startswith("endsolid") for l in lines[-5:]):
-        raise STLError(f"{path}:{len(lines)}: truncated ASCII STL (no 'endsolid' at the end)")
+        kw = parts[0].lower()
+        if state == "top":
+            if kw != "solid":
+                raise STLError(f"{path}:{lineno}: expected 'solid', got {line.strip()[:60]!r}")
+            names.append(" ".join(parts[1:]))
+            state, solid_line = "solid", lineno
+        elif state == "solid":
+            if kw == "facet":
+                if len(parts) < 2 or parts[1].lower() != "normal":
+                    raise STLError(f"{path}:{lineno}: garbled facet line {line.strip()[:60]!r} "
+                                   "(need 'facet normal nx ny nz')")
+                norms.append(_stl_numbers(parts[2:], path, lineno, "facet normal"))
+                state, facet_line, verts = "facet", lineno, []
+            elif kw == "endsolid":
+                state = "top"
+            else:
+                raise STLError(f"{path}:{lineno}: expected 'facet' or 'endsolid', got {line.strip()[:60]!r}")
+        elif state == "facet":
+            if kw != "outer" or len(parts) != 2 or parts[1].lower() != "loop":
+                raise STLError(f"{path}:{lineno}: expected 'outer loop', got {line.strip()[:60]!r}")
+            state = "loop"
+        elif state == "loop":
+            if kw == "vertex":
+                if len(verts) == 3:
+                    raise STLError(f"{path}:{lineno}: facet starting on line {facet_line} has more than 3 vertices")
+                verts.append(_stl_numbers(parts[1:], path, lineno, "vertex"))
+            elif kw == "endloop" and len(parts) == 1:
+                if len(verts) != 3:
+                    raise STLError(f"{path}:{lineno}: facet starting on line {facet_line} has {len(verts)} "
+                                   "vertices, not 3")
+                state = "endloop"
+            else:
+                raise STLError(f"{path}:{lineno}: expected 'vertex x y z' or 'endloop' (facet of line "
+                               f"{facet_line}), got {line.strip()[:60]!r}")
+        elif state == "endloop":
+            if kw != "endfacet" or len(parts) != 1:
+                raise STLError(f"{path}:{lineno}: expected 'endfacet' (facet of line {facet_line}), "
+                               f"got {line.strip()[:60]!r}")
+            tris.append(verts)
+            flines.append(facet_line)
+            state = "solid"
+    if state != "top":
+        raise STLError(f"{path}:{lineno}: truncated ASCII STL: solid of line {solid_line} has no 'endsolid'")
+    if not names:
+        raise STLError(f"{path}: empty STL file (no 'solid')")
+    return (np.asarray(tris, float).reshape(-1, 3, 3), np.asarray(norms, float).reshape(-1, 3),
+            np.asarray(flines, np.int64), names)
 
 
-def _facet_line(text: str, k: int) -> int:
-    """1-based line number of the k-th facet of an ASCII STL."""
-    count = -1
-    for i, line in enumerate(text.splitlines(), start=1):
-        if line.lstrip().lower().startswith("facet"):
-            count += 1
-            if count == k:
-                return i
-    return 0
+_BIN_DTYPE = np.dtype([("normals", "<f4", (3,)), ("vectors", "<f4", (3, 3)), ("attr", "<u2")])
 
 
-def read_stl(path, degenerate: str = "error", orient_up: bool = False) -> TriMesh:
-    """Read an ASCII or binary STL (numpy-stl); normals recomputed from the vertex order.
+def _stl_kind(raw: bytes) -> str:
+    """'binary' when the size matches the facet count of the header (even if the header starts with
+    'solid'), else 'ascii' for text starting with 'solid', else 'binary' (size checked later)."""
+    if len(raw) >= 84 and 84 + 50 * int(np.frombuffer(raw[80:84], "<u4")[0]) == len(raw):
+        return "binary"
+    if raw.lstrip()[:5].lower() == b"solid":
+        return "ascii"
+    return "binary"
+
+
+def _parse_binary_stl(raw: bytes, path):
+    if len(raw) < 84:
+        raise STLError(f"{path}: truncated binary STL ({len(raw)} bytes, the header needs 84)")
+    count = int(np.frombuffer(raw[80:84], "<u4")[0])
+    need = 84 + 50 * count
+    if len(raw) != need:
+        body = len(raw) - 84
+        what = "truncated" if len(raw) < need else "inconsistent"
+        raise STLError(f"{path}: {what} binary STL: the header announces {count} facets ({need} bytes) but the "
+                       f"file has {len(raw)} bytes ({body // 50} whole facets + {body % 50} bytes)")
+    if count == 0:
+        raise STLError(f"{path}: STL has no facets")
+    data = np.frombuffer(raw, _BIN_DTYPE, count=count, offset=84)
+    name = raw[:80].split(b"\0", 1)[0].decode("ascii", errors="replace").strip()
+    return data["vectors"].astype(float), data["normals"].astype(float), name
+
+
+def orient_facets(triangles, rule: str = "auto"):
+    """Re-orient facets consistently; returns (triangles, flipped bool mask (F,), info dict).
+
+    Rule (``rule="auto"``): vertices are welded (exact coordinate equality, as written in the STL);
+    across every edge shared by exactly two facets the winding must run in opposite directions, so
+    each edge-connected component gets one consistent winding (breadth-first propagation); then each
+    component is turned **outward** if it is closed (no boundary edge; signed volume > 0). An open
+    component (boundary edges) is decided by ray parity when the mesh has several components (a solid
+    closed only geometrically: walls meeting a surface at T-junctions, a separate bottom): a ray from
+    its largest facet along the normal crossing the mesh an odd number of times, and the opposite
+    ray an even number, means the normal points into material (flip); otherwise -- a truly open
+    surface -- it is turned **upward** (area-weighted mean normal N_z >= 0; a component with zero N_z
+    sum keeps the majority winding of the file). (Ray tests: the 64 largest open components.) Edges shared by more than two facets are ignored and counted
+    (``non_manifold_edges``); a non-orientable component keeps the propagated winding and its
+    conflicting edges are counted (``winding_conflicts``). ``rule="keep"`` changes nothing.
+
+    >>> tri = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[1, 0, 0], [0, 1, 0], [1, 1, 0]]], float)
+    >>> t, flipped, info = orient_facets(tri)        # second facet wound clockwise (normal -Z)
+    >>> flipped.tolist(), facet_normals(t)[:, 2].tolist()
+    ([False, True], [1.0, 1.0])
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import breadth_first_order, connected_components
+
+    tri = np.array(triangles, dtype=float, copy=True)
+    F = len(tri)
+    info = {"components": 0, "non_manifold_edges": 0, "winding_conflicts": 0, "boundary_edges": 0}
+    if rule == "keep":
+        return tri, np.zeros(F, bool), info
+    if rule != "auto":
+        raise ValueError(f"orient must be 'auto' or 'keep', got {rule!r}")
+    if F == 0:
+        return tri, np.zeros(0, bool), info
+    flat = np.ascontiguousarray(tri.reshape(-1, 3)) + 0.0          # + 0.0: -0.0 welds with 0.0
+    _, vid = np.unique(flat.view(np.dtype((np.void, 24))).ravel(), return_inverse=True)
+    V = vid.reshape(F, 3)
+    a = V.ravel()
+    b = V[:, [1, 2, 0]].ravel()
+    fac = np.repeat(np.arange(F), 3)
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    fwd = a < b
+    order = np.lexsort((hi, lo))
+    lo_s, hi_s = lo[order], hi[order]
+    new = np.ones(order.size, bool)
+    new[1:] = (lo_s[1:] != lo_s[:-1]) | (hi_s[1:] != hi_s[:-1])
+    gid = np.cumsum(new) - 1
+    cnt = np.bincount(gid)
+    info["boundary_edges"] = int((cnt == 1).sum())
+    info["non_manifold_edges"] = int((cnt > 2).sum())
+    first = np.flatnonzero(new)
+    pair = first[cnt[gid[first]] == 2]
+    f1, f2 = fac[order[pair]], fac[order[pair + 1]]
+    same = fwd[order[pair]] == fwd[order[pair + 1]]          # same direction -> relative flip
+    keep = f1 != f2
+    f1, f2, same = f1[keep], f2[keep], same[keep]
+    _, u = np.unique(np.minimum(f1, f2) * F + np.maximum(f1, f2), return_index=True)
+    f1, f2, same = f1[u], f2[u], same[u]                        # one link per facet pair
+    # graph with a virtual root F linked to every facet (weight 1 = no flip) so one BFS covers all
+    w = np.concatenate([same + 1, same + 1]).astype(np.int8)   # 1 = consistent, 2 = flip
+    rows = np.concatenate([f1, f2])
+    cols = np.concatenate([f2, f1])
+    G = coo_matrix((w, (rows, cols)), shape=(F, F)).tocsr()
+    ncomp, comp = connected_components(G, directed=False)
+    info["components"] = int(ncomp)
+    root_of = np.full(ncomp, -1)
+    root_of[comp[::-1]] = np.arange(F)[::-1]                  # first facet of each component
+    R = coo_matrix((np.ones(ncomp, np.int8), (np.full(ncomp, F), root_of)), shape=(F + 1, F + 1))
+    Gx = coo_matrix((G.data, (np.repeat(np.arange(F), np.diff(G.indptr)), G.indices)), shape=(F + 1, F + 1))
+    H = (Gx + R).tocsr()
+    _, pred = breadth_first_order(H, F, directed=True, return_predecessors=True)
+    pred = pred[:F]
+    par = np.zeros(F, np.int8)
+    tree = pred != F
+    if tree.any():
+        keys = np.concatenate([f1 * F + f2, f2 * F + f1])
+        vals = np.concatenate([same, same])
+        o = np.argsort(keys)
+        pos = np.searchsorted(keys[o], pred[tree].astype(np.int64) * F + np.flatnonzero(tree))
+        par[tree] = vals[o][pos].astype(np.int8)
+    anc = np.where(tree, pred, np.arange(F))
+    while True:       # pointer jumping: parity to the component root = XOR along the tree path
+        moving = anc[anc] != anc
+        if not moving.any():
+            break
+        par = np.where(moving, par ^ par[anc], par)
+        anc = np.where(moving, anc[anc], anc)
+    flip = par.astype(bool)
+    info["winding_conflicts"] = int(((flip[f1] ^ flip[f2]) != same).sum())
+    t2 = np.where(flip[:, None, None], tri[:, ::-1], tri)
+    # one sign per component: closed -> outward (signed volume), open -> upward (sum of N_z * area)
+    bnd_fac = fac[order[first[cnt[gid[first]] == 1]]]
+    open_comp = np.zeros(ncomp, bool)
+    open_comp[comp[bnd_fac]] = True
+    nm_fac = fac[order[first[cnt[gid[first]] > 2]]]
+    open_comp[comp[nm_fac]] = True
+    cross = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
+    vol = np.bincount(comp, (t2[:, 0] * cross).sum(axis=1), ncomp)
+    upz = np.bincount(comp, cross[:, 2], ncomp)
+    agree = np.bincount(comp, (~flip).astype(float), ncomp) - np.bincount(comp, flip.astype(float), ncomp)
+    turn = np.where(open_comp, np.where(upz != 0, upz < 0, agree < 0), vol < 0)
+    # open components of a solid that is closed only geometrically (walls meeting a surface at
+    # T-junctions, separate bottom ...): ray parity from the largest facet of the component decides
+    # (odd crossings along the normal -> the normal points into material -> flip). Rays in both
+    # directions must disagree in parity, else (a truly open surface) the upward rule above stands.
+    areas = np.linalg.norm(cross, axis=1)
+    cand = np.flatnonzero(open_comp)
+    if cand.size and ncomp > 1:
+        cand = cand[np.argsort(-np.bincount(comp, areas, ncomp)[cand])][:64]
+        big = np.full(ncomp, -1)
+        order_a = np.lexsort((-areas, comp))
+        firsts = np.ones(F, bool)
+        firsts[1:] = comp[order_a][1:] != comp[order_a][:-1]
+        big[comp[order_a][firsts]] = order_a[firsts]
+        for c in cand:
+            f = big[c]
+            n = cross[f] / areas[f]
+            o = t2[f].mean(axis=0)                       # independent of the vertex order
+            sgn = 1.0 if n @ _RAY_W >= 0 else -1.0       # canonical direction: same rays either winding
+            d = sgn * n + 1e-4 * _RAY_W
+            along = _ray_hits(o, d, t2, exclude=f)
+            against = _ray_hits(o, -d, t2, exclude=f)
+            if along % 2 != against % 2:                 # material on exactly one side
+                inside = along % 2 == 1 if sgn > 0 else against % 2 == 1
+                turn[c] = inside
+    flip = flip ^ turn[comp]
+    out = np.where(flip[:, None, None], tri[:, ::-1], tri)
+    return out, flip, info
+
+
+_RAY_W = np.array([0.37, 0.59, 0.23]) / np.linalg.norm([0.37, 0.59, 0.23])
+
+
+def _ray_hits(o, d, tri, exclude=-1) -> int:
+    """Number of facets crossed by the ray o + t d, t > 0 (Moller-Trumbore, vectorised)."""
+    e1 = tri[:, 1] - tri[:, 0]
+    e2 = tri[:, 2] - tri[:, 0]
+    p = np.cross(d, e2)
+    det = (e1 * p).sum(axis=1)
+    ok = np.abs(det) > 1e-300
+    inv = np.divide(1.0, det, out=np.zeros_like(det), where=ok)
+    s = o - tri[:, 0]
+    u = (s * p).sum(axis=1) * inv
+    q = np.cross(s, e1)
+    v = (q * d).sum(axis=1) * inv
+    t = (q * e2).sum(axis=1) * inv
+    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+    if exclude >= 0:
+        hit[exclude] = False
+    return int(hit.sum())
+
+
+def read_stl(path, degenerate: str = "error", orient: str = "auto", orient_up: bool = False) -> TriMesh:
+    """Read an ASCII or binary STL strictly; facets re-oriented consistently (see :func:`orient_facets`).
 
     Parameters
     ----------
-    path : STL file (mm).
+    path : STL file (mm). Binary is recognised by its size (84 + 50 x the facet count of the header,
+        also when the 80-byte header starts with "solid"); any other size is refused, both shorter
+        and longer. ASCII files may hold several ``solid ... endsolid`` blocks: **all** solids are
+        read (their facets concatenated; ``info["solids"]`` lists the names). Blank lines anywhere
+        are accepted.
     degenerate : 'error' (default: zero-area facet -> ValueError naming it) or 'drop'.
-    orient_up : flip facets whose normal has N_z < 0 (open height-field surfaces only).
+    orient : 'auto' (default: consistent winding, closed parts outward, open surfaces upward; the
+        number of flipped facets is ``info["reoriented_facets"]`` and an :class:`STLWarning` is
+        issued when it is not zero) or 'keep' (the file's vertex order as written).
+    orient_up : additionally flip every facet whose normal has N_z < 0 (open height fields with folds).
 
-    Raises ``ValueError`` (:class:`STLError`) naming the file (and line for ASCII) on a truncated or
-    garbled file, non-finite coordinates or zero-area facets.
+    Raises ``ValueError`` (:class:`STLError`) naming the file (and the line for ASCII, the facet for
+    binary) on an empty, truncated, oversized or garbled file, non-finite coordinates, zero-area
+    facets or repeated facets (same three corners; ``degenerate="drop"`` drops both kinds, counted in
+    ``info["dropped_degenerate"]`` / ``info["dropped_duplicate"]``).
+
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "t.stl"
+    >>> _ = p.write_text("solid a\\nfacet normal 0 0 1\\nouter loop\\nvertex 0 0 0\\nvertex 1 0 0\\n"
+    ...                  "vertex 0 1 0\\nendloop\\nendfacet\\nendsolid a\\n\\n\\n")
+    >>> m = read_stl(p); m.n_facets, m.info["format"], m.info["reoriented_facets"]
+    (1, 'ascii', 0)
     """
-    from stl import mesh as stlmesh
-
     path = Path(path)
     raw = path.read_bytes()
-    if not raw:
+    if not raw.strip():
         raise STLError(f"{path}: empty STL file")
-    ascii_ = _is_ascii_stl(raw)
-    text = None
-    if ascii_:
-        text = raw.decode("ascii", errors="replace")
-        _check_ascii(text, path)
+    kind = _stl_kind(raw)
+    flines = None
+    if kind == "ascii":
+        try:
+            text = raw.decode("ascii")
+        except UnicodeDecodeError as exc:
+            line = raw[:exc.start].count(b"\n") + 1
+            raise STLError(f"{path}:{line}: non-ASCII byte in an ASCII STL (or a binary STL whose size "
+                           f"does not match its facet count)") from None
+        tri, stored, flines, names = _parse_ascii_stl(text, path)
+        name = names[0] or path.stem
+        if len(tri) == 0:
+            raise STLError(f"{path}: STL has no facets")
     else:
-        if len(raw) < 84:
-            raise STLError(f"{path}: truncated binary STL ({len(raw)} bytes, header needs 84)")
-        count = int(np.frombuffer(raw[80:84], "<u4")[0])
-        if len(raw) < 84 + 50 * count:
-            raise STLError(f"{path}: truncated binary STL: header announces {count} facets "
-                           f"({84 + 50 * count} bytes), file has {len(raw)} bytes")
-    try:
-        m = stlmesh.Mesh.from_file(str(path), fh=io.BytesIO(raw), calculate_normals=False,
-                                   speedups=False)
-    except Exception as exc:  # numpy-stl raises assorted errors on bad files
-        raise STLError(f"{path}: cannot read STL: {exc}") from None
-    tri = np.asarray(m.vectors, dtype=float).reshape(-1, 3, 3)
-    if tri.shape[0] == 0:
-        raise STLError(f"{path}: STL has no facets")
-    where = lambda k: f"{path}:{_facet_line(text, k)}" if ascii_ else f"{path} (facet {k})"  # noqa: E731
+        tri, stored, name = _parse_binary_stl(raw, path)
+        names = [name]
+        name = name or path.stem
+    where = (lambda k: f"{path}:{flines[k]}") if flines is not None else (lambda k: f"{path} (facet {k})")
     bad = ~np.isfinite(tri).all(axis=(1, 2))
     if bad.any():
         raise STLError(f"{where(int(np.argmax(bad)))}: non-finite vertex coordinate")
     try:
-        mesh = TriMesh.from_triangles(tri, name=(m.name.decode(errors="replace") if isinstance(m.name, bytes)
-                                                 else str(m.name)) or path.stem,
-                                      degenerate=degenerate, source=str(path))
+        mesh = TriMesh.from_triangles(tri, name=name, degenerate=degenerate, source=str(path))
     except STLError as exc:
         k = int(re.search(r"facet (\d+)", str(exc)).group(1))
         raise STLError(f"{where(k)}: {str(exc).split(': ', 1)[1]}") from None
-    stored = np.asarray(m.normals, float).reshape(-1, 3)
-    if degenerate == "drop" and mesh.info["dropped_degenerate"]:
-        keep = facet_areas(tri) > 0
-        stored = stored[keep][: mesh.n_facets]
+    if mesh.info["dropped_degenerate"]:
+        stored = stored[facet_areas(tri) > 1e-12 * max(float(np.ptp(tri.reshape(-1, 3), axis=0).max()), 1e-300) ** 2]
+    key = np.sort(np.ascontiguousarray(mesh.triangles + 0.0).view(np.dtype((np.void, 24))).reshape(-1, 3), axis=1)
+    _, first, inv = np.unique(key.view(np.dtype((np.void, 72))).ravel(), return_index=True, return_inverse=True)
+    dup = np.flatnonzero(first[inv.ravel()] != np.arange(len(key)))
+    if dup.size and degenerate == "error":
+        k, j = int(dup[0]), int(first[inv.ravel()[dup[0]]])
+        raise STLError(f"{where(k)}: facet {k} repeats facet {j} (same three corners; {dup.size} duplicate "
+                       "facet(s); pass degenerate='drop' to skip them)")
+    if dup.size:
+        keep = np.ones(len(key), bool)
+        keep[dup] = False
+        mesh.triangles, mesh.normals, stored = mesh.triangles[keep], mesh.normals[keep], stored[keep]
+    mesh.info["dropped_duplicate"] = int(dup.size)
+    t2, flipped, oinfo = orient_facets(mesh.triangles, orient)
+    mesh.triangles = t2
+    mesh.normals = facet_normals(t2)
     ln = np.linalg.norm(stored, axis=1)
     missing = ln == 0
     unit = np.divide(stored, ln[:, None], out=np.zeros_like(stored), where=ln[:, None] > 0)
@@ -272,9 +510,13 @@ def read_stl(path, degenerate: str = "error", orient_up: bool = False) -> TriMes
         mesh.triangles[down] = mesh.triangles[down][:, ::-1]
         mesh.normals[down] *= -1
         mesh.info["flipped_down_facets"] = int(down.sum())
-    mesh.info.update(format="ascii" if ascii_ else "binary", stored_normals_missing=int(missing.sum()),
-                     stored_normals_inconsistent=int(inconsistent.sum()), normals="recomputed from vertex order",
-                     source=str(path))
+    mesh.info.update(format=kind, solids=names, stored_normals_missing=int(missing.sum()),
+                     stored_normals_inconsistent=int(inconsistent.sum()),
+                     normals="recomputed from the (re-oriented) vertex order",
+                     reoriented_facets=int(flipped.sum()), orientation=orient, source=str(path), **oinfo)
+    if flipped.any():
+        warnings.warn(f"{path}: {int(flipped.sum())} of {mesh.n_facets} facets re-oriented (consistent winding; "
+                      "closed parts outward, open surfaces upward)", STLWarning, stacklevel=2)
     return mesh
 
 

@@ -9,13 +9,28 @@ Dialect
 -------
 - ``$$`` starts a comment (a whole line or the tail of a statement).
 - A statement (or comment) whose text ends with a single ``$`` continues on the next line.
-- ``UNITS/MM`` is required for coordinates in mm; ``UNITS/INCH`` is **refused** (ValueError naming
-  file and line) -- convert in the CAM system; cnclab works in mm throughout.
+- ``UNITS/MM`` is **required** before the first motion (a file without it is refused, naming file
+  and line: a CL file of unknown units is never guessed to be mm); ``UNITS/INCH`` is **refused** --
+  convert in the CAM system; cnclab works in mm throughout. A UTF-8 byte-order mark at the start of
+  the text is dropped (it is not part of the first record; outputs are written without it).
+- Numbers follow a strict grammar: ASCII digits, optional sign, one decimal point, optional exponent
+  (``[+-]?(digits[.digits]|.digits)([eE][+-]?digits)?``). ``2_0.000``, full-width digits, ``nan``,
+  ``inf``, hex and anything else Python's ``float`` would also accept are refused. Record words are
+  ASCII identifiers (``[A-Za-z][A-Za-z0-9_]*``).
+- ``CIRCLE/xc,yc,zc,i,j,k,r`` (7 values; the 11-value form with tolerance and cutter values is
+  accepted, the extra 4 ignored) announces that the **next statement**, which must be a feed
+  ``GOTO``, is a circular arc about the centre (xc, yc, zc) and the axis (i, j, k), counter-clockwise
+  by the right-hand rule: axis +Z -> G3, -Z -> G2 (arcs in the XY plane only; Z may change: helix).
+  Start and end must lie on the circle: their XY distances from the centre may differ from each
+  other by at most 0.8 um (so the G-code reader's 1 um arc check passes after 4-decimal output) and
+  from r by at most 2 um + 1e-6 r. Anything between the CIRCLE and its GOTO other than comments is an error.
+- Motion records cnclab does not interpret (``GODLTA``, ``GOFWD``, ``GOHOME``, ``INDIRV``, ``CYCLE``,
+  ``COPY``, ``TRACUT`` ...) are **refused** (file and line) rather than carried through unmodelled.
 - ``RAPID`` makes the *next* motion a rapid; ``GOTO/x,y,z[,i,j,k]`` is a linear motion (feed unless
   preceded by ``RAPID``); ``FROM/x,y,z`` sets the start position. ``FEDRAT/f[,MMPM]`` sets the feed in
   mm/min, ``SPINDL/[RPM,]n[,CLW|CCLW]`` the spindle speed in rpm. ``END`` / ``FINI`` end the program.
 - Errors name file and line: GOTO/FROM with other than 3 or 6 values, non-numeric or non-finite
-  values, a feed motion before any ``FEDRAT``, a program without motion.
+  values, a feed motion before any ``FEDRAT``, a program without motion, a motion before ``UNITS``.
 
 Speed: runs of plain ``GOTO / x, y, z`` lines (the bulk of a CL file) are located with one regular
 expression, checked strictly with numpy (one '/', two commas, exactly one number token per field) and
@@ -28,6 +43,9 @@ check goes through the careful per-line parser, so records, text and error messa
 >>> cl = prog.cl_points()
 >>> cl.xyz.tolist(), cl.rapid.tolist(), cl.feed.tolist()
 ([[0.0, 0.0, 5.0], [10.0, 0.0, 0.0]], [True, False], [nan, 500.0])
+>>> arc = parse_apt("UNITS/MM\\nFROM/10,0,0\\nFEDRAT/500\\nCIRCLE/0,0,0,0,0,1,10\\nGOTO/0,10,0\\n").cl_points()
+>>> arc.arc.tolist(), round(float(arc.segment_lengths()[0]), 6)          # quarter circle, CCW
+([1], 15.707963)
 >>> prog.to_text() == "UNITS / MM\\nRAPID\\nGOTO / 0, 0, 5\\nFEDRAT / 500, MMPM\\nGOTO / 10, 0, 0\\nFINI\\n"
 True
 """
@@ -49,6 +67,29 @@ __all__ = ["AptError", "AptRecord", "AptProgram", "CLPoints", "parse_apt", "read
 
 class AptError(ValueError):
     """A malformed APT file; the message names the file and line."""
+
+
+#: the strict APT number grammar (ASCII only; no '_', no nan/inf, no hex)
+NUMBER_RE = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?", re.ASCII)
+_WORD_RE = re.compile(r"[A-Za-z][A-Za-z0-9_]*", re.ASCII)
+#: motion records that move the tool in a way cnclab does not model: refused (file and line)
+REFUSED_MOTION = frozenset({"GO", "GODLTA", "GOFWD", "GOBACK", "GOLFT", "GORGT", "GOUP", "GODOWN", "GOHOME",
+                            "INDIRV", "INDIRP", "CYCLE", "COPY", "INDEX", "TRACUT", "ROTABL", "ROTHED",
+                            "ROTATE", "TRANS", "ARC", "MOVARC", "MOVE", "PSIS", "DNTCUT", "AUTOPS"})
+_CIRCLE_TOL_DIFF = 0.8e-3     # mm: start and end radius may differ by this much
+_CIRCLE_TOL_R = 2e-3          # mm (+ 1e-6 r): start/end radius vs the CIRCLE's r
+
+
+def parse_number(token: str) -> float:
+    """A number of the strict APT grammar (:data:`NUMBER_RE`), else ValueError.
+
+    >>> parse_number("-1.5e3"), parse_number(".5")
+    (-1500.0, 0.5)
+    """
+    t = token.strip()
+    if not NUMBER_RE.fullmatch(t):
+        raise ValueError(f"{token!r} is not a number")
+    return float(t)
 
 
 @dataclasses.dataclass(slots=True)
@@ -74,7 +115,7 @@ class AptRecord:
         out = []
         for a in self.args:
             try:
-                out.append(float(a))
+                out.append(parse_number(a))
             except ValueError:
                 pass
         return out
@@ -113,7 +154,9 @@ class CLPoints:
 
     ``xyz`` (N, 3) mm end points; ``rapid`` (N,) bool; ``feed`` (N,) mm/min in force (NaN for rapids);
     ``spindle`` (N,) rpm in force (NaN before any SPINDL); ``record`` (N,) index into ``records``;
-    ``line`` (N,) source line; ``start`` (3,) the FROM point (or the first point).
+    ``line`` (N,) source line; ``start`` (3,) the FROM point (or the first point); ``arc`` (N,) int8:
+    0 straight, +1 counter-clockwise (G3), -1 clockwise (G2) arc from a ``CIRCLE`` record;
+    ``centre`` (N, 3) arc centres (mm, NaN for straight moves).
     """
 
     xyz: np.ndarray
@@ -123,9 +166,34 @@ class CLPoints:
     record: np.ndarray
     line: np.ndarray
     start: np.ndarray
+    arc: np.ndarray | None = None
+    centre: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.arc is None:
+            self.arc = np.zeros(len(self.xyz), np.int8)
+        if self.centre is None:
+            self.centre = np.full((len(self.xyz), 3), np.nan)
 
     def __len__(self):
         return len(self.xyz)
+
+    def segment_lengths(self) -> np.ndarray:
+        """Length (mm) of the motion ending at each point: chord for straight moves, arc (helix) length
+        for CIRCLE moves (a move ending where it starts is a full circle)."""
+        prev = np.vstack([np.asarray(self.start, float)[None], self.xyz[:-1]])
+        L = np.linalg.norm(self.xyz - prev, axis=1)
+        k = np.flatnonzero(self.arc != 0)
+        if k.size:
+            c = self.centre[k]
+            a0 = np.arctan2(prev[k, 1] - c[:, 1], prev[k, 0] - c[:, 0])
+            a1 = np.arctan2(self.xyz[k, 1] - c[:, 1], self.xyz[k, 0] - c[:, 0])
+            sweep = np.mod((a1 - a0) * self.arc[k], 2 * np.pi)
+            full = np.hypot(*(self.xyz[k, :2] - prev[k, :2]).T) == 0
+            sweep[full] = 2 * np.pi
+            r = np.hypot(prev[k, 0] - c[:, 0], prev[k, 1] - c[:, 1])
+            L[k] = np.hypot(r * sweep, self.xyz[k, 2] - prev[k, 2])
+        return L
 
 
 class GotoRun:
@@ -224,7 +292,7 @@ class AptProgram:
             c = r.comment.upper().replace(" ", "")
             if "CUTTER/" in c:
                 try:
-                    return float(c.split("CUTTER/", 1)[1].split(",")[0].rstrip("$"))
+                    return parse_number(c.split("CUTTER/", 1)[1].split(",")[0].rstrip("$"))
                 except ValueError:
                     pass
         return None
@@ -235,11 +303,15 @@ class AptProgram:
         ``record`` indexes the (expanded) ``records`` list.
         """
         xyz, rapid, feed, spin, rec, line = [], [], [], [], [], []
+        arcs = {}         # motion index -> (direction, centre)
         f = math.nan
         s = math.nan
         pending_rapid = False
+        circle = None
         start = None
         k = 0
+        n_mot = 0
+        last = None       # current position (for arc checks)
         buf = []  # (xyz, rapid, feed, spindle, record, line) of single records, flushed into arrays
 
         def flush():
@@ -255,6 +327,8 @@ class AptProgram:
             if isinstance(r, GotoRun):
                 flush()
                 m = len(r)
+                if circle is not None:
+                    raise AptError(f"{self.source}:{circle[3]}: CIRCLE must be followed by its end point GOTO")
                 ra = np.zeros(m, bool)
                 fe = np.full(m, f)
                 if pending_rapid:
@@ -270,6 +344,8 @@ class AptProgram:
                 rec.append(np.arange(k, k + m, dtype=np.int64))
                 line.append(np.arange(r.line, r.line + m, dtype=np.int64))
                 k += m
+                n_mot += m
+                last = r.xyz[-1]
                 continue
             w = r.word
             if w == "GOTO":
@@ -280,7 +356,22 @@ class AptProgram:
                     if f != f:
                         raise AptError(f"{self.source}:{r.line}: feed motion (GOTO) before any FEDRAT")
                     is_rapid, fv = False, f
-                buf.append((r.values[:3], is_rapid, fv, s, k, r.line))
+                end = r.values[:3]
+                if circle is not None:
+                    if last is None:
+                        raise AptError(f"{self.source}:{circle[3]}: CIRCLE with an unknown start point "
+                                       "(no FROM or GOTO before it)")
+                    _check_arc(last, end, circle, self.source)
+                    arcs[n_mot] = (circle[0], circle[1])
+                    circle = None
+                buf.append((end, is_rapid, fv, s, k, r.line))
+                n_mot += 1
+                last = end
+            elif w == "CIRCLE":
+                if pending_rapid:
+                    raise AptError(f"{self.source}:{r.line}: CIRCLE after RAPID (an arc is a feed motion)")
+                v = r.values
+                circle = (1 if v[5] > 0 else -1, np.array(v[:3]), v[6], r.line)
             elif w == "RAPID":
                 pending_rapid = True
             elif w == "FEDRAT":
@@ -289,14 +380,33 @@ class AptProgram:
                 s = r.values[0] if r.values else s
             elif w == "FROM":
                 start = np.array(r.values[:3])
+                last = start
             k += 1
         flush()
         if not xyz:
             raise AptError(f"{self.source}: empty program (no GOTO motion)")
+        if circle is not None:
+            raise AptError(f"{self.source}:{circle[3]}: CIRCLE without its end point GOTO")
         xyz = np.concatenate(xyz)
+        arc = np.zeros(len(xyz), np.int8)
+        centre = np.full((len(xyz), 3), np.nan)
+        for j, (d, c) in arcs.items():
+            arc[j], centre[j] = d, c
         return CLPoints(xyz, np.concatenate(rapid), np.concatenate(feed), np.concatenate(spin),
                         np.concatenate(rec), np.concatenate(line),
-                        start if start is not None else xyz[0].copy())
+                        start if start is not None else xyz[0].copy(), arc, centre)
+
+
+def _check_arc(p0, p1, circle, source) -> None:
+    """Start and end of a CIRCLE move must lie on its circle (XY distances, see module docstring)."""
+    _, c, r, line = circle
+    d0 = math.hypot(p0[0] - c[0], p0[1] - c[1])
+    d1 = math.hypot(p1[0] - c[0], p1[1] - c[1])
+    tol = _CIRCLE_TOL_R + 1e-6 * r
+    if abs(d0 - d1) > _CIRCLE_TOL_DIFF or abs(d0 - r) > tol or abs(d1 - r) > tol:
+        raise AptError(f"{source}:{line}: CIRCLE radius {r:g} mm disagrees with its start and end points "
+                       f"(distances {d0:.6g} and {d1:.6g} mm from the centre; tolerance "
+                       f"{_CIRCLE_TOL_DIFF * 1000:g} um between them, {tol * 1000:.3g} um to r)")
 
 
 def _split_comment(text: str) -> tuple[str, str]:
@@ -312,12 +422,38 @@ def _continues(physical: str) -> bool:
 class _State:
     """Parser state carried across careful segments and bulk runs."""
 
-    __slots__ = ("fed", "pending_rapid", "n_goto")
+    __slots__ = ("fed", "pending_rapid", "n_goto", "units", "circle_line", "require_units")
 
-    def __init__(self):
+    def __init__(self, require_units: bool = True):
         self.fed = False
         self.pending_rapid = False
         self.n_goto = 0
+        self.units = False
+        self.circle_line = 0
+        self.require_units = require_units
+
+
+_NONFINITE_RE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.I)
+_NUMERIC_WORDS = ("GOTO", "FROM", "CIRCLE", "FEDRAT", "SPINDL", "UNITS")
+
+
+def _strict_values(word: str, args, where: str) -> list:
+    """Numbers of a record with the strict grammar; every argument must be a number or a minor word."""
+    vals = []
+    for a in args:
+        t = a.strip()
+        if NUMBER_RE.fullmatch(t):
+            vals.append(float(t))
+        elif _NONFINITE_RE.fullmatch(t):
+            raise AptError(f"{where}: {word} has a non-finite value {t!r}")
+        elif word in ("GOTO", "FROM", "CIRCLE"):
+            raise AptError(f"{where}: {word} value {a!r} is not a number")
+        elif not _WORD_RE.fullmatch(t):
+            raise AptError(f"{where}: {word} argument {a!r} is neither a number "
+                           "([+-]digits[.digits][e[+-]digits]) nor a word")
+    if not all(math.isfinite(v) for v in vals):
+        raise AptError(f"{where}: {word} has a non-finite value")
+    return vals
 
 
 def _parse_careful(lines, first_line: int, records: list, st: _State, source: str) -> None:
@@ -355,6 +491,22 @@ def _parse_careful(lines, first_line: int, records: list, st: _State, source: st
         word = word.strip().upper()
         rec = AptRecord(word, args, raw, lineno, comment.strip())
         where = f"{source}:{lineno}"
+        head = word.split()[0]
+        if not _WORD_RE.fullmatch(head):
+            raise AptError(f"{where}: {stmt[:40]!r} does not start with an APT word (ASCII letters, digits, '_')")
+        if head in REFUSED_MOTION:
+            raise AptError(f"{where}: motion record {head} is not supported (cnclab reads GOTO, FROM, RAPID "
+                           "and CIRCLE); post the CL file with explicit GOTO points")
+        if head in ("GOTO", "FROM", "CIRCLE", "FEDRAT", "SPINDL", "UNITS", "RAPID") and word != head:
+            raise AptError(f"{where}: malformed {head} record {stmt[:40]!r} (expected '{head} / values')")
+        if st.circle_line and word != "GOTO":
+            raise AptError(f"{where}: CIRCLE of line {st.circle_line} must be followed directly by its end "
+                           f"point GOTO, got {head}")
+        if word in ("GOTO", "FROM", "CIRCLE") and st.require_units and not st.units:
+            raise AptError(f"{where}: {word} before any UNITS record: UNITS/MM is required (cnclab does not "
+                           "guess the units of a CL file)")
+        if word in _NUMERIC_WORDS:
+            rec.nums = _strict_values(word, args, where) if word != "UNITS" else None
         if word == "RAPID":
             st.pending_rapid = True
         elif word == "GOTO":
@@ -365,17 +517,25 @@ def _parse_careful(lines, first_line: int, records: list, st: _State, source: st
         elif word == "FEDRAT":
             st.fed = True
         if word in ("GOTO", "FROM"):
-            vals = []
-            for a in args:
-                try:
-                    vals.append(float(a))
-                except ValueError:
-                    raise AptError(f"{where}: {word} value {a!r} is not a number") from None
+            vals = rec.nums
             if len(vals) not in (3, 6):
                 raise AptError(f"{where}: {word} needs 3 (x,y,z) or 6 (x,y,z,i,j,k) values, got {len(vals)}")
-            if not all(math.isfinite(v) for v in vals):
-                raise AptError(f"{where}: {word} has a non-finite value")
-            rec.nums = vals
+            if word == "GOTO":
+                st.circle_line = 0
+        elif word == "CIRCLE":
+            v = rec.nums
+            if len(v) not in (7, 11) or len(args) != len(v):
+                raise AptError(f"{where}: CIRCLE needs 7 values (xc,yc,zc,i,j,k,r) or 11, got {args}")
+            ax = np.array(v[3:6])
+            na = float(np.linalg.norm(ax))
+            if na == 0 or abs(ax[0]) > 1e-6 * na or abs(ax[1]) > 1e-6 * na:
+                raise AptError(f"{where}: CIRCLE axis ({v[3]:g}, {v[4]:g}, {v[5]:g}) is not +-Z: only arcs in the "
+                               "XY plane are supported")
+            if not v[6] > 0:
+                raise AptError(f"{where}: CIRCLE radius must be > 0 mm, got {v[6]:g}")
+            if st.pending_rapid:
+                raise AptError(f"{where}: CIRCLE after RAPID (an arc is a feed motion)")
+            st.circle_line = lineno
         elif word == "FEDRAT":
             v = rec.values
             if not v or not math.isfinite(v[0]) or v[0] <= 0:
@@ -391,8 +551,9 @@ def _parse_careful(lines, first_line: int, records: list, st: _State, source: st
             if unit == "INCH":
                 raise AptError(f"{where}: UNITS/INCH is not supported: cnclab works in mm; "
                                "post the CL file in MM (UNITS/MM)")
-            if unit != "MM":
-                raise AptError(f"{where}: unknown UNITS/{unit}")
+            if unit != "MM" or len(args) != 1:
+                raise AptError(f"{where}: unknown UNITS/{', '.join(args)} (UNITS/MM is required)")
+            st.units = True
         records.append(rec)
 
 
@@ -448,17 +609,21 @@ def _after_slash(n: int, slash: np.ndarray, nl: np.ndarray) -> np.ndarray:
     return np.cumsum(d[:n]) > 0
 
 
-def parse_apt(text: str, source: str = "<apt>", fast: bool = True) -> AptProgram:
+def parse_apt(text: str, source: str = "<apt>", fast: bool = True, require_units: bool = True) -> AptProgram:
     """Parse APT CL text into an :class:`AptProgram` (see the module docstring for the dialect).
 
     ``fast=True`` reads runs of plain ``GOTO / x, y, z`` lines in bulk with numpy (same records, same
     errors, same text as the careful per-line parser used for everything else and with ``fast=False``).
+    ``require_units=False`` accepts motions before ``UNITS/MM`` (taken as mm; for hand-written
+    snippets only -- files read by :func:`read_apt` and the CLI always require UNITS).
 
     >>> p = parse_apt("UNITS / MM\\nFEDRAT / 500, MMPM\\n" + "GOTO / 1, 2, 3\\n" * 10)
     >>> len(p), p.cl_points().xyz.shape
     (12, (10, 3))
     """
-    st = _State()
+    if text.startswith("\ufeff"):
+        text = text[1:]           # a UTF-8 BOM is not part of the first record
+    st = _State(require_units)
     items: list = []
     pos = 0
     line_no = 1
@@ -480,6 +645,16 @@ def parse_apt(text: str, source: str = "<apt>", fast: bool = True) -> AptProgram
             before = text[pos:s].splitlines(keepends=True)
             _parse_careful(before, line_no, items, st, source)
             line_no += len(before)
+            pos = s
+            if st.circle_line or (st.require_units and not st.units):   # the careful parser reports it
+                first_end = text.index("\n", s) + 1
+                _parse_careful([text[s:first_end]], line_no, items, st, source)
+                line_no += 1
+                s = pos = first_end
+                xyz = xyz[1:]
+                run_text = text[s:e]
+                if len(xyz) < _MIN_RUN:
+                    continue
             if not st.pending_rapid and not st.fed:
                 raise AptError(f"{source}:{line_no}: feed motion (GOTO) before any FEDRAT")
             if st.pending_rapid and not st.fed and len(xyz) > 1:
@@ -498,10 +673,13 @@ def parse_apt(text: str, source: str = "<apt>", fast: bool = True) -> AptProgram
 def read_apt(path) -> AptProgram:
     """Read and validate an APT CL file (UTF-8/ASCII); errors name file and line."""
     path = Path(path)
+    raw = path.read_bytes()
     try:
-        text = path.read_text(encoding="utf-8")
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise AptError(f"{path}: not a text APT file ({exc})") from None
+        line = raw[:exc.start].count(b"\n") + 1
+        raise AptError(f"{path}:{line}: not a UTF-8/ASCII text APT file (byte 0x{raw[exc.start]:02x} at offset "
+                       f"{exc.start})") from None
     return parse_apt(text, str(path))
 
 

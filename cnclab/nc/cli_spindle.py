@@ -2,13 +2,42 @@
 
 Constant-cutting-speed post-processing of an APT CL file against an STL surface (Mgherony 2024,
 Sec. 7.2.3): inserts SPINDL/FEDRAT records; optional RS274/NGC export with ``--gcode OUT.ngc``.
-Inputs are never overwritten; nothing is written on error (exit code 2 with a message naming the
-file and line).
+Inputs are never overwritten and outputs must differ from the inputs and from each other; all
+outputs are written together at the end or none (also on Ctrl-C / SIGTERM: no temporary file is
+left). Every numeric option must be finite and in its range. Errors: exit code 2 with a message on
+its own line naming the option or the file and line.
 """
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+import warnings
+
+from ..cutting.spindle_model import POINT_RULES
+from ..fileio import cleanup_on_signals
+from .apt import NUMBER_RE
+from .spindle_control import postprocess_files
+
+
+def _number(name, lo=None, lo_open=True, hi=None, kind=float):
+    """argparse type: a finite number in the range (message names the option)."""
+    def conv(text):
+        try:
+            if not NUMBER_RE.fullmatch(text.strip()) and text.strip().lower() not in ("nan", "inf", "-inf", "+inf"):
+                raise ValueError(text)      # strict grammar: no '1_0', no hex, no full-width digits
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be {'an integer' if kind is int else 'a number'}, "
+                                             f"got {text!r}") from None
+        ok = math.isfinite(v) and (lo is None or (v > lo if lo_open else v >= lo)) and (hi is None or v <= hi)
+        if not ok:
+            rng = ("(" if lo_open else "[") + (f"{lo:g}" if lo is not None else "-inf") + ", " + \
+                  (f"{hi:g}]" if hi is not None else "inf)")
+            raise argparse.ArgumentTypeError(f"{name} must be finite and in {rng}, got {text!r}")
+        return v
+    conv.__name__ = name
+    return conv
 
 from ..cutting.spindle_model import POINT_RULES
 from .spindle_control import postprocess_files
@@ -19,35 +48,61 @@ def main(argv=None) -> int:
     ap.add_argument("stl", help="surface STL (ASCII or binary, mm)")
     ap.add_argument("apt", help="APT CL file (UNITS/MM)")
     ap.add_argument("-o", "--out", required=True, help="output APT file (must differ from the inputs)")
-    ap.add_argument("--vc", type=float, required=True, help="nominal cutting speed v_c (m/min)")
-    ap.add_argument("--fz", type=float, required=True, help="feed per tooth f_z (mm)")
-    ap.add_argument("--teeth", type=int, required=True, help="number of teeth z")
-    ap.add_argument("--ap", type=float, required=True, help="depth of cut a_p (mm)")
-    ap.add_argument("--ae", type=float, default=None, help="width of cut a_e (mm; reported only)")
-    ap.add_argument("--tool-diameter", type=float, default=None, help="D (mm); default from CUTTER in the APT")
-    ap.add_argument("--feed-direction", type=float, default=None, help="constant A_f (deg); default eq 7-3")
+    ap.add_argument("--vc", type=_number("--vc", 0), required=True, help="nominal cutting speed v_c (m/min)")
+    ap.add_argument("--fz", type=_number("--fz", 0), required=True, help="feed per tooth f_z (mm)")
+    ap.add_argument("--teeth", type=_number("--teeth", 1, lo_open=False, kind=int), required=True,
+                    help="number of teeth z (integer >= 1)")
+    ap.add_argument("--ap", type=_number("--ap", 0), required=True, help="depth of cut a_p (mm, <= D/2)")
+    ap.add_argument("--ae", type=_number("--ae", 0), default=None, help="width of cut a_e (mm; reported only)")
+    ap.add_argument("--tool-diameter", type=_number("--tool-diameter", 0), default=None,
+                    help="D (mm); default from CUTTER in the APT")
+    ap.add_argument("--feed-direction", type=_number("--feed-direction"), default=None,
+                    help="constant A_f (deg); default eq 7-3")
     ap.add_argument("--point", choices=POINT_RULES, default="max", help="tangent point rule (default max)")
     ap.add_argument("--facet", choices=("centroid", "nearest"), default="centroid",
                     help="facet assignment: nearest centroid (thesis) or true nearest facet")
-    ap.add_argument("--nmax", type=float, default=None, help="spindle limit (rpm)")
-    ap.add_argument("--vfmax", type=float, default=None, help="feed limit (mm/min)")
-    ap.add_argument("--accel", type=float, default=None, help="spindle acceleration limit (rpm/s)")
-    ap.add_argument("--rpm-threshold", type=float, default=50.0, help="insert SPINDL when n changes more (rpm)")
-    ap.add_argument("--vf-threshold", type=float, default=10.0, help="insert FEDRAT when v_f changes more (mm/min)")
-    ap.add_argument("--gcode", default=None, help="also write RS274/NGC G-code here")
+    ap.add_argument("--nmax", type=_number("--nmax", 0), default=None, help="spindle limit (rpm)")
+    ap.add_argument("--vfmax", type=_number("--vfmax", 0), default=None, help="feed limit (mm/min)")
+    ap.add_argument("--accel", type=_number("--accel", 0), default=None, help="spindle acceleration limit (rpm/s)")
+    ap.add_argument("--rpm-threshold", type=_number("--rpm-threshold", 0, lo_open=False), default=50.0,
+                    help="insert SPINDL when n changes more (rpm, >= 0)")
+    ap.add_argument("--vf-threshold", type=_number("--vf-threshold", 0, lo_open=False), default=10.0,
+                    help="insert FEDRAT when v_f changes more (mm/min, >= 0)")
+    ap.add_argument("--gcode", default=None, help="also write RS274/NGC G-code here (differs from -o and inputs)")
+    ap.add_argument("--mismatch-tol", type=_number("--mismatch-tol", 0), default=1.0,
+                    help="part/path check: a feed CL point is off the part if its ball is farther than this "
+                         "from the surface (mm, default 1)")
+    ap.add_argument("--max-off-share", type=_number("--max-off-share", 0, lo_open=False, hi=1), default=0.2,
+                    help="part/path check: largest accepted share of off-part feed points (default 0.2)")
+    ap.add_argument("--allow-mismatch", action="store_true",
+                    help="process even when the part/path check fails (the share is still reported)")
     args = ap.parse_args(argv)
+    if args.ae is not None and args.tool_diameter is not None and args.ae > args.tool_diameter:
+        ap.error(f"--ae must be <= the tool diameter ({args.tool_diameter:g} mm), got {args.ae:g}")
     try:
-        s = postprocess_files(args.stl, args.apt, args.out, v_c=args.vc, f_z=args.fz, teeth=args.teeth,
-                              a_p=args.ap, tool_diameter=args.tool_diameter, gcode_path=args.gcode,
-                              rpm_threshold=args.rpm_threshold, vf_threshold=args.vf_threshold,
-                              progress=True, feed_direction_deg=args.feed_direction, point=args.point,
-                              facet_rule=args.facet, n_max=args.nmax, vf_max=args.vfmax,
-                              accel_rpm_s=args.accel)
-    except (ValueError, FileNotFoundError, OSError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        with cleanup_on_signals(), warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            s = postprocess_files(args.stl, args.apt, args.out, v_c=args.vc, f_z=args.fz, teeth=args.teeth,
+                                  a_p=args.ap, tool_diameter=args.tool_diameter, gcode_path=args.gcode,
+                                  rpm_threshold=args.rpm_threshold, vf_threshold=args.vf_threshold,
+                                  progress=True, feed_direction_deg=args.feed_direction, point=args.point,
+                                  facet_rule=args.facet, n_max=args.nmax, vf_max=args.vfmax,
+                                  accel_rpm_s=args.accel, mismatch_tol=args.mismatch_tol,
+                                  max_off_share=args.max_off_share, allow_mismatch=args.allow_mismatch)
+    except (ValueError, OSError) as exc:
+        sys.stderr.flush()
+        print(f"\nerror: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("\ninterrupted: nothing written", file=sys.stderr)
+        return 130
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
     print(f"{s['cl_points']} CL points ({s['feed_points']} feed) vs {s['facets']} facets, D = {s['tool_diameter']} mm"
           + (f", a_e = {args.ae} mm" if args.ae else ""))
+    print(f"part/path check: {100 * s['off_surface_share']:.1f} % of feed points more than {args.mismatch_tol:g} mm "
+          f"from the surface (median gap {s['median_gap_mm']:.3g} mm)"
+          + (f"; {s['reoriented_facets']} STL facets re-oriented" if s["reoriented_facets"] else ""))
     print(f"n   {s['n_min']:.0f} .. {s['n_max']:.0f} rpm   v_f {s['vf_min']:.0f} .. {s['vf_max']:.0f} mm/min   "
           f"D_eff {s['d_eff_min']:.3f} .. {s['d_eff_max']:.3f} mm")
     print(f"limited points: {s['limited_points']}   v_c within ±5 %: {100 * s['vc_within_5pct_share']:.1f} % of path")
