@@ -713,7 +713,7 @@ def _part_and_path(tmp_path, dz=0.0, dx=0.0, scale=1.0, arc=False):
     tri = mesh.triangles * scale
     stl = write_stl(tmp_path / "part.stl", TriMesh.from_triangles(tri))
     if dz or dx:
-        text = apt.cl_program([p + [dx, 0, dz] for p in passes], 500, 2000, 2 * R, 30).to_text()
+        text = apt.cl_program([p + [dx, 0, dz] for p in passes], 500, 2000, 2 * R, 30 + max(dz, 0.0)).to_text()
     p = tmp_path / "path.apt"
     p.write_text(text)
     return stl, p
