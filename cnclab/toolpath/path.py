@@ -318,9 +318,15 @@ class ToolPath:
         pts.append(self.xyz[prev:]); idx.append(np.arange(prev, len(self)))
         return np.vstack(pts), np.concatenate(idx)
 
-    def resample(self, max_step: float) -> "ToolPath":
+    def resample(self, max_step: float, return_index: bool = False):
         """The same path with every move split into pieces at most ``max_step`` mm long (arcs become
-        line pieces on the arc); kind, tag, feed and spindle are inherited by the pieces."""
+        line pieces on the arc); kind, tag, feed and spindle are inherited by the pieces. With
+        ``return_index`` also the index of the original move of every piece: ``(path, index)``.
+
+        >>> p = ToolPath.build([[0, 0, 0], [1, 0, 0]], feed=100).resample(0.25)
+        >>> len(p), float(p.segment_lengths().max())
+        (5, 0.25)
+        """
         if not (math.isfinite(max_step) and max_step > 0):
             raise ValueError(f"max_step must be a finite number > 0 mm, got {max_step!r}")
         P, src = self.polyline(max_step)
@@ -330,8 +336,9 @@ class ToolPath:
             t = np.arange(1, n + 1)[:, None] / n
             out_p.append(P[j - 1] + t * (P[j] - P[j - 1])); out_i.append(np.full(n, src[j]))
         Q, I = np.vstack(out_p), np.concatenate(out_i)
-        return ToolPath(Q, self.kind[I], self.tag[I], self.feed[I], self.spindle[I], None, None,
-                        self.tool, dict(self.info))
+        out = ToolPath(Q, self.kind[I], self.tag[I], self.feed[I], self.spindle[I], None, None,
+                       self.tool, dict(self.info))
+        return (out, I) if return_index else out
 
     # -- program moves -----------------------------------------------------------------------
     def to_moves(self) -> list[Move]:

@@ -19,6 +19,7 @@ from ...simulation import dixel, pixel
 from ...toolpath import constant_mrr as cm
 from ...nc import gcode
 from ...toolpath import offsets
+from ...toolpath.job import Job, load_job
 
 Z_CUT_BELOW_TOP = True   # cutting height z = -a_p below the stock top z = 0
 
@@ -32,8 +33,13 @@ def conditions() -> dict:
 @functools.cache
 def pocket() -> Polygon:
     """The 120 × 85 mm test pocket (our design; see the data file's description)."""
-    d = json.loads(data_path("kim_yang2006", "pocket_120x85.json").read_text(encoding="utf-8"))
-    return Polygon(d["outer"], d["islands"])
+    return job().polygon
+
+
+@functools.cache
+def job() -> Job:
+    """The pocket as a job (:func:`cnclab.toolpath.job.load_job`): Table 1 cutting data."""
+    return load_job(data_path("kim_yang2006", "pocket_120x85.json"))
 
 
 def tool_radius() -> float:
