@@ -253,7 +253,7 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     trace = {"s_mm": np.cumsum(L3), "x": P[:, 0].copy(), "y": P[:, 1].copy(), "z": P[:, 2].copy(),
              "engagement_deg": eng, "removed_mm2": removed,
              "mrr_mm3_min": np.where((dxy > 0) & ~rapid, vol / np.where(dxy > 0, dxy, 1.0) * np.nan_to_num(feed), np.nan),
-             "feed_mm_min": feed.copy(), "kind": rp.kinds(), "cutting": cutting}
+             "feed_mm_min": feed.copy(), "kind": rp.kinds(), "tag": rp.tag.copy(), "ds_mm": dxy, "cutting": cutting}
     return Evaluation(
         engagement_p50_deg=weighted_percentile(e_c, dxy[cutting], 50),
         engagement_p95_deg=weighted_percentile(e_c, dxy[cutting], 95),

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["TrochoidPath", "circular_trochoid", "cycloid", "slot_limit", "evaluate_pattern",
+__all__ = ["TrochoidPath", "disk_has_material", "circular_trochoid", "cycloid", "slot_limit", "evaluate_pattern",
            "admissible_step", "front_contour", "linking_arc", "ce_period", "ce_trochoid_iteration",
            "ce_trochoid", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
 
@@ -373,7 +373,7 @@ def roll_arc(end_xy, tangent_xy, radius_mm, sweep_deg, ds=0.05, into=True):
     return P, C
 
 
-def _disk_has_material(stock, p, r, n_r=6, n_a=48):
+def disk_has_material(stock, p, r, n_r=6, n_a=48):
     """True when material lies under the tool disk at ``p`` (polar sample grid, plus the circle)."""
     rr = r * np.linspace(0.0, 1.0, n_r + 1)[1:, None] * 0.999
     a = np.linspace(0, 2 * np.pi, n_a, endpoint=False)[None, :]
@@ -443,7 +443,7 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     F0 = c.point(c.t_min)[0]
     s_near = float(ring.project(shapely.Point(F0)))
     back = 0.25                    # start the march just behind the material (the disk clear of it)
-    while back < 4 * r and _disk_has_material(stock, np.asarray(ring.interpolate(s_near - back).coords[0]), r):
+    while back < 4 * r and disk_has_material(stock, np.asarray(ring.interpolate(s_near - back).coords[0]), r):
         back += 0.25
     s_A = s_near - back
     if s_A < 0:

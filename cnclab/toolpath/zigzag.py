@@ -19,10 +19,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import shapely
+from shapely.geometry import LineString
 
 from .path import Move
 
-__all__ = ["hoang_table1_points", "zigzag_points", "zigzag_program", "n_passes_covering"]
+__all__ = ["hoang_table1_points", "zigzag_points", "zigzag_program", "n_passes_covering", "raster_lines"]
 
 
 def _positive(name, v):
@@ -112,3 +114,24 @@ def zigzag_program(points, z_cut: float, z_clear: float, feed: float, spindle: f
     if return_home:
         mv.append(Move("G0", p[0, 0], p[0, 1], z_clear, spindle=spindle))
     return mv
+
+
+def raster_lines(region, stepover: float) -> list[np.ndarray]:
+    """Zig-zag raster over a shapely (Multi)Polygon ``region`` (mm): lines along x every ``stepover``
+    mm in y from the bottom, clipped to the region, alternate lines reversed; list of (2, 2) arrays.
+
+    >>> from shapely.geometry import box
+    >>> [q.round(6).tolist() for q in raster_lines(box(0, 0, 10, 2), 1.0)]
+    [[[0.0, 1e-06], [10.0, 1e-06]], [[10.0, 1.000001], [0.0, 1.000001]]]
+    """
+    sz = _positive("stepover", stepover)
+    x0, y0, x1, y1 = region.bounds
+    lines = []
+    for i, y in enumerate(np.arange(y0 + 1e-6, y1, sz)):
+        g = region.intersection(LineString([(x0 - 1, y), (x1 + 1, y)]))
+        parts = sorted((np.asarray(p.coords) for p in shapely.get_parts(g) if p.length > 1e-6),
+                       key=lambda q: q[:, 0].min())
+        for q in parts:
+            q = q[np.argsort(q[:, 0])]
+            lines.append(q if i % 2 == 0 else q[::-1])
+    return lines

@@ -18,6 +18,7 @@ import math
 
 from cnclab.paths import data_path
 from cnclab.runtime import pick
+from cnclab.toolpath.job import load_job
 
 
 @functools.cache
@@ -42,10 +43,8 @@ def mrr_nominal() -> float:
 
 @functools.cache
 def star_job():
-    """The designed star pocket job (:class:`cnclab.toolpath.pocket.PocketJob`)."""
-    from cnclab.toolpath.pocket import load_pocket
-
-    return load_pocket(data_path("jacso2021", "star_pocket.json"))
+    """The designed star pocket job (:class:`cnclab.toolpath.job.Job`)."""
+    return load_job(data_path("jacso2021", "star_pocket.json"))
 
 
 def star_volume_mm3() -> float:
@@ -138,7 +137,7 @@ def user_pockets(resolution_mm=None):
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     rows, out = [], {}
     for case, fname in USER_POCKETS:
-        job = pk.load_pocket(data_path("jacso2021", fname))
+        job = load_job(data_path("jacso2021", fname))
         hp = pk.hybrid_path(job, res)
         T, s = pk.evaluate_strategy(hp, job, res, feed_control=True)
         s.update(case=case, laps=hp.info["laps"], arms=len(hp.info["arms"]),

@@ -97,8 +97,7 @@ def program(which: str) -> tuple:
     """``(moves parsed back, G-code text)`` of the ``"original"`` or ``"modified"`` path."""
     c = conditions()
     passes = {"original": base_passes(), "modified": tuple(modified().passes)}[which]
-    moves = cm.passes_to_moves(passes, z_cut=-c["axial_depth_mm"], z_clear=5.0, feed=c["feed_mm_min"],
-                               spindle=c["spindle_rpm"], arcs=True, tol_mm=0.02, short_mm=1.5)
+    moves = cm.passes_path(passes, job(), arcs=True, tol_mm=0.02, short_mm=1.5).to_moves()
     text = gcode.write_gcode(moves, header=[f"Kim and Yang 2006 {which} contour-parallel path",
                                             "pocket 120 x 85 mm, cnclab design, tool D10 flat"], decimals=4)
     return tuple(gcode.parse_gcode(text, source=f"kim_yang2006_{which}.nc")), text
