@@ -46,7 +46,7 @@ from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_bound
 from .job import Job, load_job, star_polygon
 from .offsets import link_loops, offset_levels
 from .path import ToolPath, subdivide
-from .trochoidal import ce_period, disk_has_material
+from .trochoidal import ce_period, disk_has_material, pattern_kinds
 from .zigzag import raster_lines
 
 __all__ = ["Job", "load_job", "star_polygon", "design_star", "medial_axis", "arm_branches", "arm_regions",
@@ -403,14 +403,14 @@ def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, 
                                 front_stock=loc, x_min=c[0])
                 if per is None:
                     break
-                Pl = per.points
+                Pl = per.xyz[:, :2]
                 df = simulate(loc, Pl, r, job.a_p, job.feed_mm_min)
                 simulate(full, Pl, r, job.a_p, job.feed_mm_min)
                 if float(df.removed_mm2.sum()) < 1e-3:
                     break
                 if last is not None:
                     arm_segs.append((_free_link(last, Pl[0], loc_allowed, full, r, resolution_mm)))
-                arm_segs.append((Pl, per.kinds))
+                arm_segs.append((Pl, pattern_kinds(per)))
                 last = Pl[-1]
             periods.append(sum(1 for s in arm_segs if not isinstance(s[1], str)))
             if not arm_segs:

@@ -115,7 +115,7 @@ def table3_program(covering: bool = True, decimals: int = 3) -> tuple[list, str]
         pts = zigzag.zigzag_points((0.0, 0.0), w, L, row.Sz)
     else:
         pts = zigzag.hoang_table1_points(0.0, 0.0, w, L, row.Sz, row.Fr_printed_convention)
-    moves = zigzag.zigzag_program(pts, z_cut=0.0, z_clear=10.0, feed=500.0)
+    moves = zigzag.zigzag_path(pts, z_cut=0.0, z_clear=10.0, feed=500.0).to_moves()
     text = gcode.write_gcode(moves, header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"],
                              decimals=decimals)
     return gcode.parse_gcode(text, source="table3.nc"), text
