@@ -75,7 +75,7 @@ from ..simulation.common import simulate
 from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
                                   resample_path, thesis3_path)
 from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
-from .path import ToolPath, subdivide
+from .path import ToolPath
 
 __all__ = ["PLAN_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "helical_entry",
            "ce_clearing", "clearing_path"]

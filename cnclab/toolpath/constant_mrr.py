@@ -42,7 +42,7 @@ from shapely.geometry import LinearRing
 from ..simulation import pixel
 from .job import Job
 from .offsets import allowed_region, link_loops, offset_levels
-from .path import Move, ToolPath
+from .path import ToolPath, subdivide
 
 __all__ = ["DEFAULT_TEETH", "ASSUMED_CURRENT_MODEL", "feed_per_tooth", "reference_pixel_count",
            "linear_motion", "cut_linear", "modify_path", "ModifiedPath", "spiral_entry", "fit_arcs",
@@ -120,17 +120,9 @@ def cut_linear(stock, p0, p1, tool_radius: float) -> int:
 
 
 def resample_polyline(points, step_mm: float) -> np.ndarray:
-    """Split every segment of ``points`` [(n,2) mm] into equal parts of at most ``step_mm``."""
-    p = np.asarray(points, float)
-    out = [p[:1]]
-    for a, b in zip(p[:-1], p[1:]):
-        L = float(np.hypot(*(b - a)))
-        if L == 0:
-            continue
-        k = max(1, int(math.ceil(L / step_mm - 1e-9)))
-        t = np.arange(1, k + 1)[:, None] / k
-        out.append(a + t * (b - a))
-    return np.vstack(out)
+    """Split every segment of ``points`` [(n,2) mm] into equal parts of at most ``step_mm``
+    (:func:`cnclab.toolpath.path.subdivide`)."""
+    return subdivide(points, step_mm)
 
 
 @dataclasses.dataclass

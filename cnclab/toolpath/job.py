@@ -43,7 +43,8 @@ import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon, Point, Polygon
 
-from ..cutting.speeds import feed_speed, spindle_speed
+from ..cutting.speeds import cutting_speed, feed_speed, spindle_speed
+from ..geometry.engagement import stepover_straight
 from .path import Tool
 
 __all__ = ["JOB_SCHEMA", "MAX_LAPS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "Job", "load_job", "star_polygon",
@@ -232,7 +233,7 @@ class Job:
         object.__setattr__(self, "spindle_rpm", float(n))
         object.__setattr__(self, "feed_mm_min", float(f))
         if self.v_c is None:
-            object.__setattr__(self, "v_c", math.pi * d * n / 1000.0)
+            object.__setattr__(self, "v_c", float(cutting_speed(d, n)))
         if self.f_z is None:
             object.__setattr__(self, "f_z", f / (self.tool.flutes * n))
         object.__setattr__(self, "depth", float(self.a_p if self.depth is None else self.depth))
@@ -256,7 +257,7 @@ class Job:
     @property
     def a_e(self) -> float:
         """Radial depth of a straight cut at theta: r (1 - cos theta) (mm)."""
-        return self.tool_radius * (1 - math.cos(math.radians(self.theta_deg)))
+        return float(stepover_straight(self.theta_deg, self.tool_radius))
 
     def mrr_nominal(self, feed=None) -> float:
         """MRR_nom = a_p a_e v_f (mm^3/min), v_f = ``feed`` or the nominal feed."""
@@ -373,7 +374,7 @@ class Job:
         tmin = theta_min_deg(poly, r)
         if theta < tmin:
             raise err("$.theta_deg", f"theta_deg = {theta:g} deg is below {tmin:.3g} deg: at a_e = r (1 - cos theta) "
-                      f"= {r * (1 - math.cos(math.radians(theta))):.3g} mm per lap, clearing the largest inscribed "
+                      f"= {float(stepover_straight(theta, r)):.3g} mm per lap, clearing the largest inscribed "
                       f"radius of this pocket needs more than {MAX_LAPS} laps (the planners' cap)")
         a_p = float(d["a_p"])
         kw = {k: float(d[k]) for k in ("v_c", "f_z", "feed_mm_min", "spindle_rpm", "rapid_mm_min", "clearance_z",

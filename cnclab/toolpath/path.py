@@ -414,7 +414,7 @@ class ToolPath:
         P, src = self.polyline(max_step)
         out_p, out_i = [P[:1]], [src[:1]]
         for j in range(1, len(P)):
-            n = max(1, int(math.ceil(np.linalg.norm(P[j] - P[j - 1]) / max_step)))
+            n = max(1, int(math.ceil(np.linalg.norm(P[j] - P[j - 1]) / max_step - 1e-9)))
             t = np.arange(1, n + 1)[:, None] / n
             out_p.append(P[j - 1] + t * (P[j] - P[j - 1])); out_i.append(np.full(n, src[j]))
         Q, I = np.vstack(out_p), np.concatenate(out_i)
@@ -483,7 +483,7 @@ class ToolPath:
 
 def subdivide(points, max_step: float) -> np.ndarray:
     """A polyline (N, 2) or (N, 3) mm with every segment split into equal pieces at most ``max_step``
-    mm long (the vertices kept): :meth:`ToolPath.resample` on the points.
+    mm long (the vertices kept, repeated points dropped): :meth:`ToolPath.resample` on the points.
 
     >>> subdivide([[0, 0], [1, 0]], 0.4).tolist()
     [[0.0, 0.0], [0.3333333333333333, 0.0], [0.6666666666666666, 0.0], [1.0, 0.0]]
@@ -491,4 +491,5 @@ def subdivide(points, max_step: float) -> np.ndarray:
     P = np.asarray(points, float)
     if P.ndim != 2 or P.shape[1] not in (2, 3) or len(P) < 1:
         raise ValueError(f"points must be (N, 2) or (N, 3) mm with N >= 1, got shape {P.shape}")
-    return ToolPath.build(P, kind="cut", feed=1.0).resample(max_step).xyz[:, :P.shape[1]]
+    Q = ToolPath.build(P, kind="cut", feed=1.0).resample(max_step).xyz[:, :P.shape[1]]
+    return Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]]          # zero-length segments dropped

@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import functools
 import json
-import math
 
+from cnclab.cutting.speeds import spindle_speed
+from cnclab.geometry.engagement import stepover_straight
 from cnclab.paths import data_path
 from cnclab.runtime import pick
 from cnclab.toolpath.job import load_job
@@ -30,14 +31,14 @@ def table41() -> dict:
 def feed_from_cutting_speed() -> float:
     """v_f = f_z z n, n = 1000 v_c / (pi D) (mm/min) — Table 4.1 prints 255."""
     t = table41()
-    n = 1000.0 * t["v_c_m_min"] / (math.pi * t["tool_diameter_mm"])
+    n = float(spindle_speed(t["v_c_m_min"], t["tool_diameter_mm"]))
     return t["f_z_mm"] * t["teeth"] * n
 
 
 def mrr_nominal() -> float:
     """MRR_nom = a_p a_e v_f with a_e = r (1 - cos theta) and the printed v_f = 255 (mm^3/min)."""
     t = table41()
-    a_e = 0.5 * t["tool_diameter_mm"] * (1 - math.cos(math.radians(t["theta_deg"])))
+    a_e = float(stepover_straight(t["theta_deg"], 0.5 * t["tool_diameter_mm"]))
     return t["a_p_mm"] * a_e * t["v_f_printed_mm_min"]
 
 
