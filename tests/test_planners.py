@@ -30,10 +30,20 @@ def test_every_strategy_plans_a_safe_toolpath(rect, name):
     assert ev.rapids_into_material == 0
     assert ev.time_total_s == pytest.approx(p.time_s(rect.rapid_mm_min)["total_s"])
     assert ev.uncut_beyond_unreachable_mm2 < 0.02 * rect.polygon.area
-    if not name.startswith("kim-yang"):
-        # the Kim & Yang programs plunge at each pass start, as the paper's planner does (spiral entry
-        # from the pass centre): counted by the evaluator, not hidden
-        assert ev.plunges_into_material == 0
+    assert ev.plunges_into_material == 0          # entries into air / cleared area, or by helix
+
+
+def test_kim_yang_paper_plunges_are_counted_and_the_planner_helix_avoids_them():
+    """Kim & Yang's program plunges onto each pass start (its spiral's centre, in material): the
+    evaluator counts them; the registry's planner enters each pass by a helix instead."""
+    from cnclab.toolpath import constant_mrr as cm
+
+    job = load_job(data_path("kim_yang2006", "pocket_120x85.json"))
+    passes = cm.kim_yang_passes(job)
+    paper = evaluate(cm.passes_path(passes, job), job, 0.5)
+    safe = evaluate(cm.passes_path(passes, job, entry="helix"), job, 0.5)
+    assert paper.plunges_into_material >= 1 and paper.plunge_swept_area_mm2 > 50
+    assert safe.plunges_into_material == 0 and safe.entries_helix == len(passes)
 
 
 def test_levels_and_unknown_strategy(rect):

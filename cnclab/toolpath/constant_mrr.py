@@ -336,10 +336,15 @@ def kim_yang_passes(job: Job, spiral: bool = True, modified: bool = False, pixel
     return list(modify_path(passes, stock, r, ref, allowed, step_mm=step_mm, tolerance=tolerance).passes)
 
 
-def passes_path(passes, job: Job, arcs: bool = True, **fit_kw) -> ToolPath:
+def passes_path(passes, job: Job, arcs: bool = True, entry: str = "plunge", **fit_kw) -> ToolPath:
     """A :class:`ToolPath` of contour-parallel ``passes`` (mm) at the job's cutting level: rapid at
-    the clearance plane above each pass start, plunge (the pass starts at the centre of its region:
-    its spiral entry), the pass as lines and fitted arcs (:func:`fit_arcs`, ``fit_kw``), retract."""
+    the clearance plane above each pass start, the entry, the pass as lines and fitted arcs
+    (:func:`fit_arcs`, ``fit_kw``), retract. ``entry="plunge"``: straight down onto the pass start
+    (Kim & Yang's program: the pass starts at the centre of its region, its spiral entry);
+    ``"helix"``: one helical turn of tool-centre radius r/4 about the pass start from the stock top
+    to the cutting level, the circle once more flat, back to the start (a machine-safe entry)."""
+    if entry not in ("plunge", "helix"):
+        raise ValueError(f"entry must be 'plunge' or 'helix', got {entry!r}")
     z, zc = job.top_z - job.a_p, job.clearance_z
     f, lf = job.feed_mm_min, job.link_feed_mm_min
     pts, kind, feed, arc, ctr = [], [], [], [], []
@@ -347,10 +352,23 @@ def passes_path(passes, job: Job, arcs: bool = True, **fit_kw) -> ToolPath:
     def add(xy, zz, k, fd, a=0, c=(np.nan, np.nan)):
         pts.append((xy[0], xy[1], zz)); kind.append(k); feed.append(fd); arc.append(a); ctr.append(c)
 
+    e = 0.25 * job.tool_radius
+    ang = np.linspace(0.0, 2 * math.pi, 33)[1:]
     for pas in passes:
         p = np.asarray(pas, float)
-        add(p[0], zc, "rapid", np.nan)
-        add(p[0], z, "plunge", f)
+        if entry == "helix":
+            ring = p[0] + e * np.c_[np.cos(ang), np.sin(ang)]
+            ring[-1] = p[0] + [e, 0.0]
+            add(p[0] + [e, 0.0], zc, "rapid", np.nan)
+            add(p[0] + [e, 0.0], job.top_z, "plunge", f)
+            for q, zz in zip(ring, job.top_z + (z - job.top_z) * np.arange(1, 33) / 32):
+                add(q, zz, "helix", f)
+            for q in ring:
+                add(q, z, "cut", f)
+            add(p[0], z, "cut", f)
+        else:
+            add(p[0], zc, "rapid", np.nan)
+            add(p[0], z, "plunge", f)
         items = _pass_segments(p, fit_kw) if arcs else [(q, 0, (np.nan, np.nan)) for q in p[1:]]
         for end, a, c in items:
             add(end, z, "cut", f, a, c)

@@ -10,7 +10,8 @@ constant-engagement      :func:`cnclab.toolpath.ce_clearing.clearing_path` (Jacs
 hybrid                   :func:`cnclab.toolpath.pocket.hybrid_path` (Jacsó §4: centre laps + CE trochoid arms)
 contour-parallel         :func:`cnclab.toolpath.pocket.contour_parallel_path` (offsets at a_e)
 zig-zag                  :func:`cnclab.toolpath.pocket.zigzag_path` (raster at a_e + a finishing lap)
-kim-yang-original        :func:`cnclab.toolpath.constant_mrr.kim_yang_passes` (offsets at a_e, spiral entries)
+kim-yang-original        :func:`cnclab.toolpath.constant_mrr.kim_yang_passes` (offsets at a_e, spiral entries;
+                         each pass entered by a helix instead of the paper's plunge)
 kim-yang-modified        the same with Kim & Yang's §3.2 constant-MRR modification
 =======================  ===================================================================
 
@@ -68,12 +69,12 @@ def _zigzag(job: Job, resolution_mm: float, **options) -> ToolPath:
 
 @register("kim-yang-original", "Kim & Yang 2006 contour-parallel path (offsets at a_e, spiral entries)")
 def _kim_yang_original(job: Job, resolution_mm: float, **options) -> ToolPath:
-    return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, **options), job)
+    return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, **options), job, entry="helix")
 
 
 @register("kim-yang-modified", "Kim & Yang 2006 constant-MRR modified contour-parallel path")
 def _kim_yang_modified(job: Job, resolution_mm: float, **options) -> ToolPath:
-    return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, modified=True, **options), job)
+    return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, modified=True, **options), job, entry="helix")
 
 
 def plan(job: Job, strategy: str = "constant-engagement", resolution_mm: float = 0.1, **options) -> ToolPath:
