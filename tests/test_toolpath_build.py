@@ -52,3 +52,20 @@ def test_zigzag_path_is_the_old_program():
     mv = p.to_moves()
     assert [m.motion for m in mv] == ["G0", "G1", "G1", "G1", "G1", "G1", "G0"]
     assert p.lengths()["feed_mm"] == pytest.approx(10 + 21 + 10)
+
+
+def test_ramp_reentry_descends_at_the_ramp_angle_and_returns():
+    """A jump re-entered by a ramp: from the stock top down to z_cut at ramp_deg along the next
+    segment (back and forth over at most ramp_max_mm), then back to the segment start at depth."""
+    segs = [(np.array([[0.0, 0], [10, 0]]), "cut", ""), (np.array([[10.0, 0], [0, 5]]), "jump", ""),
+            (np.array([[0.0, 5], [4, 5], [12, 5]]), "cut", "")]
+    p = ToolPath.from_segments(segs, z_cut=-3.0, feed=100.0, reentry="ramp", ramp_deg=3.0, ramp_max_mm=10.0)
+    ramp = np.flatnonzero(p.is_kind("ramp"))
+    assert ramp.size and p.xyz[ramp[-1], 2] == pytest.approx(-3.0)
+    L = p.segment_lengths()[ramp].sum()
+    H = 3.0 / np.tan(np.radians(3.0))                                           # horizontal = dz / tan
+    assert L == pytest.approx(np.hypot(H, 3.0), rel=1e-9)
+    assert np.all(np.abs(p.xyz[ramp, 0]) <= 10.0 + 1e-9) and np.all(p.xyz[ramp, 1] == 5.0)
+    back = ramp[-1] + 1 + np.flatnonzero(p.tag[ramp[-1] + 1:] == "ramp-return")
+    assert p.xyz[back[-1]].tolist() == [0.0, 5.0, -3.0]
+    assert not np.any(p.is_kind("plunge") & (p.xyz[:, 2] < 0) & (np.arange(len(p)) > 2))

@@ -260,12 +260,16 @@ class ToolPath:
     @classmethod
     def from_segments(cls, segments, z_cut: float, feed: float, clearance_z: float = 5.0, top_z: float = 0.0,
                       link_feed: float | None = None, spindle: float | None = None, tool: Tool | None = None,
-                      info: dict | None = None) -> "ToolPath":
+                      info: dict | None = None, reentry: str = "plunge", ramp_deg: float = 3.0,
+                      ramp_max_mm: float = 10.0) -> "ToolPath":
         """A machine-ready path at one cutting level from planar segments (tool-centre xy, mm).
 
         ``segments``: list of ``(points (n, 2), kind, tag)`` in path order; ``kind`` is ``"cut"``,
         ``"link"`` (at depth through cleared area, at ``link_feed``), ``"jump"`` (leave at its first
-        point, go to its last: retract to ``clearance_z``, rapid, and down again) or ``"helix"`` (a
+        point, go to its last: retract to ``clearance_z``, rapid, and down again: a vertical plunge
+        with ``reentry="plunge"``, or with ``"ramp"`` a ramp at ``ramp_deg`` from ``top_z`` along the
+        next segment, back and forth over at most ``ramp_max_mm`` of it, then back to its start at
+        depth) or ``"helix"`` (a
         closed xy circle: a helical entry from ``top_z`` down to ``z_cut`` along it, then the same
         circle flat at ``z_cut`` as a cut tagged ``"entry-floor"``); ``kind`` and ``tag`` may also be
         per-point arrays (cut/link). The path starts with a rapid at ``clearance_z`` above the first
@@ -299,6 +303,38 @@ class ToolPath:
             else:
                 add(P[:1], z_cut, "plunge", "", feed)
 
+        if reentry not in ("plunge", "ramp"):
+            raise ValueError(f"reentry must be 'plunge' or 'ramp', got {reentry!r}")
+
+        def ramp_into(Q):
+            """Ramp down along the polyline Q (from Q[0]) and come back to Q[0] at depth."""
+            Q = np.asarray(Q, float).reshape(-1, 2)
+            s_q = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Q, axis=0).T))] if len(Q) > 1 else np.zeros(1)
+            L = min(float(s_q[-1]), float(ramp_max_mm))
+            H = (top_z - z_cut) / math.tan(math.radians(ramp_deg))
+            if L < 1e-3 or not H > 0:
+                add(Q[:1], z_cut, "plunge", "", feed)
+                return
+            add(Q[:1], top_z, "plunge", "approach", feed)
+
+            def at(u):
+                return np.column_stack([np.interp(u, s_q, Q[:, 0]), np.interp(u, s_q, Q[:, 1])])
+
+            inner = s_q[(s_q > 0) & (s_q < L)]
+            travelled, pos, fwd = 0.0, 0.0, True
+            while travelled < H - 1e-12:
+                end = L if fwd else 0.0
+                leg = min(abs(end - pos), H - travelled)
+                tgt = pos + leg if fwd else pos - leg
+                mid = inner[(inner > min(pos, tgt)) & (inner < max(pos, tgt))]
+                u = np.r_[np.sort(mid) if fwd else np.sort(mid)[::-1], tgt]
+                dist = travelled + np.abs(u - pos)
+                add(at(u), top_z + (z_cut - top_z) * np.minimum(dist / H, 1.0), "ramp", "", feed)
+                travelled, pos, fwd = travelled + leg, tgt, not fwd
+            if pos > 1e-9:                                       # back to the segment start at depth
+                mid = inner[inner < pos][::-1]
+                add(at(np.r_[mid, 0.0]), z_cut, "cut", "ramp-return", feed)
+
         segs = [(np.asarray(P, float).reshape(-1, 2), k, t) for P, k, t in segments if len(P)]
         if not segs:
             raise ValueError("segments: no points")
@@ -313,6 +349,18 @@ class ToolPath:
                 nxt = segs[i + 1] if i + 1 < len(segs) else None
                 if nxt is not None and isinstance(nxt[1], str) and nxt[1] == "helix":
                     prev_kind = "pending-helix"
+                elif reentry == "ramp" and nxt is not None and (not isinstance(nxt[1], str)
+                                                                or nxt[1] in ("cut", "link")):
+                    ahead = [P[-1:]]                   # the path ahead at depth, up to ramp_max_mm
+                    for Pn, kn, _ in segs[i + 1:]:
+                        if isinstance(kn, str) and kn not in ("cut", "link"):
+                            break
+                        ahead.append(Pn)
+                        Q = np.vstack(ahead)
+                        if np.hypot(*np.diff(Q, axis=0).T).sum() >= ramp_max_mm:
+                            break
+                    Q = np.vstack(ahead)
+                    ramp_into(Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]])
                 else:
                     descend(P[-1:], "plunge")
                 continue

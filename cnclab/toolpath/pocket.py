@@ -95,7 +95,7 @@ def _to_toolpath(segs, job: Job, name: str, info: dict, resolution_mm: float = 0
         out.append((P, np.where(K == "link", "link", "cut"), tags))
     return ToolPath.from_segments(out, z_cut=job.top_z - job.a_p, feed=job.feed_mm_min, clearance_z=job.clearance_z,
                                   top_z=job.top_z, link_feed=job.link_feed_mm_min, spindle=job.spindle_rpm,
-                                  tool=job.tool, info=dict(info, name=name))
+                                  tool=job.tool, info=dict(info, name=name), reentry="ramp")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -594,13 +594,13 @@ def contour_parallel_path(job: Job, stepover=None, resolution_mm: float = 0.1) -
 def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0.1) -> ToolPath:
     """Zig-zag (direction-parallel) raster over the tool-centre region at ``stepover`` (mm, default
     a_e), alternate directions (:func:`cnclab.toolpath.zigzag.raster_lines`), straight feed links along
-    the boundary side when inside the region (else a jump), then one finishing lap of the region
-    boundary (removes the scallops)."""
+    the boundary side when inside the region (else a jump, re-entering by a ramp), then a finishing
+    lap of every ring of the region (outlines and islands: removes the scallops)."""
     ae = job.a_e if stepover is None else stepover
     allowed = job.allowed()
     c = entry_hole(job)[0]
     A = _rot(allowed, -angle_deg, c)
-    lines = raster_lines(A, ae)
+    lines = raster_lines(A, ae, min_length=0.5 * ae)      # tangency stubs: left to the finishing lap
     guard = A.buffer(1e-6)
     segs = [(np.vstack([c, _rot(lines[0][:1], angle_deg, c)[0]]), "cut", "zz")]     # slot from the entry hole
     prev = None
@@ -611,9 +611,10 @@ def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0
             segs.append((np.vstack([_rot(prev[None], angle_deg, c)[0], qq[0]]), kind, "zz"))
         segs.append((qq, "cut", "zz"))
         prev = q[-1]
-    ring = np.asarray(shapely.get_parts(allowed)[0].exterior.coords)
-    segs.append((np.vstack([segs[-1][0][-1], ring[0]]), "rapid", "zz"))
-    segs.append((ring, "cut", "zz"))
+    for part in shapely.get_parts(allowed):                # finishing laps: every outline and island
+        for ring in [np.asarray(part.exterior.coords)] + [np.asarray(i.coords) for i in part.interiors]:
+            segs.append((np.vstack([segs[-1][0][-1], ring[0]]), "rapid", "zz"))
+            segs.append((ring, "cut", "zz"))
     return _to_toolpath(segs, job, "zig-zag", {"stepover": ae}, resolution_mm)
 
 

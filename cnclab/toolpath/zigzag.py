@@ -124,9 +124,10 @@ def zigzag_path(points, z_cut: float, z_clear: float, feed: float, spindle: floa
                           spindle=spindle, tool=tool, info={"name": "zig-zag"})
 
 
-def raster_lines(region, stepover: float) -> list[np.ndarray]:
+def raster_lines(region, stepover: float, min_length: float = 1e-6) -> list[np.ndarray]:
     """Zig-zag raster over a shapely (Multi)Polygon ``region`` (mm): lines along x every ``stepover``
-    mm in y from the bottom, clipped to the region, alternate lines reversed; list of (2, 2) arrays.
+    mm in y from the bottom, clipped to the region (pieces shorter than ``min_length`` mm dropped),
+    alternate lines reversed; list of (2, 2) arrays.
 
     >>> from shapely.geometry import box
     >>> [q.round(6).tolist() for q in raster_lines(box(0, 0, 10, 2), 1.0)]
@@ -137,7 +138,7 @@ def raster_lines(region, stepover: float) -> list[np.ndarray]:
     lines = []
     for i, y in enumerate(np.arange(y0 + 1e-6, y1, sz)):
         g = region.intersection(LineString([(x0 - 1, y), (x1 + 1, y)]))
-        parts = sorted((np.asarray(p.coords) for p in shapely.get_parts(g) if p.length > 1e-6),
+        parts = sorted((np.asarray(p.coords) for p in shapely.get_parts(g) if p.length > min_length),
                        key=lambda q: q[:, 0].min())
         for q in parts:
             q = q[np.argsort(q[:, 0])]
