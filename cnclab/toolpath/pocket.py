@@ -253,6 +253,10 @@ def hybrid_path(job: Job, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=2
     ``wall_share_candidates`` (one metrics dict per candidate) and ``wall_share_choice`` (the
     reasons, stage by stage).
     """
+    if not isinstance(job.polygon, Polygon) or job.polygon.interiors:
+        raise ValueError(f"{job.source}: the hybrid strategy (Jacsó §4: centre laps around one start hole, arms "
+                         "along the medial axis) plans a simple pocket without islands; use the "
+                         "constant-engagement strategy for pockets with islands")
     if isinstance(max_wall_share, str):
         if max_wall_share != "auto":
             raise ValueError(f"max_wall_share must be a number in (0, 1] or 'auto', got {max_wall_share!r}")
