@@ -16,11 +16,12 @@ import pandas as pd
 
 from cnclab.paths import data_path
 from cnclab.toolpath import pocket as pk
+from cnclab.toolpath.job import load_job
 from cnclab.works.jacso2021.thesis4_star_pocket import star_job
 
 SHAPES = {"star": star_job,
-          "rectangle": lambda: pk.load_pocket(data_path("jacso2021", "rectangle_pocket.json")),
-          "L-shape": lambda: pk.load_pocket(data_path("jacso2021", "l_pocket.json"))}
+          "rectangle": lambda: load_job(data_path("jacso2021", "rectangle_pocket.json")),
+          "L-shape": lambda: load_job(data_path("jacso2021", "l_pocket.json"))}
 
 
 def main(resolutions=(0.2, 0.1)):
@@ -38,7 +39,7 @@ def main(resolutions=(0.2, 0.1)):
                 _, s = pk.evaluate_strategy(p, job, res, feed_control=name == "hybrid")
                 t2 = time.perf_counter()
                 row = {"shape": shape, "resolution_mm": res, "strategy": name, "plan_s": t1 - t0,
-                       "simulate_s": t2 - t1, "total_s": t2 - t0, "points": len(p.points),
+                       "simulate_s": t2 - t1, "total_s": t2 - t0, "points": len(p),
                        "machining_time_s": s["time_s"], "max_eng_deg": s["max_engagement_deg"],
                        "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"]}
                 if name == "hybrid":

@@ -7,6 +7,8 @@ from shapely.geometry import LineString, Point, box
 
 from cnclab.simulation import pixel
 from cnclab.toolpath import constant_mrr as cm
+from cnclab.toolpath.job import Job
+from cnclab.toolpath.path import Tool
 from cnclab.nc import gcode
 
 
@@ -83,7 +85,10 @@ def test_fit_arcs_recovers_a_circle_and_keeps_lines():
 def test_program_round_trip_and_arc_geometry():
     t = np.linspace(0, -math.pi / 2, 20)                      # clockwise quarter
     p = np.vstack([[[-5.0, 10.0]], np.column_stack([10 * np.cos(t), 10 * np.sin(t)])[::-1][::-1]])
-    moves = cm.passes_to_moves([p], z_cut=-0.5, z_clear=5, feed=500, spindle=2000, tol_mm=1e-6, short_mm=2.0)
+    job = Job(box(-20, -20, 20, 20), Tool(10.0), 66.42, 0.5, feed_mm_min=500, spindle_rpm=2000)
+    path = cm.passes_path([p], job, tol_mm=1e-6, short_mm=2.0)
+    assert path.kinds()[[0, 1, -1]].tolist() == ["rapid", "plunge", "retract"]
+    moves = path.to_moves()
     assert any(m.motion == "G2" for m in moves)
     text = gcode.write_gcode(moves)
     again = gcode.parse_gcode(text)

@@ -7,7 +7,7 @@ import pytest
 from cnclab.geometry.freeform_part import FreeformPart, freeform_part_mesh, tessellate_heightfield
 from cnclab.geometry.mesh import (FacetLocator, STLWarning, TriMesh, closest_point_on_triangles,
                                   facet_incentres, machined_surface_mask, read_stl, write_stl)
-from cnclab.toolpath.dropcutter import drop_cutter_z, zigzag_finishing_path
+from cnclab.toolpath.dropcutter import drop_cutter_z, split_passes, zigzag_finishing_path
 
 RNG = np.random.default_rng(0)
 
@@ -144,8 +144,11 @@ def test_drop_cutter_flat_and_sphere_no_gouge():
     flat = tessellate_heightfield(lambda x, y: 0 * x + 3.0, (-20, 20), (-20, 20), 4, 4)
     assert np.allclose(drop_cutter_z(flat, RNG.random((50, 2)) * 20 - 10, 5.0), 3.0)
     m = freeform_part_mesh(FreeformPart(), 2.5)
-    passes = zigzag_finishing_path(m, 10.0, 2.0, 45.0, step=2.0)
+    path = zigzag_finishing_path(m, 10.0, 2.0, 45.0, step=2.0)
+    passes = split_passes(path)
+    assert len(passes) > 1 and path.tool.corner_radius == 5.0 and np.all(path.kinds() == "cut")
     P = np.vstack(passes)
+    assert np.array_equal(P, path.xyz)
     C = P + [0, 0, 5.0]
     f = FacetLocator(m).nearest_facet(C)
     T = m.triangles[f]

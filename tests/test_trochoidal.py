@@ -15,15 +15,16 @@ def test_generators_stay_in_slot_and_advance_by_step(step, width):
     R = width / 2 - 3
     for gen in (tr.circular_trochoid, tr.cycloid):
         p = gen(step, width, 3.0, 4, ds=0.1)
-        assert np.abs(p.points[:, 1]).max() <= R + 1e-9
-        x1, x2 = (p.points[p.period == k, 0].mean() for k in (1, 2))    # identical sampling
+        per = tr.period_index(p)
+        assert np.abs(p.xyz[:, 1]).max() <= R + 1e-9 and np.all(p.xyz[:, 2] == 0)
+        x1, x2 = (p.xyz[per == k, 0].mean() for k in (1, 2))    # identical sampling
         assert x2 - x1 == pytest.approx(step, abs=0.05)      # one boundary sample may switch period
 
 
 def test_circular_period_length_is_circle_plus_step():
     p = tr.circular_trochoid(1.0, 12.0, 3.0, 3, ds=0.01)
-    assert p.length_per_period(1) == pytest.approx(2 * math.pi * 3 + 1, rel=1e-4)
-    L = p.lengths([1])
+    assert tr.length_per_period(p, 1) == pytest.approx(2 * math.pi * 3 + 1, rel=1e-4)
+    L = tr.pattern_lengths(p, [1])
     assert L["link"] == pytest.approx(1.0) and L["cut"] == pytest.approx(2 * math.pi * 3, rel=1e-4)
 
 
@@ -90,9 +91,9 @@ def test_ce_slot_engagement_by_segment(ce_slot):
 def test_ce_beats_circular_at_same_engagement_limit(ce_slot):
     _, p, _, m = ce_slot
     s_circ = tr.circle_front_step(60.0, 12.0, 3.0)          # exact front-point step of the circle
-    assert p.step > s_circ
+    assert p.info["step"] > s_circ
     circ = tr.circular_trochoid(s_circ, 12.0, 3.0, 3, ds=0.1)
-    assert m["length_per_mm_slot"] < circ.length_per_period(1) / s_circ
+    assert m["length_per_mm_slot"] < tr.length_per_period(circ, 1) / s_circ
 
 
 def test_bad_input():

@@ -149,6 +149,16 @@ def rho_min(theta_deg, tool_radius):
     return _r(tool_radius) * np.abs(np.sin(_theta(theta_deg)))
 
 
+def stepover_straight(theta_deg, tool_radius):
+    """Radial depth (stepover, mm) of a straight cut at engagement ``theta_deg``: a_e = r (1 - cos theta);
+    the inverse of :func:`theta_straight`.
+
+    >>> round(float(stepover_straight(60.0, 3.0)), 12)
+    1.5
+    """
+    return _r(tool_radius) * (1 - np.cos(_theta(theta_deg)))
+
+
 def stepover_thesis1(theta_deg, rho, tool_radius, kind, k=None):
     """Thesis I: stepover s (mm) giving engagement ``theta_deg`` on an arc of radius ``rho`` (mm).
 
@@ -165,7 +175,7 @@ def stepover_thesis1(theta_deg, rho, tool_radius, kind, k=None):
     r = _r(tool_radius)
     t = _theta(theta_deg)
     if kind == "straight":
-        return r * (1 - np.cos(t))
+        return stepover_straight(theta_deg, tool_radius)
     if k is None:
         if kind not in KIND_K:
             raise ValueError(f"kind must be 'concave', 'convex' or 'straight', got {kind!r}")

@@ -79,7 +79,6 @@ from scipy.spatial import cKDTree
 
 from ..fileio import atomic_write
 from ..toolpath.path import Move, Tool, ToolPath, arc_geometry, sample_arc
-from ..toolpath.pocket import to_gcode_moves
 
 __all__ = ["Move", "GcodeError", "GcodeProgram", "write_gcode", "save_gcode", "read_gcode", "parse_gcode",
            "load_gcode", "read_toolpath", "program_time", "sample_move", "to_polyline", "path_lengths",
@@ -641,16 +640,16 @@ def linear_moves(points, feed: float, spindle: float | None = None, z: float | N
     return [Move("G1", *row, feed=feed, spindle=spindle) for row in p]
 
 
-def gcode_roundtrip_error(path, job, feeds=None, decimals=4):
-    """Write the G-code, parse it back and compare: (max point distance mm, feed-length difference
-    mm, text) — the parsed program must reproduce the path within the written decimals."""
-    moves = to_gcode_moves(path, job, feeds, decimals=decimals)
-    text = write_gcode(moves, header="cnclab " + path.name.replace("(", "").replace(")", ""), decimals=decimals)
-    back = parse_gcode(text, source=path.name)
-    cut_back = np.array([[m.x, m.y] for m in back if m.motion == "G1" and abs(m.z + job.a_p) < 1e-9])
-    keep = np.r_[True, np.hypot(*np.diff(path.points, axis=0).T) > 10 ** -decimals]
-    ref = path.points[keep]
-    # every written cutting-depth point must lie on the path within rounding
-    d, _ = cKDTree(ref).query(cut_back)
+def gcode_roundtrip_error(path, job=None, feeds=None, decimals=4):
+    """Write a :class:`~cnclab.toolpath.path.ToolPath` as G-code (:meth:`ToolPath.to_moves`), parse it
+    back and compare: (max distance mm of the parsed end points from the path points, feed-length
+    difference mm, text) — the parsed program must reproduce the path within the written decimals.
+    ``job`` and ``feeds`` are not used (kept for the call signature)."""
+    name = str(path.info.get("name", "path"))
+    moves = path.to_moves()
+    text = write_gcode(moves, header="cnclab " + name.replace("(", "").replace(")", ""), decimals=decimals)
+    back = parse_gcode(text, source=name)
+    P = np.array([m.xyz for m in back])
+    d, _ = cKDTree(path.xyz).query(P)
     dl = abs(path_lengths(back)["feed"] - path_lengths(moves)["feed"])
     return float(d.max()), float(dl), text

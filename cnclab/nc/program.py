@@ -54,7 +54,7 @@ from ..fileio import atomic_write
 from ..toolpath.path import Move, Tool, ToolPath
 from .gcode import GcodeProgram, read_gcode, write_gcode
 
-__all__ = ["write_program", "save_program", "check_program", "ProgramCheck", "START_BLOCK", "path_from_moves"]
+__all__ = ["write_program", "save_program", "check_program", "ProgramCheck", "START_BLOCK"]
 
 START_BLOCK = "G21 G90 G17 G94 G40 G49 G80"
 CLEARED = "cleared"
@@ -224,11 +224,3 @@ def check_program(program, clearance_z: float, top_z: float = 0.0, source: str |
     if prog.spindle_stop_line is None or (lines and prog.spindle_stop_line < lines[-1]):
         errors.append(f"{src}: the spindle is not stopped (M5) after the last move")
     return ProgramCheck(errors, entries, plunges, rapids_bad, spindle_ok, prog.end_word)
-
-
-def path_from_moves(moves, tool: Tool | None = None, info: dict | None = None) -> ToolPath:
-    """A :class:`ToolPath` from the program moves an old planner container still writes
-    (``to_moves``/``to_gcode_moves``/``passes_to_moves``), kinds classified by
-    :meth:`ToolPath.from_moves`. Temporary: toolpath-core's planners return ToolPaths; the
-    integrator deletes this once every planner does."""
-    return ToolPath.from_moves(list(moves), tool=tool, info=info)

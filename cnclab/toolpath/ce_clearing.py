@@ -36,58 +36,52 @@ Algorithm (:func:`ce_clearing`):
    an M3 spindle, material on the right), its air stretches again linked. This pass is *not*
    engagement-controlled: its spikes are reported by :func:`evaluate_path` (kind ``"cleanup"``).
 
-The result is a :class:`ClearingPath` (points + per-point kind of the segment ending there:
-``"entry"``, ``"cut"``, ``"cleanup"``, ``"linkcut"`` (a link step that removes material: cutting
-feed), ``"link"`` (linking feed) or ``"rapid"``). :func:`evaluate_path` cuts any
-such path through one fresh dixel stock and reports engagement / MRR maxima, the share of the
-cutting length above theta + 5 deg, cutting / linking lengths, time and uncut area;
-:func:`to_moves` exports G-code moves (:mod:`cnclab.nc.gcode`).
+The result is a :class:`~cnclab.toolpath.path.ToolPath` at the cutting level ``-a_p``: helical
+entries (kind ``helix``, then the entry circle flat as a cut tagged ``entry-floor``), laps (``cut``),
+cleanup (``cut`` tagged ``cleanup``), link steps that remove material (``cut`` tagged ``linkcut``),
+links through the cleared region (``link``) and, where no route at depth exists, a retract, a rapid
+at the clearance plane and a plunge into the *cleared* region nearest to the next run (the free
+region of the planning stock), followed by a link at depth to the run. The one evaluator
+:func:`cnclab.toolpath.evaluate.evaluate` measures it.
 
 >>> from shapely.geometry import box
->>> path = ce_clearing(box(0, 0, 40, 30), tool_radius=5, theta_deg=66.42, resolution_mm=0.25)
->>> _, s = evaluate_path(path, box(0, 0, 40, 30), 5, 66.42, resolution_mm=0.25)
->>> s["uncut_area_mm2"] < 1.05 * s["unreachable_area_mm2"] + 1.0     # only the corner cusps remain
+>>> from cnclab.toolpath.evaluate import evaluate
+>>> from cnclab.toolpath.job import Job
+>>> from cnclab.toolpath.path import Tool
+>>> job = Job(box(0, 0, 40, 30), Tool(10.0), 66.42, 1.0, v_c=60, feed_mm_min=1000)
+>>> ev = evaluate(clearing_path(job, resolution_mm=0.25), job, 0.25)
+>>> ev.uncut_beyond_unreachable_mm2 < 1.0                          # only the corner cusps remain
 True
->>> abs(s["median_engagement_cut_deg"] - 66.42) < 2.0                # the laps hold theta
+>>> abs(ev.engagement_p50_deg - 66.42) < 2.0                       # the laps hold theta
 True
+>>> (ev.plunges_into_material, ev.rapids_into_material)
+(0, 0)
 """
 from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
+from shapely.ops import nearest_points
 
+from ..simulation import dixel
+from ..simulation.common import simulate
 from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
                                   resample_path, thesis3_path)
+from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
+from .path import ToolPath
 
-__all__ = ["ClearingPath", "KINDS", "CUTTING_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "helical_entry", "ce_clearing",
-           "evaluate_path", "to_moves", "path_from_programme"]
+__all__ = ["PLAN_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "helical_entry",
+           "ce_clearing", "clearing_path"]
 
-#: Segment kinds of a :class:`ClearingPath`; ``link`` and ``rapid`` are not meant to cut.
-KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
-#: Kinds written at the cutting feed (``linkcut``: a step of a planned link that removes material).
-CUTTING_KINDS = ("entry", "cut", "cleanup", "linkcut")
-
-
-@dataclass
-class ClearingPath:
-    """Tool-centre polyline ``points`` (N, 2) mm; ``kinds[i]`` labels the segment *ending* at point i
-    (one of :data:`KINDS`; ``kinds[0]`` is the start); ``region[i]`` the seed index (-1: cleanup)."""
-
-    points: np.ndarray
-    kinds: np.ndarray
-    region: np.ndarray
-    info: dict = field(default_factory=dict)
-
-    def lengths(self) -> dict:
-        """Length (mm) per kind."""
-        ds = np.r_[0.0, np.hypot(*np.diff(self.points, axis=0).T)]
-        return {k: float(ds[self.kinds == k].sum()) for k in KINDS}
+#: Planning labels of the clearing's points (written as ToolPath kinds/tags, see the module docstring).
+PLAN_KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
 
 
 def _polys(g) -> list:
@@ -222,8 +216,6 @@ def _lap(stock, domain, seed, E, r, theta_deg, cell, dt, step, wall="trim"):
 def _gate(stock, Q, moved, r, limit_deg, a_p, feed_mm_min):
     """Split the clamped lap ``Q`` (mm) into runs, leaving out every wall stretch (maximal run of
     ``moved`` points) on which a trial cut of ``Q`` through a copy of ``stock`` exceeds ``limit_deg``."""
-    from cnclab.simulation.common import simulate
-
     eng = simulate(stock, Q, r, a_p, feed_mm_min, copy=True).engagement_deg.to_numpy()
     keep = np.ones(len(Q), bool)
     for a, b in _true_runs(moved):                        # Q[a:b] on the wall
@@ -255,8 +247,6 @@ def _chord_clear(a, b, material, guard, r, margin_mm):
 
 def _grid_graph(free, grid_mm):
     """8-connected grid graph of the points of ``free`` (spacing ``grid_mm``): (csr, points (n, 2))."""
-    from scipy.sparse import coo_matrix
-
     x0, y0, x1, y1 = free.bounds
     X, Y = np.meshgrid(np.arange(x0, x1 + grid_mm, grid_mm), np.arange(y0, y1 + grid_mm, grid_mm))
     ok = shapely.contains_xy(free, X, Y)
@@ -279,8 +269,6 @@ def _geodesic(a, b, free, grid_mm, guard, material=None, r=0.0, margin_mm=0.0):
     """Shortest 8-connected grid path (spacing ``grid_mm``) from a to b inside the polygon ``free``
     (scipy Dijkstra), simplified; (n, 2) points a ... b inside ``guard`` (and, when ``material`` is
     given, whose swept disk of radius ``r - margin_mm`` misses it), or None."""
-    from scipy.sparse.csgraph import dijkstra
-
     free = free() if callable(free) else free
     if free.is_empty:
         return None
@@ -312,8 +300,6 @@ def geodesic_cells(allowed, seeds, grid_mm: float = 1.0):
     """Split ``allowed`` (mm) into one cell per seed: the points geodesically nearest (inside
     ``allowed``, 8-connected grid of ``grid_mm``) to that seed; the cells tile ``allowed`` (their
     interfaces are straightened to within ``grid_mm``). Returns a list of polygons."""
-    from scipy.sparse.csgraph import dijkstra
-
     G, pts = _grid_graph(allowed, grid_mm)
     src = [int(np.argmin(np.hypot(*(pts - np.asarray(s)).T))) for s in seeds]
     D = np.atleast_2d(dijkstra(G, directed=False, indices=src))
@@ -380,10 +366,11 @@ def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, marg
 
 
 def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_radius_mm=None,
-                resolution_mm: float = 0.1, step_mm=None, dt: float = 0.2, max_laps: int = 200,
+                resolution_mm: float = 0.1, step_mm=None, dt: float = 0.2, max_laps: int = MAX_LAPS,
                 min_removed_mm2=None, seed_clearance_ratio: float = 0.6, cleanup: bool = True,
                 link_grid_mm: float = 1.0, wall: str = "gate", gate_margin_deg: float = 5.0,
-                a_p: float = 1.0, feed_mm_min: float = 1000.0) -> ClearingPath:
+                a_p: float = 1.0, feed_mm_min: float = 1000.0, clearance_z: float = 5.0, top_z: float = 0.0,
+                link_feed_mm_min: float = LINK_FEED_MM_MIN, spindle_rpm=None, tool=None) -> ToolPath:
     """Constant-engagement clearing of ``pocket`` (see the module docstring).
 
     Parameters
@@ -411,15 +398,18 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
         ``"clamp"`` — centres pushed onto the boundary, all kept (earlier behaviour: the tool is
         dragged along the wall and cuts full-width wedges, up to 180 deg).
     gate_margin_deg : engagement margin (deg) above ``theta_deg`` tolerated on a wall stretch.
-    a_p, feed_mm_min : axial depth (mm) and feed (mm/min) passed to the planning simulation.
+    a_p, feed_mm_min : axial depth (mm; the cutting level is ``top_z - a_p``) and cutting feed
+        (mm/min), also used by the planning simulation.
+    clearance_z, top_z, link_feed_mm_min, spindle_rpm, tool : the program's clearance plane and
+        stock top (mm), linking feed (mm/min), spindle speed (rpm) and :class:`Tool`.
 
-    Returns a :class:`ClearingPath` whose ``info`` holds the seeds, laps per seed, the entry radius
-    and the planning stock's uncut area.
+    Returns a :class:`~cnclab.toolpath.path.ToolPath` whose ``info`` holds the seeds, laps per seed,
+    the entry radius and the planning stock's uncut area.
     """
-    from cnclab.simulation import dixel
-    from cnclab.simulation.common import simulate
 
     allowed = _check_common(pocket, tool_radius, theta_deg)
+    if not (clearance_z > top_z and a_p > 0):
+        raise ValueError(f"need clearance_z > top_z > z_cut = top_z - a_p (mm), got {clearance_z}, {top_z}, {a_p}")
     r = float(tool_radius)
     if not (isinstance(resolution_mm, (int, float)) and resolution_mm > 0):
         raise ValueError(f"resolution_mm must be > 0 mm, got {resolution_mm!r}")
@@ -474,8 +464,19 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
         route = _geodesic(a, Q0, free, link_grid_mm, guard, material, r, resolution_mm)
         if route is not None:
             link(route, k)
-        else:
-            emit(np.vstack([a, Q0]), ["rapid", "rapid"], k)
+            return
+        # no route at depth: jump (retract, rapid) to the cleared point nearest to Q0, plunge there
+        # (into air) and link at depth to Q0 (its steps that touch material become linkcut)
+        fr = free()
+        safe = fr.buffer(-2.0 * resolution_mm)
+        F = Q0
+        for g in (safe, fr):
+            if not g.is_empty:
+                F = np.asarray(shapely.get_coordinates(nearest_points(g, Point(Q0))[0])[0])
+                break
+        emit(np.vstack([a, F]), ["rapid", "rapid"], k)
+        if np.hypot(*(F - Q0)) > 1e-9:
+            link(np.vstack([F, Q0]), k)
 
     entry_r, laps, n_laps = [], [0] * len(seeds), 0
     for k, s in enumerate(seeds):
@@ -540,168 +541,35 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
                               resolution_mm, free, link_grid_mm)
             if run is not None:
                 emit(*run, -1)
-    pts, kinds, reg = [], [], []
-    for P, K, g in segs:
-        if pts and np.hypot(*(P[0] - pts[-1][-1])) < 1e-9:
-            P, K = P[1:], K[1:]
-        if len(P):
-            pts.append(P)
-            kinds.append(K)
-            reg.append(np.full(len(P), g))
-    kinds[0] = kinds[0].copy()
-    kinds[0][0] = "entry"
     info = {"seeds": seeds, "laps_per_seed": laps, "entry_radius_mm": entry_r,
             "planning_uncut_area_mm2": stock.area(), "theta_deg": float(theta_deg),
-            "resolution_mm": float(resolution_mm), "step_mm": step}
-    return ClearingPath(np.vstack(pts), np.concatenate(kinds), np.concatenate(reg), info)
+            "resolution_mm": float(resolution_mm), "step_mm": step, "name": "constant-engagement clearing"}
+    return ToolPath.from_segments(_segments(segs), z_cut=top_z - a_p, feed=feed_mm_min, clearance_z=clearance_z,
+                                  top_z=top_z, link_feed=link_feed_mm_min, spindle=spindle_rpm, tool=tool,
+                                  info=info)
 
 
-def path_from_programme(points, rapid) -> ClearingPath:
-    """A :class:`ClearingPath` from a program read back as points (``gcode.to_polyline`` output,
-    cutting-depth points only): every feed segment labelled ``"cut"``, G0 jumps ``"rapid"``."""
-    P = np.asarray(points, float)[:, :2]
-    K = np.where(np.asarray(rapid, bool), "rapid", "cut").astype(object)
-    return ClearingPath(P, K, np.zeros(len(P), int))
-
-
-#: Linking feed (mm/min) on non-cutting moves: Jacsó (2021) §4, "on the straight sections of the
-#: connecting movements, an equally increased feed rate (v_f = 1500 mm/min) was used" (text under Table 4.1).
-LINK_FEED_MM_MIN = 1500.0
-#: Rapid traverse (mm/min) for retract / reposition moves: an ASSUMED machine value (neither seed gives one).
-RAPID_MM_MIN = 10000.0
-
-
-def evaluate_path(path: ClearingPath, pocket, tool_radius: float, theta_deg: float, resolution_mm: float = 0.1,
-                  a_p: float = 1.0, feed_mm_min: float = 1000.0, radial_depth_mm=None, margin_deg: float = 5.0,
-                  mrr_window_mm: float = 1.0, air_tol_mm2=None, link_feed_mm_min: float = LINK_FEED_MM_MIN,
-                  rapid_mm_min: float = RAPID_MM_MIN, retract_mm: float = 5.5):
-    """Cut ``path`` through one fresh dixel stock of ``pocket``; per-step table and summary.
-
-    Rapid segments are jumps above the part (not simulated). A step *cuts* when it removes more than
-    ``air_tol_mm2`` (default 0.5 row² ) — the cutting / linking split is by removal, whatever the
-    label, so every path gets the same rule. Steps labelled ``"entry"`` (a helical ramp, which a 2.5D
-    full-depth simulation would wrongly count as a slot) are left out of the engagement and MRR
-    statistics and reported on their own: length of the XY circle, time of its two turns (ramp + flat)
-    at ``feed_mm_min``, and the *mean* MRR over them (bore area x a_p / time).
-
-    Summary (lengths mm, times min, engagement deg, areas mm²): max / median engagement and share of
-    the cutting length above ``theta_deg + margin_deg`` (entry excluded; also per kind), max MRR over
-    windows of ``mrr_window_mm`` divided by the nominal ``a_p * radial_depth_mm * feed`` (radial depth
-    default r (1 - cos theta)), cutting / linking / rapid lengths and times: cutting steps at
-    ``feed_mm_min``, non-cutting feed steps at ``link_feed_mm_min``, rapids (XY plus ``retract_mm`` of
-    vertical travel each) at ``rapid_mm_min``; ``time_one_feed_min`` is all feed moves at
-    ``feed_mm_min`` (rapids excluded; the earlier single-feed figure); uncut and unreachable areas.
-    """
-    for name, v in (("feed_mm_min", feed_mm_min), ("link_feed_mm_min", link_feed_mm_min),
-                    ("rapid_mm_min", rapid_mm_min)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{name} must be > 0 mm/min, got {v!r}")
-
-    from cnclab.simulation import dixel
-
-    _check_common(pocket, tool_radius, theta_deg)
-    r = float(tool_radius)
-    h = float(resolution_mm)
-    ae = r * (1 - math.cos(math.radians(theta_deg))) if radial_depth_mm is None else float(radial_depth_mm)
-    air = 0.5 * h * h if air_tol_mm2 is None else float(air_tol_mm2)
-    P, K = np.asarray(path.points, float), np.asarray(path.kinds, dtype=object)
-    # resample every non-rapid segment to <= h
-    d = np.hypot(*np.diff(P, axis=0).T)
-    n = np.where(K[1:] == "rapid", 1, np.maximum(np.ceil(d / h).astype(int), 1))
-    seg = np.repeat(np.arange(1, len(P)), n)
-    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 1) / np.repeat(n, n)
-    Q = np.vstack([P[:1], P[seg - 1] + t[:, None] * (P[seg] - P[seg - 1])])
-    KQ = np.r_[K[:1], K[seg]]
-    stock = dixel.Stock.from_polygon(pocket, h)
-    T = dixel.simulate_runs(stock, Q, KQ == "rapid", r, a_p, feed_mm_min)
-    T["kind"] = KQ[T.point.to_numpy()]
-    T["s"] = np.cumsum(T.ds.to_numpy())
-    rem, ds = T.removed_mm2.to_numpy(), T.ds.to_numpy()
-    eng = T.engagement_deg.to_numpy()
-    plunge = T.plunge.to_numpy()
-    cut = (rem > air) & ~plunge                  # the plunge disk is axial drilling, not a radial cut
-    T["cutting"] = cut
-    kinds = T.kind.to_numpy()
-    is_entry = kinds == "entry"
-    entry_area = float(rem[is_entry].sum())
-    L_entry = float(ds[is_entry].sum())
-    cut_all, cut = cut, cut & ~is_entry          # statistics below: entry excluded
-    # windowed MRR over the cutting steps (consecutive in path order)
-    s_cut = np.cumsum(np.where(cut, ds, 0.0))
-    win = np.floor(s_cut / mrr_window_mm).astype(int)
-    A = np.bincount(win[cut], weights=rem[cut])
-    L = np.bincount(win[cut], weights=ds[cut])
-    full = L >= 0.5 * mrr_window_mm
-    mrr_w = a_p * A[full] / L[full] * feed_mm_min
-    nominal = a_p * ae * feed_mm_min
-    lim = theta_deg + margin_deg
-    Lc = float(ds[cut].sum())
-    Ll = float(ds[~cut_all & ~is_entry].sum())
-    n_rapid = int(np.sum((K[1:] == "rapid") & (K[:-1] != "rapid")))
-    Lr = float(np.hypot(*np.diff(P, axis=0).T)[K[1:] == "rapid"].sum())
-    t_entry = 2.0 * L_entry / feed_mm_min
-    times = {"cutting_time_min": Lc / feed_mm_min, "linking_time_min": Ll / link_feed_mm_min,
-             "rapid_time_min": (Lr + n_rapid * retract_mm) / rapid_mm_min, "entry_time_min": t_entry}
-    summary = {**times, "total_time_min": sum(times.values()),
-               "time_one_feed_min": float(ds.sum()) / feed_mm_min,
-               "entry_length_mm": L_entry, "n_entries": int(np.sum(is_entry[1:] & ~is_entry[:-1]) + is_entry[0]),
-               "entry_mean_mrr_over_nominal": (entry_area * a_p / t_entry / nominal) if t_entry > 0 else float("nan"),
-               "max_engagement_deg": float(np.nanmax(eng[cut])),
-               "median_engagement_cut_deg": float(np.nanmedian(eng[cut])),
-               "share_above_theta_plus5": float(ds[cut & (eng > lim)].sum()) / Lc,
-               "max_mrr_over_nominal": float(mrr_w.max() / nominal),
-               "p99_mrr_over_nominal": float(np.percentile(mrr_w, 99) / nominal),
-               "cutting_length_mm": Lc, "linking_length_mm": Ll, "rapid_length_mm": Lr, "n_rapids": n_rapid,
-               "n_plunges": int(plunge.sum()), "plunge_area_mm2": float(rem[plunge].sum()),
-               "uncut_area_mm2": stock.area(),
-               "unreachable_area_mm2": float(pocket.difference(pocket.buffer(-r, quad_segs=64)
-                                                                .buffer(r, quad_segs=64)).area)}
-    for k in CUTTING_KINDS:
-        m = cut_all & (kinds == k)
-        Lk = float(ds[m].sum())
-        summary[f"cutting_length_{k}_mm"] = Lk
-        summary[f"max_engagement_{k}_deg"] = float(np.nanmax(eng[m])) if m.any() else float("nan")
-        summary[f"share_above_{k}"] = float(ds[m & (eng > lim)].sum()) / Lk if Lk > 0 else float("nan")
-    return T, summary
-
-
-def to_moves(path: ClearingPath, z_cut: float, z_clear: float, feed: float, spindle: float, link_feed=None):
-    """RS274/NGC moves of ``path`` (mm, mm/min, rpm). An entry (the points labelled ``"entry"``
-    after the start or after a rapid) is written as a helical ramp along its circle from z = 0 down
-    to ``z_cut`` (G1 points) followed by the same circle flat at ``z_cut``; a rapid segment becomes
-    retract-G0-plunge; a ``"link"`` segment is G1 at ``z_cut`` and ``link_feed`` (mm/min, default
-    ``feed``); everything else is G1 at ``z_cut`` and ``feed``."""
-    from .path import Move
-
-    if not z_cut < 0 < z_clear:
-        raise ValueError(f"z_cut must be < 0 < z_clear (mm), got {z_cut!r}, {z_clear!r}")
-    P, K = np.asarray(path.points, float), path.kinds
-    n = len(P)
-    mv = [Move("G0", P[0, 0], P[0, 1], z_clear, spindle=spindle)]
-
-    def start_at(i0):
-        """Tool above P[i0]: helix along the following entry points, or plunge; returns next index."""
-        j = i0
-        while j + 1 < n and K[j + 1] == "entry":
-            j += 1
-        if j == i0:
-            mv.append(Move("G1", P[i0, 0], P[i0, 1], z_cut, feed=feed, spindle=spindle))
-            return i0 + 1
-        circ = P[i0:j + 1]
-        s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(circ, axis=0).T))]
-        mv.append(Move("G1", circ[0, 0], circ[0, 1], 0.0, feed=feed, spindle=spindle))
-        mv.extend(Move("G1", x, y, z_cut * f, feed=feed, spindle=spindle) for (x, y), f in zip(circ[1:], s[1:] / s[-1]))
-        mv.extend(Move("G1", x, y, z_cut, feed=feed, spindle=spindle) for x, y in circ[1:])
-        return j + 1
-
-    i = start_at(0)
-    while i < n:
-        if K[i] == "rapid":
-            mv += [Move("G0", P[i - 1, 0], P[i - 1, 1], z_clear), Move("G0", P[i, 0], P[i, 1], z_clear)]
-            i = start_at(i)
+def _segments(segs):
+    """Planning segments ``(points, labels, seed)`` -> :meth:`ToolPath.from_segments` segments."""
+    out = []
+    for P, K, g in segs:
+        K = np.asarray(K, dtype=object)
+        if (K == "entry").all():
+            out.append((P, "helix", f"seed {g}"))
             continue
-        f = feed if (link_feed is None or K[i] != "link") else float(link_feed)
-        mv.append(Move("G1", P[i, 0], P[i, 1], z_cut, feed=f, spindle=spindle))
-        i += 1
-    mv.append(Move("G0", P[-1, 0], P[-1, 1], z_clear))
-    return mv
+        if (K == "rapid").all():
+            out.append((P[[0, -1]], "jump", ""))
+            continue
+        kind = np.where(K == "link", "link", "cut")
+        tag = np.where(np.isin(K, ("cleanup", "linkcut")), K, np.where(K == "link", "", f"seed {g}" if g >= 0 else ""))
+        out.append((P, kind, tag.astype(object)))
+    return out
+
+
+def clearing_path(job: Job, resolution_mm: float = 0.1, **options) -> ToolPath:
+    """:func:`ce_clearing` of a :class:`~cnclab.toolpath.job.Job` (its polygon, tool, theta, a_p,
+    feeds, planes); ``options`` go to :func:`ce_clearing`."""
+    return ce_clearing(job.polygon, job.tool_radius, job.theta_deg, resolution_mm=resolution_mm, a_p=job.a_p,
+                       feed_mm_min=job.feed_mm_min, clearance_z=job.clearance_z, top_z=job.top_z,
+                       link_feed_mm_min=job.link_feed_mm_min, spindle_rpm=job.spindle_rpm, tool=job.tool,
+                       **options)

@@ -28,6 +28,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry.contours import SplineContour
+from ..geometry.engagement import stepover_thesis1
+from ..simulation import dixel, pixel
+from ..simulation.common import simulate
+
 
 def rot(v, angle_rad):
     """Rotate 2-vectors ``v`` (..., 2) counter-clockwise by ``angle_rad``."""
@@ -75,8 +80,6 @@ def arc_start_point(arc, tool_radius, theta_deg, kind):
     The path radius is d = rho + s - r (concave, arc traversed ccw) or rho - s + r (convex, cw),
     s from Thesis I; P0 lags C0 by the angle POC of the triangle (d, rho, r).
     """
-    from cnclab.geometry.engagement import stepover_thesis1
-
     r, _ = _check(tool_radius, theta_deg)
     rho = arc.radius
     s = float(stepover_thesis1(theta_deg, rho, r, kind))
@@ -263,8 +266,6 @@ def engagement_along_path(stock_polygon, centres, tool_radius, resolution_mm, a_
     ``feed_direction`` is passed to :func:`cnclab.simulation.common.simulate` (``"central"``: the
     tangent of the sampled path, without the half-step lag of the backward chord).
     """
-    from cnclab.simulation import dixel, pixel
-
     mod = {"dixel": dixel, "pixel": pixel}.get(model)
     if mod is None:
         raise ValueError(f"model must be 'dixel' or 'pixel', got {model!r}")
@@ -346,8 +347,6 @@ def cleared_boundary_contour(stock, seed_xy, domain_polygon, min_spacing_mm=None
     heights, at least 0.3 mm) and closed with a periodic cubic spline (:class:`~cnclab.geometry.contours.SplineContour`).
     """
     from shapely.geometry import Point
-
-    from cnclab.geometry.contours import SplineContour
 
     h = stock.resolution_mm
     min_spacing_mm = max(10 * h, 0.3) if min_spacing_mm is None else min_spacing_mm
@@ -435,8 +434,6 @@ def multi_pass(stock, domain_polygon, final_polygon, seed_xy, tool_radius, theta
     ``final_polygon`` shrunk by r (so the tool never cuts beyond the final contour).
     Returns a list of dicts (path, table, removed area) per lap; stops early when nothing is removed.
     """
-    from cnclab.simulation.common import simulate
-
     r, _ = _check(tool_radius, theta_deg)
     step_mm = stock.resolution_mm * 2 if step_mm is None else step_mm
     allowed = final_polygon.buffer(-r)

@@ -12,7 +12,7 @@ Pipeline (all lengths mm, feed mm/min, spindle rpm, MRR mm³/min):
    extends it by the same length while the extension is still excessive, and inserts a return path
    to the segment start; the original segment is then re-checked (and cut);
 3. §3.3 post-step: :func:`fit_arcs` replaces runs of short segments by G2/G3 circular moves;
-   :func:`passes_to_moves` writes the program (:mod:`cnclab.nc.gcode`).
+   :func:`passes_path` makes the :class:`~cnclab.toolpath.path.ToolPath` (:func:`kim_yang_passes` plans a job).
 
 Eq. 4, the reference pixel count of one tool advance ``Δs`` (feed per tooth) at step length ``s``
 (radial depth) on pixels of side ``p``: ``(Δs/p)·(s/p)``. The paper does **not** give the tooth count
@@ -37,11 +37,16 @@ import math
 import numpy as np
 from shapely.geometry import Point, Polygon
 
-from .path import Move
+from shapely.geometry import LinearRing
+
+from ..simulation import pixel
+from .job import Job
+from .offsets import allowed_region, link_loops, offset_levels
+from .path import ToolPath, subdivide
 
 __all__ = ["DEFAULT_TEETH", "ASSUMED_CURRENT_MODEL", "feed_per_tooth", "reference_pixel_count",
            "linear_motion", "cut_linear", "modify_path", "ModifiedPath", "spiral_entry", "fit_arcs",
-           "passes_to_moves", "spindle_current", "resample_polyline"]
+           "spindle_current", "resample_polyline", "kim_yang_passes", "passes_path"]
 
 #: Tooth count used for eq. 4 — NOT given by Kim & Yang (2006); documented choice (2-flute Ø10 mm).
 DEFAULT_TEETH = 2
@@ -115,17 +120,9 @@ def cut_linear(stock, p0, p1, tool_radius: float) -> int:
 
 
 def resample_polyline(points, step_mm: float) -> np.ndarray:
-    """Split every segment of ``points`` [(n,2) mm] into equal parts of at most ``step_mm``."""
-    p = np.asarray(points, float)
-    out = [p[:1]]
-    for a, b in zip(p[:-1], p[1:]):
-        L = float(np.hypot(*(b - a)))
-        if L == 0:
-            continue
-        k = max(1, int(math.ceil(L / step_mm - 1e-9)))
-        t = np.arange(1, k + 1)[:, None] / k
-        out.append(a + t * (b - a))
-    return np.vstack(out)
+    """Split every segment of ``points`` [(n,2) mm] into equal parts of at most ``step_mm``
+    (:func:`cnclab.toolpath.path.subdivide`)."""
+    return subdivide(points, step_mm)
 
 
 @dataclasses.dataclass
@@ -295,29 +292,87 @@ def fit_arcs(points, tol_mm: float = 0.02, short_mm: float = 2.0, min_points: in
     return items
 
 
-def passes_to_moves(passes, z_cut: float, z_clear: float, feed: float, spindle: float,
-                    arcs: bool = True, **fit_kw) -> list[Move]:
-    """G-code moves of the passes [mm]: rapid above each pass start, plunge, G1/G2/G3, retract."""
-    moves = []
-    for pas in passes:
-        p = np.asarray(pas, float)
-        moves.append(Move("G0", p[0, 0], p[0, 1], z_clear, spindle=spindle))
-        moves.append(Move("G1", p[0, 0], p[0, 1], z_cut, feed=feed, spindle=spindle))
-        cur = p[0]
-        items = fit_arcs(p, **fit_kw) if arcs else [("line", q) for q in p[1:]]
-        for it in items:
-            end = it[1]
-            if it[0] == "line":
-                moves.append(Move("G1", end[0], end[1], z_cut, feed=feed, spindle=spindle))
-            else:
-                ctr, ccw = it[2], it[3]
-                moves.append(Move("G3" if ccw else "G2", end[0], end[1], z_cut, i=ctr[0] - cur[0],
-                                  j=ctr[1] - cur[1], feed=feed, spindle=spindle))
-            cur = end
-        moves.append(Move("G1", cur[0], cur[1], z_clear, feed=feed, spindle=spindle))
-    return moves
-
-
 def spindle_current(mrr_mm3_min, model: dict = ASSUMED_CURRENT_MODEL):
     """Eq. 6, ``I_M = p1 + H·p2·Z_M`` [A] with ``model`` constants (default: ASSUMED values)."""
     return model["p1_A"] + model["H"] * model["p2_A_per_mm3_min"] * np.asarray(mrr_mm3_min, float)
+
+
+def _pass_segments(p, fit_kw):
+    """Arc-fitted moves of one pass: list of (end xy, arc 0/2/3, centre xy)."""
+    out = []
+    for it in fit_arcs(p, **fit_kw):
+        if it[0] == "line":
+            out.append((it[1], 0, (np.nan, np.nan)))
+        else:
+            out.append((it[1], 3 if it[3] else 2, it[2]))
+    return out
+
+
+def kim_yang_passes(job: Job, spiral: bool = True, modified: bool = False, pixel_mm: float = 0.3,
+                    teeth: int | None = None, tolerance: float = 0.15, step_mm: float = 1.0) -> list:
+    """Kim & Yang (2006) contour-parallel passes on ``job`` (offsets at the radial depth ``job.a_e``,
+    linked inside-out; each counter-clockwise pass preceded by a spiral entry from its centre), and
+    with ``modified`` the §3.2 constant-MRR modification on a ``pixel_mm`` pixel stock (reference
+    pixel count of eq. 4 with ``teeth`` teeth, default the job's). Returns a list of (n, 2) arrays, mm."""
+    r, b = job.tool_radius, job.a_e
+    allowed = allowed_region(job.polygon, r)
+    passes = link_loops(offset_levels(job.polygon, r, b), allowed)
+    if spiral:
+        out = []
+        for q in passes:
+            d = np.hypot(q[1:, 0] - q[0, 0], q[1:, 1] - q[0, 1])
+            k = np.flatnonzero(d < 1e-9)
+            ring = LinearRing(q[:int(k[0]) + 2] if len(k) else q)
+            if ring.is_ccw and Polygon(ring).area > 1.0:
+                q = np.vstack([spiral_entry(Polygon(ring), q[0], pitch_mm=b)[:-1], q])
+            out.append(q)
+        passes = out
+    if not modified:
+        return passes
+    z = job.teeth if teeth is None else int(teeth)
+    fz = feed_per_tooth(job.feed_mm_min, job.spindle_rpm, z)
+    ref = reference_pixel_count(fz, b, pixel_mm) / fz
+    stock = pixel.Stock.from_polygon(job.polygon, pixel_mm)
+    return list(modify_path(passes, stock, r, ref, allowed, step_mm=step_mm, tolerance=tolerance).passes)
+
+
+def passes_path(passes, job: Job, arcs: bool = True, entry: str = "plunge", **fit_kw) -> ToolPath:
+    """A :class:`ToolPath` of contour-parallel ``passes`` (mm) at the job's cutting level: rapid at
+    the clearance plane above each pass start, the entry, the pass as lines and fitted arcs
+    (:func:`fit_arcs`, ``fit_kw``), retract. ``entry="plunge"``: straight down onto the pass start
+    (Kim & Yang's program: the pass starts at the centre of its region, its spiral entry);
+    ``"helix"``: one helical turn of tool-centre radius r/4 about the pass start from the stock top
+    to the cutting level, the circle once more flat, back to the start (a machine-safe entry)."""
+    if entry not in ("plunge", "helix"):
+        raise ValueError(f"entry must be 'plunge' or 'helix', got {entry!r}")
+    z, zc = job.top_z - job.a_p, job.clearance_z
+    f, lf = job.feed_mm_min, job.link_feed_mm_min
+    pts, kind, feed, arc, ctr = [], [], [], [], []
+
+    def add(xy, zz, k, fd, a=0, c=(np.nan, np.nan)):
+        pts.append((xy[0], xy[1], zz)); kind.append(k); feed.append(fd); arc.append(a); ctr.append(c)
+
+    e = 0.25 * job.tool_radius
+    ang = np.linspace(0.0, 2 * math.pi, 33)[1:]
+    for pas in passes:
+        p = np.asarray(pas, float)
+        if entry == "helix":
+            ring = p[0] + e * np.c_[np.cos(ang), np.sin(ang)]
+            ring[-1] = p[0] + [e, 0.0]
+            add(p[0] + [e, 0.0], zc, "rapid", np.nan)
+            add(p[0] + [e, 0.0], job.top_z, "plunge", f)
+            for q, zz in zip(ring, job.top_z + (z - job.top_z) * np.arange(1, 33) / 32):
+                add(q, zz, "helix", f)
+            for q in ring:
+                add(q, z, "cut", f)
+            add(p[0], z, "cut", f)
+        else:
+            add(p[0], zc, "rapid", np.nan)
+            add(p[0], z, "plunge", f)
+        items = _pass_segments(p, fit_kw) if arcs else [(q, 0, (np.nan, np.nan)) for q in p[1:]]
+        for end, a, c in items:
+            add(end, z, "cut", f, a, c)
+        add(pts[-1][:2], zc, "retract", lf)
+    return ToolPath.build(np.array(pts), kind=kind, feed=np.array(feed), arc=np.array(arc),
+                          arc_center=np.array(ctr, float), spindle=job.spindle_rpm, tool=job.tool,
+                          info={"name": "Kim & Yang contour-parallel"})

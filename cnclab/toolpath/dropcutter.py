@@ -20,8 +20,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.mesh import TriMesh
+from .path import Tool, ToolPath
 
-__all__ = ["drop_cutter_z", "zigzag_xy", "zigzag_finishing_path"]
+__all__ = ["drop_cutter_z", "zigzag_xy", "zigzag_finishing_path", "split_passes"]
 
 
 def _pair_heights(px, py, T, N, R):
@@ -158,8 +159,10 @@ def zigzag_xy(bounds, a_e: float, feed_angle_deg: float, step: float) -> list[np
 
 
 def zigzag_finishing_path(mesh: TriMesh, tool_diameter: float, a_e: float, feed_angle_deg: float,
-                          step: float = 0.5, bounds=None) -> list[np.ndarray]:
-    """Drop-cut zig-zag finishing passes (list of (M, 3) tool-tip points, mm) over ``mesh``.
+                          step: float = 0.5, bounds=None, feed_mm_min: float = 1000.0) -> ToolPath:
+    """Drop-cut zig-zag finishing path over ``mesh``: a :class:`ToolPath` of tool-tip CL points (mm),
+    every move a ``cut`` at ``feed_mm_min`` tagged ``"pass k"`` (the link to the next pass, along
+    the boundary, belongs to pass k); :func:`split_passes` gives the passes back.
 
     ``bounds`` (x0, x1, y0, y1) defaults to the mesh's xy extent (the tool centre line stays inside).
     """
@@ -173,6 +176,14 @@ def zigzag_finishing_path(mesh: TriMesh, tool_diameter: float, a_e: float, feed_
     z = drop_cutter_z(mesh, xy, tool_diameter / 2.0)
     if np.isnan(z).any():
         raise ValueError("zigzag_finishing_path: some cutter locations do not touch the mesh")
-    pts = np.column_stack([xy, z])
-    cuts = np.cumsum([len(p) for p in passes])[:-1]
-    return np.split(pts, cuts)
+    tags = np.concatenate([np.full(len(q), f"pass {k}", dtype=object) for k, q in enumerate(passes)])
+    return ToolPath.build(np.column_stack([xy, z]), kind="cut", tag=tags, feed=feed_mm_min,
+                          tool=Tool(float(tool_diameter), 0.5 * float(tool_diameter)),
+                          info={"name": "drop-cutter zig-zag finishing", "feed_angle_deg": float(feed_angle_deg),
+                                "a_e": float(a_e)})
+
+
+def split_passes(path: ToolPath) -> list[np.ndarray]:
+    """The (M, 3) point arrays of the passes of a finishing path (consecutive runs of one tag)."""
+    cuts = np.flatnonzero(path.tag[1:] != path.tag[:-1]) + 1
+    return np.split(path.xyz, cuts)

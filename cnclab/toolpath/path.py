@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-__all__ = ["MOTIONS", "Move", "KINDS", "ENTRY_KINDS", "Tool", "ToolPath", "arc_geometry", "sample_arc"]
+__all__ = ["MOTIONS", "Move", "KINDS", "ENTRY_KINDS", "Tool", "ToolPath", "arc_geometry", "sample_arc", "subdivide"]
 
 MOTIONS = ("G0", "G1", "G2", "G3")
 
@@ -257,6 +257,136 @@ class ToolPath:
                    np.vstack([p.arc_center for p in paths]), tool,
                    dict(info if info is not None else paths[0].info))
 
+    @classmethod
+    def from_segments(cls, segments, z_cut: float, feed: float, clearance_z: float = 5.0, top_z: float = 0.0,
+                      link_feed: float | None = None, spindle: float | None = None, tool: Tool | None = None,
+                      info: dict | None = None, reentry: str = "plunge", ramp_deg: float = 3.0,
+                      ramp_max_mm: float = 10.0) -> "ToolPath":
+        """A machine-ready path at one cutting level from planar segments (tool-centre xy, mm).
+
+        ``segments``: list of ``(points (n, 2), kind, tag)`` in path order; ``kind`` is ``"cut"``,
+        ``"link"`` (at depth through cleared area, at ``link_feed``), ``"jump"`` (leave at its first
+        point, go to its last: retract to ``clearance_z``, rapid, and down again: a vertical plunge
+        with ``reentry="plunge"``, or with ``"ramp"`` a ramp at ``ramp_deg`` from ``top_z`` along the
+        next segment, back and forth over at most ``ramp_max_mm`` of it, then back to its start at
+        depth) or ``"helix"`` (a
+        closed xy circle: a helical entry from ``top_z`` down to ``z_cut`` along it, then the same
+        circle flat at ``z_cut`` as a cut tagged ``"entry-floor"``); ``kind`` and ``tag`` may also be
+        per-point arrays (cut/link). The path starts with a rapid at ``clearance_z`` above the first
+        point and ends with a retract there. Descents not into a helix are vertical ``plunge`` moves:
+        the planner asserts their target is air (a start hole or cleared area; the evaluator checks).
+
+        >>> p = ToolPath.from_segments([(np.array([[0, 0], [10, 0]]), "cut", "")], z_cut=-2, feed=100)
+        >>> p.kinds().tolist(), p.xyz[:, 2].tolist()
+        (['rapid', 'plunge', 'cut', 'retract'], [5.0, -2.0, -2.0, 5.0])
+        """
+        if not clearance_z > top_z >= z_cut:
+            raise ValueError(f"need clearance_z > top_z >= z_cut (mm), got {clearance_z}, {top_z}, {z_cut}")
+        lf = float(feed if link_feed is None else link_feed)
+        pts, kind, tag, fd = [], [], [], []
+
+        def add(P, z, k, t, f):
+            P = np.asarray(P, float).reshape(-1, 2)
+            zz = np.broadcast_to(np.asarray(z, float), (len(P),))
+            kk = [k] * len(P) if isinstance(k, str) else list(k)
+            tt = [t] * len(P) if isinstance(t, str) else list(t)
+            ff = np.broadcast_to(np.asarray(f, float), (len(P),))
+            pts.extend(np.column_stack([P, zz])); kind.extend(kk); tag.extend(tt); fd.extend(ff)
+
+        def descend(P, k):
+            """Tool above P[0] at clearance: come down (helix along P, or plunge at P[0])."""
+            if k == "helix":
+                add(P[:1], top_z, "plunge", "approach", feed)
+                s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+                add(P[1:], top_z + (z_cut - top_z) * s[1:] / s[-1], "helix", "", feed)
+                add(P[1:], z_cut, "cut", "entry-floor", feed)
+            else:
+                add(P[:1], z_cut, "plunge", "", feed)
+
+        if reentry not in ("plunge", "ramp"):
+            raise ValueError(f"reentry must be 'plunge' or 'ramp', got {reentry!r}")
+
+        def ramp_into(Q):
+            """Ramp down along the polyline Q (from Q[0]) and come back to Q[0] at depth."""
+            Q = np.asarray(Q, float).reshape(-1, 2)
+            s_q = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Q, axis=0).T))] if len(Q) > 1 else np.zeros(1)
+            L = min(float(s_q[-1]), float(ramp_max_mm))
+            H = (top_z - z_cut) / math.tan(math.radians(ramp_deg))
+            if L < 1e-3 or not H > 0:
+                add(Q[:1], z_cut, "plunge", "", feed)
+                return
+            add(Q[:1], top_z, "plunge", "approach", feed)
+
+            def at(u):
+                return np.column_stack([np.interp(u, s_q, Q[:, 0]), np.interp(u, s_q, Q[:, 1])])
+
+            inner = s_q[(s_q > 0) & (s_q < L)]
+            travelled, pos, fwd = 0.0, 0.0, True
+            while travelled < H - 1e-12:
+                end = L if fwd else 0.0
+                leg = min(abs(end - pos), H - travelled)
+                tgt = pos + leg if fwd else pos - leg
+                mid = inner[(inner > min(pos, tgt)) & (inner < max(pos, tgt))]
+                u = np.r_[np.sort(mid) if fwd else np.sort(mid)[::-1], tgt]
+                dist = travelled + np.abs(u - pos)
+                add(at(u), top_z + (z_cut - top_z) * np.minimum(dist / H, 1.0), "ramp", "", feed)
+                travelled, pos, fwd = travelled + leg, tgt, not fwd
+            if pos > 1e-9:                                       # back to the segment start at depth
+                mid = inner[inner < pos][::-1]
+                add(at(np.r_[mid, 0.0]), z_cut, "cut", "ramp-return", feed)
+
+        segs = [(np.asarray(P, float).reshape(-1, 2), k, t) for P, k, t in segments if len(P)]
+        if not segs:
+            raise ValueError("segments: no points")
+        first = segs[0]
+        add(first[0][:1], clearance_z, "rapid", "", np.nan)
+        descend(first[0], first[1] if isinstance(first[1], str) else "cut")
+        prev_kind = "helix" if isinstance(first[1], str) and first[1] == "helix" else None
+        for i, (P, k, t) in enumerate(segs):
+            if isinstance(k, str) and k == "jump":
+                add(P[:1], clearance_z, "retract", "", lf)
+                add(P[-1:], clearance_z, "rapid", "", np.nan)
+                nxt = segs[i + 1] if i + 1 < len(segs) else None
+                if nxt is not None and isinstance(nxt[1], str) and nxt[1] == "helix":
+                    prev_kind = "pending-helix"
+                elif reentry == "ramp" and nxt is not None and (not isinstance(nxt[1], str)
+                                                                or nxt[1] in ("cut", "link")):
+                    ahead = [P[-1:]]                   # the path ahead at depth, up to ramp_max_mm
+                    for Pn, kn, _ in segs[i + 1:]:
+                        if isinstance(kn, str) and kn not in ("cut", "link"):
+                            break
+                        ahead.append(Pn)
+                        Q = np.vstack(ahead)
+                        if np.hypot(*np.diff(Q, axis=0).T).sum() >= ramp_max_mm:
+                            break
+                    Q = np.vstack(ahead)
+                    ramp_into(Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]])
+                else:
+                    descend(P[-1:], "plunge")
+                continue
+            if isinstance(k, str) and k == "helix":
+                if i > 0:
+                    if prev_kind == "pending-helix":               # above the jump's end at clearance
+                        if np.hypot(*(P[0] - pts[-1][:2])) > 1e-9:
+                            add(P[:1], clearance_z, "rapid", "", np.nan)
+                        descend(P, "helix")
+                    else:                                  # a helix from depth: retract first
+                        add(pts[-1][None, :2], clearance_z, "retract", "", lf)
+                        add(P[:1], clearance_z, "rapid", "", np.nan)
+                        descend(P, "helix")
+                prev_kind = "helix"
+                continue
+            kk = np.broadcast_to(np.asarray(k, dtype=object), (len(P),))
+            if np.any(~np.isin(kk, ("cut", "link"))):
+                raise ValueError(f"segment kinds must be cut/link (or a whole jump/helix segment), got {set(kk)}")
+            skip = 1 if pts and np.hypot(*(P[0] - pts[-1][:2])) < 1e-9 and abs(pts[-1][2] - z_cut) < 1e-9 else 0
+            tt = np.broadcast_to(np.asarray(t, dtype=object), (len(P),))
+            add(P[skip:], z_cut, kk[skip:], tt[skip:], np.where(kk[skip:] == "link", lf, float(feed)))
+            prev_kind = None
+        add(np.asarray(pts[-1][:2])[None], clearance_z, "retract", "", lf)
+        return cls.build(np.array(pts), kind=kind, tag=np.array(tag, dtype=object), feed=np.array(fd, float),
+                         spindle=spindle, tool=tool, info=info)
+
     def __len__(self) -> int:
         return len(self.xyz)
 
@@ -318,20 +448,27 @@ class ToolPath:
         pts.append(self.xyz[prev:]); idx.append(np.arange(prev, len(self)))
         return np.vstack(pts), np.concatenate(idx)
 
-    def resample(self, max_step: float) -> "ToolPath":
+    def resample(self, max_step: float, return_index: bool = False):
         """The same path with every move split into pieces at most ``max_step`` mm long (arcs become
-        line pieces on the arc); kind, tag, feed and spindle are inherited by the pieces."""
+        line pieces on the arc); kind, tag, feed and spindle are inherited by the pieces. With
+        ``return_index`` also the index of the original move of every piece: ``(path, index)``.
+
+        >>> p = ToolPath.build([[0, 0, 0], [1, 0, 0]], feed=100).resample(0.25)
+        >>> len(p), float(p.segment_lengths().max())
+        (5, 0.25)
+        """
         if not (math.isfinite(max_step) and max_step > 0):
             raise ValueError(f"max_step must be a finite number > 0 mm, got {max_step!r}")
         P, src = self.polyline(max_step)
         out_p, out_i = [P[:1]], [src[:1]]
         for j in range(1, len(P)):
-            n = max(1, int(math.ceil(np.linalg.norm(P[j] - P[j - 1]) / max_step)))
+            n = max(1, int(math.ceil(np.linalg.norm(P[j] - P[j - 1]) / max_step - 1e-9)))
             t = np.arange(1, n + 1)[:, None] / n
             out_p.append(P[j - 1] + t * (P[j] - P[j - 1])); out_i.append(np.full(n, src[j]))
         Q, I = np.vstack(out_p), np.concatenate(out_i)
-        return ToolPath(Q, self.kind[I], self.tag[I], self.feed[I], self.spindle[I], None, None,
-                        self.tool, dict(self.info))
+        out = ToolPath(Q, self.kind[I], self.tag[I], self.feed[I], self.spindle[I], None, None,
+                       self.tool, dict(self.info))
+        return (out, I) if return_index else out
 
     # -- program moves -----------------------------------------------------------------------
     def to_moves(self) -> list[Move]:
@@ -390,3 +527,17 @@ class ToolPath:
             return cls(np.zeros((0, 3)), None, None, None, None, None, None, tool, dict(info or {}))
         return cls.build(np.array(pts), kind=kind, feed=np.array(feed, float), spindle=np.array(spin, float),
                          arc=np.array(arc), arc_center=np.array(ctr, float), tool=tool, info=info)
+
+
+def subdivide(points, max_step: float) -> np.ndarray:
+    """A polyline (N, 2) or (N, 3) mm with every segment split into equal pieces at most ``max_step``
+    mm long (the vertices kept, repeated points dropped): :meth:`ToolPath.resample` on the points.
+
+    >>> subdivide([[0, 0], [1, 0]], 0.4).tolist()
+    [[0.0, 0.0], [0.3333333333333333, 0.0], [0.6666666666666666, 0.0], [1.0, 0.0]]
+    """
+    P = np.asarray(points, float)
+    if P.ndim != 2 or P.shape[1] not in (2, 3) or len(P) < 1:
+        raise ValueError(f"points must be (N, 2) or (N, 3) mm with N >= 1, got shape {P.shape}")
+    Q = ToolPath.build(P, kind="cut", feed=1.0).resample(max_step).xyz[:, :P.shape[1]]
+    return Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]]          # zero-length segments dropped

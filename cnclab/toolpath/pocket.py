@@ -1,209 +1,108 @@
-"""2.5D pocket roughing: user pocket input, medial axis, the Jacsó (2021, §4) hybrid path and the
-comparison strategies (contour-parallel offsets, zig-zag) on the same pocket.
+"""2.5D pocket roughing: medial axis, the Jacsó (2021, §4) hybrid path and the comparison
+strategies (contour-parallel offsets, zig-zag) on the same pocket.
 
-A pocket is a shapely ``Polygon`` (mm) with a pre-drilled start hole (diameter, mm) and cutting data
-(:class:`PocketJob`). Units: mm, mm/min, m/min, degrees. ``tool_diameter`` is a *diameter*;
-``tool_radius`` = diameter / 2 everywhere else.
+A pocket is a :class:`cnclab.toolpath.job.Job` (polygon with islands, optional pre-drilled start
+hole, cutting data). Units: mm, mm/min, m/min, degrees; ``tool_radius`` = diameter / 2.
 
 Hybrid path (:func:`hybrid_path`), after the medial axis transformation (:func:`medial_axis`):
 
 1. **open centre** — spiral-like constant-engagement laps around the start hole
    (:func:`cnclab.toolpath.constant_engagement.multi_pass`, Thesis III with the stock recomputed
-   after every lap) until a lap touches the final contour;
+   after every lap) until a lap touches the final contour (without a start hole the path first
+   bores one by a helical entry);
 2. **arms** — for every medial-axis branch that ends in a tip, constant-engagement trochoidal
    periods (:func:`cnclab.toolpath.trochoidal.ce_period`) in the branch's frame, the front
    recomputed from a dixel stock after every period, linked by arcs through the cleared region;
 3. **linking** — straight moves between arms through the cleared centre (fast linking feed).
 
-Every strategy is a :class:`StrategyPath` (points + per-point link flags); :func:`evaluate_strategy`
-cuts it through one dixel stock (pocket minus start hole) and reports engagement maxima, the share
-of the path above theta + 5 deg, machining time and the uncut area; :func:`to_gcode_moves` exports
-it as RS274/NGC moves.
+Every strategy returns a :class:`~cnclab.toolpath.path.ToolPath` at the cutting level (move tags:
+``"<phase>"`` or ``"<phase>:roll-in"`` / ``"<phase>:roll-out"``, phase e.g. ``centre``, ``arm 2``,
+``cp``, ``zz``); :func:`evaluate_strategy` cuts its cutting level through one dixel stock with the
+Thesis IV feed control (the general metrics are :func:`cnclab.toolpath.evaluate.evaluate`).
 
->>> job = PocketJob.from_dict({"polygon": [[0, 0], [40, 0], [40, 30], [0, 30]],
-...                            "start_hole": {"center": [20, 15], "diameter": 11}})
->>> round(job.volume_mm3(), 1)                # a_p (A_pocket - A_hole) = 3 (1200 - 95.03)
-3314.9
->>> PocketJob.from_dict({"polygon": [[0, 0], [5, 0], [5, 30], [0, 30]],
-...                      "start_hole": {"center": [2.5, 15], "diameter": 4}})
-Traceback (most recent call last):
-...
-ValueError: <dict>: the tool (diameter 6 mm) cannot enter the pocket: it is narrower than the tool
+>>> job = Job.from_dict({"polygon": [[0, 0], [40, 0], [40, 30], [0, 30]], "tool_diameter": 6, "teeth": 1,
+...                      "v_c": 120, "f_z": 0.04, "a_p": 3, "theta_deg": 60,
+...                      "start_hole": {"center": [20, 15], "diameter": 11}})
+>>> p = contour_parallel_path(job)
+>>> p.kinds()[:2].tolist(), round(float(p.xyz[:, 2].min()), 6)
+(['rapid', 'plunge'], -3.0)
 """
 from __future__ import annotations
 
-import json
 import math
-from dataclasses import dataclass, field
-from pathlib import Path
+import time
 
 import numpy as np
 import shapely
+from scipy.optimize import brentq
 from shapely import affinity
-from shapely.geometry import LineString, Point, Polygon
+from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 
-__all__ = ["PocketJob", "load_pocket", "star_polygon", "design_star", "medial_axis", "arm_branches", "arm_regions",
-           "StrategyPath", "centre_lap", "hybrid_path", "choose_candidate", "contour_parallel_path", "zigzag_path",
-           "evaluate_strategy", "to_gcode_moves"]
+from ..cutting.feed_control import controlled_feed, mrr_error_windowed
+from ..simulation import dixel
+from ..simulation.common import simulate, simulate_runs
+from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
+                                  resample_path, thesis3_path)
+from .job import Job, load_job, star_polygon
+from .offsets import link_loops, offset_levels
+from .path import ToolPath, subdivide
+from .trochoidal import ce_period, disk_has_material, pattern_kinds
+from .zigzag import raster_lines
 
-
-# ---------------------------------------------------------------------------------------------
-# input
-# ---------------------------------------------------------------------------------------------
-@dataclass
-class PocketJob:
-    """Pocket and cutting data. Lengths mm, v_c m/min, f_z mm/tooth, feeds mm/min, theta deg."""
-
-    polygon: Polygon
-    start_center: tuple
-    start_hole_diameter: float
-    tool_diameter: float = 6.0
-    teeth: int = 1
-    v_c: float = 120.0
-    f_z: float = 0.04
-    a_p: float = 3.0
-    theta_deg: float = 60.0
-    link_feed: float = 1500.0
-    v_fmax: float = 1000.0
-    roll_radius: float = 1.0
-    source: str = "<dict>"
-    feed_mm_min: float | None = None
-
-    @property
-    def tool_radius(self) -> float:
-        return 0.5 * self.tool_diameter
-
-    @property
-    def spindle_rpm(self) -> float:
-        """n = 1000 v_c / (pi D) (rpm)."""
-        return 1000.0 * self.v_c / (math.pi * self.tool_diameter)
-
-    @property
-    def feed(self) -> float:
-        """Nominal feed (mm/min): ``feed_mm_min`` if given (e.g. the rounded catalogue value), else
-        v_f = f_z z n."""
-        return self.feed_mm_min if self.feed_mm_min else self.f_z * self.teeth * self.spindle_rpm
-
-    @property
-    def a_e(self) -> float:
-        """Radial depth of a straight cut at theta: r (1 - cos theta) (mm)."""
-        return self.tool_radius * (1 - math.cos(math.radians(self.theta_deg)))
-
-    def mrr_nominal(self, feed=None) -> float:
-        """MRR_nom = a_p a_e v_f (mm^3/min)."""
-        return self.a_p * self.a_e * (self.feed if feed is None else feed)
-
-    def start_hole(self) -> Polygon:
-        return Point(self.start_center).buffer(0.5 * self.start_hole_diameter, 256)
-
-    def volume_mm3(self) -> float:
-        """Material to remove: a_p (pocket area - start-hole area) (mm^3)."""
-        return self.a_p * self.polygon.difference(self.start_hole()).area
-
-    def allowed(self) -> Polygon:
-        """Tool-centre region: the pocket shrunk by the tool radius."""
-        return self.polygon.buffer(-self.tool_radius, 64)
-
-    @classmethod
-    def from_dict(cls, d: dict, source: str = "<dict>") -> "PocketJob":
-        """Build and validate from a mapping (the JSON layout of :func:`load_pocket`)."""
-        def num(key, default, sub=None):
-            v = (d.get(sub, {}) if sub else d).get(key, default)
-            try:
-                v = float(v)
-            except (TypeError, ValueError):
-                raise ValueError(f"{source}: '{key}' must be a number, got {v!r}") from None
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"{source}: '{key}' must be a positive number, got {v!r}")
-            return v
-
-        pts = d.get("polygon")
-        if pts is None:
-            raise ValueError(f"{source}: missing 'polygon' (a list of [x, y] points in mm)")
-        try:
-            P = np.asarray(pts, float)
-        except (TypeError, ValueError):
-            raise ValueError(f"{source}: 'polygon' must be a list of [x, y] points in mm") from None
-        if P.ndim != 2 or P.shape[1] != 2 or len(P) < 3 or not np.all(np.isfinite(P)):
-            raise ValueError(f"{source}: 'polygon' must hold >= 3 finite [x, y] points in mm")
-        poly = Polygon(P)
-        if not poly.is_valid or poly.area <= 0:
-            raise ValueError(f"{source}: 'polygon' is not a simple polygon ({shapely.is_valid_reason(poly)})")
-        tool = num("tool_diameter", 6.0)
-        hole = d.get("start_hole", {})
-        centre = hole.get("center")
-        if centre is None:
-            centre = shapely.get_coordinates(shapely.maximum_inscribed_circle(poly, 0.01))[0]
-        centre = tuple(float(c) for c in centre)
-        job = cls(poly, centre, num("diameter", 11.0, "start_hole"), tool, int(num("teeth", 1)),
-                  num("v_c", 120.0), num("f_z", 0.04), num("a_p", 3.0), num("theta_deg", 60.0),
-                  num("link_feed", 1500.0), num("v_fmax", 1000.0), num("roll_radius", 1.0), source,
-                  num("feed_mm_min", 1.0) if "feed_mm_min" in d else None)
-        job.validate()
-        return job
-
-    def validate(self) -> None:
-        """Refuse jobs the tool cannot machine; ValueError naming the source and the reason."""
-        if not 0 < self.theta_deg <= 180:
-            raise ValueError(f"{self.source}: theta_deg must be in (0, 180], got {self.theta_deg}")
-        allowed = self.allowed()
-        if allowed.is_empty or allowed.area < 1e-6:
-            raise ValueError(f"{self.source}: the tool (diameter {self.tool_diameter:g} mm) cannot enter "
-                             "the pocket: it is narrower than the tool")
-        if self.start_hole_diameter < self.tool_diameter:
-            raise ValueError(f"{self.source}: start hole diameter {self.start_hole_diameter:g} mm is smaller "
-                             f"than the tool diameter {self.tool_diameter:g} mm: the tool cannot enter it")
-        if not self.polygon.buffer(1e-9).contains(self.start_hole()):
-            raise ValueError(f"{self.source}: the start hole at {self.start_center} (diameter "
-                             f"{self.start_hole_diameter:g} mm) is not inside the pocket")
+__all__ = ["Job", "load_job", "star_polygon", "design_star", "medial_axis", "arm_branches", "arm_regions",
+           "centre_lap", "hybrid_path", "choose_candidate", "contour_parallel_path", "zigzag_path",
+           "evaluate_strategy", "planar_view", "entry_hole", "SEGMENT_KINDS"]
 
 
-def load_pocket(path) -> PocketJob:
-    """Read a pocket job JSON (read-only): ``{"polygon": [[x, y], ...], "start_hole": {"center":
-    [x, y], "diameter": d}, "tool_diameter": 6, "v_c": 120, "f_z": 0.04, "teeth": 1, "a_p": 3,
-    "theta_deg": 60, "link_feed": 1500, "v_fmax": 1000}`` (mm, m/min, mm/min, deg).
-    Errors name the file (and the line for JSON syntax errors)."""
-    p = Path(path)
-    try:
-        d = json.loads(p.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as e:
-        raise ValueError(f"{p}:{e.lineno}: invalid JSON ({e.msg})") from None
-    if not isinstance(d, dict):
-        raise ValueError(f"{p}: the top level must be a JSON object")
-    if "star" in d and "polygon" not in d:
-        d = dict(d, polygon=shapely.get_coordinates(star_polygon(**d["star"]).exterior).tolist())
-    return PocketJob.from_dict(d, source=str(p))
+def entry_hole(job: Job):
+    """``(centre (x, y), diameter mm, predrilled)``: the job's start hole, or a hole to bore by a
+    helical entry at :attr:`Job.start_center` (diameter 1.8 D, reduced to fit the pocket)."""
+    if job.start_hole is not None:
+        return (job.start_hole[0], job.start_hole[1]), job.start_hole[2], True
+    c = job.start_center
+    clear = float(job.polygon.boundary.distance(Point(c)))
+    return c, min(1.8 * job.tool_diameter, 2.0 * clear - 0.2), False
+
+
+def _entry_segments(job: Job, resolution_mm: float):
+    """Planar segments that put the tool into the entry hole: none for a pre-drilled hole (the first
+    point, its centre, is plunged into), else a helix circle (radius hole/2 - r) about the centre."""
+    c, d, pre = entry_hole(job)
+    if pre:
+        return []
+    e = 0.5 * d - job.tool_radius
+    n = max(16, int(math.ceil(2 * math.pi * e / resolution_mm)))
+    a = np.linspace(0.0, 2 * math.pi, n + 1)
+    H = np.asarray(c) + e * np.c_[np.cos(a), np.sin(a)]
+    H[-1] = H[0]
+    return [(H, "helix", "entry"), (np.vstack([H[-1], c]), "link", "entry")]
+
+
+def _to_toolpath(segs, job: Job, name: str, info: dict, resolution_mm: float = 0.1) -> ToolPath:
+    """ToolPath at the job's (single) cutting level from planar (points, kind, phase) segments with
+    kind cut / roll-in / roll-out / link / rapid (a rapid becomes a jump: retract, G0, plunge)."""
+    out = _entry_segments(job, resolution_mm)
+    for P, kind, ph in segs:
+        P = np.asarray(P, float)
+        K = np.full(len(P), kind, dtype=object) if isinstance(kind, str) else np.asarray(kind, dtype=object)
+        if isinstance(kind, str) and kind == "rapid":
+            out.append((P[[0, -1]], "jump", ph))
+            continue
+        bad = set(K) - set(SEGMENT_KINDS)
+        if bad:
+            raise ValueError(f"kind must be one of {SEGMENT_KINDS} or 'rapid', got {sorted(bad)}")
+        tags = np.array([ph if k in ("cut", "link") else f"{ph}:{k}" for k in K], dtype=object)
+        out.append((P, np.where(K == "link", "link", "cut"), tags))
+    return ToolPath.from_segments(out, z_cut=job.top_z - job.a_p, feed=job.feed_mm_min, clearance_z=job.clearance_z,
+                                  top_z=job.top_z, link_feed=job.link_feed_mm_min, spindle=job.spindle_rpm,
+                                  tool=job.tool, info=dict(info, name=name), reentry="ramp")
 
 
 # ---------------------------------------------------------------------------------------------
 # the star pocket of §4 (contour not printed: a parameterised stand-in)
 # ---------------------------------------------------------------------------------------------
-def star_polygon(n_arms=5, outer_radius=23.0, inner_ratio=0.5, tip_radius=4.0, root_radius=2.0,
-                 center=(0.0, 0.0), rotation_deg=90.0, quad_segs=32) -> Polygon:
-    """Rounded star (mm): a regular star polygon with tips at ``outer_radius`` and roots at
-    ``inner_ratio * outer_radius``, its convex tips rounded with ``tip_radius`` (the pocket's concave
-    corners: must exceed the tool radius for the tool to follow) and its roots with ``root_radius``.
-
-    Rounding is morphological: tips by an opening (buffer -rt, +rt), roots by a closing (+rr, -rr).
-    """
-    n = int(n_arms)
-    if n < 3:
-        raise ValueError(f"n_arms must be >= 3, got {n_arms!r}")
-    if not 0 < inner_ratio < 1:
-        raise ValueError(f"inner_ratio must be in (0, 1), got {inner_ratio!r}")
-    k = np.arange(2 * n)
-    rad = np.where(k % 2 == 0, outer_radius, inner_ratio * outer_radius)
-    ang = np.radians(rotation_deg) + k * np.pi / n
-    poly = Polygon(np.c_[center[0] + rad * np.cos(ang), center[1] + rad * np.sin(ang)])
-    poly = poly.buffer(-tip_radius, quad_segs).buffer(tip_radius, quad_segs)
-    poly = poly.buffer(root_radius, quad_segs).buffer(-root_radius, quad_segs)
-    return shapely.set_precision(poly, 1e-9)
-
-
 def design_star(volume_mm3, a_p, hole_diameter, **star_kw) -> float:
     """Outer radius (mm) of :func:`star_polygon` whose volume a_p (A - A_hole) equals ``volume_mm3``."""
-    from scipy.optimize import brentq
-
     hole = math.pi * (0.5 * hole_diameter) ** 2
     star_kw = {k: v for k, v in star_kw.items() if k != "outer_radius"}
 
@@ -276,60 +175,6 @@ def arm_branches(polygon, center, spacing_mm=0.25, min_length_mm=None):
 # ---------------------------------------------------------------------------------------------
 # strategy paths
 # ---------------------------------------------------------------------------------------------
-@dataclass
-class StrategyPath:
-    """Tool-centre polyline (N, 2) mm with per-point labels of the segment ending at point i:
-    ``kinds[i]`` in {"cut", "roll-in", "roll-out", "link", "rapid"}; ``link`` (link or rapid: no
-    cutting intended) and ``rapid`` (retract-G0-plunge jump above the part) are derived from it;
-    ``phase`` labels (e.g. 'centre', 'arm 2')."""
-
-    points: np.ndarray
-    kinds: np.ndarray
-    phase: np.ndarray
-    name: str = ""
-    info: dict = field(default_factory=dict)
-
-    @property
-    def link(self) -> np.ndarray:
-        return np.isin(self.kinds, ("link", "rapid"))
-
-    @property
-    def rapid(self) -> np.ndarray:
-        return self.kinds == "rapid"
-
-    @staticmethod
-    def build(segments, name="", info=None):
-        """From a list of (points (n,2), kind, phase) in path order; kind in
-        {"cut", "roll-in", "roll-out", "link", "rapid"} or an (n,) array of kinds."""
-        pts, kinds, phase = [], [], []
-        for P, kind, ph in segments:
-            P = np.asarray(P, float)
-            K = np.asarray(kind, dtype=object) if not isinstance(kind, str) else np.full(len(P), kind, dtype=object)
-            if len(K) != len(P):
-                raise ValueError(f"segment kinds ({len(K)}) and points ({len(P)}) differ")
-            bad = set(K) - KINDS
-            if bad:
-                raise ValueError(f"kind must be one of {sorted(KINDS)}, got {sorted(bad)}")
-            if pts and np.hypot(*(P[0] - pts[-1][-1])) < 1e-9:
-                P, K = P[1:], K[1:]
-            if len(P) == 0:
-                continue
-            pts.append(P)
-            kinds.append(K)
-            phase.append(np.full(len(P), ph, dtype=object))
-        kinds[0] = kinds[0].copy()
-        kinds[0][0] = "cut" if kinds[0][0] == "rapid" else kinds[0][0]
-        return StrategyPath(np.vstack(pts), np.concatenate(kinds), np.concatenate(phase), name, info or {})
-
-    def lengths(self) -> dict:
-        """Length (mm) per kind."""
-        ds = np.r_[0.0, np.hypot(*np.diff(self.points, axis=0).T)]
-        return {k: float(ds[self.kinds == k].sum()) for k in sorted(KINDS)}
-
-
-KINDS = {"cut", "roll-in", "roll-out", "link", "rapid"}
-
-
 def _rot(geom_or_pts, angle_deg, origin):
     if isinstance(geom_or_pts, np.ndarray):
         a = math.radians(angle_deg)
@@ -364,9 +209,6 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
     from the previous one (engagement 0 -> theta, no radial plunge) and closes on its own start.
     Tool centres are clamped to ``allowed``. Returns the (n, 2) centre points (mm).
     """
-    from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
-                                      resample_path, thesis3_path)
-
     r = tool_radius
     c = cleared_boundary_contour(stock, seed_xy, domain)
     shifted = ShiftedContour(c, lap_start(c, start_xy, r)[2])
@@ -384,7 +226,7 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
 WALL_SHARE_CANDIDATES = (0.3, 0.5)
 
 
-def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=200,
+def hybrid_path(job: Job, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=200,
                 spacing_mm=0.25, max_rounds=3, arm_min_area_mm2=1.0, max_wall_share="auto",
                 wall_share_candidates=WALL_SHARE_CANDIDATES, stop_when_clean=False):
     """Jacsó §4 hybrid path on ``job`` (see the module docstring). Returns a :class:`StrategyPath`
@@ -411,6 +253,10 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
     ``wall_share_candidates`` (one metrics dict per candidate) and ``wall_share_choice`` (the
     reasons, stage by stage).
     """
+    if not isinstance(job.polygon, Polygon) or job.polygon.interiors:
+        raise ValueError(f"{job.source}: the hybrid strategy (Jacsó §4: centre laps around one start hole, arms "
+                         "along the medial axis) plans a simple pocket without islands; use the "
+                         "constant-engagement strategy for pockets with islands")
     if isinstance(max_wall_share, str):
         if max_wall_share != "auto":
             raise ValueError(f"max_wall_share must be a number in (0, 1] or 'auto', got {max_wall_share!r}")
@@ -420,8 +266,6 @@ def hybrid_path(job: PocketJob, resolution_mm=0.05, dt=0.1, max_laps=20, max_per
             raise ValueError(f"max_wall_share must be a number in (0, 1] or 'auto', got {max_wall_share!r}")
         return _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds,
                                 arm_min_area_mm2, v)
-    import time
-
     cands = sorted(float(c) for c in wall_share_candidates)
     if not cands or not all(0 < c <= 1 for c in cands):
         raise ValueError(f"wall_share_candidates must be numbers in (0, 1], got {wall_share_candidates!r}")
@@ -507,18 +351,15 @@ def choose_candidate(metrics, pocket_area_mm2, theta_deg=60.0, uncut_tol_frac=0.
 def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds, arm_min_area_mm2,
                      max_wall_share):
     """:func:`hybrid_path` for one numeric ``max_wall_share``."""
-    from cnclab.simulation.common import simulate
-    from cnclab.simulation.dixel import Stock
-
-    from .trochoidal import _link, ce_period
-
+    Stock = dixel.Stock
     r, th = job.tool_radius, job.theta_deg
     pocket, allowed = job.polygon, job.allowed()
-    c = np.asarray(job.start_center, float)
-    stock = Stock.from_polygon(pocket.difference(job.start_hole()), resolution_mm)
+    centre, hole_d, _ = entry_hole(job)
+    c = np.asarray(centre, float)
+    stock = Stock.from_polygon(pocket.difference(Point(c).buffer(0.5 * hole_d, 256)), resolution_mm)
     # 1. open centre: chained constant-engagement laps
-    E = c + np.array([0.5 * job.start_hole_diameter - r, 0.0])       # touches the hole wall
-    segs = [(_link(c, E, None, resolution_mm), "link", "centre")]
+    E = c + np.array([0.5 * hole_d - r, 0.0])       # touches the hole wall
+    segs = [(subdivide(np.vstack([c, E]), resolution_mm), "link", "centre")]
     laps, stop_share = 0, None
     domain = pocket.buffer(-2 * resolution_mm)   # 2 rows: wall slivers must not join the cleared region
     for _ in range(int(max_laps)):
@@ -530,7 +371,7 @@ def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, 
         if on_wall.mean() > max_wall_share:
             stop_share = float(on_wall.mean())
             break               # this lap would run along the final contour: the arms take over
-        df = simulate(stock, P, r, job.a_p, job.feed)
+        df = simulate(stock, P, r, job.a_p, job.feed_mm_min)
         if float(df.removed_mm2.sum()) < 1e-6:
             break
         segs.append((P, _label_lap(df.engagement_deg, th), "centre"))
@@ -562,18 +403,18 @@ def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, 
             arm_segs, last = [], None
             for _ in range(int(max_periods)):
                 per = ce_period(full, r, th, loc_allowed, dt=dt, step_mm=resolution_mm,
-                                roll_radius=job.roll_radius, a_p=job.a_p, feed_mm_min=job.feed,
+                                roll_radius=job.roll_radius, a_p=job.a_p, feed_mm_min=job.feed_mm_min,
                                 front_stock=loc, x_min=c[0])
                 if per is None:
                     break
-                Pl = per.points
-                df = simulate(loc, Pl, r, job.a_p, job.feed)
-                simulate(full, Pl, r, job.a_p, job.feed)
+                Pl = per.xyz[:, :2]
+                df = simulate(loc, Pl, r, job.a_p, job.feed_mm_min)
+                simulate(full, Pl, r, job.a_p, job.feed_mm_min)
                 if float(df.removed_mm2.sum()) < 1e-3:
                     break
                 if last is not None:
                     arm_segs.append((_free_link(last, Pl[0], loc_allowed, full, r, resolution_mm)))
-                arm_segs.append((Pl, per.kinds))
+                arm_segs.append((Pl, pattern_kinds(per)))
                 last = Pl[-1]
             periods.append(sum(1 for s in arm_segs if not isinstance(s[1], str)))
             if not arm_segs:
@@ -589,7 +430,7 @@ def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, 
     info = {"laps": laps, "arms": arms_done, "periods_per_arm": periods, "rounds": rounds,
             "medial_axis": medial_axis(pocket, spacing_mm), "max_wall_share": max_wall_share,
             "stop_lap_wall_share": stop_share}
-    return StrategyPath.build(segs, "hybrid (Jacsó §4)", info)
+    return _to_toolpath(segs, job, "hybrid (Jacsó §4)", info, resolution_mm)
 
 
 def arm_regions(material, center, tool_radius, min_area_mm2=1.0, open_mm=None):
@@ -710,23 +551,19 @@ def _free_link(E, S, allowed, stock, r, ds, via=None):
     """Linking move E -> S (mm): straight if the tool stays in ``allowed`` and clear of the
     ``stock`` material (sampled every ``ds``), else through ``via``, else a rapid jump
     (retract, G0, plunge into the cleared start). Returns (points, kind)."""
-    from .trochoidal import _disk_has_material, _link
-
     guard = allowed.buffer(1e-6)
     for Q in ([E, S],) + (([E, via, S],) if via is not None else ()):
         Q = np.asarray(Q, float)
         if not guard.contains(LineString(Q)):
             continue
-        pts = np.vstack([_link(Q[i], Q[i + 1], None, ds)[(1 if i else 0):] for i in range(len(Q) - 1)])
-        if not any(_disk_has_material(stock, p, r * 0.98) for p in pts[1:-1:2]):
+        pts = subdivide(Q, ds)
+        if not any(disk_has_material(stock, p, r * 0.98) for p in pts[1:-1:2]):
             return pts, "link"
     return np.vstack([E, S]), "rapid"
 
 
 def _polygonal(g):
     """Polygonal part of a geometry as a valid (Multi)Polygon (slivers under 1e-6 mm^2 dropped)."""
-    from shapely.geometry import MultiPolygon
-
     parts = [p for p in shapely.get_parts(shapely.make_valid(g)) if isinstance(p, Polygon) and p.area > 1e-6]
     if not parts:
         return Polygon()
@@ -743,42 +580,33 @@ def _apply_world(stock, paths, r):
     return stock
 
 
-def contour_parallel_path(job: PocketJob, stepover=None):
-    """Contour-parallel offsets (inside-out, :mod:`cnclab.toolpath.offsets`) at ``stepover``
-    (default the nominal a_e); passes joined by rapids (retract, G0, plunge)."""
-    from .offsets import link_loops, offset_levels
-
+def contour_parallel_path(job: Job, stepover=None, resolution_mm: float = 0.1) -> ToolPath:
+    """Contour-parallel offsets (inside-out, :mod:`cnclab.toolpath.offsets`) at ``stepover`` (mm,
+    default the nominal a_e); passes joined by jumps (retract, rapid, plunge)."""
     ae = job.a_e if stepover is None else stepover
+    c = entry_hole(job)[0]
     levels = offset_levels(job.polygon, job.tool_radius, ae)
-    passes = link_loops(levels, job.allowed(), start=job.start_center)
-    segs = [(np.vstack([job.start_center, passes[0][0]]), "link", "cp")]
+    passes = link_loops(levels, job.allowed(), start=c)
+    segs = [(np.vstack([c, passes[0][0]]), "link", "cp")]
     for i, P in enumerate(passes):
         if i > 0:
             segs.append((np.vstack([passes[i - 1][-1], P[0]]), "rapid", "cp"))
         segs.append((P, "cut", "cp"))
-    return StrategyPath.build(segs, "contour-parallel", {"stepover": ae})
+    return _to_toolpath(segs, job, "contour-parallel", {"stepover": ae}, resolution_mm)
 
 
-def zigzag_path(job: PocketJob, stepover=None, angle_deg=0.0):
-    """Zig-zag (direction-parallel) raster over the tool-centre region at ``stepover`` (default a_e),
-    alternate directions, straight feed links along the boundary side when inside the region
-    (else retract-rapid), then one finishing lap of the region boundary (removes the scallops)."""
+def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0.1) -> ToolPath:
+    """Zig-zag (direction-parallel) raster over the tool-centre region at ``stepover`` (mm, default
+    a_e), alternate directions (:func:`cnclab.toolpath.zigzag.raster_lines`), straight feed links along
+    the boundary side when inside the region (else a jump, re-entering by a ramp), then a finishing
+    lap of every ring of the region (outlines and islands: removes the scallops)."""
     ae = job.a_e if stepover is None else stepover
     allowed = job.allowed()
-    c = job.start_center
+    c = entry_hole(job)[0]
     A = _rot(allowed, -angle_deg, c)
-    x0, y0, x1, y1 = A.bounds
-    lines = []
-    ys = np.arange(y0 + 1e-6, y1, ae)
-    for i, y in enumerate(ys):
-        g = A.intersection(LineString([(x0 - 1, y), (x1 + 1, y)]))
-        parts = [np.asarray(p.coords) for p in shapely.get_parts(g) if p.length > 1e-6]
-        parts = sorted(parts, key=lambda q: q[:, 0].min())
-        for q in parts:
-            q = q[np.argsort(q[:, 0])]
-            lines.append(q if i % 2 == 0 else q[::-1])
+    lines = raster_lines(A, ae, min_length=0.5 * ae)      # tangency stubs: left to the finishing lap
     guard = A.buffer(1e-6)
-    segs = [(np.vstack([c, _rot(lines[0][:1], angle_deg, c)[0]]), "rapid", "zz")]
+    segs = [(np.vstack([c, _rot(lines[0][:1], angle_deg, c)[0]]), "cut", "zz")]     # slot from the entry hole
     prev = None
     for q in lines:
         qq = _rot(q, angle_deg, c)
@@ -787,35 +615,47 @@ def zigzag_path(job: PocketJob, stepover=None, angle_deg=0.0):
             segs.append((np.vstack([_rot(prev[None], angle_deg, c)[0], qq[0]]), kind, "zz"))
         segs.append((qq, "cut", "zz"))
         prev = q[-1]
-    ring = np.asarray(allowed.exterior.coords)
-    segs.append((np.vstack([segs[-1][0][-1], ring[0]]), "rapid", "zz"))
-    segs.append((ring, "cut", "zz"))
-    return StrategyPath.build(segs, "zig-zag", {"stepover": ae})
+    for part in shapely.get_parts(allowed):                # finishing laps: every outline and island
+        for ring in [np.asarray(part.exterior.coords)] + [np.asarray(i.coords) for i in part.interiors]:
+            segs.append((np.vstack([segs[-1][0][-1], ring[0]]), "rapid", "zz"))
+            segs.append((ring, "cut", "zz"))
+    return _to_toolpath(segs, job, "zig-zag", {"stepover": ae}, resolution_mm)
 
 
 # ---------------------------------------------------------------------------------------------
-# evaluation, feed control and G-code
+# evaluation with feed control
 # ---------------------------------------------------------------------------------------------
-def _resample_strategy(path: StrategyPath, step_mm):
-    """Insert points so no segment exceeds ``step_mm`` (labels carried by the segment end)."""
-    P = path.points
-    d = np.hypot(*np.diff(P, axis=0).T)
-    n = np.maximum(np.ceil(d / step_mm).astype(int), 1)
-    seg = np.repeat(np.arange(1, len(P)), n)                       # segment index of each new point
-    t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 1) / np.repeat(n, n)
-    Q = P[seg - 1] + t[:, None] * (P[seg] - P[seg - 1])
-    return StrategyPath(np.vstack([P[:1], Q]), np.r_[path.kinds[:1], path.kinds[seg]],
-                        np.r_[path.phase[:1], path.phase[seg]], path.name, path.info)
-
-
 SEGMENT_KINDS = ("cut", "roll-in", "roll-out", "link")
 
 
-def evaluate_strategy(path: StrategyPath, job: PocketJob, resolution_mm=0.05, feed_control=False,
-                      block_mm=0.5, margin_deg=5.0, link_tol_mm2=1e-3, mrr_window_mm=1.0):
-    """Cut ``path`` through the pocket stock (pocket minus start hole) with the dixel simulator.
+def planar_view(path: ToolPath, step_mm: float, z_tol: float = 1e-6):
+    """The cutting level of ``path`` as planar samples: ``(points (n, 2), kinds, phase, jump)``.
 
-    Rapid jumps are not simulated (the tool is above the part). Linking moves run at the linking
+    The path is resampled every ``step_mm`` (:meth:`ToolPath.resample`); samples at the lowest z
+    (cut, link or the end of a descent) are kept; ``kinds`` is cut / roll-in / roll-out / link (from
+    the move kind and its tag), ``phase`` the tag's phase, ``jump[i]`` True when sample i is reached
+    after leaving the level (a retract-rapid-descent)."""
+    rp, _ = path.resample(step_mm, return_index=True)
+    z0 = float(rp.xyz[:, 2].min())
+    at = np.flatnonzero(np.abs(rp.xyz[:, 2] - z0) <= z_tol)
+    if at.size < 2:
+        raise ValueError("the path has fewer than 2 points at its cutting level")
+    names = rp.kinds()[at]
+    tags = rp.tag[at]
+    phase = np.array([str(t).split(":")[0] for t in tags], dtype=object)
+    roll = np.array([str(t).split(":")[1] if ":" in str(t) else "" for t in tags], dtype=object)
+    kinds = np.where(names == "link", "link", np.where(roll != "", roll, "cut")).astype(object)
+    kinds[names == "plunge"] = "link"
+    jump = np.r_[False, np.diff(at) > 1]
+    return rp.xyz[at, :2], kinds, phase, jump
+
+
+def evaluate_strategy(path: ToolPath, job: Job, resolution_mm=0.05, feed_control=False,
+                      block_mm=0.5, margin_deg=5.0, link_tol_mm2=1e-3, mrr_window_mm=1.0):
+    """Cut the cutting level of ``path`` (:func:`planar_view`) through the pocket stock (pocket minus
+    the entry hole) with the dixel simulator, with the Thesis IV feed control.
+
+    Jumps are not simulated (the tool is above the part). Linking moves run at the linking
     feed only if they remove (almost) nothing: a link step removing more than ``link_tol_mm2`` is
     flagged ``link_cuts`` and runs at the cutting feed and counts as cutting. With
     ``feed_control`` the roll-in/roll-out steps get the MRR-holding feed
@@ -825,31 +665,30 @@ def evaluate_strategy(path: StrategyPath, job: PocketJob, resolution_mm=0.05, fe
     :func:`cnclab.simulation.common.simulate` plus ``kind``, ``phase``, ``link_cuts``,
     ``feed_mm_min``, ``mrr_ctrl_mm3_min``) and a dict: engagement maximum and share of length
     above theta + ``margin_deg`` overall and per segment kind (``max_eng_<kind>_deg``,
-    ``share_above_<kind>``), lengths, machining time (s), uncut area (mm^2), the theoretical
-    minimum V / MRR_nom and the MRR error over the "cut" segments
+    ``share_above_<kind>``), lengths, machining time at depth (s, the feed-controlled cutting-level
+    time; the whole program's time is :func:`cnclab.toolpath.evaluate.evaluate`'s), uncut area
+    (mm^2), the theoretical minimum V / MRR_nom and the MRR error over the "cut" segments
     (:func:`cnclab.cutting.feed_control.mrr_error_windowed`, windows of ``mrr_window_mm``).
     """
-    from cnclab.cutting.feed_control import controlled_feed, mrr_error_windowed
-    from cnclab.simulation import dixel
-
-    p = _resample_strategy(path, resolution_mm)
-    stock = dixel.Stock.from_polygon(job.polygon.difference(job.start_hole()), resolution_mm)
-    T = dixel.simulate_runs(stock, p.points, p.rapid, job.tool_radius, job.a_p, job.feed, f_z=job.f_z,
-                            teeth=job.teeth)
+    P, kinds_p, phase_p, jump = planar_view(path, resolution_mm)
+    centre, hole_d, _ = entry_hole(job)
+    stock = dixel.Stock.from_polygon(job.polygon.difference(Point(centre).buffer(0.5 * hole_d, 256)), resolution_mm)
+    T = simulate_runs(stock, P, jump, job.tool_radius, job.a_p, job.feed_mm_min, f_z=job.f_z, teeth=job.teeth)
     idx = T.point.to_numpy()
-    # the plunge after a rapid is a link
-    T["kind"] = np.where(T.plunge.to_numpy() & (idx > 0), "link", np.asarray(p.kinds, dtype=object)[idx])
-    T["phase"] = np.asarray(p.phase, dtype=object)[idx]
+    # the descent after a jump is a link
+    T["kind"] = np.where(T.plunge.to_numpy() & (idx > 0), "link", kinds_p[idx])
+    T["phase"] = phase_p[idx]
     kinds = T.kind.to_numpy()
     rem = T.removed_mm2.to_numpy()
     T["link_cuts"] = (kinds == "link") & (rem > link_tol_mm2)
     cut = (kinds != "link") | T.link_cuts.to_numpy()
-    v = np.where(cut, job.feed, job.link_feed)
+    feed, link_feed = job.feed_mm_min, job.link_feed_mm_min
+    v = np.where(cut, feed, link_feed)
     if feed_control:
         adj = np.isin(kinds, ("roll-in", "roll-out"))
-        vc = controlled_feed(rem, T.ds.to_numpy(), T.engagement_deg.to_numpy(), cut, job.a_e, job.feed,
+        vc = controlled_feed(rem, T.ds.to_numpy(), T.engagement_deg.to_numpy(), cut, job.a_e, feed,
                              job.v_fmax, job.theta_deg, block_mm, margin_deg, adjust=adj)
-        v = np.where(cut, vc, job.link_feed)
+        v = np.where(cut, vc, link_feed)
     T["feed_mm_min"] = v
     ds = T.ds.to_numpy()
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -858,10 +697,10 @@ def evaluate_strategy(path: StrategyPath, job: PocketJob, resolution_mm=0.05, fe
     time_s = 60.0 * float(np.sum(ds / v))
     Lc = float(ds[cut].sum())
     lim = job.theta_deg + margin_deg
-    summary = {"strategy": path.name, "max_engagement_deg": float(np.nanmax(eng[cut])),
+    summary = {"strategy": path.info.get("name", ""), "max_engagement_deg": float(np.nanmax(eng[cut])),
                "share_above_theta_plus5": float(ds[cut & (eng > lim)].sum()) / Lc,
                "cut_length_mm": Lc, "link_length_mm": float(ds[~cut].sum()),
-               "rapid_length_mm": p.lengths()["rapid"],
+               "rapid_length_mm": path.lengths()["rapid_mm"],
                "link_cutting_length_mm": float(ds[T.link_cuts.to_numpy()].sum()),
                "link_removed_mm3": job.a_p * float(rem[kinds == "link"].sum())}
     for k in SEGMENT_KINDS:
@@ -880,26 +719,3 @@ def evaluate_strategy(path: StrategyPath, job: PocketJob, resolution_mm=0.05, fe
     summary["mrr_error_cut_pct"] = err["mean_abs_pct"]
     summary["mrr_error_cut_p95_pct"] = err["p95_abs_pct"]
     return T, summary
-
-
-def to_gcode_moves(path: StrategyPath, job: PocketJob, feeds=None, z_cut=None, z_clear=5.0,
-                   decimals=4):
-    """RS274/NGC moves: G0 to the start above the part, plunge, then G1 per segment at the cutting
-    feed (or ``feeds[i]`` mm/min per point, e.g. the controlled feed), links at the linking feed,
-    rapid jumps as retract-G0-plunge. ``z_cut`` defaults to -a_p."""
-    from .path import Move
-
-    z = -job.a_p if z_cut is None else z_cut
-    S = job.spindle_rpm
-    P = path.points
-    mv = [Move("G0", P[0, 0], P[0, 1], z_clear), Move("G1", P[0, 0], P[0, 1], z, feed=job.feed, spindle=S)]
-    link = path.link
-    for i in range(1, len(P)):
-        if path.rapid[i]:
-            mv += [Move("G0", P[i - 1, 0], P[i - 1, 1], z_clear), Move("G0", P[i, 0], P[i, 1], z_clear),
-                   Move("G1", P[i, 0], P[i, 1], z, feed=job.feed, spindle=S)]
-            continue
-        f = job.link_feed if link[i] else (job.feed if feeds is None else float(feeds[i]))
-        mv.append(Move("G1", P[i, 0], P[i, 1], z, feed=f, spindle=S))
-    mv.append(Move("G0", P[-1, 0], P[-1, 1], z_clear, spindle=S))
-    return mv

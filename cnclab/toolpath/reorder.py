@@ -29,7 +29,11 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["densify", "neighbour_sets", "ReorderResult", "reorder_path", "path_metrics"]
+from ..cutting.spindle_model import working_diameters
+from ..cutting.speeds import spindle_speed
+from .path import Tool, ToolPath
+
+__all__ = ["densify", "neighbour_sets", "ReorderResult", "reorder_path", "reordered_path", "path_metrics"]
 
 NEIGHBOUR_RULES = ("knn", "radius", "unvisited")
 
@@ -136,8 +140,6 @@ def reorder_path(points, normals, *, tool_diameter: float, a_p: float, k: int = 
         raise ValueError(f"neighbours must be one of {NEIGHBOUR_RULES}, got {neighbours!r}")
     if adjacent_mm is not None and not adjacent_mm > 0:
         raise ValueError(f"adjacent_mm must be > 0 mm or None, got {adjacent_mm}")
-    from ..cutting.spindle_model import working_diameters
-
     P = np.asarray(points, float)
     N = len(P)
     if N < 2:
@@ -236,8 +238,6 @@ def path_metrics(points, d_eff, v_c: float = 63.0, jump=None) -> dict:
     """Travelling distance (mm), and the ranges of |Delta D_eff| (mm) and |Delta n| (rpm) between
     consecutive points of a path (points in visiting order, d_eff per point); moves flagged in ``jump``
     (bool per point: the move into it) are excluded from the Delta ranges (the tool lifts)."""
-    from ..cutting.speeds import spindle_speed
-
     P = np.asarray(points, float)
     d = np.asarray(d_eff, float)
     n = spindle_speed(v_c, np.maximum(d, 1e-6))
@@ -249,3 +249,32 @@ def path_metrics(points, d_eff, v_c: float = 63.0, jump=None) -> dict:
             "dn_min": float(dn.min()), "dn_max": float(dn.max()), "dn_mean": float(dn.mean()),
             "dD_p99": float(np.percentile(dd, 99)), "dn_p99": float(np.percentile(dn, 99)),
             "jumps": 0 if jump is None else int(np.sum(jump))}
+
+
+def reordered_path(points, result: ReorderResult, *, feed_mm_min: float, clearance_z: float,
+                   spindle_rpm: float | None = None, tool: Tool | None = None) -> ToolPath:
+    """The :class:`ToolPath` visiting ``points`` (N, 3, mm) in ``result.order``: a rapid above the
+    first point at ``clearance_z``, a plunge onto it, feed moves between neighbours, and at every
+    jump a retract to ``clearance_z``, a rapid above the next point and a plunge onto it; a final
+    retract. (:class:`ReorderResult` stays the search's record: order, jumps, working diameters.)
+
+    >>> P = np.array([[0, 0, 0], [1, 0, 0], [5, 5, 0.0]])
+    >>> r = ReorderResult(np.array([0, 1, 2]), np.array([False, False, True]), np.ones(3))
+    >>> reordered_path(P, r, feed_mm_min=500, clearance_z=30).kinds().tolist()
+    ['rapid', 'plunge', 'cut', 'retract', 'rapid', 'plunge', 'retract']
+    """
+    P = np.asarray(points, float)
+    order = np.asarray(result.order)
+    if P.ndim != 2 or P.shape[1] != 3 or len(order) != len(P):
+        raise ValueError(f"points must be (N, 3) with N = len(result.order), got {P.shape}, {len(order)}")
+    cuts = np.flatnonzero(np.asarray(result.jump, bool))
+    pts, kind = [], []
+    for seg in np.split(P[order], cuts[cuts > 0]):
+        pts += [[seg[0, 0], seg[0, 1], clearance_z], seg[0]]
+        kind += ["rapid", "plunge"]
+        pts += list(seg[1:])
+        kind += ["cut"] * (len(seg) - 1)
+        pts.append([seg[-1, 0], seg[-1, 1], clearance_z])
+        kind.append("retract")
+    return ToolPath.build(np.array(pts, float), kind=kind, feed=feed_mm_min, spindle=spindle_rpm, tool=tool,
+                          info={"name": "reordered", "n_jumps": result.n_jumps})

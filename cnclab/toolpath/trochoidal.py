@@ -6,8 +6,9 @@ trochoidal step ``step`` (mm) per period. The tool centre must stay in |y| <= W/
 final-contour limit). All patterns are climb milling with a clockwise (M3) spindle: the uncut
 material lies on the right of the feed direction, so circles run counter-clockwise.
 
-Patterns (each returned as a :class:`TrochoidPath`: centre points, a per-point link flag, a period
-index):
+Patterns (each returned as a :class:`~cnclab.toolpath.path.ToolPath` at z = 0: centre points, kind
+``link`` on linking moves, tags ``"period k"`` / ``"period k:roll-in"`` (:func:`period_index`,
+:func:`pattern_kinds`), ``info["step"]``):
 
 * **circular trochoid** — full circles of radius R = W/2 - r whose centres advance by ``step``; the
   transfer from one circle to the next is a straight move of length ``step`` at the rear point of
@@ -33,10 +34,10 @@ engagement stays at ``theta_max_deg``.
 Units: mm, mm/min, mm^3/min; angles in degrees at the API.
 
 >>> p = circular_trochoid(step=1.0, width=12.0, tool_radius=3.0, n_periods=2, ds=0.1)
->>> round(p.length_per_period(), 2)          # 2 pi R + step = 2 pi 3 + 1
+>>> round(length_per_period(p), 2)          # 2 pi R + step = 2 pi 3 + 1
 19.85
 >>> c = cycloid(step=1.0, width=12.0, tool_radius=3.0, n_periods=1, ds=0.05)
->>> bool(abs(c.points[:, 1]).max() <= 3.0 + 1e-9)
+>>> bool(abs(c.xyz[:, 1]).max() <= 3.0 + 1e-9)
 True
 """
 from __future__ import annotations
@@ -45,8 +46,17 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
+import shapely
+from shapely.geometry import box
 
-__all__ = ["TrochoidPath", "circular_trochoid", "cycloid", "slot_limit", "evaluate_pattern",
+from ..geometry.contours import SplineContour
+from ..simulation import dixel
+from ..simulation.common import simulate
+from .constant_engagement import clamp_to_region, resample_path, thesis3_path
+from .path import ToolPath, subdivide
+
+__all__ = ["period_index", "pattern_kinds", "pattern_lengths", "length_per_period", "disk_has_material", "circular_trochoid", "cycloid", "slot_limit", "evaluate_pattern",
            "admissible_step", "front_contour", "linking_arc", "ce_period", "ce_trochoid_iteration",
            "ce_trochoid", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
 
@@ -73,44 +83,47 @@ def slot_limit(width, tool_radius) -> float:
     return 0.5 * W - r
 
 
-@dataclass
-class TrochoidPath:
-    """Tool-centre polyline (N, 2) mm; ``link[i]`` True when the segment ending at point i is a
-    linking (non-cutting by design) move; ``period[i]`` the period index; ``step`` mm per period.
-
-    ``arcs`` optionally lists linking arcs as (start_index, end_index, centre_xy, ccw) for G-code;
-    ``kinds[i]`` labels the segment ending at point i: "cut", "roll-in", "roll-out" or "link".
-    """
-
-    points: np.ndarray
-    link: np.ndarray
-    period: np.ndarray
-    step: float
-    kind: str = ""
-    arcs: list = field(default_factory=list)
-    kinds: np.ndarray | None = None
-
-    def __post_init__(self):
-        if self.kinds is None:
-            self.kinds = np.where(self.link, "link", "cut").astype(object)
-
-    def seg_lengths(self) -> np.ndarray:
-        return np.r_[0.0, np.hypot(*np.diff(self.points, axis=0).T)]
-
-    def lengths(self, periods=None) -> dict:
-        """Cutting and linking length (mm), over all periods or the given period indices."""
-        ds = self.seg_lengths()
-        m = np.ones(len(ds), bool) if periods is None else np.isin(self.period, list(periods))
-        return {"cut": float(ds[m & ~self.link].sum()), "link": float(ds[m & self.link].sum())}
-
-    def length_per_period(self, k: int | None = None) -> float:
-        """Path length (mm) of one period (default: the middle period)."""
-        k = int(np.median(np.unique(self.period))) if k is None else k
-        L = self.lengths([k])
-        return L["cut"] + L["link"]
+def _pattern(points, kinds, period, step, pattern, feed_mm_min, link_feed_mm_min=None) -> ToolPath:
+    """A planar pattern (z = 0) as a :class:`ToolPath`: ``kinds`` per point (cut / roll-in / roll-out
+    / link; the move ending at point i), ``period`` per point (tag ``"period k"`` or
+    ``"period k:roll-in"``), ``info`` with the step (mm) and the pattern name."""
+    K = np.asarray(kinds, dtype=object)
+    tags = np.array([f"period {int(k)}" + ("" if n in ("cut", "link") else f":{n}") for k, n in zip(period, K)],
+                    dtype=object)
+    lf = feed_mm_min if link_feed_mm_min is None else link_feed_mm_min
+    return ToolPath.build(np.asarray(points, float), kind=np.where(K == "link", "link", "cut"), tag=tags,
+                          feed=np.where(K == "link", lf, feed_mm_min),
+                          info={"step": float(step), "pattern": pattern, "name": pattern})
 
 
-def circular_trochoid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05) -> TrochoidPath:
+def period_index(path: ToolPath) -> np.ndarray:
+    """Period index of every point of a pattern (from its ``"period k"`` tags)."""
+    return np.array([int(str(t).split(":")[0].split(" ")[1]) for t in path.tag])
+
+
+def pattern_kinds(path: ToolPath) -> np.ndarray:
+    """cut / roll-in / roll-out / link per point of a pattern or period."""
+    roll = np.array([str(t).split(":")[1] if ":" in str(t) else "" for t in path.tag], dtype=object)
+    return np.where(path.is_kind("link"), "link", np.where(roll != "", roll, "cut")).astype(object)
+
+
+def pattern_lengths(path: ToolPath, periods=None) -> dict:
+    """Cutting and linking length (mm) of a pattern, over all periods or the given period indices."""
+    ds = path.segment_lengths()
+    m = np.ones(len(ds), bool) if periods is None else np.isin(period_index(path), list(periods))
+    link = path.is_kind("link")
+    return {"cut": float(ds[m & ~link].sum()), "link": float(ds[m & link].sum())}
+
+
+def length_per_period(path: ToolPath, k: int | None = None) -> float:
+    """Path length (mm) of one period (default: the middle period)."""
+    k = int(np.median(np.unique(period_index(path)))) if k is None else k
+    L = pattern_lengths(path, [k])
+    return L["cut"] + L["link"]
+
+
+def circular_trochoid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05, feed_mm_min=255.0,
+                      link_feed_mm_min=None) -> ToolPath:
     """Circle-and-line trochoid: ccw circles of radius W/2 - r, centres at x0 + k*step (mm).
 
     Each period starts at the circle's rear point (angle pi), runs one full circle and moves
@@ -138,10 +151,12 @@ def circular_trochoid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05) -> T
         pts.append(line)
         link.append(np.ones(ml, bool))
         per.append(np.full(ml, k))
-    return TrochoidPath(np.vstack(pts), np.concatenate(link), np.concatenate(per), s, "circular")
+    link = np.concatenate(link)
+    return _pattern(np.vstack(pts), np.where(link, "link", "cut"), np.concatenate(per), s, "circular",
+                    feed_mm_min, link_feed_mm_min)
 
 
-def cycloid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05) -> TrochoidPath:
+def cycloid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05, feed_mm_min=255.0) -> ToolPath:
     """Prolate-trochoid path x = x0 + s phi/(2 pi) + R cos(phi), y = R sin(phi), R = W/2 - r (mm).
 
     One period per 2 pi, starting at the rear point phi = pi (so the pattern is comparable with
@@ -156,7 +171,7 @@ def cycloid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05) -> TrochoidPat
     phi = math.pi + np.linspace(0.0, 2 * math.pi * n, n * m + 1)
     pts = np.c_[x0 + s * (phi - math.pi) / (2 * math.pi) + R * np.cos(phi), R * np.sin(phi)]
     per = np.minimum(((phi - math.pi) // (2 * math.pi)).astype(int), n - 1)
-    return TrochoidPath(pts, np.zeros(len(pts), bool), per, s, "cycloid")
+    return _pattern(pts, np.full(len(pts), "cut"), per, s, "cycloid", feed_mm_min)
 
 
 def max_engagement_circle_front(step, width, tool_radius) -> float:
@@ -195,16 +210,12 @@ def circle_front_step(theta_deg, width, tool_radius) -> float:
 # ---------------------------------------------------------------------------------------------
 # simulation-based evaluation
 # ---------------------------------------------------------------------------------------------
-def _slot_stock(path: TrochoidPath, width, resolution_mm, x_start=0.0):
-    from shapely.geometry import box
-
-    from cnclab.simulation import dixel
-
-    x_end = float(path.points[:, 0].max()) + 4 * float(width)
+def _slot_stock(path: ToolPath, width, resolution_mm, x_start=0.0):
+    x_end = float(path.xyz[:, 0].max()) + 4 * float(width)
     return dixel.Stock.from_polygon(box(x_start, -0.5 * width, x_end, 0.5 * width), resolution_mm)
 
 
-def evaluate_pattern(path: TrochoidPath, width, tool_radius, resolution_mm=0.05, a_p=3.0,
+def evaluate_pattern(path: ToolPath, width, tool_radius, resolution_mm=0.05, a_p=3.0,
                      feed_mm_min=255.0, link_feed_mm_min=None, steady_periods=None, stock=None):
     """Cut ``path`` through a slot stock (material x >= 0) with the dixel simulator; steady-state metrics.
 
@@ -219,40 +230,38 @@ def evaluate_pattern(path: TrochoidPath, width, tool_radius, resolution_mm=0.05,
     corner left by the previous period and does cut (see the notebook discussion).
     Linking moves run at ``link_feed_mm_min`` (default: the cutting feed).
     """
-    from cnclab.simulation import dixel
-
     r = _pos("tool_radius", tool_radius)
     W = _pos("width", width)
     st = _slot_stock(path, W, resolution_mm) if stock is None else stock
-    df = dixel.simulate(st, path.points, r, a_p, feed_mm_min)
-    df["period"] = path.period
-    df["link"] = path.link
-    df["kind"] = path.kinds
-    periods = np.unique(path.period)
+    period, link, kinds, step = period_index(path), path.is_kind("link"), pattern_kinds(path), path.info["step"]
+    df = dixel.simulate(st, path.xyz[:, :2], r, a_p, feed_mm_min)
+    df["period"] = period
+    df["link"] = link
+    df["kind"] = kinds
+    periods = np.unique(period)
     if steady_periods is None:
         steady_periods = periods[2:-1] if len(periods) > 3 else periods[-1:]
-    m = np.isin(path.period, list(steady_periods))
+    m = np.isin(period, list(steady_periods))
     vlink = feed_mm_min if link_feed_mm_min is None else link_feed_mm_min
     n_p = len(steady_periods)
-    cut = float(df.ds[m & ~path.link].sum()) / n_p
-    lnk = float(df.ds[m & path.link].sum()) / n_p
+    cut = float(df.ds[m & ~link].sum()) / n_p
+    lnk = float(df.ds[m & link].sum()) / n_p
     t_min = cut / feed_mm_min + lnk / vlink
     removed = float(df.removed_mm2[m].sum()) / n_p
     eng = df.engagement_deg.to_numpy()
     metrics = {
-        "max_engagement_deg": float(np.nanmax(eng[m & ~path.link])),
-        "max_engagement_link_deg": float(np.nanmax(np.r_[0.0, eng[m & path.link]])),
-        "step_mm": path.step,
+        "max_engagement_deg": float(np.nanmax(eng[m & ~link])),
+        "max_engagement_link_deg": float(np.nanmax(np.r_[0.0, eng[m & link]])),
+        "step_mm": step,
         "cut_mm": cut, "link_mm": lnk,
         "length_per_period_mm": cut + lnk,
-        "length_per_mm_slot": (cut + lnk) / path.step,
+        "length_per_mm_slot": (cut + lnk) / step,
         "time_per_period_s": 60.0 * t_min,
-        "mrr_avg_mm3_min": a_p * W * path.step / t_min,
+        "mrr_avg_mm3_min": a_p * W * step / t_min,
         "mrr_avg_sim_mm3_min": a_p * removed / t_min,
-        "link_removed_mm2": float(df.removed_mm2[m & path.link].sum()) / n_p,
+        "link_removed_mm2": float(df.removed_mm2[m & link].sum()) / n_p,
         "engaged_share": float(np.mean(eng[m] > 1.0)),
     }
-    kinds = np.asarray(path.kinds)
     for name in ("roll-in", "cut", "roll-out", "link"):
         e = eng[m & (kinds == name)]
         metrics[f"max_eng_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
@@ -306,8 +315,6 @@ def front_contour(stock, x_min=-math.inf, every_rows=3, min_points=6):
     Returns a :class:`~cnclab.geometry.contours.SplineContour`, or None when fewer than
     ``min_points`` rows hold material.
     """
-    from cnclab.geometry.contours import SplineContour
-
     rows, a, b = stock.intervals()
     keep = b > x_min
     rows, a = rows[keep], np.maximum(a[keep], x_min)
@@ -373,7 +380,7 @@ def roll_arc(end_xy, tangent_xy, radius_mm, sweep_deg, ds=0.05, into=True):
     return P, C
 
 
-def _disk_has_material(stock, p, r, n_r=6, n_a=48):
+def disk_has_material(stock, p, r, n_r=6, n_a=48):
     """True when material lies under the tool disk at ``p`` (polar sample grid, plus the circle)."""
     rr = r * np.linspace(0.0, 1.0, n_r + 1)[1:, None] * 0.999
     a = np.linspace(0, 2 * np.pi, n_a, endpoint=False)[None, :]
@@ -382,23 +389,15 @@ def _disk_has_material(stock, p, r, n_r=6, n_a=48):
     return bool(stock.contains(np.r_[x.ravel(), p[0]], np.r_[y.ravel(), p[1]]).any())
 
 
-@dataclass
-class CEPeriod:
-    """One planned constant-engagement period: ``segments`` = [(kind, points (n, 2))] with kind in
-    {"roll-in", "cut", "roll-out"}; ``reached_theta`` False when the roll-in march never reached
-    theta (little material left: no constant-engagement part)."""
-
-    segments: list
-    reached_theta: bool
-
-    @property
-    def points(self) -> np.ndarray:
-        return np.vstack([P if i == 0 else P[1:] for i, (_, P) in enumerate(self.segments)])
-
-    @property
-    def kinds(self) -> np.ndarray:
-        return np.concatenate([np.full(len(P) if i == 0 else len(P) - 1, k, dtype=object)
-                               for i, (k, P) in enumerate(self.segments)])
+def _period(segments, reached_theta: bool, feed_mm_min: float) -> ToolPath:
+    """One planned period as a :class:`ToolPath` (z = 0): ``segments`` = [(kind, points (n, 2))] with
+    kind roll-in / cut / roll-out (tags ``"roll-in"``, ``""``, ``"roll-out"``); ``info["reached_theta"]``
+    False when the roll-in march never reached theta (little material left)."""
+    P = np.vstack([Q if i == 0 else Q[1:] for i, (_, Q) in enumerate(segments)])
+    tags = np.concatenate([np.full(len(Q) if i == 0 else len(Q) - 1, "" if k == "cut" else f"period 0:{k}", dtype=object)
+                           for i, (k, Q) in enumerate(segments)])
+    tags = np.where(tags == "", "period 0", tags)
+    return ToolPath.build(P, kind="cut", tag=tags, feed=feed_mm_min, info={"reached_theta": bool(reached_theta)})
 
 
 def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_min=-math.inf,
@@ -424,14 +423,9 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     ``front_stock`` (default ``stock``): the stock whose front is followed (e.g. one pocket arm's
     material) while the engagement is simulated on ``stock`` (all the material).
 
-    Returns :class:`CEPeriod`, or None when no material is left in reach.
+    Returns a :class:`ToolPath` of the period (:func:`pattern_kinds` gives roll-in / cut / roll-out),
+    or None when no material is left in reach.
     """
-    import shapely
-
-    from cnclab.simulation.common import simulate
-
-    from .constant_engagement import clamp_to_region, resample_path, thesis3_path
-
     r = _pos("tool_radius", tool_radius)
     rho = _pos("roll_radius", roll_radius)
     fs = stock if front_stock is None else front_stock
@@ -443,7 +437,7 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     F0 = c.point(c.t_min)[0]
     s_near = float(ring.project(shapely.Point(F0)))
     back = 0.25                    # start the march just behind the material (the disk clear of it)
-    while back < 4 * r and _disk_has_material(stock, np.asarray(ring.interpolate(s_near - back).coords[0]), r):
+    while back < 4 * r and disk_has_material(stock, np.asarray(ring.interpolate(s_near - back).coords[0]), r):
         back += 0.25
     s_A = s_near - back
     if s_A < 0:
@@ -464,7 +458,7 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
         roll_in = pre[:max(k + 1, len(arc) + 1)]
         E, T = roll_in[-1], roll_in[-1] - roll_in[-2]
         out, _ = roll_arc(E, T, rho, roll_sweep_deg, ds=step_mm, into=False)
-        return CEPeriod([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False)
+        return _period([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False, feed_mm_min)
     i_s = len(arc) + int(hit[0])
     roll_in = pre[:i_s + 1].copy()
     e0, e1 = eng[i_s - 1], eng[i_s]
@@ -474,7 +468,7 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     simulate(st, roll_in, r, a_p, feed_mm_min, lag_mm=0.0)
     c = front_contour(st, x_min=x_min)
     if c is None:
-        return CEPeriod([("roll-in", roll_in)], True)
+        return _period([("roll-in", roll_in)], True, feed_mm_min)
     Ps = roll_in[-1]
     tt = np.linspace(c.t_min, c.t_max, max(int(c.t_max / (0.25 * step_mm)), 50))
     dist = np.hypot(*(c.point(tt) - Ps).T)
@@ -490,7 +484,7 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
             continue
     if res is None:          # the followed front is out of the tool's reach here: roll out
         out, _ = roll_arc(Ps, Ps - roll_in[-2], rho, roll_sweep_deg, ds=step_mm, into=False)
-        return CEPeriod([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False)
+        return _period([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False, feed_mm_min)
     Q = resample_path(res.P, step_mm)
     ins = shapely.contains_xy(allowed.buffer(1e-9), Q[:, 0], Q[:, 1])
     # the cut ends where it first leaves the region through the *upper* wall: the wall limit there
@@ -519,7 +513,7 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
         TE = np.diff(cut, axis=0)[d][-1] if d.any() else np.array([1.0, 0.0])
     roll_out, _ = roll_arc(E, TE, rho, roll_sweep_deg, ds=step_mm, into=False)
     roll_out = clamp_to_region(roll_out, allowed)
-    return CEPeriod([("roll-in", roll_in), ("cut", np.vstack([Ps, cut[1:]])), ("roll-out", roll_out)], True)
+    return _period([("roll-in", roll_in), ("cut", np.vstack([Ps, cut[1:]])), ("roll-out", roll_out)], True, feed_mm_min)
 
 
 def linking_arc(E, S, allowed=None, bulge=0.5, ds=0.05, side=None):
@@ -558,8 +552,6 @@ def linking_arc(E, S, allowed=None, bulge=0.5, ds=0.05, side=None):
     pts = np.c_[ux + R * np.cos(ang), uy + R * np.sin(ang)]
     pts[0], pts[-1] = E, S
     if allowed is not None:
-        from .constant_engagement import clamp_to_region
-
         q = clamp_to_region(pts, allowed)
         if not np.allclose(q, pts):
             return q, None, ccw
@@ -591,12 +583,9 @@ def _shape_change(A, B, n=200):
     return shift, float(res.max())
 
 
-def _link(E, S, allowed, ds):
-    """Straight linking move E -> S (mm) sampled every ``ds``; via the cleared side if needed."""
-    from .constant_engagement import clamp_to_region
-
-    n = max(int(math.ceil(np.hypot(*(np.asarray(S) - E)) / ds)), 1)
-    P = np.asarray(E) + np.linspace(0, 1, n + 1)[:, None] * (np.asarray(S) - np.asarray(E))
+def _straight_link(E, S, allowed, ds):
+    """Straight linking move E -> S (mm) sampled every ``ds`` (:func:`subdivide`), clamped to ``allowed``."""
+    P = subdivide(np.vstack([E, S]), ds)
     return P if allowed is None else clamp_to_region(P, allowed)
 
 
@@ -607,15 +596,10 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
     Per period the front is recomputed from the dixel stock and :func:`ce_period` plans roll-in,
     constant-engagement cut and roll-out; a straight link joins the previous roll-out to it.
     Returns :class:`CEIteration`: ``cuts`` (the whole period polylines), ``periods``
-    (:class:`CEPeriod`), ``links`` and a table per period of shift (the trochoidal step, mm),
+    (period :class:`ToolPath` s), ``links`` and a table per period of shift (the trochoidal step, mm),
     shape change (max residual after removing the shift, mm), lengths, removed area, the maximum
     engagement per segment type (deg) and the material cut by the link (mm^2).
     """
-    import pandas as pd
-    from shapely.geometry import box
-
-    from cnclab.simulation import dixel
-
     r = _pos("tool_radius", tool_radius)
     yl = slot_limit(width, r)
     W = float(width)
@@ -628,8 +612,8 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
                         a_p=a_p, feed_mm_min=feed_mm_min)
         if per is None:
             break
-        P, kinds = per.points, per.kinds
-        lk = _link(cuts[-1][-1], P[0], allowed, resolution_mm) if cuts else P[:1]
+        P, kinds = per.xyz[:, :2], pattern_kinds(per)
+        lk = _straight_link(cuts[-1][-1], P[0], allowed, resolution_mm) if cuts else P[:1]
         df = dixel.simulate(st, np.vstack([lk, P[1:]]), r, a_p, feed_mm_min)
         kk = np.r_[np.full(len(lk), "link", dtype=object), kinds[1:]]
         if not cuts:
@@ -651,7 +635,8 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
 
 
 def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
-                n_iter=8, roll_radius=1.0, iteration: CEIteration | None = None) -> TrochoidPath:
+                n_iter=8, roll_radius=1.0, iteration: CEIteration | None = None, feed_mm_min=255.0,
+                link_feed_mm_min=None) -> ToolPath:
     """Repetitive constant-engagement pattern: the last (converged) period of
     :func:`ce_trochoid_iteration` (roll-in, cut, roll-out) repeated ``n_periods`` times with the
     converged step, joined by straight linking moves (flagged link) through the cleared slot.
@@ -661,7 +646,7 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
     if len(it.cuts) < 3:
         raise ValueError("the constant-engagement iteration produced fewer than 3 periods")
     per = it.periods[-1]
-    P0, K0 = per.points, per.kinds
+    P0, K0 = per.xyz[:, :2], pattern_kinds(per)
     step = float(it.table.shift_mm.iloc[-1])
     if not step > 0:
         raise ValueError(f"non-positive converged step {step}")
@@ -670,7 +655,7 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
     for k in range(int(n_periods)):
         C = P0 + np.array([k * step, 0.0])
         if k > 0:
-            lk = _link(pts[-1][-1], C[0], None, resolution_mm)
+            lk = _straight_link(pts[-1][-1], C[0], None, resolution_mm)
             pts.append(lk[1:])
             kinds.append(np.full(len(lk) - 1, "link", dtype=object))
             per_ix.append(np.full(len(lk) - 1, k - 1))
@@ -681,8 +666,8 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
         kinds.append(KC)
         per_ix.append(np.full(len(C), k))
     kinds = np.concatenate(kinds)
-    return TrochoidPath(np.vstack(pts), kinds == "link", np.concatenate(per_ix), step,
-                        "constant-engagement", kinds=kinds)
+    return _pattern(np.vstack(pts), kinds, np.concatenate(per_ix), step, "constant-engagement", feed_mm_min,
+                    link_feed_mm_min)
 
 
 def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=3.0,
@@ -694,8 +679,6 @@ def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=
     limit (:func:`ce_trochoid_at_limit`, column ``theta_plan_deg``), so all three patterns are
     compared at the same simulated maximum engagement. Returns a pandas DataFrame.
     """
-    import pandas as pd
-
     p = ce_trochoid(width, tool_radius, theta_max_deg, n_periods, resolution_mm)
     _, m_ce = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
     # equal *simulated* maximum engagement: the CE pattern planned at theta_max overshoots it by a
@@ -721,8 +704,6 @@ def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=
 
 def pattern_sweep(width_over_r, theta_max_deg, tool_radius=3.0, resolution_mm=0.05, **kw):
     """:func:`compare_patterns` over a grid of W/r and theta_max; one row per (W/r, theta, pattern)."""
-    import pandas as pd
-
     out = []
     for wr in width_over_r:
         for th in theta_max_deg:

@@ -2,7 +2,7 @@
 
 Passes run along +X / −X (``length`` [mm]) and step along +Y by the stepover ``S_z`` [mm] until the
 ``width`` [mm] is covered. Points are cutter-contact (CC) points in the XY plane; the programs built by
-:func:`zigzag_program` put them at a cutting height ``z_cut`` [mm] with a plunge from and a retract to
+:func:`zigzag_path` put them at a cutting height ``z_cut`` [mm] with a plunge from and a retract to
 ``z_clear`` [mm], ending with a rapid back to the start above the part.
 
 * :func:`hoang_table1_points` transcribes Table 1 literally (MATLAB ``for i = 1:n/2`` with
@@ -19,10 +19,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import shapely
+from shapely.geometry import LineString
 
-from .path import Move
+from .path import ToolPath
 
-__all__ = ["hoang_table1_points", "zigzag_points", "zigzag_program", "n_passes_covering"]
+__all__ = ["hoang_table1_points", "zigzag_points", "zigzag_path", "n_passes_covering", "raster_lines"]
 
 
 def _positive(name, v):
@@ -93,11 +95,14 @@ def zigzag_points(start, width: float, length: float, stepover: float, forward_s
     return np.vstack(pts)
 
 
-def zigzag_program(points, z_cut: float, z_clear: float, feed: float, spindle: float | None = None,
-                   plunge_feed: float | None = None, return_home: bool = True) -> list[Move]:
-    """G-code moves for XY ``points`` [mm]: rapid above the first point at ``z_clear``, G1 plunge to
-    ``z_cut`` (at ``plunge_feed``, default ``feed`` [mm/min]), G1 through the points, G1 retract to
-    ``z_clear``, and (``return_home``) a G0 back above the first point.
+def zigzag_path(points, z_cut: float, z_clear: float, feed: float, spindle: float | None = None,
+                plunge_feed: float | None = None, return_home: bool = True, tool=None) -> ToolPath:
+    """The tool path of XY ``points`` [mm]: rapid above the first point at ``z_clear``, plunge to
+    ``z_cut`` (at ``plunge_feed``, default ``feed`` [mm/min]), cuts through the points, retract to
+    ``z_clear`` at ``feed``, and (``return_home``) a rapid back above the first point.
+
+    >>> zigzag_path([[0, 0], [10, 0]], z_cut=0, z_clear=10, feed=500).kinds().tolist()
+    ['rapid', 'plunge', 'cut', 'retract', 'rapid']
     """
     p = np.asarray(points, float)
     if p.ndim != 2 or p.shape[1] != 2 or len(p) < 2:
@@ -105,10 +110,37 @@ def zigzag_program(points, z_cut: float, z_clear: float, feed: float, spindle: f
     if not z_clear > z_cut:
         raise ValueError(f"z_clear must be above z_cut (mm), got z_clear={z_clear}, z_cut={z_cut}")
     pf = feed if plunge_feed is None else plunge_feed
-    mv = [Move("G0", p[0, 0], p[0, 1], z_clear, spindle=spindle),
-          Move("G1", p[0, 0], p[0, 1], z_cut, feed=pf, spindle=spindle)]
-    mv += [Move("G1", x, y, z_cut, feed=feed, spindle=spindle) for x, y in p[1:]]
-    mv.append(Move("G1", p[-1, 0], p[-1, 1], z_clear, feed=feed, spindle=spindle))
+    xy = np.vstack([p[:1], p[:1], p, p[-1:]] + ([p[:1]] if return_home else []))
+    z = np.r_[z_clear, z_cut, np.full(len(p), z_cut), z_clear] + 0.0
+    kinds = ["rapid", "plunge"] + ["cut"] * len(p) + ["retract"]
+    feeds = [np.nan, pf] + [feed] * len(p) + [feed]
     if return_home:
-        mv.append(Move("G0", p[0, 0], p[0, 1], z_clear, spindle=spindle))
-    return mv
+        z = np.r_[z, z_clear]
+        kinds.append("rapid")
+        feeds.append(np.nan)
+    P = np.column_stack([xy, z])
+    keep = np.r_[True, np.any(np.diff(P, axis=0) != 0, axis=1)]      # the plunge lands on points[0]
+    return ToolPath.build(P[keep], kind=list(np.array(kinds, dtype=object)[keep]), feed=np.array(feeds)[keep],
+                          spindle=spindle, tool=tool, info={"name": "zig-zag"})
+
+
+def raster_lines(region, stepover: float, min_length: float = 1e-6) -> list[np.ndarray]:
+    """Zig-zag raster over a shapely (Multi)Polygon ``region`` (mm): lines along x every ``stepover``
+    mm in y from the bottom, clipped to the region (pieces shorter than ``min_length`` mm dropped),
+    alternate lines reversed; list of (2, 2) arrays.
+
+    >>> from shapely.geometry import box
+    >>> [q.round(6).tolist() for q in raster_lines(box(0, 0, 10, 2), 1.0)]
+    [[[0.0, 1e-06], [10.0, 1e-06]], [[10.0, 1.000001], [0.0, 1.000001]]]
+    """
+    sz = _positive("stepover", stepover)
+    x0, y0, x1, y1 = region.bounds
+    lines = []
+    for i, y in enumerate(np.arange(y0 + 1e-6, y1, sz)):
+        g = region.intersection(LineString([(x0 - 1, y), (x1 + 1, y)]))
+        parts = sorted((np.asarray(p.coords) for p in shapely.get_parts(g) if p.length > min_length),
+                       key=lambda q: q[:, 0].min())
+        for q in parts:
+            q = q[np.argsort(q[:, 0])]
+            lines.append(q if i % 2 == 0 else q[::-1])
+    return lines

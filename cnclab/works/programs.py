@@ -29,12 +29,13 @@ import numpy as np
 
 from ..fileio import atomic_write
 from ..nc.apt import read_apt
-from ..nc.program import path_from_moves, write_program
+from ..nc.program import write_program
 from ..nc.spindle_control import to_gcode_moves as apt_to_moves
 from ..paths import build_dir, data_path
 from ..runtime import fast_mode, pick
-from ..toolpath import pocket as pk
+from ..toolpath.job import load_job
 from ..toolpath.path import Tool, ToolPath
+from ..toolpath.planners import plan
 from .hoang2024 import constant_volume as cv
 from .jacso2021 import thesis4_star_pocket as t4
 from .kim_yang2006 import ce_comparison as kyce
@@ -56,25 +57,21 @@ def _hoang(covering):
 
 def _ky(which):
     def make():
-        c = ky.conditions()
-        moves, _ = ky.program(which) if which != "ce" else kyce.ce_program()
-        path = path_from_moves(moves, tool=Tool(2 * ky.tool_radius()))
-        hdr = [f"Kim and Yang 2006 pocket 120 x 85 mm: {which} path, tool D{2 * ky.tool_radius():g} flat"]
-        text = write_program(path, clearance_z=5.0, spindle_rpm=c["spindle_rpm"], header=hdr)
-        return text, {"clearance_z": 5.0, "top_z": 0.0, "path": path}
+        job = ky.job()
+        path = ky.program_path(which) if which != "ce" else kyce.ce_path()
+        hdr = [f"Kim and Yang 2006 pocket 120 x 85 mm: {which} path, tool D{job.tool.diameter:g} flat"]
+        text = write_program(path, job, header=hdr)
+        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path}
     return make
 
 
 def _jacso(job_file, strategy):
     def make():
-        job = pk.load_pocket(data_path("jacso2021", job_file))
-        res = pick(0.05, 0.1)
-        sp = {"hybrid": lambda: pk.hybrid_path(job, res), "contour-parallel": lambda: pk.contour_parallel_path(job),
-              "zig-zag": lambda: pk.zigzag_path(job)}[strategy]()
-        path = path_from_moves(pk.to_gcode_moves(sp, job), tool=Tool(job.tool_diameter, flutes=job.teeth))
-        hdr = [f"Jacso 2021 section 4: {strategy} on {job_file}, tool D{job.tool_diameter:g} flat"]
-        text = write_program(path, clearance_z=5.0, spindle_rpm=job.spindle_rpm, header=hdr)
-        return text, {"clearance_z": 5.0, "top_z": 0.0, "path": path}
+        job = load_job(data_path("jacso2021", job_file))
+        path = plan(job, strategy, resolution_mm=pick(0.05, 0.1))
+        hdr = [f"Jacso 2021 section 4: {strategy} on {job_file}, tool D{job.tool.diameter:g} flat"]
+        text = write_program(path, job, header=hdr)
+        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path}
     return make
 
 
@@ -82,7 +79,7 @@ def _mgherony(angle):
     def make():
         tp = ch7_9.parameters()["table7_1"]
         moves = apt_to_moves(read_apt(ch7_9.zigzag_apt(angle)))
-        path = path_from_moves(moves, tool=Tool(tp["D"], corner_radius=0.5 * tp["D"], flutes=tp["teeth"]))
+        path = ToolPath.from_moves(moves, tool=Tool(tp["D"], corner_radius=0.5 * tp["D"], flutes=tp["teeth"]))
         hdr = [f"Mgherony 2024 ch. 8 drop-cut zig-zag finishing, A_f = {angle:g} deg, D{tp['D']:g} ball"]
         on_part = path.xyz[(~path.is_kind("rapid")) & (path.xyz[:, 2] < 30.0), 2]
         top = float(on_part.max())   # the part's highest CL point: the stock top of a finishing path

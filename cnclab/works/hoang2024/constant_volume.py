@@ -123,9 +123,9 @@ def table3_program(covering: bool = True, decimals: int = 3) -> tuple[list, str]
         pts = zigzag.zigzag_points((0.0, 0.0), w, L, row.Sz)
     else:
         pts = zigzag.hoang_table1_points(0.0, 0.0, w, L, row.Sz, row.Fr_printed_convention)
-    moves = zigzag.zigzag_program(pts, z_cut=0.0, z_clear=10.0, feed=500.0)
     rt = float(table2_printed().loc[f"r{s['table2_row_used']}", "RT_mm"])  # ball radius [mm]
-    path = ToolPath.from_moves(moves, tool=Tool(2 * rt, corner_radius=rt))
+    path = zigzag.zigzag_path(pts, z_cut=0.0, z_clear=10.0, feed=500.0)
+    path.tool = Tool(2 * rt, corner_radius=rt)
     text = write_program(path, clearance_z=10.0, spindle_rpm=TABLE3_SPINDLE_RPM, top_z=0.0,
                          header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"], decimals=decimals)
     return gcode.parse_gcode(text, source="table3.nc"), text

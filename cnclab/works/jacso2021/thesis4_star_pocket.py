@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import functools
 import json
-import math
 
+from cnclab.cutting.speeds import spindle_speed
+from cnclab.geometry.engagement import stepover_straight
 from cnclab.paths import data_path
 from cnclab.runtime import pick
-from cnclab.toolpath.pocket import load_pocket
 from cnclab.toolpath import pocket as pk
+from cnclab.toolpath.job import load_job
 from cnclab.toolpath.trochoidal import compare_patterns, pattern_sweep
 
 
@@ -32,21 +33,21 @@ def table41() -> dict:
 def feed_from_cutting_speed() -> float:
     """v_f = f_z z n, n = 1000 v_c / (pi D) (mm/min) — Table 4.1 prints 255."""
     t = table41()
-    n = 1000.0 * t["v_c_m_min"] / (math.pi * t["tool_diameter_mm"])
+    n = float(spindle_speed(t["v_c_m_min"], t["tool_diameter_mm"]))
     return t["f_z_mm"] * t["teeth"] * n
 
 
 def mrr_nominal() -> float:
     """MRR_nom = a_p a_e v_f with a_e = r (1 - cos theta) and the printed v_f = 255 (mm^3/min)."""
     t = table41()
-    a_e = 0.5 * t["tool_diameter_mm"] * (1 - math.cos(math.radians(t["theta_deg"])))
+    a_e = float(stepover_straight(t["theta_deg"], 0.5 * t["tool_diameter_mm"]))
     return t["a_p_mm"] * a_e * t["v_f_printed_mm_min"]
 
 
 @functools.cache
 def star_job():
-    """The designed star pocket job (:class:`cnclab.toolpath.pocket.PocketJob`)."""
-    return load_pocket(data_path("jacso2021", "star_pocket.json"))
+    """The designed star pocket job (:class:`cnclab.toolpath.job.Job`)."""
+    return load_job(data_path("jacso2021", "star_pocket.json"))
 
 
 def star_volume_mm3() -> float:
@@ -171,7 +172,7 @@ def user_pockets(resolution_mm=None):
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     rows, out = [], {}
     for case, fname in USER_POCKETS:
-        job = pk.load_pocket(data_path("jacso2021", fname))
+        job = load_job(data_path("jacso2021", fname))
         hp = pk.hybrid_path(job, res)
         T, s = pk.evaluate_strategy(hp, job, res, feed_control=True)
         s.update(case=case, laps=hp.info["laps"], arms=len(hp.info["arms"]),

@@ -3,7 +3,7 @@
 The same 120 × 85 mm pocket (cnclab's design, ``data/kim_yang2006/pocket_120x85.json``) and Table 1
 conditions (tool Ø10 → r = 5 mm, radial depth b = 3 mm, a_p = 0.5 mm, 500 mm/min, 2000 rpm) are
 cleared three ways and every path is cut through the *same* dixel simulator
-(:func:`cnclab.toolpath.ce_clearing.evaluate_path`):
+(:func:`cnclab.toolpath.evaluate.evaluate` on the pocket job ``data/kim_yang2006/pocket_120x85.json``):
 
 * ``original`` — the contour-parallel path (offsets at b = 3 mm, spiral entries), from its G-code;
 * ``modified`` — Kim & Yang's §3.2–3.3 constant-MRR modification, from its G-code;
@@ -12,8 +12,8 @@ cleared three ways and every path is cut through the *same* dixel simulator
   entry in each part of the pocket, limited by the final contour within each lap, then a final
   contour pass).
 
-Times: cutting steps (those that remove material) at 500 mm/min, non-cutting feed steps at Jacsó's
-linking feed 1500 mm/min (§4), rapids at an assumed 10 m/min — one rule for all three paths.
+Times: the programs' own motion model (every feed move at its written feed, rapids at an assumed
+10 m/min) — one rule for all three paths.
 
 The paper prints no number for such a comparison: nothing here is a ledger claim.
 """
@@ -25,9 +25,11 @@ import math
 import numpy as np
 import pandas as pd
 
+from ...nc import gcode
 from ...runtime import pick
 from ...toolpath import ce_clearing as cc
-from ...nc import gcode
+from ...toolpath.evaluate import Evaluation, evaluate
+from ...toolpath.path import ToolPath
 from . import constant_mrr_pocket as ky
 
 PATHS = ("original", "modified", "constant engagement")
@@ -44,111 +46,116 @@ def resolution_mm() -> float:
 
 
 @functools.cache
-def ce_path() -> cc.ClearingPath:
-    """The constant-engagement clearing of the pocket (default seeds: one per side of the neck)."""
-    c = ky.conditions()
-    return cc.ce_clearing(ky.pocket(), ky.tool_radius(), theta_deg(), resolution_mm=resolution_mm(),
-                          a_p=c["axial_depth_mm"], feed_mm_min=c["feed_mm_min"])
+def ce_path() -> ToolPath:
+    """The constant-engagement clearing of the pocket job (default seeds: one per side of the neck)."""
+    return cc.clearing_path(ky.job(), resolution_mm=resolution_mm())
 
 
 @functools.cache
 def ce_program() -> tuple:
     """``(moves parsed back, G-code text)`` of the constant-engagement path."""
-    c = ky.conditions()
-    moves = cc.to_moves(ce_path(), z_cut=-c["axial_depth_mm"], z_clear=5.0, feed=c["feed_mm_min"],
-                        spindle=c["spindle_rpm"], link_feed=cc.LINK_FEED_MM_MIN)
-    text = gcode.write_gcode(moves, header=["Kim and Yang 2006 pocket: constant-engagement clearing",
-                                            "cnclab ce_clearing, Jacso Thesis III laps, tool D10 flat"], decimals=4)
+    text = gcode.write_gcode(ce_path().to_moves(),
+                             header=["Kim and Yang 2006 pocket: constant-engagement clearing",
+                                     "cnclab ce_clearing, Jacso Thesis III laps, tool D10 flat"], decimals=4)
     return tuple(gcode.parse_gcode(text, source="kim_yang2006_ce.nc")), text
 
 
 def ce_roundtrip() -> dict:
-    """G-code round trip of the CE path: max distance (mm) of the parsed cutting-depth points from
-    the path points, and parsed vs path XY length at cutting depth (mm)."""
+    """G-code round trip of the CE path: max distance (mm) of the parsed end points from the path
+    points, and the number of points."""
     from scipy.spatial import cKDTree
 
     moves, _ = ce_program()
-    z = -ky.conditions()["axial_depth_mm"]
-    P = np.array([[m.x, m.y] for m in moves if abs(m.z - z) < 1e-9])
-    d, _ = cKDTree(ce_path().points).query(P)
-    return {"max_point_error_mm": float(d.max()), "n_cutting_points": len(P),
-            "n_path_points": len(ce_path().points)}
-
-
-def programme_path(which: str) -> cc.ClearingPath:
-    """The ``original`` / ``modified`` program read back, as a :class:`ClearingPath` at cutting
-    depth (arcs sampled every 0.5 mm; a jump over non-cutting moves is a ``rapid``)."""
-    moves, _ = ky.program(which)
-    pts, _ = gcode.to_polyline(moves, max_segment=0.5)
-    z = -ky.conditions()["axial_depth_mm"]
-    keep = np.flatnonzero(np.abs(pts[:, 2] - z) < 1e-9)
-    jump = np.r_[False, np.diff(keep) > 1]
-    return cc.path_from_programme(pts[keep], jump)
+    P = np.array([m.xyz for m in moves])
+    d, _ = cKDTree(ce_path().xyz).query(P)
+    return {"max_point_error_mm": float(d.max()), "n_program_points": len(P), "n_path_points": len(ce_path())}
 
 
 @functools.cache
-def evaluation(which: str) -> tuple:
-    """``(per-step table, summary)`` of one path cut through a fresh dixel stock of the pocket."""
-    c = ky.conditions()
+def programme_path(which: str) -> ToolPath:
+    """The ``original`` / ``modified`` program read back as a :class:`ToolPath` (kinds classified
+    from the geometry by :meth:`ToolPath.from_moves`)."""
+    moves, _ = ky.program(which)
+    return ToolPath.from_moves(moves, tool=ky.job().tool, info={"name": which})
+
+
+@functools.cache
+def evaluation(which: str) -> Evaluation:
+    """The one evaluator (:func:`cnclab.toolpath.evaluate.evaluate`) on the pocket job."""
     path = ce_path() if which == "constant engagement" else programme_path(which)
-    return cc.evaluate_path(path, ky.pocket(), ky.tool_radius(), theta_deg(), resolution_mm(),
-                            a_p=c["axial_depth_mm"], feed_mm_min=c["feed_mm_min"],
-                            radial_depth_mm=c["radial_depth_mm"])
+    return evaluate(path, ky.job(), resolution_mm())
 
 
-ROWS = {"max_mrr_over_nominal": "max MRR / nominal (1 mm windows, entry ramps excluded)",
-        "p99_mrr_over_nominal": "99th pct MRR / nominal",
-        "max_engagement_deg": "max engagement [deg] (entry ramps excluded)",
-        "median_engagement_cut_deg": "median engagement [deg]",
-        "share_above_theta_plus5": "share of cutting length above theta+5 deg",
-        "cutting_length_mm": "cutting length [mm]",
-        "linking_length_mm": "linking (air) feed length [mm]",
-        "rapid_length_mm": "rapid XY length [mm]",
-        "n_rapids": "retracts (rapid + plunge)",
-        "cutting_time_min": "cutting time at 500 mm/min [min]",
-        "linking_time_min": "linking time at 1500 mm/min [min]",
-        "rapid_time_min": "rapid time at 10 m/min, assumed [min]",
-        "entry_time_min": "helical entry time, 2 turns at 500 mm/min [min]",
-        "total_time_min": "total time [min]",
-        "time_one_feed_min": "time, every feed move at 500 mm/min [min]",
-        "entry_mean_mrr_over_nominal": "helical entry: mean MRR / nominal",
-        "plunge_area_mm2": "area plunged axially [mm2]",
+def trace_table(which: str) -> pd.DataFrame:
+    """The evaluation's trace along the sampled path as a DataFrame (``ds`` = xy step, mm)."""
+    t = evaluation(which).trace
+    return pd.DataFrame({k: v for k, v in t.items()}).rename(columns={"ds_mm": "ds"})
+
+
+ROWS = {"mrr_max_over_nominal": "max MRR / nominal (1 mm windows, entries excluded)",
+        "engagement_max_deg": "max engagement [deg] (entries excluded)",
+        "engagement_p50_deg": "median engagement [deg]",
+        "engagement_p95_deg": "95th pct engagement [deg]",
+        "share_above_5_pct": "share of cutting length above theta+5 deg [%]",
+        "cut_length_mm": "cut length [mm]",
+        "air_cut_length_mm": "of which air cut [mm]",
+        "link_length_mm": "link length at depth [mm]",
+        "rapid_length_mm": "rapid length [mm]",
+        "retracts": "retracts",
+        "entries_helix": "helical entries", "entries_plunge": "plunge entries",
+        "plunges_into_material": "plunges into material",
+        "plunge_swept_area_mm2": "area plunged into [mm2]",
+        "rapids_into_material": "rapids into material",
+        "time_cut_s": "cut time [s]", "time_link_s": "link time [s]",
+        "time_rapid_s": "rapid time at 10 m/min, assumed [s]",
+        "time_entry_s": "entry time [s]", "time_retract_s": "retract time [s]",
+        "time_total_s": "total time = the program's [s]",
         "uncut_area_mm2": "uncut area [mm2]",
-        "unreachable_area_mm2": "of which unreachable by a r=5 tool [mm2]"}
+        "uncut_beyond_unreachable_mm2": "uncut beyond the unreachable corners [mm2]"}
 
 
 @functools.cache
 def comparison_table() -> pd.DataFrame:
     """The three paths side by side (rows: :data:`ROWS`)."""
-    out = pd.DataFrame({w: {ROWS[k]: evaluation(w)[1][k] for k in ROWS} for w in PATHS})
-    return out
+    return pd.DataFrame({w: {ROWS[k]: getattr(evaluation(w), k) for k in ROWS} for w in PATHS})
+
+
+def _by_tag(ev: Evaluation) -> pd.DataFrame:
+    t = ev.trace
+    tags = np.array([str(x).split(" ")[0] for x in t["tag"]], dtype=object)
+    groups = {"laps": (t["kind"] == "cut") & (tags == "seed"), "cleanup": tags == "cleanup",
+              "linkcut": tags == "linkcut", "entry (helix)": t["kind"] == "helix"}
+    lim = ev.theta_deg + 5.0
+    out = {}
+    for name, m in groups.items():
+        m = m & (t["removed_mm2"] > 0.5 * ev.resolution_mm ** 2)
+        L = float(t["ds_mm"][m].sum())
+        e = t["engagement_deg"][m]
+        out[name] = {"cutting length [mm]": L,
+                     "max engagement [deg]": float(np.nanmax(e)) if np.isfinite(e).any() else float("nan"),
+                     "share above theta+5": float(t["ds_mm"][m & (t["engagement_deg"] > lim)].sum()) / L if L else float("nan")}
+    return pd.DataFrame(out)
 
 
 def ce_breakdown() -> pd.DataFrame:
-    """Constant-engagement path per segment kind (entry = helical ramp simulated at full depth, shown
-    here only): cutting length, max engagement, share above theta+5."""
-    s = evaluation("constant engagement")[1]
-    return pd.DataFrame({k: {"cutting length [mm]": s[f"cutting_length_{k}_mm"],
-                             "max engagement [deg]": s[f"max_engagement_{k}_deg"],
-                             "share above theta+5": s[f"share_above_{k}"]} for k in cc.CUTTING_KINDS})
+    """Constant-engagement path per part (laps, cleanup, link steps that cut, helical entries):
+    cutting length, max engagement, share above theta+5."""
+    return _by_tag(evaluation("constant engagement"))
 
 
 @functools.cache
 def wall_modes(modes: tuple = ("clamp", "gate")) -> pd.DataFrame:
     """Lap statistics of the CE clearing under each final-contour handling ``wall`` (see
     :func:`cnclab.toolpath.ce_clearing.ce_clearing`): max engagement and share above theta+5 of the
-    laps, of the whole path (entry excluded), retracts, total time. Each mode plans and evaluates anew."""
-    c = ky.conditions()
+    laps, of the whole path (entries excluded), retracts, total time. Each mode plans and evaluates anew."""
     rows = {}
     for w in modes:
-        path = cc.ce_clearing(ky.pocket(), ky.tool_radius(), theta_deg(), resolution_mm=resolution_mm(),
-                              a_p=c["axial_depth_mm"], feed_mm_min=c["feed_mm_min"], wall=w)
-        s = cc.evaluate_path(path, ky.pocket(), ky.tool_radius(), theta_deg(), resolution_mm(),
-                             a_p=c["axial_depth_mm"], feed_mm_min=c["feed_mm_min"],
-                             radial_depth_mm=c["radial_depth_mm"])[1]
-        rows[w] = {"laps: max engagement [deg]": s["max_engagement_cut_deg"],
-                   "laps: share above theta+5": s["share_above_cut"],
-                   "path: max engagement [deg]": s["max_engagement_deg"],
-                   "path: share above theta+5": s["share_above_theta_plus5"],
-                   "retracts": s["n_rapids"], "total time [min]": s["total_time_min"]}
+        path = cc.clearing_path(ky.job(), resolution_mm=resolution_mm(), wall=w)
+        ev = evaluate(path, ky.job(), resolution_mm())
+        laps = _by_tag(ev)["laps"]
+        rows[w] = {"laps: max engagement [deg]": laps["max engagement [deg]"],
+                   "laps: share above theta+5": laps["share above theta+5"],
+                   "path: max engagement [deg]": ev.engagement_max_deg,
+                   "path: share above theta+5 [%]": ev.share_above_5_pct,
+                   "retracts": ev.retracts, "total time [s]": ev.time_total_s}
     return pd.DataFrame(rows)

@@ -19,6 +19,8 @@ from ...simulation import dixel, pixel
 from ...toolpath import constant_mrr as cm
 from ...nc import gcode
 from ...toolpath import offsets
+from ...toolpath.job import Job, load_job
+from ...toolpath.path import ToolPath
 
 Z_CUT_BELOW_TOP = True   # cutting height z = -a_p below the stock top z = 0
 
@@ -32,8 +34,13 @@ def conditions() -> dict:
 @functools.cache
 def pocket() -> Polygon:
     """The 120 × 85 mm test pocket (our design; see the data file's description)."""
-    d = json.loads(data_path("kim_yang2006", "pocket_120x85.json").read_text(encoding="utf-8"))
-    return Polygon(d["outer"], d["islands"])
+    return job().polygon
+
+
+@functools.cache
+def job() -> Job:
+    """The pocket as a job (:func:`cnclab.toolpath.job.load_job`): Table 1 cutting data."""
+    return load_job(data_path("kim_yang2006", "pocket_120x85.json"))
 
 
 def tool_radius() -> float:
@@ -87,12 +94,15 @@ def modified(tolerance: float = 0.15, step_mm: float = 1.0) -> cm.ModifiedPath:
 
 
 @functools.cache
+def program_path(which: str) -> ToolPath:
+    """The ``"original"`` or ``"modified"`` contour-parallel path (§3.3 arcs, the paper's entries)."""
+    passes = {"original": base_passes(), "modified": tuple(modified().passes)}[which]
+    return cm.passes_path(passes, job(), arcs=True, tol_mm=0.02, short_mm=1.5)
+
+
 def program(which: str) -> tuple:
     """``(moves parsed back, G-code text)`` of the ``"original"`` or ``"modified"`` path."""
-    c = conditions()
-    passes = {"original": base_passes(), "modified": tuple(modified().passes)}[which]
-    moves = cm.passes_to_moves(passes, z_cut=-c["axial_depth_mm"], z_clear=5.0, feed=c["feed_mm_min"],
-                               spindle=c["spindle_rpm"], arcs=True, tol_mm=0.02, short_mm=1.5)
+    moves = program_path(which).to_moves()
     text = gcode.write_gcode(moves, header=[f"Kim and Yang 2006 {which} contour-parallel path",
                                             "pocket 120 x 85 mm, cnclab design, tool D10 flat"], decimals=4)
     return tuple(gcode.parse_gcode(text, source=f"kim_yang2006_{which}.nc")), text

@@ -25,7 +25,7 @@ from ...nc.apt import reordered_program
 from ...nc.spindle_control import spindle_schedule
 from ...paths import build_dir, data_path
 from ...runtime import pick
-from ...toolpath.dropcutter import zigzag_finishing_path
+from ...toolpath.dropcutter import split_passes, zigzag_finishing_path
 from ...toolpath.reorder import ReorderResult, densify, path_metrics, reorder_path
 
 DIRECTIONS = (0.0, 22.5, 45.0, 67.5, 90.0)
@@ -71,7 +71,8 @@ def zigzag_apt(feed_angle_deg: float, a_e: float = 0.25, step_mm: float | None =
     """Drop-cut zig-zag finishing CL file (D = 10 ball) at A_f, written to build/; returns its path."""
     step = pick(0.5, 1.0) if step_mm is None else step_mm
     tp = parameters()["table7_1"]
-    passes = zigzag_finishing_path(surface_mesh(cell_mm), tp["D"], a_e, feed_angle_deg, step=step)
+    passes = split_passes(zigzag_finishing_path(surface_mesh(cell_mm), tp["D"], a_e, feed_angle_deg, step=step,
+                                                feed_mm_min=tp["v_f"]))
     prog = apt.cl_program(passes, tp["v_f"], tp["n"], tp["D"], clearance_z=30.0,
                           partno=f"CH8_AF{feed_angle_deg:g}")
     path = _out(f"ch8_zigzag_Af{feed_angle_deg:g}_ae{a_e:g}_step{step:g}.apt")

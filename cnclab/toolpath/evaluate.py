@@ -1,0 +1,274 @@
+"""One evaluator for every tool path: :func:`evaluate` a :class:`~cnclab.toolpath.path.ToolPath` on
+a :class:`~cnclab.toolpath.job.Job` with the dixel simulator, one metric schema (:class:`Evaluation`).
+
+Model (units: mm, deg, mm/min, s):
+
+* The stock is the pocket (outline minus islands minus the pre-drilled start hole) from ``top_z``
+  down to ``top_z - depth``, cut in the levels of :meth:`Job.levels`. Each level is a slab with its
+  own 2D dixel stock (:class:`cnclab.simulation.dixel.Stock`); the path is sampled every
+  ``resolution_mm`` (:meth:`ToolPath.resample`) and every sample whose tool tip is below a slab's
+  top cuts the tool disc out of that slab, in path order (:func:`cnclab.simulation.common.simulate`
+  on each run of consecutive samples inside the slab). The slab is 2D: a tool that has entered it
+  removes its full thickness under the disc, so ramps and helices are approximated by the level
+  they cross (they are entries: excluded from the engagement statistics anyway).
+* **Cutting samples**: cut or link moves (at depth) that remove more than ``air_tol_mm2`` (default
+  half a dixel row squared); engagement (max over the slabs the tool is in) and MRR statistics are
+  length-weighted over them. A *cut* move removing nothing is **air cut**.
+* **Plunges into material**: a descending move that is not a helix or ramp (a plunge, or a cut,
+  link or rapid losing z) and whose tool disc removes material where it enters a slab; the swept
+  area is the material area under the disc. **Rapids into material**: rapid moves that remove
+  material, or run below ``top_z`` with the tool centre outside the allowed region (into a wall or
+  island).
+* **Uncut area**: material left, summed over the levels; *beyond unreachable*: the part outside the
+  region no tool disc can reach (the pocket minus the morphological opening: the union of the tool
+  discs over the allowed tool-centre region).
+* **Times**: :meth:`ToolPath.time_s` at ``job.rapid_mm_min`` — the motion model of the written program
+  (feed moves at their feed, rapids at the rapid rate, no acceleration).
+
+>>> from cnclab.toolpath.job import Job
+>>> from cnclab.toolpath.path import Tool, ToolPath
+>>> from shapely.geometry import box
+>>> job = Job(box(0, 0, 40, 20), Tool(6.0, flutes=2), 180.0, 2.0, v_c=100, feed_mm_min=300)
+>>> p = ToolPath.build([[-5, 10, 5], [-5, 10, -2], [45, 10, -2], [45, 10, 5]],
+...                    kind=["rapid", "plunge", "cut", "retract"], feed=300)
+>>> ev = evaluate(p, job, 0.05)                   # a full slot across the pocket, entered from outside
+>>> round(ev.engagement_p50_deg), ev.plunges_into_material, ev.retracts
+(180, 0, 1)
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pandas as pd
+import shapely
+
+from ..simulation import dixel
+from ..simulation.common import simulate
+from .job import Job
+from .path import KINDS, ToolPath
+
+__all__ = ["Evaluation", "evaluate", "UNITS", "weighted_percentile", "unreachable_region"]
+
+_K = {k: i for i, k in enumerate(KINDS)}
+
+#: unit of every scalar field of :class:`Evaluation` (for :meth:`Evaluation.summary_table`)
+UNITS = {"deg": "deg", "pct": "%", "mm2": "mm^2", "mm": "mm", "_s": "s", "nominal": "-"}
+
+
+@dataclasses.dataclass(frozen=True)
+class Evaluation:
+    """Metrics of a tool path on a job (units in the names; see the module docstring)."""
+
+    engagement_p50_deg: float
+    engagement_p95_deg: float
+    engagement_max_deg: float
+    share_above_5_pct: float
+    share_above_15_pct: float
+    entry_engagement_max_deg: float
+    mrr_max_over_nominal: float
+    entries_helix: int
+    entries_ramp: int
+    entries_plunge: int
+    plunges_into_material: int
+    plunge_swept_area_mm2: float
+    rapids_into_material: int
+    retracts: int
+    cut_length_mm: float
+    link_length_mm: float
+    rapid_length_mm: float
+    entry_length_mm: float
+    retract_length_mm: float
+    air_cut_length_mm: float
+    uncut_area_mm2: float
+    uncut_beyond_unreachable_mm2: float
+    time_cut_s: float
+    time_link_s: float
+    time_rapid_s: float
+    time_entry_s: float
+    time_retract_s: float
+    time_total_s: float
+    theta_deg: float
+    resolution_mm: float
+    trace: dict = dataclasses.field(repr=False, compare=False, default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """The scalar fields (``trace`` left out)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "trace"}
+
+    def summary_table(self) -> pd.DataFrame:
+        """Scalars as a table: columns ``metric``, ``value``, ``unit``."""
+        rows = []
+        for k, v in self.to_dict().items():
+            unit = next((u for suf, u in UNITS.items() if k.endswith(suf)), "count")
+            rows.append({"metric": k, "value": v, "unit": unit})
+        return pd.DataFrame(rows)
+
+
+def weighted_percentile(values, weights, q: float) -> float:
+    """Length-weighted percentile: the smallest value whose cumulative weight reaches ``q`` % of the
+    total (NaN for no weight).
+
+    >>> weighted_percentile([1, 2, 3], [1, 1, 2], 50)
+    2.0
+    """
+    v, w = np.asarray(values, float), np.asarray(weights, float)
+    ok = np.isfinite(v) & (w > 0)
+    if not ok.any():
+        return float("nan")
+    o = np.argsort(v[ok])
+    c = np.cumsum(w[ok][o])
+    return float(v[ok][o][np.searchsorted(c, q / 100.0 * c[-1] - 1e-12 * c[-1])])
+
+
+def unreachable_region(polygon, tool_radius: float):
+    """Part of the pocket no tool disc reaches: pocket minus the union of the discs over the allowed
+    tool-centre region (the morphological opening by the tool disc).
+
+    >>> from shapely.geometry import box
+    >>> round(unreachable_region(box(0, 0, 20, 10), 3.0).area, 2)      # 4 r^2 (1 - pi/4) = 7.726 (64-gon arcs)
+    7.73
+    """
+    reach = polygon.buffer(-tool_radius, quad_segs=64).buffer(tool_radius, quad_segs=64)
+    return polygon.difference(reach)
+
+
+def _runs(mask):
+    """(start, stop) pairs of the maximal runs of True."""
+    e = np.flatnonzero(np.diff(np.r_[0, np.asarray(mask, int), 0]))
+    return list(zip(e[0::2], e[1::2]))
+
+
+def _count_runs(kind, k):
+    m = kind == _K[k]
+    return int(np.count_nonzero(m & ~np.r_[False, m[:-1]]))
+
+
+def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2: float | None = None,
+             mrr_window_mm: float = 1.0) -> Evaluation:
+    """Cut ``path`` through a fresh stock of ``job`` (level by level) and measure it.
+
+    Parameters
+    ----------
+    path : the tool path (tool reference point = the flat end mill's tip centre, mm).
+    job : the pocket and cutting data (``job.tool_radius``, levels, ``rapid_mm_min``, theta).
+    resolution_mm : dixel row height and path sampling step (mm).
+    air_tol_mm2 : a sample removing at most this area (mm^2) removes nothing (default 0.5 h^2).
+    mrr_window_mm : MRR is averaged over windows of this cutting length (mm) before its maximum is
+        taken (single dixel steps are noisy by +-h / ds).
+
+    Returns an :class:`Evaluation`.
+    """
+    if not isinstance(path, ToolPath):
+        raise TypeError(f"path must be a ToolPath, got {type(path).__name__}")
+    h = float(resolution_mm)
+    if not (math.isfinite(h) and h > 0):
+        raise ValueError(f"resolution_mm must be a finite number > 0 mm, got {resolution_mm!r}")
+    if not mrr_window_mm > 0:
+        raise ValueError(f"mrr_window_mm must be > 0 mm, got {mrr_window_mm!r}")
+    if len(path) < 2:
+        raise ValueError("path must have at least 2 points")
+    air = 0.5 * h * h if air_tol_mm2 is None else float(air_tol_mm2)
+    r = job.tool_radius
+    rp, src = path.resample(h, return_index=True)
+    P, K = rp.xyz, rp.kind
+    n = len(P)
+    L3 = rp.segment_lengths()
+    dxy = np.r_[0.0, np.hypot(*np.diff(P[:, :2], axis=0).T)]
+    feed = rp.feed
+    # descending moves that are not helix/ramp entries (plunge-like), per sample
+    dz_move = np.r_[0.0, np.diff(path.xyz[:, 2])]
+    plunge_like_move = (dz_move < -1e-9) & ~path.is_kind("helix", "ramp")
+    plunge_like = plunge_like_move[src]
+
+    levels = job.levels()
+    tops = [job.top_z] + levels[:-1]
+    material = job.polygon.difference(job.start_hole_polygon())
+    eng = np.full(n, np.nan)
+    removed = np.zeros(n)          # area summed over slabs (mm^2)
+    vol = np.zeros(n)              # volume (mm^3)
+    stocks = []
+    for top, bot in zip(tops, levels):
+        stock = dixel.Stock.from_polygon(material, h)
+        inside = np.flatnonzero(P[:, 2] < top - 1e-9)
+        thick = top - np.maximum(P[:, 2], bot)
+        if inside.size:
+            brk = np.r_[True, np.diff(inside) > 1]
+            starts = np.flatnonzero(brk)
+            stops = np.r_[starts[1:], inside.size]
+            for a, b in zip(starts, stops):
+                idx = inside[a:b]
+                keep = np.r_[True, dxy[idx[1:]] > 1e-12]
+                idx = idx[keep]
+                if len(idx) == 1:
+                    rem = np.array([stock.cut_disk(P[idx[0], :2], r)])
+                    e = np.array([np.nan])
+                else:
+                    df = simulate(stock, P[idx, :2], r, 1.0, 1.0)
+                    rem = df.removed_mm2.to_numpy()
+                    e = df.engagement_deg.to_numpy().copy()
+                    e[0] = np.nan                     # no feed direction from behind at the run start
+                removed[idx] += rem
+                vol[idx] += rem * thick[idx]
+                eng[idx] = np.fmax(eng[idx], np.where(rem > 0, e, np.nan))
+        stocks.append(stock)
+
+    cutting = np.isin(K, [_K["cut"], _K["link"]]) & (removed > air) & (dxy > 0)
+    entry = np.isin(K, [_K["helix"], _K["ramp"], _K["plunge"]])
+    Lc = float(dxy[cutting].sum())
+    e_c = eng[cutting]
+    lim5, lim15 = job.theta_deg + 5.0, job.theta_deg + 15.0
+    share5 = 100.0 * float(dxy[cutting & (eng > lim5)].sum()) / Lc if Lc > 0 else float("nan")
+    share15 = 100.0 * float(dxy[cutting & (eng > lim15)].sum()) / Lc if Lc > 0 else float("nan")
+    # windowed MRR over the cutting samples: volume / time in windows of mrr_window_mm
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dt_min = np.where(cutting, dxy / feed, 0.0)
+    s_cut = np.cumsum(np.where(cutting, dxy, 0.0))
+    win = np.floor(s_cut / mrr_window_mm).astype(int)
+    V = np.bincount(win[cutting], weights=vol[cutting])
+    T = np.bincount(win[cutting], weights=dt_min[cutting])
+    Lw = np.bincount(win[cutting], weights=dxy[cutting])
+    full = (Lw >= 0.5 * mrr_window_mm) & (T > 0)
+    mrr_max = float((V[full] / T[full]).max() / job.mrr_nominal()) if full.any() else float("nan")
+
+    # plunges / rapids into material, per original move
+    pl = plunge_like & (K != _K["rapid"]) & (removed > air)
+    pl_moves = np.unique(src[pl])
+    rapid = K == _K["rapid"]
+    guard = job.allowed().buffer(1e-6)
+    low = rapid & (P[:, 2] < job.top_z - 1e-9)
+    outside = np.zeros(n, bool)
+    if low.any():
+        outside[low] = ~shapely.contains_xy(guard, P[low, 0], P[low, 1])
+    rp_moves = np.unique(src[rapid & ((removed > air) | outside)])
+
+    air_cut = (K == _K["cut"]) & (removed <= air)
+    lengths = path.lengths()
+    times = path.time_s(job.rapid_mm_min)
+    unreach = unreachable_region(job.polygon, r)
+    uncut = float(sum(st.area() for st in stocks))
+    beyond = float(sum(st.to_polygon().difference(unreach).area for st in stocks)) if uncut > 0 else 0.0
+    e_entry = eng[entry]
+    trace = {"s_mm": np.cumsum(L3), "x": P[:, 0].copy(), "y": P[:, 1].copy(), "z": P[:, 2].copy(),
+             "engagement_deg": eng, "removed_mm2": removed,
+             "mrr_mm3_min": np.where((dxy > 0) & ~rapid, vol / np.where(dxy > 0, dxy, 1.0) * np.nan_to_num(feed), np.nan),
+             "feed_mm_min": feed.copy(), "kind": rp.kinds(), "tag": rp.tag.copy(), "ds_mm": dxy, "cutting": cutting}
+    return Evaluation(
+        engagement_p50_deg=weighted_percentile(e_c, dxy[cutting], 50),
+        engagement_p95_deg=weighted_percentile(e_c, dxy[cutting], 95),
+        engagement_max_deg=float(np.nanmax(e_c)) if np.isfinite(e_c).any() else float("nan"),
+        share_above_5_pct=share5, share_above_15_pct=share15,
+        entry_engagement_max_deg=float(np.nanmax(e_entry)) if np.isfinite(e_entry).any() else float("nan"),
+        mrr_max_over_nominal=mrr_max,
+        entries_helix=_count_runs(path.kind, "helix"), entries_ramp=_count_runs(path.kind, "ramp"),
+        entries_plunge=_count_runs(path.kind, "plunge"),
+        plunges_into_material=int(len(pl_moves)), plunge_swept_area_mm2=float(removed[pl].sum()),
+        rapids_into_material=int(len(rp_moves)), retracts=_count_runs(path.kind, "retract"),
+        cut_length_mm=lengths["cut_mm"], link_length_mm=lengths["link_mm"], rapid_length_mm=lengths["rapid_mm"],
+        entry_length_mm=lengths["helix_mm"] + lengths["ramp_mm"] + lengths["plunge_mm"],
+        retract_length_mm=lengths["retract_mm"], air_cut_length_mm=float(L3[air_cut].sum()),
+        uncut_area_mm2=uncut, uncut_beyond_unreachable_mm2=beyond,
+        time_cut_s=times["cut_s"], time_link_s=times["link_s"], time_rapid_s=times["rapid_s"],
+        time_entry_s=times["helix_s"] + times["ramp_s"] + times["plunge_s"], time_retract_s=times["retract_s"],
+        time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h, trace=trace)

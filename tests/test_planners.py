@@ -1,0 +1,62 @@
+"""plan(job, strategy): every registered 2.5D strategy returns a ToolPath that the one evaluator
+scores; machine safety (rapids at clearance, no rapid into material, entries into air or by
+helix); levels for a pocket deeper than a_p."""
+import numpy as np
+import pytest
+
+from cnclab.paths import data_path
+from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.job import load_job
+from cnclab.toolpath.path import ToolPath
+from cnclab.toolpath.planners import STRATEGIES, plan
+
+RES = 0.25
+
+
+@pytest.fixture(scope="module")
+def rect():
+    return load_job(data_path("jacso2021", "rectangle_pocket.json"))
+
+
+@pytest.mark.parametrize("name", sorted(STRATEGIES))
+def test_every_strategy_plans_a_safe_toolpath(rect, name):
+    p = plan(rect, name, resolution_mm=RES)
+    assert isinstance(p, ToolPath) and p.info["strategy"] == name and p.tool == rect.tool
+    rapid = p.is_kind("rapid")
+    assert np.all(p.xyz[rapid, 2] == rect.clearance_z)                       # rapids only at clearance
+    assert p.kinds()[0] == "rapid" and p.kinds()[-1] == "retract"
+    assert p.xyz[:, 2].min() == pytest.approx(rect.top_z - rect.a_p)
+    ev = evaluate(p, rect, RES)
+    assert ev.rapids_into_material == 0
+    assert ev.time_total_s == pytest.approx(p.time_s(rect.rapid_mm_min)["total_s"])
+    assert ev.uncut_beyond_unreachable_mm2 < 0.02 * rect.polygon.area
+    assert ev.plunges_into_material == 0          # entries into air / cleared area, or by helix
+
+
+def test_kim_yang_paper_plunges_are_counted_and_the_planner_helix_avoids_them():
+    """Kim & Yang's program plunges onto each pass start (its spiral's centre, in material): the
+    evaluator counts them; the registry's planner enters each pass by a helix instead."""
+    from cnclab.toolpath import constant_mrr as cm
+
+    job = load_job(data_path("kim_yang2006", "pocket_120x85.json"))
+    passes = cm.kim_yang_passes(job)
+    paper = evaluate(cm.passes_path(passes, job), job, 0.5)
+    safe = evaluate(cm.passes_path(passes, job, entry="helix"), job, 0.5)
+    assert paper.plunges_into_material >= 1 and paper.plunge_swept_area_mm2 > 50
+    assert safe.plunges_into_material == 0 and safe.entries_helix == len(passes)
+
+
+def test_levels_and_unknown_strategy(rect):
+    import dataclasses
+
+    deep = dataclasses.replace(rect, depth=5.0)              # a_p = 3: two levels of 2.5 mm
+    p = plan(deep, "contour-parallel", resolution_mm=RES)
+    assert p.info["levels"] == [-2.5, -5.0]
+    cut_z = sorted(set(np.round(p.xyz[p.is_kind("cut"), 2], 9)))
+    assert cut_z == [-5.0, -2.5]
+    ev = evaluate(p, deep, RES)
+    assert ev.uncut_beyond_unreachable_mm2 < 0.02 * 2 * rect.polygon.area and ev.rapids_into_material == 0
+    with pytest.raises(ValueError, match="strategy must be one of"):
+        plan(rect, "spiral-of-doom")
+    with pytest.raises(ValueError, match="pocket_120x85.json: the hybrid strategy"):
+        plan(load_job(data_path("kim_yang2006", "pocket_120x85.json")), "hybrid")
