@@ -145,3 +145,20 @@ def test_corrupted_json_gives_error_naming_the_file_or_a_job(tmp_path_factory, d
         return
     assert job.polygon.is_valid and job.allowed().area > 0 and 0 < job.theta_deg < 180
     assert job.tool.flutes == int(job.tool.flutes) >= 1 and job.feed_mm_min > 0
+
+
+def test_regions_give_a_multipolygon_and_round_trip(tmp_path):
+    """A job of disjoint regions (data/pockets/two_regions.json) is one MultiPolygon; to_dict/from_dict
+    keep it; overlapping regions are refused naming the region."""
+    from cnclab.paths import data_path
+    from cnclab.toolpath.job import Job, load_job
+
+    job = load_job(data_path("pockets", "two_regions.json"))
+    assert job.polygon.geom_type == "MultiPolygon" and len(job.polygon.geoms) == 2
+    back = Job.from_dict(job.to_dict())
+    assert back.polygon.symmetric_difference(job.polygon).area < 1e-9
+    sq = [[0, 0], [20, 0], [20, 20], [0, 20]]
+    d = {"regions": [{"polygon": sq}, {"polygon": [[10, 10], [30, 10], [30, 30], [10, 30]]}],
+         "tool_diameter": 6, "theta_deg": 60, "a_p": 1}
+    with pytest.raises(ValueError, match=r"regions\[1\].*overlaps"):
+        Job.from_dict(d, source="j.json")

@@ -86,6 +86,10 @@ JOB_SCHEMA = {
                                 "rotation_deg": {"type": "number"}, "quad_segs": {"type": "integer", "minimum": 1}},
                  "additionalProperties": False},
         "islands": {"type": "array", "items": _RING, "description": "a list of island outlines (each >= 3 [x, y] points)"},
+        "regions": {"type": "array", "minItems": 1,
+                    "items": {"type": "object", "properties": {"polygon": _RING, "islands": {"type": "array", "items": _RING}},
+                              "required": ["polygon"], "additionalProperties": False},
+                    "description": "disjoint pocket regions of one job: a list of {polygon, islands}"},
         "start_hole": {"type": "object", "properties": {"center": _POINT, "diameter": _pos("start hole diameter, mm")},
                        "required": ["center", "diameter"], "additionalProperties": False,
                        "description": "a pre-drilled hole {center: [x, y], diameter: d} (mm)"},
@@ -111,7 +115,7 @@ JOB_SCHEMA = {
     },
     "patternProperties": {"^_": {}},
     "required": ["tool_diameter", "theta_deg", "a_p"],
-    "oneOf": [{"required": ["polygon"]}, {"required": ["star"]}],
+    "oneOf": [{"required": ["polygon"]}, {"required": ["star"]}, {"required": ["regions"]}],
     "additionalProperties": False,
 }
 
@@ -312,13 +316,34 @@ class Job:
                 bad = sorted(k for k in e.instance if k not in known and not str(k).startswith("_"))
                 msg = f"unknown key(s) {bad}: allowed are {sorted(known)} and comments '_...'"
             elif e.validator == "oneOf" and not e.absolute_path:
-                msg = "give exactly one of 'polygon' (a list of [x, y] points) or 'star' (star_polygon keywords)"
+                msg = ("give exactly one of 'polygon' (a list of [x, y] points), 'star' (star_polygon keywords) "
+                       "or 'regions' (a list of {polygon, islands})")
             else:
                 msg = e.message
             raise ValueError(f"{source}: {e.json_path}: {msg}{extra}")
 
         def err(path, msg):
             return ValueError(f"{source}: {path}: {msg}")
+
+        def region(shell_pts, rings, at):
+            islands = []
+            for k, ring in enumerate(rings):
+                P = np.asarray(ring, float)
+                why = _ring_problem(P)
+                if why:
+                    raise err(f"{at}islands[{k}]", why)
+                islands.append(Polygon(P))
+            outer = Polygon(shell_pts)
+            for k, isl in enumerate(islands):
+                if not outer.contains(isl):
+                    raise err(f"{at}islands[{k}]", "the island is not inside the pocket outline")
+                for j in range(k):
+                    if isl.intersects(islands[j]):
+                        raise err(f"{at}islands[{k}]", f"the island overlaps or touches island {j}")
+            poly = Polygon(shell_pts, [np.asarray(i.exterior.coords) for i in islands])
+            if not poly.is_valid:
+                raise err(f"{at}islands", f"pocket with islands is not valid ({shapely.is_valid_reason(poly)})")
+            return poly
 
         if "star" in d:
             try:
@@ -327,29 +352,27 @@ class Job:
                 raise err("$.star", str(exc)) from None
             if shell.is_empty or not isinstance(shell, Polygon):
                 raise err("$.star", "the star parameters give no single polygon")
-            shell_pts = shapely.get_coordinates(shell.exterior)
+            poly = region(shapely.get_coordinates(shell.exterior), d.get("islands", []), "$.")
+        elif "regions" in d:
+            if "islands" in d:
+                raise err("$.islands", "with 'regions', give the islands inside each region")
+            parts = []
+            for k, g in enumerate(d["regions"]):
+                P = np.asarray(g["polygon"], float)
+                why = _ring_problem(P)
+                if why:
+                    raise err(f"$.regions[{k}].polygon", why)
+                parts.append(region(P, g.get("islands", []), f"$.regions[{k}]."))
+                for j in range(k):
+                    if parts[k].intersects(parts[j]):
+                        raise err(f"$.regions[{k}]", f"the region overlaps or touches region {j}")
+            poly = MultiPolygon(parts) if len(parts) > 1 else parts[0]
         else:
             shell_pts = np.asarray(d["polygon"], float)
             why = _ring_problem(shell_pts)
             if why:
                 raise err("$.polygon", why)
-        islands = []
-        for k, ring in enumerate(d.get("islands", [])):
-            P = np.asarray(ring, float)
-            why = _ring_problem(P)
-            if why:
-                raise err(f"$.islands[{k}]", why)
-            islands.append(Polygon(P))
-        outer = Polygon(shell_pts)
-        for k, isl in enumerate(islands):
-            if not outer.contains(isl):
-                raise err(f"$.islands[{k}]", "the island is not inside the pocket outline")
-            for j in range(k):
-                if isl.intersects(islands[j]):
-                    raise err(f"$.islands[{k}]", f"the island overlaps or touches island {j}")
-        poly = Polygon(shell_pts, [np.asarray(i.exterior.coords) for i in islands])
-        if not poly.is_valid:
-            raise err("$.islands", f"pocket with islands is not valid ({shapely.is_valid_reason(poly)})")
+            poly = region(shell_pts, d.get("islands", []), "$.")
         D = float(d["tool_diameter"])
         teeth = int(d.get("teeth", 2))
         try:
@@ -391,10 +414,9 @@ class Job:
     def to_dict(self) -> dict:
         """The JSON mapping of this job (``Job.from_dict(job.to_dict())`` gives an equal job)."""
         polys = list(self.polygon.geoms) if isinstance(self.polygon, MultiPolygon) else [self.polygon]
-        if len(polys) != 1:
-            raise ValueError("a MultiPolygon pocket has no single-outline JSON form")
+        ring = lambda g: shapely.get_coordinates(g)[:-1].tolist()  # noqa: E731
         p = polys[0]
-        d = {"polygon": shapely.get_coordinates(p.exterior)[:-1].tolist(),
+        d = {"polygon": ring(p.exterior),
              "tool_diameter": self.tool.diameter, "corner_radius": self.tool.corner_radius,
              "teeth": int(self.tool.flutes), "tool_number": int(self.tool.number),
              "theta_deg": self.theta_deg, "a_p": self.a_p, "depth": self.depth, "v_c": self.v_c,
@@ -403,7 +425,10 @@ class Job:
              "clearance_z": self.clearance_z, "top_z": self.top_z, "v_fmax": self.v_fmax,
              "roll_radius": self.roll_radius}
         if p.interiors:
-            d["islands"] = [shapely.get_coordinates(i)[:-1].tolist() for i in p.interiors]
+            d["islands"] = [ring(i) for i in p.interiors]
+        if len(polys) > 1:
+            d.pop("polygon"), d.pop("islands", None)
+            d["regions"] = [{"polygon": ring(q.exterior), "islands": [ring(i) for i in q.interiors]} for q in polys]
         if self.start_hole is not None:
             d["start_hole"] = {"center": [self.start_hole[0], self.start_hole[1]], "diameter": self.start_hole[2]}
         if self.description:
