@@ -3,15 +3,12 @@ NOT_DERIVABLE names the missing input."""
 import pytest
 
 from cnclab import claims
-from cnclab.runtime import fast_mode
 
 LEDGER = claims.load()
 
 
 @pytest.mark.parametrize("claim", LEDGER, ids=[c.claim_id for c in LEDGER])
 def test_claim_holds(claim):
-    if claim.slow and fast_mode():
-        pytest.skip("claim marked slow; computed by `make reproduce`")
     res = claims.evaluate(claim)
     assert not res.error, f"{claim.claim_id} ({claim.computed_by}) raised: {res.error}"
     if claim.status == "MATCH":

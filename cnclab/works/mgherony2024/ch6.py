@@ -30,12 +30,14 @@ import numpy as np
 import pandas as pd
 
 from ... import __version__
+from ...cache import cached
 from ...analysis import response_surface as rs
 from ...analysis.doe import full_factorial
 from ...analysis.error_stats import STAT_NAMES, difference_stats
 from ...claims import Interval
 from ...fileio import atomic_write
 from ...paths import DATA_DIR, data_path
+from ...sweep import sweep
 
 # ----------------------------------------------------------------------------------- Table 6-1
 #: Table 6-1 levels, in the printed order (the plan's first factor varies slowest).
@@ -299,21 +301,28 @@ N_SEEDS = 10
 MAX_EPOCHS = 1000
 
 
+@cached()
+def _ann_net(model: str, seed: int, trainer: str, max_epochs: int):
+    """One network of :func:`ann_runs` (cached under build/cache/, keyed by the code and the args)."""
+    from ...analysis.mlp import train_mlp
+
+    df = dataset()
+    X, Y = df[list(INPUTS)].to_numpy(), df[list(OUTPUTS)].to_numpy()
+    return train_mlp(X, Y, hidden=ARCHITECTURES[model], activation="logsig", trainer=trainer,
+                     seed=seed, max_epochs=max_epochs)
+
+
 @functools.cache
 def ann_runs(model: str, n_seeds: int = N_SEEDS, trainer: str = "lm", max_epochs: int = MAX_EPOCHS) -> tuple:
     """Train ``model`` ('a1' or 'a2') for seeds ``0..n_seeds-1``: 4 inputs (D, a_p, A_N2, A_f) →
     logistic hidden layer(s) → 2 linear outputs (D_eff1, D_eff2), MATLAB-like LM recipe.
 
-    Returns a tuple of :class:`cnclab.analysis.mlp.TrainedMLP`.
+    Returns a tuple of :class:`cnclab.analysis.mlp.TrainedMLP`. The seeds run through
+    :func:`cnclab.sweep.sweep` (serial, joblib or Dask) and each network is cached on disk.
     """
-    from ...analysis.mlp import train_mlp
-
     if model not in ARCHITECTURES:
         raise ValueError(f"model must be one of {list(ARCHITECTURES)}, got {model!r}")
-    df = dataset()
-    X, Y = df[list(INPUTS)].to_numpy(), df[list(OUTPUTS)].to_numpy()
-    return tuple(train_mlp(X, Y, hidden=ARCHITECTURES[model], activation="logsig", trainer=trainer,
-                           seed=s, max_epochs=max_epochs) for s in range(n_seeds))
+    return tuple(sweep(_ann_net, [(model, s, trainer, max_epochs) for s in range(n_seeds)]))
 
 
 def ann_statistics(model: str, n_seeds: int = N_SEEDS, trainer: str = "lm",
@@ -394,15 +403,21 @@ def surrogate_features(df: pd.DataFrame) -> np.ndarray:
                             np.sin(af), np.cos(af)])
 
 
-@functools.cache
-def surrogate_runs(n_seeds: int = 3, hidden: tuple = (20, 20), max_epochs: int = 400) -> tuple:
-    """Train the surrogate: features of :func:`surrogate_features` → tanh (20, 20) → ``D_eff/D``; LM."""
+@cached()
+def _surrogate_net(seed: int, hidden: tuple, max_epochs: int):
+    """One network of :func:`surrogate_runs` (cached under build/cache/)."""
     from ...analysis.mlp import train_mlp
 
     df = dataset()
     X, Y = surrogate_features(df), df[list(OUTPUTS)].to_numpy() / df[["D"]].to_numpy()
-    return tuple(train_mlp(X, Y, hidden=hidden, activation="tansig", trainer="lm", seed=s,
-                           max_epochs=max_epochs) for s in range(n_seeds))
+    return train_mlp(X, Y, hidden=hidden, activation="tansig", trainer="lm", seed=seed,
+                     max_epochs=max_epochs)
+
+
+@functools.cache
+def surrogate_runs(n_seeds: int = 3, hidden: tuple = (20, 20), max_epochs: int = 400) -> tuple:
+    """Train the surrogate: features of :func:`surrogate_features` → tanh (20, 20) → ``D_eff/D``; LM."""
+    return tuple(sweep(_surrogate_net, [(s, tuple(hidden), max_epochs) for s in range(n_seeds)]))
 
 
 def surrogate_predict(net, df: pd.DataFrame) -> np.ndarray:
