@@ -68,8 +68,13 @@ def _module_file(name: str) -> Path | None:
     return None
 
 
-def _imports(path: Path, modname: str) -> set[str]:
+def _imports(path: Path, modname: str) -> frozenset:
     """Absolute names of the modules ``path`` (module ``modname``) imports, anywhere in the file."""
+    return _imports_cached(path, modname, path.stat().st_mtime_ns, path.stat().st_size)
+
+
+@functools.lru_cache(maxsize=None)
+def _imports_cached(path: Path, modname: str, mtime_ns: int, size: int) -> frozenset:
     pkg = modname if path.name == "__init__.py" else modname.rpartition(".")[0]
     out = set()
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
@@ -80,7 +85,7 @@ def _imports(path: Path, modname: str) -> set[str]:
                 if node.level else (node.module or "")
             out.add(base)
             out.update(f"{base}.{a.name}" for a in node.names)   # `from . import x` imports modules
-    return out
+    return frozenset(out)
 
 
 @functools.lru_cache(maxsize=None)
