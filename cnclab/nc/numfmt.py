@@ -15,8 +15,9 @@ error bound); the few other values, and non-finite or huge ones, are formatted b
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-__all__ = ["fixed", "python_fixed"]
+__all__ = ["fixed", "python_fixed", "scaled_ints", "gcode_linear_body"]
 
 
 def python_fixed(v: float, decimals: int) -> str:
@@ -66,3 +67,124 @@ def fixed(values, decimals: int) -> np.ndarray:
             out[i] = python_fixed(float(v[i]), int(decimals))
         out = out.astype(str)
     return out.reshape(shape)
+
+
+def scaled_ints(values, decimals: int) -> np.ndarray:
+    """int64 ``k`` with ``fixed(values, decimals) == format(k / 10**decimals)``: the digits Python
+    prints, as an integer (negative zero → 0). Non-finite or huge values raise ValueError."""
+    v = np.asarray(values, dtype=float).ravel()
+    if not np.isfinite(v).all():
+        raise ValueError("scaled_ints: non-finite value")
+    p = v * 10.0 ** decimals
+    ap = np.abs(p)
+    if (ap >= 2.0 ** 52).any():
+        raise ValueError("scaled_ints: value too large for exact fixed-point formatting")
+    frac = ap - np.floor(ap)
+    risky = np.abs(frac - 0.5) <= ap * 2.0 ** -50 + 1e-300
+    k = np.rint(p).astype(np.int64)
+    for i in np.flatnonzero(risky):
+        k[i] = int(python_fixed(float(v[i]), int(decimals)).replace(".", ""))
+    return k
+
+
+@njit(cache=True)
+def _put_fixed(buf, pos, k, decimals):
+    """Write the scaled integer ``k`` as fixed-point text with ``decimals`` digits; new position."""
+    if k < 0:
+        buf[pos] = 45  # '-'
+        pos += 1
+        k = -k
+    m = 1
+    for _ in range(decimals):
+        m *= 10
+    ip, fp = k // m, k % m
+    # integer part
+    tmp = np.empty(20, np.uint8)
+    n = 0
+    while True:
+        tmp[n] = 48 + ip % 10
+        n += 1
+        ip //= 10
+        if ip == 0:
+            break
+    for i in range(n - 1, -1, -1):
+        buf[pos] = tmp[i]
+        pos += 1
+    if decimals > 0:
+        buf[pos] = 46  # '.'
+        pos += 1
+        for i in range(decimals - 1, -1, -1):
+            buf[pos + i] = 48 + fp % 10
+            fp //= 10
+        pos += decimals
+    return pos
+
+
+@njit(cache=True)
+def gcode_linear_body(kx, ky, kz, rapid, kf, ks, has_s, decimals, feed_decimals):
+    """RS274 lines (bytes) of linear moves, modal rules of :func:`cnclab.nc.gcode.write_gcode`.
+
+    ``kx, ky, kz``: scaled coordinates (:func:`scaled_ints`, ``decimals``); ``rapid``: G0 vs G1;
+    ``kf``: scaled feeds (``feed_decimals``, ignored for G0); ``ks``/``has_s``: spindle (0 decimals,
+    False = off). Returns (bytes array, spindle still on, last spindle value).
+    """
+    n = kx.shape[0]
+    buf = np.empty(n * 96 + 64, np.uint8)
+    pos = 0
+    first = True
+    cx = cy = cz = 0
+    motion = -1
+    have_f = False
+    cur_f = 0
+    have_s = False
+    cur_s = 0
+    for i in range(n):
+        chx = first or kx[i] != cx
+        chy = first or ky[i] != cy
+        chz = first or kz[i] != cz
+        if not (chx or chy or chz):
+            continue
+        first = False
+        if has_s[i] != have_s or (has_s[i] and ks[i] != cur_s):
+            if has_s[i]:
+                buf[pos] = 83  # 'S'
+                pos = _put_fixed(buf, pos + 1, ks[i], 0)
+                buf[pos:pos + 4] = np.array([32, 77, 51, 10], np.uint8)  # ' M3\n'
+                pos += 4
+            else:
+                buf[pos:pos + 3] = np.array([77, 53, 10], np.uint8)  # 'M5\n'
+                pos += 3
+            have_s = has_s[i]
+            cur_s = ks[i]
+        sep = False
+        mo = 0 if rapid[i] else 1
+        if mo != motion:
+            buf[pos] = 71  # 'G'
+            buf[pos + 1] = 48 + mo
+            pos += 2
+            motion = mo
+            sep = True
+        for ax in range(3):
+            if ax == 0:
+                ch, v, letter = chx, kx[i], 88
+            elif ax == 1:
+                ch, v, letter = chy, ky[i], 89
+            else:
+                ch, v, letter = chz, kz[i], 90
+            if ch:
+                if sep:
+                    buf[pos] = 32
+                    pos += 1
+                buf[pos] = letter
+                pos = _put_fixed(buf, pos + 1, v, decimals)
+                sep = True
+        if mo == 1 and (not have_f or kf[i] != cur_f):
+            buf[pos] = 32
+            buf[pos + 1] = 70  # 'F'
+            pos = _put_fixed(buf, pos + 2, kf[i], feed_decimals)
+            have_f = True
+            cur_f = kf[i]
+        cx, cy, cz = kx[i], ky[i], kz[i]
+        buf[pos] = 10
+        pos += 1
+    return buf[:pos], have_s

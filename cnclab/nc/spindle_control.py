@@ -253,6 +253,46 @@ def to_gcode_moves(program: AptProgram):
     return moves
 
 
+def gcode_text(program: AptProgram, header: str = "") -> str:
+    """``write_gcode(to_gcode_moves(program), header)`` without building one Move per point: the
+    program's points, rapid flags, F and S in force go to :func:`cnclab.nc.gcode.write_gcode_linear`
+    as arrays (same bytes)."""
+    from .apt import _GotoRun
+    from .gcode import write_gcode, write_gcode_linear
+
+    xyz, rap, fe, sp = [], [], [], []
+    f = s = None
+    rapid = False
+    for r in program.items():
+        if isinstance(r, _GotoRun):
+            m = len(r)
+            xyz.append(r.xyz)
+            flags = np.zeros(m, bool)
+            flags[0] = rapid
+            rap.append(flags)
+            fe.append(np.full(m, np.nan if f is None else f))
+            sp.append(np.full(m, np.nan if s is None else s))
+            rapid = False
+        elif r.word == "RAPID":
+            rapid = True
+        elif r.word == "FEDRAT":
+            f = r.values[0]
+        elif r.word == "SPINDL" and r.values:
+            s = r.values[-1]
+        elif r.word == "GOTO":
+            xyz.append(np.asarray([r.values[:3]], float))
+            rap.append(np.array([rapid]))
+            fe.append(np.array([np.nan if f is None else f]))
+            sp.append(np.array([np.nan if s is None else s]))
+            rapid = False
+    if not xyz:
+        return write_gcode([], header=header)
+    rap_a, fe_a = np.concatenate(rap), np.concatenate(fe)
+    if np.isnan(fe_a[~rap_a]).any():   # a feed move without FEDRAT: let the Move writer report it
+        return write_gcode(to_gcode_moves(program), header=header)
+    return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, np.concatenate(sp), header=header)
+
+
 def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, teeth: int, a_p: float,
                       tool_diameter: float | None = None, gcode_path=None, rpm_threshold: float = 50.0,
                       vf_threshold: float = 10.0, progress: bool = False, **kwargs) -> dict:
@@ -263,7 +303,6 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
     from ..fileio import atomic_write
     from ..geometry.mesh import read_stl
     from .apt import read_apt
-    from .gcode import write_gcode
 
     t0 = time.perf_counter()
     steps = ["read STL", "read APT", "working diameter", "write"]
@@ -296,7 +335,7 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
     tick("D_eff")
     new, counts = insert_spindle_records(prog, cl, sched, rpm_threshold, vf_threshold)
     text = new.to_text()
-    gtext = write_gcode(to_gcode_moves(new), header=f"cnclab spindle control of {Path(apt_path).name}") \
+    gtext = gcode_text(new, header=f"cnclab spindle control of {Path(apt_path).name}") \
         if gcode_path is not None else None
     atomic_write(out_path, text, inputs=ins)
     if gtext is not None:
