@@ -18,6 +18,7 @@ import math
 
 from cnclab.paths import data_path
 from cnclab.runtime import pick
+from cnclab.sweep import sweep
 
 
 @functools.cache
@@ -122,6 +123,16 @@ def trochoid_sweep(resolution_mm=None):
 USER_POCKETS = (("rectangle 40 x 24", "rectangle_pocket.json"), ("L-shape", "l_pocket.json"))
 
 
+def user_pocket_job(fname: str, res: float):
+    """One user pocket of :func:`user_pockets`: (job, hybrid path, feed-control table, summary)."""
+    from cnclab.toolpath import pocket as pk
+
+    job = pk.load_pocket(data_path("jacso2021", fname))
+    hp = pk.hybrid_path(job, res)
+    T, s = pk.evaluate_strategy(hp, job, res, feed_control=True)
+    return job, hp, T, s
+
+
 @functools.cache
 def user_pockets(resolution_mm=None):
     """The hybrid path with default settings (``max_wall_share="auto"``) on the user-pocket
@@ -133,14 +144,10 @@ def user_pockets(resolution_mm=None):
     """
     import pandas as pd
 
-    from cnclab.toolpath import pocket as pk
-
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     rows, out = [], {}
-    for case, fname in USER_POCKETS:
-        job = pk.load_pocket(data_path("jacso2021", fname))
-        hp = pk.hybrid_path(job, res)
-        T, s = pk.evaluate_strategy(hp, job, res, feed_control=True)
+    runs = sweep(user_pocket_job, [(fname, res) for _, fname in USER_POCKETS])
+    for (case, fname), (job, hp, T, s) in zip(USER_POCKETS, runs):
         s.update(case=case, laps=hp.info["laps"], arms=len(hp.info["arms"]),
                  max_wall_share=hp.info["max_wall_share"],
                  uncut_beyond_unreachable_mm2=s["uncut_area_mm2"] - s["unreachable_area_mm2"])

@@ -20,6 +20,7 @@ from ...geometry.freeform_part import FreeformPart, freeform_part_mesh
 from ...geometry.mesh import FacetLocator, machined_surface_mask, read_stl, write_stl
 from ...paths import build_dir, data_path
 from ...runtime import pick
+from ...sweep import sweep
 from ...nc import apt
 from ...toolpath.dropcutter import zigzag_finishing_path
 
@@ -226,6 +227,15 @@ def original_deff(direction: str = "move", step_mm: float | None = None) -> np.n
     return working_diameters(nrm, af, t["D"], t["a_p"], "max")[0]
 
 
+def reorder_path_job(dense, nrm, D, a_p, k, start, A_f, direction, neighbours, a_e):
+    """One reordering of :func:`reorder_cases` (a module-level function: a sweep item)."""
+    from ...toolpath.reorder import reorder_path
+
+    return reorder_path(dense, nrm, tool_diameter=D, a_p=a_p, k=k, start=start, feed_direction_deg=A_f,
+                        direction=direction, neighbours=neighbours, radius_step=a_e,
+                        adjacent_mm=1.5 * a_e if neighbours == "unvisited" else None)
+
+
 @functools.cache
 def reorder_cases(direction: str = "move", step_mm: float | None = None, neighbours: str = "knn"):
     """Original vs reordered metrics for the four Table 9-2 cases on the reconstruction (a_e = 0.5, A_f = 90).
@@ -233,17 +243,17 @@ def reorder_cases(direction: str = "move", step_mm: float | None = None, neighbo
     Default = the Sec. 9.2 reading: k nearest neighbours (visited ones tabu), D_eff of a neighbour for
     the direction of the move to it. Returns ``(table, dense points, {case: ReorderResult})``.
     """
-    from ...toolpath.reorder import ReorderResult, path_metrics, reorder_path
+    from ...toolpath.reorder import ReorderResult, path_metrics
 
     t = parameters()["table9_1"]
     dense, nrm, starts = ch9_points(step_mm)
     d0 = original_deff(direction, step_mm)
     rows = [{"case": "original", "start": "-", "k": "-", **path_metrics(dense, d0, t["v_c"])}]
     orders = {"original": ReorderResult(np.arange(len(dense)), np.zeros(len(dense), bool), d0)}
-    for case, (where, k) in enumerate([("corner", 4), ("middle", 4), ("corner", 8), ("middle", 8)], start=1):
-        r = reorder_path(dense, nrm, tool_diameter=t["D"], a_p=t["a_p"], k=k, start=starts[where],
-                         feed_direction_deg=t["A_f"], direction=direction, neighbours=neighbours,
-                         radius_step=t["a_e"], adjacent_mm=1.5 * t["a_e"] if neighbours == "unvisited" else None)
+    cases = [("corner", 4), ("middle", 4), ("corner", 8), ("middle", 8)]
+    runs = sweep(reorder_path_job, [(dense, nrm, t["D"], t["a_p"], k, starts[where], t["A_f"], direction,
+                                     neighbours, t["a_e"]) for where, k in cases])
+    for case, ((where, k), r) in enumerate(zip(cases, runs), start=1):
         orders[case] = r
         rows.append({"case": case, "start": starts[where], "k": k,
                      **path_metrics(dense[r.order], r.d_eff, t["v_c"], jump=r.jump)})
