@@ -16,13 +16,14 @@ value can never be returned; change something the function does not depend on an
 Values are pickled and written atomically (:func:`cnclab.fileio.atomic_write`).
 
 >>> import tempfile, os
+>>> old = os.environ.get("CNCLAB_CACHE_DIR")
 >>> os.environ["CNCLAB_CACHE_DIR"] = tempfile.mkdtemp()
 >>> @cached()
 ... def square(x):
 ...     return x * x
 >>> square(3), square(3), square.last_hit
 (9, 9, True)
->>> del os.environ["CNCLAB_CACHE_DIR"]
+>>> _ = os.environ.pop("CNCLAB_CACHE_DIR") if old is None else os.environ.update(CNCLAB_CACHE_DIR=old)
 """
 from __future__ import annotations
 
