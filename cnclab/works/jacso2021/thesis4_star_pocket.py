@@ -110,14 +110,23 @@ def trochoid_sweep(resolution_mm=None):
     Fast mode: W/r = 4, theta_max in {45, 60} deg; full: W/r in {3, 4, 5, 6} x theta_max in
     {30, 45, 60, 75, 90} deg. Gains are reported with links at 1500 mm/min and with every move at
     the cutting feed (``mrr_gain_same_feed_vs_*``)."""
-    from cnclab.toolpath.trochoidal import pattern_sweep
+    import pandas as pd
 
     t = table41()
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     wr = pick((3.0, 4.0, 5.0, 6.0), (4.0,))
     th = pick((30.0, 45.0, 60.0, 75.0, 90.0), (45.0, 60.0))
-    return pattern_sweep(wr, th, 0.5 * t["tool_diameter_mm"], res, a_p=t["a_p_mm"],
-                         feed_mm_min=t["v_f_printed_mm_min"], link_feed_mm_min=t["link_feed_mm_min"])
+    cells = sweep(trochoid_cell, [(w, a, 0.5 * t["tool_diameter_mm"], res, t["a_p_mm"], t["v_f_printed_mm_min"],
+                                   t["link_feed_mm_min"]) for w in wr for a in th])
+    return pd.concat(cells, ignore_index=True)
+
+
+def trochoid_cell(wr, theta_max_deg, tool_radius, res, a_p, feed_mm_min, link_feed_mm_min):
+    """One (W/r, theta_max) cell of :func:`trochoid_sweep` (the rows ``pattern_sweep`` gives for it)."""
+    from cnclab.toolpath.trochoidal import pattern_sweep
+
+    return pattern_sweep([wr], [theta_max_deg], tool_radius, res, a_p=a_p, feed_mm_min=feed_mm_min,
+                         link_feed_mm_min=link_feed_mm_min)
 
 
 USER_POCKETS = (("rectangle 40 x 24", "rectangle_pocket.json"), ("L-shape", "l_pocket.json"))
