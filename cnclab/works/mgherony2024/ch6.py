@@ -73,12 +73,18 @@ def working_diameters(D, a_p, A_N2, A_f_rel, sign: float = 1.0, offset_deg: floa
     return tangent_point_diameters(D, a_p, sign * np.asarray(A_f_rel, dtype=float) + offset_deg, A_N2, 0.0)
 
 
-@functools.cache
-def _dataset_cached() -> pd.DataFrame:
-    plan = full_factorial(LEVELS)
+def dataset_block(D) -> pd.DataFrame:
+    """The rows of the §6.2 plan with tool diameter ``D`` (mm): one sweep item of :func:`dataset`."""
+    plan = full_factorial({**LEVELS, "D": [D]})
     d1, d2 = working_diameters(plan["D"].to_numpy(), plan["a_p"].to_numpy(), plan["A_N2"].to_numpy(),
                                plan["A_f"].to_numpy())
     return plan.assign(D_eff1=d1, D_eff2=d2)
+
+
+@functools.cache
+def _dataset_cached() -> pd.DataFrame:
+    # D varies slowest in the plan: the blocks concatenated in LEVELS order are the full plan's rows
+    return pd.concat(sweep(dataset_block, [(D,) for D in LEVELS["D"]]), ignore_index=True)
 
 
 def dataset() -> pd.DataFrame:
