@@ -269,6 +269,9 @@ def run_all(only: str | None = None, jobs: int | None = None, force: bool = Fals
     report_cached = _read_stamp("claims-report", rkey, force) is not None
     print(f"running {len(todo)} notebook(s) on {jobs} process(es)"
           f"{'' if report_cached else ' + the claims report'} ...", flush=True)
+    summ_path = out / "cache" / "reproduce" / "claims_summary.json"
+    if not report_cached:
+        summ_path.unlink(missing_ok=True)   # never print a previous run's summary for this one
     with cf.ProcessPoolExecutor(max_workers=jobs) as pool:
         futs = {}
         if not report_cached:
@@ -292,7 +295,6 @@ def run_all(only: str | None = None, jobs: int | None = None, force: bool = Fals
                 log(name, f"FAILED after {sec:.1f} s: {err}")
             else:
                 log(name, f"done in {sec:.1f} s -> {out / 'notebooks' / name}")
-    summ_path = out / "cache" / "reproduce" / "claims_summary.json"
     bad = []
     if summ_path.is_file():
         summ = json.loads(summ_path.read_text())
