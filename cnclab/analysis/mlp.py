@@ -245,8 +245,9 @@ class _EarlyStop:
         return self.fails >= self.max_fail
 
 
-def _record(hist, epoch, theta, spec, data, mu=np.nan):
-    hist.append({"epoch": epoch, "train_mse": _mse(theta, spec, data["train"]),
+def _record(hist, epoch, theta, spec, data, mu=np.nan, train_mse=None):
+    """Append the epoch's MSEs; ``train_mse`` may be passed when already computed at ``theta``."""
+    hist.append({"epoch": epoch, "train_mse": _mse(theta, spec, data["train"]) if train_mse is None else train_mse,
                  "val_mse": _mse(theta, spec, data["val"]), "test_mse": _mse(theta, spec, data["test"]),
                  "mu": mu})
     return hist[-1]["val_mse"]
@@ -324,9 +325,10 @@ def _train_lm(theta, spec, data, max_epochs, max_fail, mu, mu_dec, mu_inc, mu_ma
     stop = _EarlyStop(theta, max_fail)
     stop.update(0, theta, _record(hist, 0, theta, spec, data, mu))
     reason = "max_epochs"
+    with torch.no_grad():
+        out = _forward(theta, X, spec)
     for epoch in range(1, max_epochs + 1):
-        with torch.no_grad():
-            e = (Y - _forward(theta, X, spec)).reshape(-1)
+        e = (Y - out).reshape(-1)       # the output at theta: computed when theta was accepted
         J = jac(theta)                                # d output / d theta, (n*n_out, P)
         JtJ, Jte = J.T @ J, J.T @ e
         perf = float(e @ e) / n_res
@@ -337,9 +339,10 @@ def _train_lm(theta, spec, data, max_epochs, max_fail, mu, mu_dec, mu_inc, mu_ma
             step = torch.linalg.solve(JtJ + mu * eye, Jte)
             new = theta + step
             with torch.no_grad():
-                perf_new = float(((Y - _forward(new, X, spec)) ** 2).mean())
+                out_new = _forward(new, X, spec)
+            perf_new = float(((Y - out_new) ** 2).mean())
             if perf_new < perf:
-                theta, mu = new, mu * mu_dec
+                theta, mu, out = new, mu * mu_dec, out_new
                 break
             mu *= mu_inc
             if mu > mu_max:
@@ -347,7 +350,8 @@ def _train_lm(theta, spec, data, max_epochs, max_fail, mu, mu_dec, mu_inc, mu_ma
         if mu > mu_max:
             reason = "mu_max"
             break
-        if stop.update(epoch, theta, _record(hist, epoch, theta, spec, data, mu)):
+        # train MSE at the accepted theta = perf_new ((Y - f)^2 and (f - Y)^2 are the same floats)
+        if stop.update(epoch, theta, _record(hist, epoch, theta, spec, data, mu, train_mse=perf_new)):
             reason = "validation_stop"
             break
     return stop.best_theta, hist, stop.best_epoch, reason
