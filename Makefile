@@ -4,7 +4,7 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.cnclab-installed
-JOBS ?= 2
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 .PHONY: reproduce test venv claims bench strip clean help browser-test site gcode-check
 
@@ -28,8 +28,9 @@ $(STAMP): environment.txt pyproject.toml
 	@touch $(STAMP)
 	@echo ">> $(VENV) ready"
 
+# JOBS=N notebooks at once (default: one per core); FORCE=1 ignores build/cache and executed copies
 reproduce: $(STAMP)
-	$(PY) -m cnclab reproduce
+	$(if $(FORCE),CNCLAB_NO_CACHE=1 )$(PY) -m cnclab reproduce --jobs $(or $(REPRO_JOBS),$(JOBS)) $(if $(FORCE),--force)
 
 test: $(STAMP)
 	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --durations=15 tests

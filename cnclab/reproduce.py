@@ -1,30 +1,61 @@
-"""``make reproduce``: execute every notebook headless, export HTML, write the claims report."""
+"""``make reproduce``: execute every notebook headless, export HTML, write the claims report.
+
+Notebooks run in parallel (``--jobs N``, default one per core; ``make reproduce JOBS=N``), each in
+its own process with a fresh ``python3`` kernel talking over IPC sockets (no TCP, so no transport
+warning). Progress is printed per notebook.
+
+Incremental: a notebook whose inputs are unchanged — its own ``.ipynb``, the source of every cnclab
+module it imports (transitively, :func:`cnclab.cache.module_closure`), the data files those name,
+``environment.txt`` and the fast-mode flag — is not executed again; its executed copy and HTML in
+``build/notebooks/`` are kept (their hashes are checked). The claims report is likewise reused when
+no cnclab source or data file changed. Expensive recipes inside are cached by :mod:`cnclab.cache`.
+``--force`` (``make reproduce FORCE=1``, which also sets ``CNCLAB_NO_CACHE=1``) re-runs everything.
+"""
 from __future__ import annotations
 
+import ast
+import concurrent.futures as cf
+import functools
+import hashlib
+import json
 import os
+import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-from . import site
+from . import claims, site
+from .cache import module_closure
 from .fileio import atomic_write
 from .notebook_tools import INDEX_NOTEBOOK, list_notebooks
-from .paths import NOTEBOOKS_DIR, build_dir
+from .paths import DATA_DIR, NOTEBOOKS_DIR, PACKAGE_DIR, REPO_ROOT, build_dir
+from .runtime import fast_mode
 from .works import programs as nc_programs
 
 
 def execute_notebook(path: Path, timeout: int = 3600, env: dict | None = None):
-    """Execute a notebook in its own folder with a fresh ``python3`` kernel; returns the executed nb."""
+    """Execute a notebook in its own folder with a fresh ``python3`` kernel; returns the executed nb.
+
+    The kernel talks over IPC (Unix sockets in a private temporary folder), not TCP; cell timing
+    metadata is not recorded, so an executed notebook depends only on what its cells print.
+    """
     import nbformat
     from nbclient import NotebookClient
+    from traitlets.config import Config
 
     nb = nbformat.read(path, as_version=4)
     old = {k: os.environ.get(k) for k in (env or {})}
     os.environ.update(env or {})
+    sockdir = tempfile.mkdtemp(prefix="cnclab-kernel-")
     try:
-        NotebookClient(nb, timeout=timeout, kernel_name="python3",
+        cfg = Config()
+        cfg.KernelManager.transport = "ipc"
+        cfg.KernelManager.ip = os.path.join(sockdir, "k")
+        NotebookClient(nb, config=cfg, timeout=timeout, kernel_name="python3", record_timing=False,
                        resources={"metadata": {"path": str(Path(path).parent)}}).execute()
     finally:
+        shutil.rmtree(sockdir, ignore_errors=True)
         for k, v in old.items():
             if v is None:
                 os.environ.pop(k, None)
@@ -33,46 +64,263 @@ def execute_notebook(path: Path, timeout: int = 3600, env: dict | None = None):
     return nb
 
 
-def run_all(only: str | None = None) -> int:
+# ------------------------------------------------------------------------------ input hashes
+def _sha(*parts: bytes) -> str:
+    h = hashlib.sha256()
+    for p in parts:
+        h.update(p)
+        h.update(b"\0")
+    return h.hexdigest()
+
+
+def _code_cells(nb_path: Path) -> str:
+    nb = json.loads(nb_path.read_text(encoding="utf-8"))
+    return "\n".join("".join(c.get("source", "")) for c in nb.get("cells", []) if c.get("cell_type") == "code")
+
+
+def _cnclab_imports(source: str) -> set[str]:
+    """cnclab modules named by ``import``/``from`` statements in ``source`` (IPython magics dropped)."""
+    lines = [ln for ln in source.splitlines() if not ln.lstrip().startswith(("%", "!"))]
+    try:
+        tree = ast.parse("\n".join(lines))
+    except SyntaxError:
+        return {"cnclab"}
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names if a.name.split(".")[0] == "cnclab")
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "cnclab":
+            out.add(node.module)
+            out.update(f"{node.module}.{a.name}" for a in node.names)
+    return out or {"cnclab"}
+
+
+@functools.lru_cache(maxsize=None)
+def _data_names_in(source: str) -> frozenset:
+    found: set[Path] = set()
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return frozenset()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and 0 < len(node.value) < 200 \
+                and "\n" not in node.value and not node.value.startswith(("/", ".")):
+            p = DATA_DIR / node.value
+            try:
+                if p.is_file():
+                    found.add(p)
+                elif p.is_dir():
+                    found.update(q for q in p.rglob("*") if q.is_file())
+            except OSError:
+                continue
+    return frozenset(found)
+
+
+def _data_files_named(sources: list[str]) -> list[Path]:
+    """Files under ``data/`` named by a string constant in ``sources`` (a folder name: all its files),
+    plus ``data/claims.csv`` (every notebook's closing table shows ledger rows)."""
+    found: set[Path] = {DATA_DIR / "claims.csv"} if (DATA_DIR / "claims.csv").is_file() else set()
+    for src in sources:
+        found.update(_data_names_in(src))
+    return sorted(found)
+
+
+#: modules whose string constants name work folders as identifiers, not as files they read
+_NOT_DATA_READERS = ("paths.py", "claims.py", "plotting.py", "works/__init__.py")
+
+
+@functools.lru_cache(maxsize=None)
+def _read_bytes(path: Path, mtime_ns: int) -> bytes:
+    return path.read_bytes()
+
+
+def _bytes(path: Path) -> bytes:
+    return _read_bytes(path, path.stat().st_mtime_ns)
+
+
+def _environment_key() -> bytes:
+
+    env = (REPO_ROOT / "environment.txt")
+    return (env.read_bytes() if env.exists() else b"") + f"|py{sys.version_info[:3]}|fast={fast_mode()}".encode()
+
+
+def notebook_inputs(nb_path: Path) -> tuple[str, list[Path]]:
+    """(hash, files): the key of everything a notebook's outputs depend on, and the files in it."""
+
+    code = _code_cells(nb_path)
+    mods: set[Path] = set()
+    for m in sorted(_cnclab_imports(code)):
+        mods.update(module_closure(m))
+    mods.add(PACKAGE_DIR / "paper.mplstyle")
+    skip = {PACKAGE_DIR / m for m in _NOT_DATA_READERS}
+    sources = [code] + [_bytes(p).decode("utf-8") for p in sorted(mods) if p.suffix == ".py" and p not in skip]
+    files = [Path(nb_path)] + sorted(mods) + _data_files_named(sources)
+    parts = [_environment_key()]
+    for f in files:
+        parts += [str(f.relative_to(REPO_ROOT)).encode(), _bytes(f)]
+    return _sha(*parts), files
+
+
+def report_inputs() -> str:
+    """Key of the claims report: every cnclab source, every data file and the environment."""
+    files = sorted(PACKAGE_DIR.rglob("*.py")) + sorted(p for p in DATA_DIR.rglob("*") if p.is_file())
+    parts = [_environment_key()]
+    for f in files:
+        parts += [str(f.relative_to(REPO_ROOT)).encode(), _bytes(f)]
+    return _sha(*parts)
+
+
+def _stamp_path(name: str) -> Path:
+    return build_dir() / "cache" / "reproduce" / (name.replace("/", "__") + ".json")
+
+
+def _outputs_ok(stamp: dict) -> bool:
+    for rel, digest in stamp.get("outputs", {}).items():
+        p = build_dir() / rel
+        if not p.is_file() or hashlib.sha256(p.read_bytes()).hexdigest() != digest:
+            return False
+    return bool(stamp.get("outputs"))
+
+
+def _read_stamp(name: str, key: str, force: bool) -> dict | None:
+    p = _stamp_path(name)
+    if force or not p.is_file():
+        return None
+    try:
+        stamp = json.loads(p.read_text())
+    except (OSError, ValueError):
+        return None
+    return stamp if stamp.get("key") == key and _outputs_ok(stamp) else None
+
+
+def _write_stamp(name: str, key: str, outputs: list[Path], seconds: float) -> None:
+    out = {str(p.relative_to(build_dir())): hashlib.sha256(p.read_bytes()).hexdigest() for p in outputs}
+    atomic_write(_stamp_path(name), json.dumps({"key": key, "seconds": round(seconds, 1), "outputs": out},
+                                               indent=1, sort_keys=True) + "\n")
+
+
+# ------------------------------------------------------------------------------ jobs
+def _run_notebook_job(path_str: str, key: str) -> tuple[str, float, str | None]:
+    """Execute one notebook and export it (in a worker process); (rel, seconds, error)."""
     import nbformat
     from nbconvert import HTMLExporter
 
-    from . import claims
+    p = Path(path_str)
+    rel = p.relative_to(NOTEBOOKS_DIR)
+    t0 = time.perf_counter()
+    try:
+        nb = execute_notebook(p)
+    except Exception as exc:  # report and go on: the summary fails the run
+        return str(rel), time.perf_counter() - t0, f"{type(exc).__name__}: {str(exc)[-2000:]}"
+    dest = build_dir() / "notebooks" / rel
+    atomic_write(dest, nbformat.writes(nb) + "\n")
+    html, _ = HTMLExporter().from_notebook_node(nb)
+    atomic_write(dest.with_suffix(".html"), html)
+    sec = time.perf_counter() - t0
+    _write_stamp(str(rel), key, [dest, dest.with_suffix(".html")], sec)
+    return str(rel), sec, None
 
+
+def _run_claims_job(key: str) -> tuple[str, float, str | None]:
+    """Evaluate the ledger and write build/claims.{csv,md} (in a worker process)."""
+    t0 = time.perf_counter()
+    results = claims.evaluate_all(claims.load())
+    p_csv, p_md = claims.write_report(results, build_dir())
+    summary = claims.headline(claims.summary_frame(results)).to_string()
+    bad = [r.claim.claim_id for r in results if not r.ok and not r.skipped]
+    atomic_write(build_dir() / "cache" / "reproduce" / "claims_summary.json",
+                 json.dumps({"summary": summary, "bad": bad, "files": [str(p_csv), str(p_md)]}, indent=1) + "\n")
+    sec = time.perf_counter() - t0
+    if not bad:
+        _write_stamp("claims-report", key, [Path(p_csv), Path(p_md)], sec)
+    return "claims report", sec, None
+
+
+def _previous_seconds(rel: str) -> float:
+    try:
+        return float(json.loads(_stamp_path(rel).read_text()).get("seconds", 0))
+    except (OSError, ValueError):
+        return 0.0
+
+
+#: notebooks that take minutes (measured on the 2-core reference machine): on a fresh clone, with no
+#: previous times in build/cache/reproduce, they start first so the parallel run ends sooner.
+_KNOWN_LONG = ("kim_yang2006/ce_vs_constant_mrr.ipynb", "mgherony2024/ch6_neural_networks.ipynb",
+               "jacso2021/s4_star_pocket_hybrid_path.ipynb", "mgherony2024/ch7_spindle_speed_control.ipynb")
+
+
+def run_all(only: str | None = None, jobs: int | None = None, force: bool = False) -> int:
     out = build_dir()
     nbs = [p for p in list_notebooks() if not only or only in str(p)]
     work_nbs = [p for p in nbs if p != INDEX_NOTEBOOK]
+    jobs = max(1, jobs or os.cpu_count() or 1)
     t_start = time.perf_counter()
-    failures = []
+    failures, n_total, done = [], len(nbs), [0]
 
-    def run(i, p):
-        rel = p.relative_to(NOTEBOOKS_DIR)
-        print(f"[{i}/{len(nbs)}] {rel} ...", flush=True)
-        t0 = time.perf_counter()
-        try:
-            nb = execute_notebook(p)
-        except Exception as exc:  # report and go on: the summary fails the run
-            failures.append(str(rel))
-            print(f"      FAILED after {time.perf_counter() - t0:.1f} s: {type(exc).__name__}: "
-                  f"{str(exc)[-2000:]}", flush=True)
-            return
-        dest = out / "notebooks" / rel
-        atomic_write(dest, nbformat.writes(nb) + "\n")
-        html, _ = HTMLExporter().from_notebook_node(nb)
-        atomic_write(dest.with_suffix(".html"), html)
-        print(f"      done in {time.perf_counter() - t0:.1f} s (total {time.perf_counter() - t_start:.0f} s)"
-              f" -> {dest}", flush=True)
+    def log(rel, msg):
+        done[0] += 1
+        print(f"[{done[0]}/{n_total}] {rel}: {msg} (total {time.perf_counter() - t_start:.0f} s)", flush=True)
 
-    for i, p in enumerate(work_nbs, 1):
-        run(i, p)
-    print("computing the claims ledger ...", flush=True)
-    results = claims.evaluate_all(claims.load(), progress=True)
-    p_csv, p_md = claims.write_report(results, out)
-    print(claims.headline(claims.summary_frame(results)).to_string())
-    print(f"wrote {p_csv} and {p_md}")
+    # what must run; the rest is reused
+    todo = []
+    for p in work_nbs:
+        rel = str(p.relative_to(NOTEBOOKS_DIR))
+        key, _ = notebook_inputs(p)
+        if _read_stamp(rel, key, force):
+            log(rel, "unchanged, executed copy reused")
+        else:
+            todo.append((p, rel, key))
+    # longest first: by the last run's times, else the notebooks known to be long start first
+    todo.sort(key=lambda t: (-_previous_seconds(t[1]), t[1] not in _KNOWN_LONG))
+    rkey = report_inputs()
+    report_cached = _read_stamp("claims-report", rkey, force) is not None
+    print(f"running {len(todo)} notebook(s) on {jobs} process(es)"
+          f"{'' if report_cached else ' + the claims report'} ...", flush=True)
+    summ_path = out / "cache" / "reproduce" / "claims_summary.json"
+    if not report_cached:
+        summ_path.unlink(missing_ok=True)   # never print a previous run's summary for this one
+    with cf.ProcessPoolExecutor(max_workers=jobs) as pool:
+        futs = {}
+        if not report_cached:
+            futs[pool.submit(_run_claims_job, rkey)] = "claims report"
+        for p, rel, key in todo:
+            futs[pool.submit(_run_notebook_job, str(p), key)] = rel
+            print(f"      queued {rel}", flush=True)
+        for fut in cf.as_completed(futs):
+            try:
+                name, sec, err = fut.result()
+            except Exception as exc:  # a worker crashed
+                name, sec, err = futs[fut], 0.0, f"{type(exc).__name__}: {exc}"
+            if name == "claims report":
+                print(f"      claims report computed in {sec:.1f} s" if not err else f"claims report FAILED: {err}",
+                      flush=True)
+                if err:
+                    failures.append(name)
+                continue
+            if err:
+                failures.append(name)
+                log(name, f"FAILED after {sec:.1f} s: {err}")
+            else:
+                log(name, f"done in {sec:.1f} s -> {out / 'notebooks' / name}")
+    bad = []
+    if summ_path.is_file():
+        summ = json.loads(summ_path.read_text())
+        print(summ["summary"])
+        print(f"wrote {' and '.join(summ['files'])}{' (unchanged inputs: reused)' if report_cached else ''}")
+        bad = summ["bad"]
     if INDEX_NOTEBOOK in nbs:  # last: it shows the report just written
-        run(len(nbs), INDEX_NOTEBOOK)
-    bad = [r.claim.claim_id for r in results if not r.ok and not r.skipped]
+        rel = str(INDEX_NOTEBOOK.relative_to(NOTEBOOKS_DIR))
+        key, _ = notebook_inputs(INDEX_NOTEBOOK)
+        key = _sha(key.encode(), (out / "claims.md").read_bytes() if (out / "claims.md").is_file() else b"")
+        if _read_stamp(rel, key, force):
+            log(rel, "unchanged, executed copy reused")
+        else:
+            name, sec, err = _run_notebook_job(str(INDEX_NOTEBOOK), key)
+            if err:
+                failures.append(name)
+                log(name, f"FAILED after {sec:.1f} s: {err}")
+            else:
+                log(name, f"done in {sec:.1f} s")
     if failures:
         print(f"{len(failures)} notebook(s) failed: {', '.join(failures)}")
     if bad:
@@ -88,8 +336,12 @@ def main(argv=None) -> int:
 
     ap = argparse.ArgumentParser(prog="python -m cnclab reproduce")
     ap.add_argument("--only", help="run only notebooks whose path contains this text")
+    ap.add_argument("--jobs", type=int, default=None, help="notebooks run at once (default: one per core)")
+    ap.add_argument("--force", action="store_true", help="re-run everything: ignore executed copies and caches")
     a = ap.parse_args(argv)
-    return run_all(a.only)
+    if a.force:
+        os.environ["CNCLAB_NO_CACHE"] = "1"
+    return run_all(a.only, a.jobs, a.force)
 
 
 if __name__ == "__main__":

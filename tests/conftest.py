@@ -11,6 +11,13 @@ def pytest_configure(config):
         import tempfile
 
         os.environ["CNCLAB_BUILD_DIR"] = tempfile.mkdtemp(prefix="cnclab-test-build-")
+    # Expensive results (trained MLP weights, ...) are content-addressed (cnclab.cache: keyed by the
+    # code, data and arguments that produce them), so the tests share the repository's build/cache/
+    # with `make reproduce`; CNCLAB_NO_CACHE=1 recomputes everything.
+    if "CNCLAB_CACHE_DIR" not in os.environ:
+        from pathlib import Path
+
+        os.environ["CNCLAB_CACHE_DIR"] = str(Path(__file__).resolve().parents[1] / "build" / "cache")
 
 
 # Hypothesis: in CI (CI set) examples are derandomised (a fixed seed per test), so a CI run is

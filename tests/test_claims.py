@@ -9,7 +9,6 @@ import pytest
 
 from cnclab import claims
 from cnclab.paths import REPO_ROOT
-from cnclab.runtime import fast_mode
 
 LEDGER = claims.load()
 #: rows with something to compute (INPUT rows without a function and NOT_DERIVABLE rows without a
@@ -21,8 +20,6 @@ AUDITED = [c for c in LEDGER if c.work in claims.QUOTED_WORKS]
 
 @pytest.mark.parametrize("claim", COMPUTED, ids=[c.claim_id for c in COMPUTED])
 def test_claim_status_holds(claim):
-    if claim.slow and fast_mode():
-        pytest.skip("claim marked slow; computed by `make reproduce`")
     res = claims.evaluate(claim)
     assert not res.error, f"{claim.claim_id} ({claim.computed_by or claim.reconstructed_by}) raised: {res.error}"
     where = f"{claim.claim_id}: reproduced {res.reproduced} vs paper {claim.paper_value} (atol {claim.atol}, rtol {claim.rtol})"

@@ -80,7 +80,7 @@ from scipy.spatial import cKDTree
 from ..fileio import atomic_write
 from ..toolpath.path import Move, Tool, ToolPath, arc_geometry, sample_arc
 
-__all__ = ["Move", "GcodeError", "GcodeProgram", "write_gcode", "save_gcode", "read_gcode", "parse_gcode",
+__all__ = ["Move", "GcodeError", "GcodeProgram", "write_gcode", "write_gcode_linear", "save_gcode", "read_gcode", "parse_gcode",
            "load_gcode", "read_toolpath", "program_time", "sample_move", "to_polyline", "path_lengths",
            "linear_moves", "gcode_roundtrip_error", "MM_PER_INCH"]
 
@@ -194,6 +194,39 @@ def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimal
         lines.append("M5")
     lines += list(end_block) + ["%"]
     return "\n".join(lines) + "\n"
+
+
+def write_gcode_linear(xyz, rapid, feed, spindle, header: str | Sequence[str] = "", decimals: int = 4,
+                       feed_decimals: int = 1) -> str:
+    """:func:`write_gcode` of linear moves given as arrays, byte-identical and ~50x faster.
+
+    ``xyz`` (n, 3) end points [mm]; ``rapid`` (n,) bool (G0 vs G1); ``feed`` (n,) [mm/min] (NaN
+    allowed for G0 only); ``spindle`` (n,) [rpm], NaN = off. Numbers are formatted exactly as
+    ``f"{v:.{d}f}"`` by :mod:`cnclab.nc.numfmt`.
+    """
+    from .numfmt import gcode_linear_body, scaled_ints
+
+    if not isinstance(decimals, int) or not 0 <= decimals <= 8:
+        raise ValueError(f"decimals must be an int in [0, 8], got {decimals!r}")
+    xyz = np.asarray(xyz, float).reshape(-1, 3)
+    rapid = np.asarray(rapid, bool).reshape(-1)
+    feed = np.asarray(feed, float).reshape(-1)
+    spindle = np.asarray(spindle, float).reshape(-1)
+    if not (len(rapid) == len(feed) == len(spindle) == len(xyz)):
+        raise ValueError("xyz, rapid, feed and spindle must have the same length")
+    if np.isnan(feed[~rapid]).any():
+        raise ValueError("write_gcode_linear: a G1 move has no feed")
+    has_s = ~np.isnan(spindle)
+    body, on = gcode_linear_body(scaled_ints(xyz[:, 0], decimals), scaled_ints(xyz[:, 1], decimals),
+                                 scaled_ints(xyz[:, 2], decimals), rapid,
+                                 scaled_ints(np.where(rapid, 0.0, feed), feed_decimals),
+                                 scaled_ints(np.where(has_s, spindle, 0.0), 0), has_s, decimals, feed_decimals)
+    hdr = header.splitlines() if isinstance(header, str) else list(header)
+    for h in hdr:
+        if "(" in h or ")" in h:
+            raise ValueError(f"header lines cannot contain parentheses, got {h!r}")
+    head = "\n".join(["%", *(f"({h})" for h in hdr), "G21 G90 G17 G94"]) + "\n"
+    return head + body.tobytes().decode("ascii") + ("M5\n" if on else "") + "M30\n%\n"
 
 
 def save_gcode(moves: Iterable[Move], path, header: str | Sequence[str] = "", decimals: int = 4,

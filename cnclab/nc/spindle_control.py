@@ -37,7 +37,7 @@ from ..fileio import atomic_write_many, check_outputs
 from ..geometry.mesh import FacetLocator, TriMesh, closest_point_on_triangles, machined_surface_mask, read_stl
 from ..toolpath.path import Move
 from .apt import AptProgram, CLPoints, GotoRun, fedrat, read_apt, spindl
-from .gcode import write_gcode
+from .gcode import write_gcode, write_gcode_linear
 
 __all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
            "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files",
@@ -347,6 +347,45 @@ def _finite(name, v, lo=None, lo_open=True, hi=None, optional=False):
         raise ValueError(f"{name} must be a finite number in {rng}, got {v!r}")
 
 
+def gcode_text(program: AptProgram, header: str = "") -> str:
+    """``write_gcode(to_gcode_moves(program), header)`` without building one Move per point: the
+    program's points, rapid flags, F and S in force go to :func:`cnclab.nc.gcode.write_gcode_linear`
+    as arrays (same bytes)."""
+    if any(getattr(r, "word", None) == "CIRCLE" for r in program.items()):
+        return write_gcode(to_gcode_moves(program), header=header)   # arcs: G2/G3 through the Move writer
+    xyz, rap, fe, sp = [], [], [], []
+    f = s = None
+    rapid = False
+    for r in program.items():
+        if isinstance(r, GotoRun):
+            m = len(r)
+            xyz.append(r.xyz)
+            flags = np.zeros(m, bool)
+            flags[0] = rapid
+            rap.append(flags)
+            fe.append(np.full(m, np.nan if f is None else f))
+            sp.append(np.full(m, np.nan if s is None else s))
+            rapid = False
+        elif r.word == "RAPID":
+            rapid = True
+        elif r.word == "FEDRAT":
+            f = r.values[0]
+        elif r.word == "SPINDL" and r.values:
+            s = r.values[-1]
+        elif r.word == "GOTO":
+            xyz.append(np.asarray([r.values[:3]], float))
+            rap.append(np.array([rapid]))
+            fe.append(np.array([np.nan if f is None else f]))
+            sp.append(np.array([np.nan if s is None else s]))
+            rapid = False
+    if not xyz:
+        return write_gcode([], header=header)
+    rap_a, fe_a = np.concatenate(rap), np.concatenate(fe)
+    if np.isnan(fe_a[~rap_a]).any():   # a feed move without FEDRAT: let the Move writer report it
+        return write_gcode(to_gcode_moves(program), header=header)
+    return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, np.concatenate(sp), header=header)
+
+
 def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, teeth: int, a_p: float,
                       tool_diameter: float | None = None, gcode_path=None, rpm_threshold: float = 50.0,
                       vf_threshold: float = 10.0, progress: bool = False, mismatch_tol: float = 1.0,
@@ -416,8 +455,7 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
         new, counts = insert_spindle_records(prog, cl, sched, rpm_threshold, vf_threshold)
         outs = [(out_path, new.to_text())]
         if gcode_path is not None:
-            outs.append((gcode_path, write_gcode(to_gcode_moves(new),
-                                                 header=f"cnclab spindle control of {Path(apt_path).name}")))
+            outs.append((gcode_path, gcode_text(new, header=f"cnclab spindle control of {Path(apt_path).name}")))
         atomic_write_many(outs, inputs=[stl_path, apt_path])
         tick("written")
     finally:

@@ -14,6 +14,7 @@ import numpy as np
 from cnclab.geometry import engagement as eng
 from cnclab.geometry.contours import Arc, Blob
 from cnclab.toolpath import constant_engagement as ce
+from cnclab.cache import cached
 from cnclab.simulation import dixel, pixel
 
 R_TOOL = 3.0          # mm, Ø6 mm tool of Table 4.1
@@ -166,6 +167,7 @@ def thesis2_ivp_arc_radius_residual() -> float:
 
 
 @functools.cache
+@cached()
 def blob_engagement_stats(resolution_mm: float = 0.02, dt: float = 0.05, method: str = "midpoint"):
     """Engagement statistics (deg) along a Thesis III path on a smooth blob (R0 = 10 mm), dixel-simulated."""
     from shapely.geometry import Polygon, box

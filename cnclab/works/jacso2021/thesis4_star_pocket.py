@@ -19,6 +19,7 @@ from cnclab.cutting.speeds import spindle_speed
 from cnclab.geometry.engagement import stepover_straight
 from cnclab.paths import data_path
 from cnclab.runtime import pick
+from cnclab.sweep import sweep
 from cnclab.toolpath import pocket as pk
 from cnclab.toolpath.job import load_job
 from cnclab.toolpath.trochoidal import compare_patterns, pattern_sweep
@@ -151,11 +152,26 @@ def trochoid_sweep(resolution_mm=None):
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     wr = pick((3.0, 4.0, 5.0, 6.0), (4.0,))
     th = pick((30.0, 45.0, 60.0, 75.0, 90.0), (45.0, 60.0))
-    return pattern_sweep(wr, th, 0.5 * t["tool_diameter_mm"], res, a_p=t["a_p_mm"],
-                         feed_mm_min=t["v_f_printed_mm_min"], link_feed_mm_min=t["link_feed_mm_min"])
+    cells = sweep(trochoid_cell, [(w, a, 0.5 * t["tool_diameter_mm"], res, t["a_p_mm"], t["v_f_printed_mm_min"],
+                                   t["link_feed_mm_min"]) for w in wr for a in th])
+    return pd.concat(cells, ignore_index=True)
+
+
+def trochoid_cell(wr, theta_max_deg, tool_radius, res, a_p, feed_mm_min, link_feed_mm_min):
+    """One (W/r, theta_max) cell of :func:`trochoid_sweep` (the rows ``pattern_sweep`` gives for it)."""
+    return pattern_sweep([wr], [theta_max_deg], tool_radius, res, a_p=a_p, feed_mm_min=feed_mm_min,
+                         link_feed_mm_min=link_feed_mm_min)
 
 
 USER_POCKETS = (("rectangle 40 x 24", "rectangle_pocket.json"), ("L-shape", "l_pocket.json"))
+
+
+def user_pocket_job(fname: str, res: float):
+    """One user pocket of :func:`user_pockets`: (job, hybrid path, feed-control table, summary)."""
+    job = load_job(data_path("jacso2021", fname))
+    hp = pk.hybrid_path(job, res)
+    T, s = pk.evaluate_strategy(hp, job, res, feed_control=True)
+    return job, hp, T, s
 
 
 @functools.cache
@@ -171,10 +187,8 @@ def user_pockets(resolution_mm=None):
 
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     rows, out = [], {}
-    for case, fname in USER_POCKETS:
-        job = load_job(data_path("jacso2021", fname))
-        hp = pk.hybrid_path(job, res)
-        T, s = pk.evaluate_strategy(hp, job, res, feed_control=True)
+    runs = sweep(user_pocket_job, [(fname, res) for _, fname in USER_POCKETS])
+    for (case, fname), (job, hp, T, s) in zip(USER_POCKETS, runs):
         s.update(case=case, laps=hp.info["laps"], arms=len(hp.info["arms"]),
                  max_wall_share=hp.info["max_wall_share"],
                  uncut_beyond_unreachable_mm2=s["uncut_area_mm2"] - s["unreachable_area_mm2"])

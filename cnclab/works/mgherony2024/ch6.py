@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from ... import __version__
+from ...cache import cached
 from ...analysis import response_surface as rs
 from ...analysis.doe import full_factorial, interaction_means, main_effects
 from ...analysis.error_stats import STAT_NAMES, difference_stats
@@ -38,6 +39,7 @@ from ...fileio import atomic_write
 from ...paths import DATA_DIR, data_path
 from ...geometry.ball_end import tangent_point_diameters
 from ...analysis.mlp import train_mlp
+from ...sweep import sweep
 
 # ----------------------------------------------------------------------------------- Table 6-1
 #: Table 6-1 levels, in the printed order (the plan's first factor varies slowest).
@@ -71,12 +73,18 @@ def working_diameters(D, a_p, A_N2, A_f_rel, sign: float = 1.0, offset_deg: floa
     return tangent_point_diameters(D, a_p, sign * np.asarray(A_f_rel, dtype=float) + offset_deg, A_N2, 0.0)
 
 
-@functools.cache
-def _dataset_cached() -> pd.DataFrame:
-    plan = full_factorial(LEVELS)
+def dataset_block(D) -> pd.DataFrame:
+    """The rows of the §6.2 plan with tool diameter ``D`` (mm): one sweep item of :func:`dataset`."""
+    plan = full_factorial({**LEVELS, "D": [D]})
     d1, d2 = working_diameters(plan["D"].to_numpy(), plan["a_p"].to_numpy(), plan["A_N2"].to_numpy(),
                                plan["A_f"].to_numpy())
     return plan.assign(D_eff1=d1, D_eff2=d2)
+
+
+@functools.cache
+def _dataset_cached() -> pd.DataFrame:
+    # D varies slowest in the plan: the blocks concatenated in LEVELS order are the full plan's rows
+    return pd.concat(sweep(dataset_block, [(D,) for D in LEVELS["D"]]), ignore_index=True)
 
 
 def dataset() -> pd.DataFrame:
@@ -299,19 +307,27 @@ N_SEEDS = 10
 MAX_EPOCHS = 1000
 
 
+@cached()
+def _ann_net(model: str, seed: int, trainer: str, max_epochs: int):
+    """One network of :func:`ann_runs` (cached under build/cache/, keyed by the code and the args)."""
+
+    df = dataset()
+    X, Y = df[list(INPUTS)].to_numpy(), df[list(OUTPUTS)].to_numpy()
+    return train_mlp(X, Y, hidden=ARCHITECTURES[model], activation="logsig", trainer=trainer,
+                     seed=seed, max_epochs=max_epochs)
+
+
 @functools.cache
 def ann_runs(model: str, n_seeds: int = N_SEEDS, trainer: str = "lm", max_epochs: int = MAX_EPOCHS) -> tuple:
     """Train ``model`` ('a1' or 'a2') for seeds ``0..n_seeds-1``: 4 inputs (D, a_p, A_N2, A_f) →
     logistic hidden layer(s) → 2 linear outputs (D_eff1, D_eff2), MATLAB-like LM recipe.
 
-    Returns a tuple of :class:`cnclab.analysis.mlp.TrainedMLP`.
+    Returns a tuple of :class:`cnclab.analysis.mlp.TrainedMLP`. The seeds run through
+    :func:`cnclab.sweep.sweep` (serial, joblib or Dask) and each network is cached on disk.
     """
     if model not in ARCHITECTURES:
         raise ValueError(f"model must be one of {list(ARCHITECTURES)}, got {model!r}")
-    df = dataset()
-    X, Y = df[list(INPUTS)].to_numpy(), df[list(OUTPUTS)].to_numpy()
-    return tuple(train_mlp(X, Y, hidden=ARCHITECTURES[model], activation="logsig", trainer=trainer,
-                           seed=s, max_epochs=max_epochs) for s in range(n_seeds))
+    return tuple(sweep(_ann_net, [(model, s, trainer, max_epochs) for s in range(n_seeds)]))
 
 
 def ann_statistics(model: str, n_seeds: int = N_SEEDS, trainer: str = "lm",
@@ -460,13 +476,19 @@ def surrogate_features(df: pd.DataFrame) -> np.ndarray:
                             np.sin(af), np.cos(af)])
 
 
+@cached()
+def _surrogate_net(seed: int, hidden: tuple, max_epochs: int):
+    """One network of :func:`surrogate_runs` (cached under build/cache/)."""
+    df = dataset()
+    X, Y = surrogate_features(df), df[list(OUTPUTS)].to_numpy() / df[["D"]].to_numpy()
+    return train_mlp(X, Y, hidden=hidden, activation="tansig", trainer="lm", seed=seed,
+                     max_epochs=max_epochs)
+
+
 @functools.cache
 def surrogate_runs(n_seeds: int = 3, hidden: tuple = (20, 20), max_epochs: int = 400) -> tuple:
     """Train the surrogate: features of :func:`surrogate_features` → tanh (20, 20) → ``D_eff/D``; LM."""
-    df = dataset()
-    X, Y = surrogate_features(df), df[list(OUTPUTS)].to_numpy() / df[["D"]].to_numpy()
-    return tuple(train_mlp(X, Y, hidden=hidden, activation="tansig", trainer="lm", seed=s,
-                           max_epochs=max_epochs) for s in range(n_seeds))
+    return tuple(sweep(_surrogate_net, [(s, tuple(hidden), max_epochs) for s in range(n_seeds)]))
 
 
 def surrogate_predict(net, df: pd.DataFrame) -> np.ndarray:

@@ -25,6 +25,7 @@ from ...nc.apt import reordered_program
 from ...nc.spindle_control import spindle_schedule
 from ...paths import build_dir, data_path
 from ...runtime import pick
+from ...sweep import sweep
 from ...toolpath.dropcutter import split_passes, zigzag_finishing_path
 from ...toolpath.reorder import ReorderResult, densify, path_metrics, reorder_path
 
@@ -238,6 +239,13 @@ def original_deff(direction: str = "move", step_mm: float | None = None) -> np.n
     return working_diameters(nrm, af, t["D"], t["a_p"], "max")[0]
 
 
+def reorder_path_job(dense, nrm, D, a_p, k, start, A_f, direction, neighbours, a_e):
+    """One reordering of :func:`reorder_cases` (a module-level function: a sweep item)."""
+    return reorder_path(dense, nrm, tool_diameter=D, a_p=a_p, k=k, start=start, feed_direction_deg=A_f,
+                        direction=direction, neighbours=neighbours, radius_step=a_e,
+                        adjacent_mm=1.5 * a_e if neighbours == "unvisited" else None)
+
+
 @functools.cache
 def reorder_cases(direction: str = "move", step_mm: float | None = None, neighbours: str = "knn"):
     """Original vs reordered metrics for the four Table 9-2 cases on the reconstruction (a_e = 0.5, A_f = 90).
@@ -250,10 +258,10 @@ def reorder_cases(direction: str = "move", step_mm: float | None = None, neighbo
     d0 = original_deff(direction, step_mm)
     rows = [{"case": "original", "start": "-", "k": "-", **path_metrics(dense, d0, t["v_c"])}]
     orders = {"original": ReorderResult(np.arange(len(dense)), np.zeros(len(dense), bool), d0)}
-    for case, (where, k) in enumerate([("corner", 4), ("middle", 4), ("corner", 8), ("middle", 8)], start=1):
-        r = reorder_path(dense, nrm, tool_diameter=t["D"], a_p=t["a_p"], k=k, start=starts[where],
-                         feed_direction_deg=t["A_f"], direction=direction, neighbours=neighbours,
-                         radius_step=t["a_e"], adjacent_mm=1.5 * t["a_e"] if neighbours == "unvisited" else None)
+    cases = [("corner", 4), ("middle", 4), ("corner", 8), ("middle", 8)]
+    runs = sweep(reorder_path_job, [(dense, nrm, t["D"], t["a_p"], k, starts[where], t["A_f"], direction,
+                                     neighbours, t["a_e"]) for where, k in cases])
+    for case, ((where, k), r) in enumerate(zip(cases, runs), start=1):
         orders[case] = r
         rows.append({"case": case, "start": starts[where], "k": k,
                      **path_metrics(dense[r.order], r.d_eff, t["v_c"], jump=r.jump)})
