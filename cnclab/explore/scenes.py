@@ -184,10 +184,12 @@ def trochoid_scene(pattern, step_mm, width_mm, tool_radius_mm, theta_deg=60.0, n
     else:
         raise ValueError(f"pattern must be one of {TROCHOID_PATTERNS}, got {pattern!r}")
     df, metrics = trochoidal.evaluate_pattern(path, W, r, resolution_mm)
-    front = (trochoidal.max_engagement_circle_front(path.step, W, r) if pattern == "circle" else math.nan)
-    return {"pattern": pattern, "points": path.points, "link": path.link, "kinds": np.asarray(path.kinds),
+    step = float(path.info["step"])
+    front = (trochoidal.max_engagement_circle_front(step, W, r) if pattern == "circle" else math.nan)
+    return {"pattern": pattern, "points": path.xyz[:, :2], "link": path.is_kind("link"),
+            "kinds": np.asarray(trochoidal.pattern_kinds(path)),
             "engagement_deg": df.engagement_deg.to_numpy(), "s_mm": df.s.to_numpy(),
-            "metrics": metrics, "step_mm": float(path.step), "width_mm": W, "tool_radius_mm": r,
+            "metrics": metrics, "step_mm": step, "width_mm": W, "tool_radius_mm": r,
             "theta_deg": float(theta_deg), "front_engagement_deg": front}
 
 

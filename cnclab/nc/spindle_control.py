@@ -294,8 +294,8 @@ def path_surface_deviation(mesh: TriMesh, cl: CLPoints, tool_radius: float, *, o
     >>> from cnclab.nc.apt import cl_program
     >>> m = tessellate_heightfield(lambda x, y: 0 * x, (0, 10), (0, 10), 2, 2)
     >>> cl = cl_program([[[2, 5, 0.0], [8, 5, 0.0]]], 500, 2000, 10, 30).cl_points()
-    >>> path_surface_deviation(m, cl, 5.0).round(9).tolist()
-    [0.0]
+    >>> path_surface_deviation(m, cl, 5.0).round(9).tolist()   # both feed points (fed down onto the first)
+    [0.0, 0.0]
     """
     if output not in ("tip", "centre"):
         raise ValueError(f"output must be 'tip' or 'centre', got {output!r}")

@@ -15,6 +15,8 @@ from __future__ import annotations
 import functools
 import json
 
+import pandas as pd
+
 from cnclab.cutting.speeds import spindle_speed
 from cnclab.geometry.engagement import stepover_straight
 from cnclab.paths import data_path

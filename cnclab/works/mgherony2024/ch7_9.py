@@ -86,7 +86,7 @@ def sample_ch8_apt() -> apt.AptProgram:
     test part on a 2 mm grid, drop-cut zig-zag (D = 10 ball, a_e = 1 mm, A_f = 0, 2 mm step), Table 7-1
     n and v_f, approach at Z30 and feed down (:func:`cnclab.nc.apt.cl_program`)."""
     tp = parameters()["table7_1"]
-    passes = zigzag_finishing_path(surface_mesh(2.0), tp["D"], 1.0, 0.0, step=2.0)
+    passes = split_passes(zigzag_finishing_path(surface_mesh(2.0), tp["D"], 1.0, 0.0, step=2.0))
     return apt.cl_program(passes, tp["v_f"], tp["n"], tp["D"], clearance_z=30.0, partno="SAMPLE_CH8_AF0")
 
 
