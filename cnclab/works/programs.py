@@ -58,7 +58,9 @@ def _hoang(covering):
 def _ky(which):
     def make():
         job = ky.job()
-        path = ky.program_path(which) if which != "ce" else kyce.ce_path()
+        # the paper's passes, entered by a helix (the paper plunges; the reproduction keeps that in
+        # ky.program, the program for a machine does not)
+        path = ky.program_path(which, entry="helix") if which != "ce" else kyce.ce_path()
         hdr = [f"Kim and Yang 2006 pocket 120 x 85 mm: {which} path, tool D{job.tool.diameter:g} flat"]
         text = write_program(path, job, header=hdr)
         return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path}

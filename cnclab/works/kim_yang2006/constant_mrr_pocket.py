@@ -94,10 +94,12 @@ def modified(tolerance: float = 0.15, step_mm: float = 1.0) -> cm.ModifiedPath:
 
 
 @functools.cache
-def program_path(which: str) -> ToolPath:
-    """The ``"original"`` or ``"modified"`` contour-parallel path (§3.3 arcs, the paper's entries)."""
+def program_path(which: str, entry: str = "plunge") -> ToolPath:
+    """The ``"original"`` or ``"modified"`` contour-parallel path (§3.3 arcs). ``entry="plunge"``:
+    the paper's program (straight down onto each pass start); ``"helix"``: the machine-safe program
+    (:func:`cnclab.toolpath.constant_mrr.passes_path`)."""
     passes = {"original": base_passes(), "modified": tuple(modified().passes)}[which]
-    return cm.passes_path(passes, job(), arcs=True, tol_mm=0.02, short_mm=1.5)
+    return cm.passes_path(passes, job(), arcs=True, entry=entry, tol_mm=0.02, short_mm=1.5)
 
 
 def program(which: str) -> tuple:
