@@ -8,7 +8,8 @@ For each program of ``build/gcode/manifest.json`` (written by ``python -m cnclab
 3. the static safety check (:func:`cnclab.nc.program.check_program`) finds no rapid below the
    clearance plane outside marked cleared area, the spindle on before the first feed move, ``M5`` and
    ``M30``; plunges below the stock top that are not marked cleared are counted and reported (the
-   simulator decides whether they meet material: ``cnclab analyze``);
+   simulator decides whether they meet material: for 2.5D pocket programs the manifest carries the
+   dixel simulator's counts of plunges and rapids into material, which must both be 0);
 4. the planner's path time (:meth:`ToolPath.time_s`, in the manifest) and the written program's
    time agree within 0.5 % (the writer adds only the approach from and the retract to the
    clearance plane).
@@ -63,12 +64,17 @@ def check_all(root="build/gcode") -> tuple[list, bool]:
         if abs(d_path) > TIME_TOL:
             problems.append(f"path time differs from the program time by {100 * d_path:+.3f} %")
         problems += [e for e in chk.errors if "plunge into material" not in e][:3]
+        for k in ("sim_plunges_into_material", "sim_rapids_into_material"):
+            if meta.get(k):
+                problems.append(f"{k.replace('sim_', '').replace('_', ' ')}: {meta[k]} (dixel simulator)")
         if not canon.spindle_on_before_feed:
             problems.append("rs274: spindle not on before the first feed")
         row.update(ok=not problems, feed_mm=round(canon.feed_mm, 3), d_feed_pct=round(100 * d_len, 5) + 0.0,
                    feed_s=round(canon.feed_s, 3), d_time_pct=round(100 * d_time, 5) + 0.0,
                    path_vs_program_pct=round(100 * d_path, 4) + 0.0, rapids_below_clearance=chk.rapids_below_clearance,
-                   plunges_below_top=chk.plunges_into_material, entries=chk.entries, problem="; ".join(problems))
+                   plunges_below_top=chk.plunges_into_material, entries=chk.entries,
+                   sim_plunges=meta.get("sim_plunges_into_material", ""), sim_rapids=meta.get("sim_rapids_into_material", ""),
+                   problem="; ".join(problems))
         ok_all &= not problems
         rows.append(row)
     return rows, ok_all
@@ -79,7 +85,7 @@ def main(argv=None) -> int:
     root = argv[0] if argv else "build/gcode"
     rows, ok = check_all(root)
     cols = ["program", "ok", "feed_mm", "d_feed_pct", "feed_s", "d_time_pct", "path_vs_program_pct",
-            "rapids_below_clearance", "plunges_below_top", "problem"]
+            "rapids_below_clearance", "plunges_below_top", "sim_plunges", "sim_rapids", "problem"]
     print(" | ".join(cols))
     for r in rows:
         print(" | ".join(str(r.get(c, "")) for c in cols))

@@ -35,6 +35,7 @@ from ..paths import build_dir, data_path
 from ..runtime import fast_mode, pick
 from ..toolpath.job import load_job
 from ..toolpath.path import Tool, ToolPath
+from ..toolpath.evaluate import evaluate
 from ..toolpath.planners import plan
 from .hoang2024 import constant_volume as cv
 from .jacso2021 import thesis4_star_pocket as t4
@@ -63,7 +64,7 @@ def _ky(which):
         path = ky.program_path(which, entry="helix") if which != "ce" else kyce.ce_path()
         hdr = [f"Kim and Yang 2006 pocket 120 x 85 mm: {which} path, tool D{job.tool.diameter:g} flat"]
         text = write_program(path, job, header=hdr)
-        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path}
+        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path, "job": job}
     return make
 
 
@@ -73,7 +74,7 @@ def _jacso(job_file, strategy):
         path = plan(job, strategy, resolution_mm=pick(0.05, 0.1))
         hdr = [f"Jacso 2021 section 4: {strategy} on {job_file}, tool D{job.tool.diameter:g} flat"]
         text = write_program(path, job, header=hdr)
-        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path}
+        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path, "job": job}
     return make
 
 
@@ -120,6 +121,11 @@ def write_programs(outdir=None, works=None, quiet=False) -> dict:
                     print(f"{key}: NOT WRITTEN: {exc}", file=sys.stderr)
                 continue
             path = meta.pop("path")
+            job = meta.pop("job", None)
+            if job is not None:   # 2.5D pocket: the simulator proves entries and rapids (issue 12)
+                ev = evaluate(path, job, resolution_mm=pick(0.1, 0.25))
+                meta.update(sim_resolution_mm=ev.resolution_mm, sim_plunges_into_material=ev.plunges_into_material,
+                            sim_rapids_into_material=ev.rapids_into_material)
             f = atomic_write(outdir / work / f"{name}.ngc", text)
             t = path.time_s(RAPID_MM_MIN)
             L = path.lengths()
