@@ -238,7 +238,7 @@ def save_gcode(moves: Iterable[Move], path, header: str | Sequence[str] = "", de
 # --------------------------------------------------------------------------------------------
 # reader
 # --------------------------------------------------------------------------------------------
-_WORD = re.compile(r"([A-Za-z])\s*([+-]?\s*(?:\d+\.?\d*|\.\d+))")
+_WORD = re.compile(r"([A-Za-z])\s*([+-]?\s*(?:\d+\.?\d*|\.\d+))", re.ASCII)  # ASCII digits only (RS274)
 MM_PER_INCH = 25.4
 #: G words accepted with no effect on the tool-centre path (cutter compensation off, tool length
 #: offset on/off — coordinates are the controlled point either way —, work offsets G54..G59.3 taken
