@@ -244,15 +244,32 @@ def to_gcode_moves(program: AptProgram):
     Move(motion='G2', x=0.0, y=-10.0, z=0.0, i=-10.0, j=0.0, feed=500.0, spindle=None)
     """
     moves = []
+    for xyz, rapid, f, sp, circle, pos, line in _motion_blocks(program):
+        if circle is not None:
+            if pos is None:
+                raise ValueError(f"{program.source}:{line}: arc with an unknown start point")
+            x, y, z = xyz[0].tolist()
+            moves.append(Move("G3" if circle[5] > 0 else "G2", x, y, z, i=circle[0] - pos[0],
+                              j=circle[1] - pos[1], feed=f, spindle=sp))
+            continue
+        for k, (x, y, z) in enumerate(xyz.tolist()):
+            moves.append(Move("G0", x, y, z, spindle=sp) if rapid and k == 0
+                         else Move("G1", x, y, z, feed=f, spindle=sp))
+    return moves
+
+
+def _motion_blocks(program: AptProgram):
+    """The APT program's motion, once, with the modal state in force: yields ``(xyz (m, 3) mm,
+    rapid (the first point is reached by RAPID), feed, spindle, circle (CIRCLE values ending at this
+    single point, else None), start position (x, y, z) or None, line)`` per GOTO run or GOTO."""
     f = s = None
     rapid = False
     circle = None
     pos = None
     for r in program.items():
         if isinstance(r, GotoRun):
-            for x, y, z in r.xyz.tolist():
-                moves.append(Move("G0", x, y, z, spindle=s) if rapid else Move("G1", x, y, z, feed=f, spindle=s))
-                rapid = False
+            yield r.xyz, rapid, f, s, None, pos, r.line
+            rapid = False
             pos = r.xyz[-1].tolist()
         elif r.word == "RAPID":
             rapid = True
@@ -265,18 +282,10 @@ def to_gcode_moves(program: AptProgram):
         elif r.word == "CIRCLE":
             circle = r.values
         elif r.word == "GOTO":
-            x, y, z = r.values[:3]
-            if circle is not None:
-                if pos is None:
-                    raise ValueError(f"{program.source}:{r.line}: arc with an unknown start point")
-                moves.append(Move("G3" if circle[5] > 0 else "G2", x, y, z, i=circle[0] - pos[0],
-                                  j=circle[1] - pos[1], feed=f, spindle=s))
-                circle = None
-            else:
-                moves.append(Move("G0", x, y, z, spindle=s) if rapid else Move("G1", x, y, z, feed=f, spindle=s))
+            yield np.asarray([r.values[:3]], float), rapid, f, s, circle, pos, r.line
+            circle = None
             rapid = False
-            pos = [x, y, z]
-    return moves
+            pos = list(r.values[:3])
 
 
 def path_surface_deviation(mesh: TriMesh, cl: CLPoints, tool_radius: float, *, output: str = "tip",
@@ -354,30 +363,14 @@ def gcode_text(program: AptProgram, header: str = "") -> str:
     if any(getattr(r, "word", None) == "CIRCLE" for r in program.items()):
         return write_gcode(to_gcode_moves(program), header=header)   # arcs: G2/G3 through the Move writer
     xyz, rap, fe, sp = [], [], [], []
-    f = s = None
-    rapid = False
-    for r in program.items():
-        if isinstance(r, GotoRun):
-            m = len(r)
-            xyz.append(r.xyz)
-            flags = np.zeros(m, bool)
-            flags[0] = rapid
-            rap.append(flags)
-            fe.append(np.full(m, np.nan if f is None else f))
-            sp.append(np.full(m, np.nan if s is None else s))
-            rapid = False
-        elif r.word == "RAPID":
-            rapid = True
-        elif r.word == "FEDRAT":
-            f = r.values[0]
-        elif r.word == "SPINDL" and r.values:
-            s = r.values[-1]
-        elif r.word == "GOTO":
-            xyz.append(np.asarray([r.values[:3]], float))
-            rap.append(np.array([rapid]))
-            fe.append(np.array([np.nan if f is None else f]))
-            sp.append(np.array([np.nan if s is None else s]))
-            rapid = False
+    for pts, rapid, f, s, _, _, _ in _motion_blocks(program):
+        m = len(pts)
+        xyz.append(pts)
+        flags = np.zeros(m, bool)
+        flags[0] = rapid
+        rap.append(flags)
+        fe.append(np.full(m, np.nan if f is None else f))
+        sp.append(np.full(m, np.nan if s is None else s))
     if not xyz:
         return write_gcode([], header=header)
     rap_a, fe_a = np.concatenate(rap), np.concatenate(fe)
