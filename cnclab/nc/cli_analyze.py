@@ -28,21 +28,10 @@ from ..fileio import atomic_write
 from ..paths import build_dir
 from .gcode import GcodeError, read_toolpath
 
-try:  # toolpath-core's modules (issue 12); guarded until that branch is merged
-    from ..toolpath.evaluate import evaluate
-    from ..toolpath.job import load_job
-    _MISSING = None
-except ImportError as exc:  # pragma: no cover - depends on the merge state
-    evaluate = load_job = None
-    _MISSING = str(exc)
+from ..toolpath.evaluate import evaluate
+from ..toolpath.job import load_job
 
 __all__ = ["main", "analyze", "trace_figure", "engagement_map"]
-
-
-def _require():
-    if evaluate is None or load_job is None:
-        raise RuntimeError("cnclab analyze needs cnclab.toolpath.evaluate and cnclab.toolpath.job "
-                           f"(issue 12, toolpath-core), not available: {_MISSING}")
 
 
 def _png_pdf(fig):
@@ -104,7 +93,6 @@ def engagement_map(trace: dict, polygon=None, title: str = ""):
 def analyze(program, job_file, resolution_mm: float = 0.05, outdir=None, quiet: bool = False) -> dict:
     """Evaluate ``program`` against ``job_file`` and write the outputs (see the module docstring);
     returns ``{"evaluation": Evaluation, "files": [paths]}``."""
-    _require()
     import matplotlib.pyplot as plt
 
     program, job_file = Path(program), Path(job_file)
