@@ -36,9 +36,9 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import sys
 from pathlib import Path
 
-import jsonschema
 import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon, Point, Polygon
@@ -119,7 +119,25 @@ JOB_SCHEMA = {
     "additionalProperties": False,
 }
 
-_VALIDATOR = jsonschema.Draft202012Validator(JOB_SCHEMA)
+_VALIDATOR = []
+
+
+def _validator():
+    """The JSON-schema validator of :data:`JOB_SCHEMA`, built on first use. jsonschema is imported
+    with its optional ``iri`` format checker (package ``rfc3987_syntax``, installed by Jupyter)
+    hidden: its import compiles a grammar, ~2 s of CPU in every process that loads a job, for a
+    format this schema never uses (no ``format`` keyword: format checks are off anyway)."""
+    if not _VALIDATOR:
+        hide = "rfc3987_syntax" not in sys.modules
+        if hide:
+            sys.modules["rfc3987_syntax"] = None        # makes `import rfc3987_syntax` raise ImportError
+        try:
+            import jsonschema
+        finally:
+            if hide and sys.modules.get("rfc3987_syntax", 0) is None:
+                del sys.modules["rfc3987_syntax"]
+        _VALIDATOR.append(jsonschema.Draft202012Validator(JOB_SCHEMA))
+    return _VALIDATOR[0]
 
 
 def star_polygon(n_arms=5, outer_radius=23.0, inner_ratio=0.5, tip_radius=4.0, root_radius=2.0,
@@ -306,7 +324,7 @@ class Job:
         """Build and validate a job from a mapping of the JSON format (see the module docstring)."""
         if not isinstance(d, dict):
             raise ValueError(f"{source}: $: a job must be a JSON object {{...}}, got a {type(d).__name__}")
-        errors = sorted(_VALIDATOR.iter_errors(d), key=lambda e: (len(list(e.absolute_path)), e.json_path))
+        errors = sorted(_validator().iter_errors(d), key=lambda e: (len(list(e.absolute_path)), e.json_path))
         if errors:
             e = errors[0]
             desc = e.schema.get("description") if isinstance(e.schema, dict) else None
