@@ -52,13 +52,13 @@ from shapely.geometry import box
 
 from ..geometry.contours import SplineContour
 from ..simulation import dixel
-from ..simulation.common import simulate
+from ..simulation.common import default_lag_mm, simulate
 from .constant_engagement import clamp_to_region, resample_path, thesis3_path
 from .path import ToolPath, subdivide
 
 __all__ = ["period_index", "pattern_kinds", "pattern_lengths", "length_per_period", "disk_has_material", "circular_trochoid", "cycloid", "slot_limit", "evaluate_pattern",
            "admissible_step", "front_contour", "linking_arc", "ce_period", "ce_trochoid_iteration",
-           "ce_trochoid", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
+           "ce_trochoid", "ce_admissible_step", "held_roll_in", "fillet_entry", "fillet_exit", "tangent_arc", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
 
 
 def _pos(name, v):
@@ -389,6 +389,60 @@ def disk_has_material(stock, p, r, n_r=6, n_a=48):
     return bool(stock.contains(np.r_[x.ravel(), p[0]], np.r_[y.ravel(), p[1]]).any())
 
 
+def held_roll_in(stock, start_xy, heading_xy, tool_radius, theta_deg, allowed, step_mm=0.05,
+                 min_radius_mm=1.0, max_length_mm=None, n_headings=9, switch_deg=1.0):
+    """Roll-in that holds the engagement at most ``theta_deg``: a curvature-limited march into the material.
+
+    From ``start_xy`` (mm, in air) with unit direction ``heading_xy`` the tool advances by
+    ``step_mm``; the heading of each step turns by at most ``step_mm / min_radius_mm`` rad (so the
+    path's curvature radius is >= ``min_radius_mm``). Of the candidate headings (``n_headings``
+    evenly over that turn, points outside ``allowed`` projected onto its boundary) the one turned
+    furthest clockwise — toward the material on the right — whose engagement (dixel stock, measured
+    like :func:`~cnclab.simulation.common.simulate` with its default lag) is <= ``theta_deg`` is
+    taken; a step whose candidates all exceed it is halved (down to ``step_mm / 8``), then the least
+    engaged candidate is taken. The march ends at the first point whose engagement is within
+    ``switch_deg`` of ``theta_deg`` (where the Thesis III cut takes over) or after ``max_length_mm``
+    (default 6 r). ``stock`` is not modified.
+
+    Returns ``(points (m, 2), engagement_deg (m,), reached)``, ``reached`` False when the march ran
+    out of length before the engagement reached theta.
+    """
+    r = _pos("tool_radius", tool_radius)
+    h0 = _pos("step_mm", step_mm)
+    rho = _pos("min_radius_mm", min_radius_mm)
+    L_max = 6 * r if max_length_mm is None else _pos("max_length_mm", max_length_mm)
+    st = stock.copy()
+    lag = default_lag_mm(st.resolution_mm, r)
+    P = [np.asarray(start_xy, float)]
+    h = math.atan2(heading_xy[1], heading_xy[0])
+    E, s_acc, pending = [0.0], [0.0], [0]          # pending: indices whose disks are not cut yet
+    while s_acc[-1] < L_max:
+        ds = h0
+        while True:
+            dmax = ds / rho
+            dh = np.linspace(-dmax, dmax, n_headings)
+            Q = P[-1] + ds * np.c_[np.cos(h + dh), np.sin(h + dh)]
+            Q = clamp_to_region(Q, allowed)
+            e = np.array([st.engagement(q, r, q - P[-1]).angle_deg if np.hypot(*(q - P[-1])) > 1e-9 else np.inf
+                          for q in Q])
+            ok = np.flatnonzero(e <= theta_deg)
+            if ok.size or ds <= h0 / 8:
+                break
+            ds *= 0.5
+        j = int(ok[0]) if ok.size else int(np.argmin(e))
+        d = Q[j] - P[-1]
+        h = math.atan2(d[1], d[0])
+        P.append(Q[j])
+        E.append(float(e[j]))
+        s_acc.append(s_acc[-1] + float(np.hypot(*d)))
+        pending.append(len(P) - 1)
+        while pending and s_acc[-1] - s_acc[pending[0]] >= lag:
+            st.cut_disk(P[pending.pop(0)], r)
+        if E[-1] >= theta_deg - switch_deg:
+            return np.array(P), np.array(E), True
+    return np.array(P), np.array(E), False
+
+
 def _period(segments, reached_theta: bool, feed_mm_min: float) -> ToolPath:
     """One planned period as a :class:`ToolPath` (z = 0): ``segments`` = [(kind, points (n, 2))] with
     kind roll-in / cut / roll-out (tags ``"roll-in"``, ``""``, ``"roll-out"``); ``info["reached_theta"]``
@@ -400,8 +454,16 @@ def _period(segments, reached_theta: bool, feed_mm_min: float) -> ToolPath:
     return ToolPath.build(P, kind="cut", tag=tags, feed=feed_mm_min, info={"reached_theta": bool(reached_theta)})
 
 
+def _roll_out_period(roll_in, rho, sweep_deg, step_mm, allowed, feed_mm_min) -> ToolPath:
+    """A period that never reached theta (little material left): the roll-in, then a roll-out arc."""
+    E, T = roll_in[-1], roll_in[-1] - roll_in[-2]
+    out, _ = roll_arc(E, T, rho, sweep_deg, ds=step_mm, into=False)
+    return _period([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False, feed_mm_min)
+
+
 def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_min=-math.inf,
-              roll_radius=1.0, roll_sweep_deg=90.0, a_p=1.0, feed_mm_min=1000.0, front_stock=None):
+              roll_radius=1.0, roll_sweep_deg=90.0, a_p=1.0, feed_mm_min=1000.0, front_stock=None,
+              roll_in="wall", fillet_radius_mm=None):
     """Plan one constant-engagement trochoidal period with explicit roll-in and roll-out.
 
     Local frame: the period advances along +x, the material front is cut from the lower wall to the
@@ -448,22 +510,29 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     T_A = M[1] - M[0]
     arc, _ = roll_arc(M[0], T_A, rho, roll_sweep_deg, ds=step_mm, into=True)
     arc = clamp_to_region(arc, allowed)
-    pre = np.vstack([arc, M[1:]])
-    st = stock.copy()
-    df = simulate(st, pre, r, a_p, feed_mm_min)
-    eng = np.nan_to_num(df.engagement_deg.to_numpy())
-    hit = np.flatnonzero(eng[len(arc):] >= theta_deg)
-    if hit.size == 0:            # little material: the whole march is roll-in, then roll out
-        k = int(np.argmax(eng))
-        roll_in = pre[:max(k + 1, len(arc) + 1)]
-        E, T = roll_in[-1], roll_in[-1] - roll_in[-2]
-        out, _ = roll_arc(E, T, rho, roll_sweep_deg, ds=step_mm, into=False)
-        return _period([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False, feed_mm_min)
-    i_s = len(arc) + int(hit[0])
-    roll_in = pre[:i_s + 1].copy()
-    e0, e1 = eng[i_s - 1], eng[i_s]
-    if e1 > e0 and i_s > len(arc):     # end exactly where the engagement reaches theta (linear)
-        roll_in[-1] = pre[i_s - 1] + (theta_deg - e0) / (e1 - e0) * (pre[i_s] - pre[i_s - 1])
+    if roll_in == "held":
+        H, eng_h, reached = held_roll_in(stock, M[0], T_A, r, theta_deg, allowed, step_mm, min_radius_mm=rho)
+        pre = np.vstack([arc, H[1:]])
+        if not reached:          # little material: the whole march is roll-in, then roll out
+            k = int(np.argmax(eng_h))
+            return _roll_out_period(pre[:len(arc) + max(k, 1)], rho, roll_sweep_deg, step_mm, allowed, feed_mm_min)
+        roll_in = pre
+    elif roll_in == "wall":
+        pre = np.vstack([arc, M[1:]])
+        st = stock.copy()
+        df = simulate(st, pre, r, a_p, feed_mm_min)
+        eng = np.nan_to_num(df.engagement_deg.to_numpy())
+        hit = np.flatnonzero(eng[len(arc):] >= theta_deg)
+        if hit.size == 0:            # little material: the whole march is roll-in, then roll out
+            k = int(np.argmax(eng))
+            return _roll_out_period(pre[:max(k + 1, len(arc) + 1)], rho, roll_sweep_deg, step_mm, allowed, feed_mm_min)
+        i_s = len(arc) + int(hit[0])
+        roll_in = pre[:i_s + 1].copy()
+        e0, e1 = eng[i_s - 1], eng[i_s]
+        if e1 > e0 and i_s > len(arc):     # end exactly where the engagement reaches theta (linear)
+            roll_in[-1] = pre[i_s - 1] + (theta_deg - e0) / (e1 - e0) * (pre[i_s] - pre[i_s - 1])
+    else:
+        raise ValueError(f"roll_in must be 'wall' or 'held', got {roll_in!r}")
     st = fs.copy()
     simulate(st, roll_in, r, a_p, feed_mm_min, lag_mm=0.0)
     c = front_contour(st, x_min=x_min)
@@ -511,9 +580,129 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     if not np.hypot(*TE) > 1e-9:
         d = np.hypot(*np.diff(cut, axis=0).T) > 1e-9
         TE = np.diff(cut, axis=0)[d][-1] if d.any() else np.array([1.0, 0.0])
+    cut = np.vstack([Ps, cut[1:]])
+    if fillet_radius_mm is not None:
+        roll_in, cut = fillet_entry(roll_in, cut, fillet_radius_mm, rho, roll_sweep_deg, step_mm, allowed)
+        if near_wall and float(np.dot(TE, cut[-1] - cut[-2])) > 0:
+            cut, E, TE = fillet_exit(cut, TE, fillet_radius_mm, step_mm, allowed)
     roll_out, _ = roll_arc(E, TE, rho, roll_sweep_deg, ds=step_mm, into=False)
     roll_out = clamp_to_region(roll_out, allowed)
-    return _period([("roll-in", roll_in), ("cut", np.vstack([Ps, cut[1:]])), ("roll-out", roll_out)], True, feed_mm_min)
+    return _period([("roll-in", roll_in), ("cut", cut), ("roll-out", roll_out)], True, feed_mm_min)
+
+
+def _arclength(P):
+    return np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+
+
+def _unit2(v):
+    v = np.asarray(v, float)
+    n = float(np.hypot(*v))
+    if not n > 1e-12:
+        raise ValueError("zero-length direction")
+    return v / n
+
+
+def tangent_arc(A, T, B, ds=0.05):
+    """Circular arc from ``A`` (mm) leaving along direction ``T`` and ending at ``B`` (mm).
+
+    The circle tangent to T at A through B (centre on the side of T that B lies on); a straight
+    segment when B lies on the line. Returns points (m, 2) with the exact end points.
+
+    >>> P = tangent_arc((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), ds=0.1)
+    >>> bool(np.allclose(np.hypot(P[:, 0], P[:, 1] - 1.0), 1.0))       # centre (0, 1), radius 1
+    True
+    """
+    A, B, T = np.asarray(A, float), np.asarray(B, float), _unit2(T)
+    d = B - A
+    n = np.array([-T[1], T[0]])
+    dn = float(d @ n)
+    if abs(dn) < 1e-12 * max(float(d @ d), 1e-300):
+        return subdivide(np.vstack([A, B]), ds)
+    rho = float(d @ d) / (2.0 * dn)                # signed: > 0 turns left (ccw)
+    C = A + rho * n
+    a0, a1 = math.atan2(*(A - C)[::-1]), math.atan2(*(B - C)[::-1])
+    sweep = (a1 - a0) % (2 * math.pi) if rho > 0 else -((a0 - a1) % (2 * math.pi))
+    m = max(int(math.ceil(abs(sweep * rho) / ds)), 2)
+    ang = a0 + sweep * np.linspace(0.0, 1.0, m + 1)
+    P = np.c_[C[0] + abs(rho) * np.cos(ang), C[1] + abs(rho) * np.sin(ang)]
+    P[0], P[-1] = A, B
+    return P
+
+
+def _turn(T0, T1) -> float:
+    """Signed turning angle (rad, ccw positive) from direction T0 to T1."""
+    return math.atan2(T0[0] * T1[1] - T0[1] * T1[0], T0 @ T1)
+
+
+def fillet_entry(roll_in, cut, radius_mm, roll_radius_mm=1.0, roll_sweep_deg=90.0, ds=0.05, allowed=None,
+                 min_turn_deg=2.0):
+    """Round the corner where the roll-in (along the wall limit) turns into the Thesis III cut.
+
+    The cut leaves the wall at the roll-in end Ps turning by alpha (ccw); a tool arriving along the
+    wall engages the corner left by the previous period's turn at once (the engagement jumps to
+    ~alpha however short the step). The corner is replaced by the arc of radius ``radius_mm``
+    tangent to the roll-in direction T_in at A = Ps - u T_in, u = radius tan(alpha / 2), ending on
+    the cut at arc length u (an exact fillet when the cut starts straight): it runs on the cleared
+    side, so each period rounds the corner and the next one, shifted by the step s, cuts it like a
+    circular trochoid of radius ``radius_mm`` at step s. The roll-in becomes a ``roll_radius_mm``
+    arc landing on the wall 0.5 mm before A, the wall to A, and the fillet.
+
+    Returns ``(roll_in, cut)`` (points (n, 2), mm); unchanged when the turn is below ``min_turn_deg``.
+    """
+    roll_in, cut = np.asarray(roll_in, float), np.asarray(cut, float)
+    rf = _pos("radius_mm", radius_mm)
+    Ps = cut[0]
+    d_in = np.diff(roll_in, axis=0)
+    d_in = d_in[np.hypot(*d_in.T) > 1e-9]
+    T_in = _unit2(d_in[-1])
+    sc = _arclength(cut)
+    if sc[-1] < 4 * ds:
+        return roll_in, cut
+    T_out = _unit2(cut[int(np.searchsorted(sc, min(0.5, 0.5 * sc[-1])))] - Ps)
+    alpha = _turn(T_in, T_out)
+    if not math.degrees(alpha) > min_turn_deg:
+        return roll_in, cut
+    u = min(rf * math.tan(0.5 * alpha), 0.6 * sc[-1])
+    A = Ps - u * T_in
+    j = min(int(np.searchsorted(sc, u)), len(cut) - 2)
+    fil = tangent_arc(A, T_in, cut[j], ds)
+    A0 = A - 0.5 * T_in
+    arc, _ = roll_arc(A0, T_in, roll_radius_mm, roll_sweep_deg, ds=ds, into=True)
+    new_in = np.vstack([arc, subdivide(np.vstack([A0, A]), ds)[1:], fil[1:]])
+    if allowed is not None:
+        new_in = clamp_to_region(new_in, allowed)
+    return new_in, cut[j:]
+
+
+def fillet_exit(cut, wall_direction, radius_mm, ds=0.05, allowed=None, min_turn_deg=2.0):
+    """Round the corner where the cut reaches the far wall limit and turns along it (``wall_direction``).
+
+    Mirror of :func:`fillet_entry`: the cut's last ``u = radius tan(alpha / 2)`` (alpha = turn from
+    the cut's arrival direction to the wall direction) is replaced by the arc tangent to the wall at
+    D = E + u T_wall (E the cut's end on the wall) through the cut point at arc length u before E.
+    Returns ``(cut, D, T_wall)``: the new cut ending at D, where the roll-out starts along T_wall.
+    """
+    cut = np.asarray(cut, float)
+    rf = _pos("radius_mm", radius_mm)
+    TE = _unit2(wall_direction)
+    sc = _arclength(cut)
+    E = cut[-1]
+    if sc[-1] < 4 * ds:
+        return cut, E, TE
+    T_c = _unit2(E - cut[int(np.searchsorted(sc, sc[-1] - min(0.5, 0.5 * sc[-1])))])
+    alpha = _turn(T_c, TE)
+    if not math.degrees(alpha) > min_turn_deg:
+        return cut, E, TE
+    u = min(rf * math.tan(0.5 * alpha), 0.6 * sc[-1])
+    D = E + u * TE
+    if allowed is not None:
+        D = clamp_to_region(D[None, :], allowed)[0]
+    j = max(int(np.searchsorted(sc, sc[-1] - u)), 1)
+    fil = tangent_arc(D, -TE, cut[j], ds)[::-1]
+    new = np.vstack([cut[:j], fil])
+    if allowed is not None:
+        new = clamp_to_region(new, allowed)
+    return new, D, TE
 
 
 def linking_arc(E, S, allowed=None, bulge=0.5, ds=0.05, side=None):
@@ -590,7 +779,8 @@ def _straight_link(E, S, allowed, ds):
 
 
 def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution_mm=0.05,
-                          dt=0.1, a_p=3.0, feed_mm_min=255.0, x_front0=0.0, roll_radius=1.0):
+                          dt=0.1, a_p=3.0, feed_mm_min=255.0, x_front0=0.0, roll_radius=1.0, roll_in="wall",
+                          fillet_radius_mm=None):
     """Thesis IV iteration: plan and cut period after period into a straight slot (front at ``x_front0``).
 
     Per period the front is recomputed from the dixel stock and :func:`ce_period` plans roll-in,
@@ -609,7 +799,7 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
     cuts, periods, links, rows = [], [], [], []
     for k in range(int(n_periods)):
         per = ce_period(st, r, theta_deg, allowed, dt=dt, step_mm=resolution_mm, roll_radius=roll_radius,
-                        a_p=a_p, feed_mm_min=feed_mm_min)
+                        a_p=a_p, feed_mm_min=feed_mm_min, roll_in=roll_in, fillet_radius_mm=fillet_radius_mm)
         if per is None:
             break
         P, kinds = per.xyz[:, :2], pattern_kinds(per)
@@ -634,22 +824,11 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
     return CEIteration(cuts, pd.DataFrame(rows), st, periods, links)
 
 
-def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
-                n_iter=8, roll_radius=1.0, iteration: CEIteration | None = None, feed_mm_min=255.0,
-                link_feed_mm_min=None) -> ToolPath:
-    """Repetitive constant-engagement pattern: the last (converged) period of
-    :func:`ce_trochoid_iteration` (roll-in, cut, roll-out) repeated ``n_periods`` times with the
-    converged step, joined by straight linking moves (flagged link) through the cleared slot.
-    """
-    it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, n_iter, resolution_mm, dt,
-                                            roll_radius=roll_radius)
-    if len(it.cuts) < 3:
-        raise ValueError("the constant-engagement iteration produced fewer than 3 periods")
-    per = it.periods[-1]
+def _repeat_period(per: ToolPath, step, n_periods, resolution_mm, feed_mm_min=255.0,
+                   link_feed_mm_min=None) -> ToolPath:
+    """One planned period (roll-in, cut, roll-out) repeated ``n_periods`` times ``step`` mm apart
+    along +x, joined by straight links (flagged link) through the cleared slot."""
     P0, K0 = per.xyz[:, :2], pattern_kinds(per)
-    step = float(it.table.shift_mm.iloc[-1])
-    if not step > 0:
-        raise ValueError(f"non-positive converged step {step}")
     P0 = P0 - np.array([P0[:, 0].min(), 0.0])
     pts, kinds, per_ix = [], [], []
     for k in range(int(n_periods)):
@@ -668,6 +847,76 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
     kinds = np.concatenate(kinds)
     return _pattern(np.vstack(pts), kinds, np.concatenate(per_ix), step, "constant-engagement", feed_mm_min,
                     link_feed_mm_min)
+
+
+def ce_admissible_step(per: ToolPath, theta_max_deg, width, tool_radius, resolution_mm=0.05, n_periods=5,
+                       s_guess=None, tol_mm=0.005):
+    """Largest step (mm) at which the repeated period ``per`` keeps the simulated steady-state
+    maximum engagement (every cutting move: roll-in, cut, roll-out) at most ``theta_max_deg``.
+
+    The same bisection as :func:`admissible_step` applies to the circle and the cycloid, so the three
+    patterns are compared at equal simulated maximum engagement. ``s_guess`` (mm, e.g. the
+    iteration's shift) seeds the bracket.
+    """
+    r = _pos("tool_radius", tool_radius)
+    s0 = _pos("s_guess", s_guess) if s_guess is not None else 0.5 * r
+
+    def emax(s):
+        p = _repeat_period(per, s, n_periods, resolution_mm)
+        return evaluate_pattern(p, width, r, resolution_mm)[1]["max_engagement_deg"]
+
+    lo, hi = 0.5 * s0, 1.5 * s0
+    while emax(lo) > theta_max_deg:
+        hi, lo = lo, 0.5 * lo
+        if lo < tol_mm:
+            raise ValueError(f"theta_max_deg={theta_max_deg} is below the engagement of the smallest step")
+    while emax(hi) <= theta_max_deg:
+        lo, hi = hi, 1.5 * hi
+        if hi > 4 * r:
+            return lo
+    while hi - lo > tol_mm:
+        mid = 0.5 * (lo + hi)
+        if emax(mid) <= theta_max_deg:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
+                n_iter=8, roll_radius=1.0, iteration: CEIteration | None = None, feed_mm_min=255.0,
+                link_feed_mm_min=None, step="admissible", theta_max_deg=None) -> ToolPath:
+    """Repetitive constant-engagement pattern: the last (converged) period of
+    :func:`ce_trochoid_iteration` (roll-in, cut, roll-out) repeated ``n_periods`` times, joined by
+    straight linking moves (flagged link) through the cleared slot.
+
+    ``step``: ``"admissible"`` (default) — the largest step whose simulated maximum engagement stays
+    at ``theta_max_deg`` (default ``theta_deg``; :func:`ce_admissible_step`); ``"shift"`` — the
+    iteration's last shift (a dixel-noisy estimate: the roll-in end sits where the engagement climbs
+    steeply, so a step a few hundredths of a mm too long shows as an overshoot); or a number (mm).
+    ``info["shift"]`` keeps the iteration's last shift.
+    """
+    it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, n_iter, resolution_mm, dt,
+                                            roll_radius=roll_radius)
+    if len(it.cuts) < 3:
+        raise ValueError("the constant-engagement iteration produced fewer than 3 periods")
+    per = it.periods[-1]
+    shift = float(it.table.shift_mm.iloc[-1])
+    if not shift > 0:
+        raise ValueError(f"non-positive converged step {shift}")
+    if isinstance(step, str):
+        if step == "shift":
+            s = shift
+        elif step == "admissible":
+            th = theta_deg if theta_max_deg is None else theta_max_deg
+            s = ce_admissible_step(per, th, width, tool_radius, resolution_mm, s_guess=shift)
+        else:
+            raise ValueError(f"step must be 'admissible', 'shift' or a number (mm), got {step!r}")
+    else:
+        s = _pos("step", step)
+    p = _repeat_period(per, s, n_periods, resolution_mm, feed_mm_min, link_feed_mm_min)
+    p.info["shift"] = shift
+    return p
 
 
 def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=3.0,
