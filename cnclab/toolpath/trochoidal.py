@@ -52,13 +52,13 @@ from shapely.geometry import box
 
 from ..geometry.contours import SplineContour
 from ..simulation import dixel
-from ..simulation.common import default_lag_mm, simulate
+from ..simulation.common import simulate
 from .constant_engagement import clamp_to_region, resample_path, thesis3_path
 from .path import ToolPath, subdivide
 
 __all__ = ["period_index", "pattern_kinds", "pattern_lengths", "length_per_period", "disk_has_material", "circular_trochoid", "cycloid", "slot_limit", "evaluate_pattern",
            "admissible_step", "front_contour", "linking_arc", "ce_period", "ce_trochoid_iteration",
-           "ce_trochoid", "ce_admissible_step", "held_roll_in", "fillet_entry", "fillet_exit", "tangent_arc", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
+           "ce_trochoid", "ce_admissible_step", "fillet_entry", "fillet_exit", "tangent_arc", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
 
 
 def _pos(name, v):
@@ -389,60 +389,6 @@ def disk_has_material(stock, p, r, n_r=6, n_a=48):
     return bool(stock.contains(np.r_[x.ravel(), p[0]], np.r_[y.ravel(), p[1]]).any())
 
 
-def held_roll_in(stock, start_xy, heading_xy, tool_radius, theta_deg, allowed, step_mm=0.05,
-                 min_radius_mm=1.0, max_length_mm=None, n_headings=9, switch_deg=1.0):
-    """Roll-in that holds the engagement at most ``theta_deg``: a curvature-limited march into the material.
-
-    From ``start_xy`` (mm, in air) with unit direction ``heading_xy`` the tool advances by
-    ``step_mm``; the heading of each step turns by at most ``step_mm / min_radius_mm`` rad (so the
-    path's curvature radius is >= ``min_radius_mm``). Of the candidate headings (``n_headings``
-    evenly over that turn, points outside ``allowed`` projected onto its boundary) the one turned
-    furthest clockwise — toward the material on the right — whose engagement (dixel stock, measured
-    like :func:`~cnclab.simulation.common.simulate` with its default lag) is <= ``theta_deg`` is
-    taken; a step whose candidates all exceed it is halved (down to ``step_mm / 8``), then the least
-    engaged candidate is taken. The march ends at the first point whose engagement is within
-    ``switch_deg`` of ``theta_deg`` (where the Thesis III cut takes over) or after ``max_length_mm``
-    (default 6 r). ``stock`` is not modified.
-
-    Returns ``(points (m, 2), engagement_deg (m,), reached)``, ``reached`` False when the march ran
-    out of length before the engagement reached theta.
-    """
-    r = _pos("tool_radius", tool_radius)
-    h0 = _pos("step_mm", step_mm)
-    rho = _pos("min_radius_mm", min_radius_mm)
-    L_max = 6 * r if max_length_mm is None else _pos("max_length_mm", max_length_mm)
-    st = stock.copy()
-    lag = default_lag_mm(st.resolution_mm, r)
-    P = [np.asarray(start_xy, float)]
-    h = math.atan2(heading_xy[1], heading_xy[0])
-    E, s_acc, pending = [0.0], [0.0], [0]          # pending: indices whose disks are not cut yet
-    while s_acc[-1] < L_max:
-        ds = h0
-        while True:
-            dmax = ds / rho
-            dh = np.linspace(-dmax, dmax, n_headings)
-            Q = P[-1] + ds * np.c_[np.cos(h + dh), np.sin(h + dh)]
-            Q = clamp_to_region(Q, allowed)
-            e = np.array([st.engagement(q, r, q - P[-1]).angle_deg if np.hypot(*(q - P[-1])) > 1e-9 else np.inf
-                          for q in Q])
-            ok = np.flatnonzero(e <= theta_deg)
-            if ok.size or ds <= h0 / 8:
-                break
-            ds *= 0.5
-        j = int(ok[0]) if ok.size else int(np.argmin(e))
-        d = Q[j] - P[-1]
-        h = math.atan2(d[1], d[0])
-        P.append(Q[j])
-        E.append(float(e[j]))
-        s_acc.append(s_acc[-1] + float(np.hypot(*d)))
-        pending.append(len(P) - 1)
-        while pending and s_acc[-1] - s_acc[pending[0]] >= lag:
-            st.cut_disk(P[pending.pop(0)], r)
-        if E[-1] >= theta_deg - switch_deg:
-            return np.array(P), np.array(E), True
-    return np.array(P), np.array(E), False
-
-
 def _period(segments, reached_theta: bool, feed_mm_min: float) -> ToolPath:
     """One planned period as a :class:`ToolPath` (z = 0): ``segments`` = [(kind, points (n, 2))] with
     kind roll-in / cut / roll-out (tags ``"roll-in"``, ``""``, ``"roll-out"``); ``info["reached_theta"]``
@@ -463,7 +409,7 @@ def _roll_out_period(roll_in, rho, sweep_deg, step_mm, allowed, feed_mm_min) -> 
 
 def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_min=-math.inf,
               roll_radius=1.0, roll_sweep_deg=90.0, a_p=1.0, feed_mm_min=1000.0, front_stock=None,
-              roll_in="wall", fillet_radius_mm=None):
+              fillet_radius_mm=None):
     """Plan one constant-engagement trochoidal period with explicit roll-in and roll-out.
 
     Local frame: the period advances along +x, the material front is cut from the lower wall to the
@@ -510,29 +456,19 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     T_A = M[1] - M[0]
     arc, _ = roll_arc(M[0], T_A, rho, roll_sweep_deg, ds=step_mm, into=True)
     arc = clamp_to_region(arc, allowed)
-    if roll_in == "held":
-        H, eng_h, reached = held_roll_in(stock, M[0], T_A, r, theta_deg, allowed, step_mm, min_radius_mm=rho)
-        pre = np.vstack([arc, H[1:]])
-        if not reached:          # little material: the whole march is roll-in, then roll out
-            k = int(np.argmax(eng_h))
-            return _roll_out_period(pre[:len(arc) + max(k, 1)], rho, roll_sweep_deg, step_mm, allowed, feed_mm_min)
-        roll_in = pre
-    elif roll_in == "wall":
-        pre = np.vstack([arc, M[1:]])
-        st = stock.copy()
-        df = simulate(st, pre, r, a_p, feed_mm_min)
-        eng = np.nan_to_num(df.engagement_deg.to_numpy())
-        hit = np.flatnonzero(eng[len(arc):] >= theta_deg)
-        if hit.size == 0:            # little material: the whole march is roll-in, then roll out
-            k = int(np.argmax(eng))
-            return _roll_out_period(pre[:max(k + 1, len(arc) + 1)], rho, roll_sweep_deg, step_mm, allowed, feed_mm_min)
-        i_s = len(arc) + int(hit[0])
-        roll_in = pre[:i_s + 1].copy()
-        e0, e1 = eng[i_s - 1], eng[i_s]
-        if e1 > e0 and i_s > len(arc):     # end exactly where the engagement reaches theta (linear)
-            roll_in[-1] = pre[i_s - 1] + (theta_deg - e0) / (e1 - e0) * (pre[i_s] - pre[i_s - 1])
-    else:
-        raise ValueError(f"roll_in must be 'wall' or 'held', got {roll_in!r}")
+    pre = np.vstack([arc, M[1:]])
+    st = stock.copy()
+    df = simulate(st, pre, r, a_p, feed_mm_min)
+    eng = np.nan_to_num(df.engagement_deg.to_numpy())
+    hit = np.flatnonzero(eng[len(arc):] >= theta_deg)
+    if hit.size == 0:            # little material: the whole march is roll-in, then roll out
+        k = int(np.argmax(eng))
+        return _roll_out_period(pre[:max(k + 1, len(arc) + 1)], rho, roll_sweep_deg, step_mm, allowed, feed_mm_min)
+    i_s = len(arc) + int(hit[0])
+    roll_in = pre[:i_s + 1].copy()
+    e0, e1 = eng[i_s - 1], eng[i_s]
+    if e1 > e0 and i_s > len(arc):     # end exactly where the engagement reaches theta (linear)
+        roll_in[-1] = pre[i_s - 1] + (theta_deg - e0) / (e1 - e0) * (pre[i_s] - pre[i_s - 1])
     st = fs.copy()
     simulate(st, roll_in, r, a_p, feed_mm_min, lag_mm=0.0)
     c = front_contour(st, x_min=x_min)
@@ -662,9 +598,28 @@ def fillet_entry(roll_in, cut, radius_mm, roll_radius_mm=1.0, roll_sweep_deg=90.
     alpha = _turn(T_in, T_out)
     if not math.degrees(alpha) > min_turn_deg:
         return roll_in, cut
-    u = min(rf * math.tan(0.5 * alpha), 0.6 * sc[-1])
-    A = Ps - u * T_in
-    j = min(int(np.searchsorted(sc, u)), len(cut) - 2)
+    # G1 fillet: for each cut point j (tangent T_j) the circle tangent to the roll-in line and to the
+    # cut at j has its corner X_j (the two tangent lines' intersection) equidistant from both
+    # tangent points; take the j whose radius is closest to ``radius_mm``
+    J = np.arange(1, len(cut) - 1)
+    T = cut[J + 1] - cut[J - 1]
+    T = T / np.hypot(*T.T)[:, None]
+    den = T_in[0] * T[:, 1] - T_in[1] * T[:, 0]           # sin of the turn at j
+    w = cut[J] - Ps
+    lam = (w[:, 0] * T[:, 1] - w[:, 1] * T[:, 0]) / np.where(np.abs(den) > 1e-9, den, np.nan)
+    X = Ps + lam[:, None] * T_in
+    dist = np.hypot(*(cut[J] - X).T)
+    turn = np.arctan2(den, T @ T_in)
+    rad = dist / np.tan(0.5 * np.where(turn > 1e-3, turn, np.nan))
+    ok = np.isfinite(rad) & (dist <= 0.6 * sc[-1] + 10 * rf) & (sc[J] <= 0.6 * sc[-1])
+    if ok.any():
+        k = int(np.nanargmin(np.where(ok, np.abs(rad - rf), np.nan)))
+        j = int(J[k])
+        A = X[k] - dist[k] * T_in
+    else:
+        u = min(rf * math.tan(0.5 * alpha), 0.6 * sc[-1])
+        A = Ps - u * T_in
+        j = min(int(np.searchsorted(sc, u)), len(cut) - 2)
     fil = tangent_arc(A, T_in, cut[j], ds)
     A0 = A - 0.5 * T_in
     arc, _ = roll_arc(A0, T_in, roll_radius_mm, roll_sweep_deg, ds=ds, into=True)
@@ -779,8 +734,8 @@ def _straight_link(E, S, allowed, ds):
 
 
 def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution_mm=0.05,
-                          dt=0.1, a_p=3.0, feed_mm_min=255.0, x_front0=0.0, roll_radius=1.0, roll_in="wall",
-                          fillet_radius_mm=None):
+                          dt=0.1, a_p=3.0, feed_mm_min=255.0, x_front0=0.0, roll_radius=1.0,
+                          fillet_radius_mm="auto"):
     """Thesis IV iteration: plan and cut period after period into a straight slot (front at ``x_front0``).
 
     Per period the front is recomputed from the dixel stock and :func:`ce_period` plans roll-in,
@@ -797,9 +752,10 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
     st = dixel.Stock.from_polygon(box(x_front0, -W / 2, length, W / 2), resolution_mm)
     allowed = box(x_front0 - 10 * W, -yl, length + 10 * W, yl)
     cuts, periods, links, rows = [], [], [], []
+    fr = yl if isinstance(fillet_radius_mm, str) and fillet_radius_mm == "auto" else fillet_radius_mm
     for k in range(int(n_periods)):
         per = ce_period(st, r, theta_deg, allowed, dt=dt, step_mm=resolution_mm, roll_radius=roll_radius,
-                        a_p=a_p, feed_mm_min=feed_mm_min, roll_in=roll_in, fillet_radius_mm=fillet_radius_mm)
+                        a_p=a_p, feed_mm_min=feed_mm_min, fillet_radius_mm=fr)
         if per is None:
             break
         P, kinds = per.xyz[:, :2], pattern_kinds(per)
@@ -898,18 +854,27 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
     """
     it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, n_iter, resolution_mm, dt,
                                             roll_radius=roll_radius)
-    if len(it.cuts) < 3:
-        raise ValueError("the constant-engagement iteration produced fewer than 3 periods")
-    per = it.periods[-1]
-    shift = float(it.table.shift_mm.iloc[-1])
-    if not shift > 0:
-        raise ValueError(f"non-positive converged step {shift}")
+    # the last complete period (roll-in, cut at theta, roll-out); a final period that found no
+    # front in reach (Thesis III failed, rolled straight out) is not a pattern period
+    good = [k for k, q in enumerate(it.periods)
+            if q.info.get("reached_theta", True) and bool((pattern_kinds(q) == "cut").any())]
+    if len(it.cuts) < 3 or not good or good[-1] < 2:
+        raise ValueError("the constant-engagement iteration produced fewer than 3 complete periods")
+    k_last = good[-1]
+    per = it.periods[k_last]
+    shifts = it.table.shift_mm.to_numpy()[:k_last + 1]
+    shift = float(shifts[-1])
     if isinstance(step, str):
         if step == "shift":
+            if not shift > 0:
+                raise ValueError(f"non-positive converged step {shift}")
             s = shift
         elif step == "admissible":
             th = theta_deg if theta_max_deg is None else theta_max_deg
-            s = ce_admissible_step(per, th, width, tool_radius, resolution_mm, s_guess=shift)
+            last = shifts[-3:]
+            last = last[np.isfinite(last) & (last > 0)]     # the bracket's seed only
+            guess = float(np.median(last)) if last.size else circle_front_step(th, width, tool_radius)
+            s = ce_admissible_step(per, th, width, tool_radius, resolution_mm, s_guess=guess)
         else:
             raise ValueError(f"step must be 'admissible', 'shift' or a number (mm), got {step!r}")
     else:
@@ -920,19 +885,43 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
 
 
 def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=3.0,
-                     feed_mm_min=255.0, link_feed_mm_min=None, n_periods=6):
+                     feed_mm_min=255.0, link_feed_mm_min=None, n_periods=6, plan_offsets_deg=(0.0, 3.0),
+                     fillet_fractions=(0.5, 1.0)):
     """The three patterns at the same engagement limit: admissible step, lengths, MRR (one row each).
 
-    Circular and cycloid steps come from :func:`admissible_step`; the constant-engagement pattern
-    is planned at the angle theta' <= theta_max whose simulated maximum engagement respects the
-    limit (:func:`ce_trochoid_at_limit`, column ``theta_plan_deg``), so all three patterns are
-    compared at the same simulated maximum engagement. Returns a pandas DataFrame.
+    All three steps are bisected to the same limit: circular and cycloid by :func:`admissible_step`,
+    the constant-engagement pattern by :func:`ce_admissible_step` — every pattern's simulated
+    steady-state maximum engagement over all cutting moves (roll-in included) is <= theta_max
+    (column ``theta_limit_deg``). The CE period is planned by :func:`ce_trochoid_iteration` with
+    entry/exit fillets; as the cycloid's one parameter (its step) is optimised by the bisection,
+    the CE pattern's two shape parameters are chosen from a small grid by the same simulation: the
+    planning angle theta_plan in ``plan_offsets_deg`` + theta_max and the fillet radius in
+    ``fillet_fractions`` x (W/2 - r); the candidate with the shortest path per mm of slot (at its
+    admissible step) wins (columns ``theta_plan_deg``, ``fillet_radius_mm``, ``shift_mm``).
+    Returns a pandas DataFrame.
     """
-    p = ce_trochoid(width, tool_radius, theta_max_deg, n_periods, resolution_mm)
-    _, m_ce = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
-    # equal *simulated* maximum engagement: the CE pattern planned at theta_max overshoots it by a
-    # few degrees at its roll-in corner, so the conventional patterns get that same limit
-    lim = max(float(theta_max_deg), m_ce["max_engagement_deg"])
+    R = slot_limit(width, tool_radius)
+    best, errs = None, []
+    for d_plan in plan_offsets_deg:
+        for frac in fillet_fractions:
+            th_plan = float(theta_max_deg) + float(d_plan)
+            try:
+                it = ce_trochoid_iteration(width, tool_radius, th_plan, 8, resolution_mm, a_p=a_p,
+                                           feed_mm_min=feed_mm_min, fillet_radius_mm=frac * R)
+                p = ce_trochoid(width, tool_radius, th_plan, n_periods, resolution_mm, iteration=it,
+                                theta_max_deg=theta_max_deg, feed_mm_min=feed_mm_min,
+                                link_feed_mm_min=link_feed_mm_min)
+            except ValueError as e:
+                errs.append(f"theta_plan={th_plan}, fillet={frac * R:.3g} mm: {e}")
+                continue
+            _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
+            m.update(theta_plan_deg=th_plan, fillet_radius_mm=frac * R, shift_mm=p.info["shift"])
+            if best is None or m["length_per_mm_slot"] < best["length_per_mm_slot"]:
+                best = m
+    if best is None:
+        raise ValueError(f"no constant-engagement period keeps theta_max_deg={theta_max_deg}: {'; '.join(errs)}")
+    m_ce = best
+    lim = float(theta_max_deg)
     rows = []
     for kind in ("circular", "cycloid"):
         s = admissible_step(kind, lim, width, tool_radius, resolution_mm)
