@@ -24,7 +24,16 @@ Patterns (each returned as a :class:`~cnclab.toolpath.path.ToolPath` at z = 0: c
   to the final-contour limit (roll-in/roll-out), the stock is cut, and a linking arc through the
   cleared region leads back to the next period. The period shape converges (booklet Fig. 3.5);
   :func:`ce_trochoid_iteration` returns every period and its change, :func:`ce_trochoid` repeats the
-  converged period with the converged step.
+  converged period with the largest step whose simulated maximum engagement stays at the limit
+  (:func:`ce_admissible_step`, the same bisection as for the circle and the cycloid).
+  **Roll-in corner.** The Thesis III cut leaves the wall at a steep angle (about 75 deg to the wall
+  at theta = 30 deg): a tool arriving along the wall then meets the previous period's corner and
+  its engagement jumps to about that turn angle however small the step (simulated: 4 -> 46 deg
+  within one 0.1 mm sample; 43 deg at a 0.05 mm step, 59 deg at the iteration's step at
+  theta = 30 deg). :func:`fillet_entry` replaces the corner by a G1 arc of radius rho tangent to the
+  wall and to the cut (and :func:`fillet_exit` the corner at the far wall): the next period,
+  shifted by s, then cuts a rounded corner like a circular trochoid of radius rho at step s, and
+  its engagement rises without a jump.
 
 Evaluation (:func:`evaluate_pattern`) cuts the pattern through a dixel slot stock and reports the
 steady-state engagement trace, path length per period and per mm of slot, cutting vs linking
@@ -426,7 +435,10 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
        the engagement stays at theta (it cannot exceed theta: the entry point is held at theta - 90
        deg from the feed, the front-half measure is <= theta);
     3. **roll-out** — where the cut reaches the upper wall limit the tool leaves on a ccw arc of
-       radius ``roll_radius`` tangent to the wall limit (the feed turns away from the material).
+       radius ``roll_radius`` tangent to the wall limit (the feed turns away from the material);
+    4. with ``fillet_radius_mm`` (mm; default None = sharp corners) the corner between the wall
+       march and the cut and the one between the cut and the far wall are rounded
+       (:func:`fillet_entry`, :func:`fillet_exit`; the entry fillet is tagged roll-in).
 
     ``front_stock`` (default ``stock``): the stock whose front is followed (e.g. one pocket arm's
     material) while the engagement is simulated on ``stock`` (all the material).
@@ -740,6 +752,8 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
 
     Per period the front is recomputed from the dixel stock and :func:`ce_period` plans roll-in,
     constant-engagement cut and roll-out; a straight link joins the previous roll-out to it.
+    ``fillet_radius_mm``: corner fillets of :func:`ce_period` ("auto" = the slot's centre-line
+    half-width W/2 - r, the circle trochoid's radius; None = sharp corners, the pre-fillet roll-in).
     Returns :class:`CEIteration`: ``cuts`` (the whole period polylines), ``periods``
     (period :class:`ToolPath` s), ``links`` and a table per period of shift (the trochoidal step, mm),
     shape change (max residual after removing the shift, mm), lengths, removed area, the maximum
