@@ -588,14 +588,21 @@ def fillet_entry(roll_in, cut, radius_mm, roll_radius_mm=1.0, roll_sweep_deg=90.
 
     The cut leaves the wall at the roll-in end Ps turning by alpha (ccw); a tool arriving along the
     wall engages the corner left by the previous period's turn at once (the engagement jumps to
-    ~alpha however short the step). The corner is replaced by the arc of radius ``radius_mm``
-    tangent to the roll-in direction T_in at A = Ps - u T_in, u = radius tan(alpha / 2), ending on
-    the cut at arc length u (an exact fillet when the cut starts straight): it runs on the cleared
-    side, so each period rounds the corner and the next one, shifted by the step s, cuts it like a
-    circular trochoid of radius ``radius_mm`` at step s. The roll-in becomes a ``roll_radius_mm``
-    arc landing on the wall 0.5 mm before A, the wall to A, and the fillet.
+    ~alpha however short the step). The corner is replaced by a G1 arc tangent to the roll-in line
+    (direction T_in) at A and to the cut at the cut point whose tangent circle has the radius
+    closest to ``radius_mm`` (mm; on a straight cut: A = Ps - u T_in and the cut point at arc length
+    u, u = radius tan(alpha / 2)). It runs on the cleared side, so each period rounds the corner
+    and the next one, shifted by the step s, cuts it like a circular trochoid of radius
+    ``radius_mm`` at step s. The roll-in becomes a ``roll_radius_mm`` arc landing on the wall
+    0.5 mm before A, the wall to A, and the fillet; ``ds`` (mm) samples them.
 
     Returns ``(roll_in, cut)`` (points (n, 2), mm); unchanged when the turn is below ``min_turn_deg``.
+
+    >>> wall = np.c_[np.linspace(-5.0, 0.0, 51), np.zeros(51)]
+    >>> cut = np.c_[np.zeros(51), np.linspace(0.0, 5.0, 51)]          # a 90 deg turn at (0, 0)
+    >>> r_in, c = fillet_entry(wall, cut, 1.0, ds=0.1)
+    >>> c[0].tolist(), np.round(r_in[-1], 9).tolist()               # u = 1 tan 45 deg = 1 mm
+    ([0.0, 1.0], [0.0, 1.0])
     """
     roll_in, cut = np.asarray(roll_in, float), np.asarray(cut, float)
     rf = _pos("radius_mm", radius_mm)
