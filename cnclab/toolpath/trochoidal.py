@@ -24,7 +24,16 @@ Patterns (each returned as a :class:`~cnclab.toolpath.path.ToolPath` at z = 0: c
   to the final-contour limit (roll-in/roll-out), the stock is cut, and a linking arc through the
   cleared region leads back to the next period. The period shape converges (booklet Fig. 3.5);
   :func:`ce_trochoid_iteration` returns every period and its change, :func:`ce_trochoid` repeats the
-  converged period with the converged step.
+  converged period with the largest step whose simulated maximum engagement stays at the limit
+  (:func:`ce_admissible_step`, the same bisection as for the circle and the cycloid).
+  **Roll-in corner.** The Thesis III cut leaves the wall at a steep angle (about 75 deg to the wall
+  at theta = 30 deg): a tool arriving along the wall then meets the previous period's corner and
+  its engagement jumps to about that turn angle however small the step (simulated: 4 -> 46 deg
+  within one 0.1 mm sample; 43 deg at a 0.05 mm step, 59 deg at the iteration's step at
+  theta = 30 deg). :func:`fillet_entry` replaces the corner by a G1 arc of radius rho tangent to the
+  wall and to the cut (and :func:`fillet_exit` the corner at the far wall): the next period,
+  shifted by s, then cuts a rounded corner like a circular trochoid of radius rho at step s, and
+  its engagement rises without a jump.
 
 Evaluation (:func:`evaluate_pattern`) cuts the pattern through a dixel slot stock and reports the
 steady-state engagement trace, path length per period and per mm of slot, cutting vs linking
@@ -58,7 +67,7 @@ from .path import ToolPath, subdivide
 
 __all__ = ["period_index", "pattern_kinds", "pattern_lengths", "length_per_period", "disk_has_material", "circular_trochoid", "cycloid", "slot_limit", "evaluate_pattern",
            "admissible_step", "front_contour", "linking_arc", "ce_period", "ce_trochoid_iteration",
-           "ce_trochoid", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
+           "ce_trochoid", "ce_admissible_step", "fillet_entry", "fillet_exit", "tangent_arc", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
 
 
 def _pos(name, v):
@@ -400,8 +409,16 @@ def _period(segments, reached_theta: bool, feed_mm_min: float) -> ToolPath:
     return ToolPath.build(P, kind="cut", tag=tags, feed=feed_mm_min, info={"reached_theta": bool(reached_theta)})
 
 
+def _roll_out_period(roll_in, rho, sweep_deg, step_mm, allowed, feed_mm_min) -> ToolPath:
+    """A period that never reached theta (little material left): the roll-in, then a roll-out arc."""
+    E, T = roll_in[-1], roll_in[-1] - roll_in[-2]
+    out, _ = roll_arc(E, T, rho, sweep_deg, ds=step_mm, into=False)
+    return _period([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False, feed_mm_min)
+
+
 def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_min=-math.inf,
-              roll_radius=1.0, roll_sweep_deg=90.0, a_p=1.0, feed_mm_min=1000.0, front_stock=None):
+              roll_radius=1.0, roll_sweep_deg=90.0, a_p=1.0, feed_mm_min=1000.0, front_stock=None,
+              fillet_radius_mm=None):
     """Plan one constant-engagement trochoidal period with explicit roll-in and roll-out.
 
     Local frame: the period advances along +x, the material front is cut from the lower wall to the
@@ -418,7 +435,10 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
        the engagement stays at theta (it cannot exceed theta: the entry point is held at theta - 90
        deg from the feed, the front-half measure is <= theta);
     3. **roll-out** — where the cut reaches the upper wall limit the tool leaves on a ccw arc of
-       radius ``roll_radius`` tangent to the wall limit (the feed turns away from the material).
+       radius ``roll_radius`` tangent to the wall limit (the feed turns away from the material);
+    4. with ``fillet_radius_mm`` (mm; default None = sharp corners) the corner between the wall
+       march and the cut and the one between the cut and the far wall are rounded
+       (:func:`fillet_entry`, :func:`fillet_exit`; the entry fillet is tagged roll-in).
 
     ``front_stock`` (default ``stock``): the stock whose front is followed (e.g. one pocket arm's
     material) while the engagement is simulated on ``stock`` (all the material).
@@ -455,10 +475,7 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     hit = np.flatnonzero(eng[len(arc):] >= theta_deg)
     if hit.size == 0:            # little material: the whole march is roll-in, then roll out
         k = int(np.argmax(eng))
-        roll_in = pre[:max(k + 1, len(arc) + 1)]
-        E, T = roll_in[-1], roll_in[-1] - roll_in[-2]
-        out, _ = roll_arc(E, T, rho, roll_sweep_deg, ds=step_mm, into=False)
-        return _period([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False, feed_mm_min)
+        return _roll_out_period(pre[:max(k + 1, len(arc) + 1)], rho, roll_sweep_deg, step_mm, allowed, feed_mm_min)
     i_s = len(arc) + int(hit[0])
     roll_in = pre[:i_s + 1].copy()
     e0, e1 = eng[i_s - 1], eng[i_s]
@@ -511,9 +528,155 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     if not np.hypot(*TE) > 1e-9:
         d = np.hypot(*np.diff(cut, axis=0).T) > 1e-9
         TE = np.diff(cut, axis=0)[d][-1] if d.any() else np.array([1.0, 0.0])
+    cut = np.vstack([Ps, cut[1:]])
+    if fillet_radius_mm is not None:
+        roll_in, cut = fillet_entry(roll_in, cut, fillet_radius_mm, rho, roll_sweep_deg, step_mm, allowed)
+        if near_wall and float(np.dot(TE, cut[-1] - cut[-2])) > 0:
+            cut, E, TE = fillet_exit(cut, TE, fillet_radius_mm, step_mm, allowed)
     roll_out, _ = roll_arc(E, TE, rho, roll_sweep_deg, ds=step_mm, into=False)
     roll_out = clamp_to_region(roll_out, allowed)
-    return _period([("roll-in", roll_in), ("cut", np.vstack([Ps, cut[1:]])), ("roll-out", roll_out)], True, feed_mm_min)
+    return _period([("roll-in", roll_in), ("cut", cut), ("roll-out", roll_out)], True, feed_mm_min)
+
+
+def _arclength(P):
+    return np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+
+
+def _unit2(v):
+    v = np.asarray(v, float)
+    n = float(np.hypot(*v))
+    if not n > 1e-12:
+        raise ValueError("zero-length direction")
+    return v / n
+
+
+def tangent_arc(A, T, B, ds=0.05):
+    """Circular arc from ``A`` (mm) leaving along direction ``T`` and ending at ``B`` (mm).
+
+    The circle tangent to T at A through B (centre on the side of T that B lies on); a straight
+    segment when B lies on the line. Returns points (m, 2) with the exact end points.
+
+    >>> P = tangent_arc((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), ds=0.1)
+    >>> bool(np.allclose(np.hypot(P[:, 0], P[:, 1] - 1.0), 1.0))       # centre (0, 1), radius 1
+    True
+    """
+    A, B, T = np.asarray(A, float), np.asarray(B, float), _unit2(T)
+    d = B - A
+    n = np.array([-T[1], T[0]])
+    dn = float(d @ n)
+    if abs(dn) < 1e-12 * max(float(d @ d), 1e-300):
+        return subdivide(np.vstack([A, B]), ds)
+    rho = float(d @ d) / (2.0 * dn)                # signed: > 0 turns left (ccw)
+    C = A + rho * n
+    a0, a1 = math.atan2(*(A - C)[::-1]), math.atan2(*(B - C)[::-1])
+    sweep = (a1 - a0) % (2 * math.pi) if rho > 0 else -((a0 - a1) % (2 * math.pi))
+    m = max(int(math.ceil(abs(sweep * rho) / ds)), 2)
+    ang = a0 + sweep * np.linspace(0.0, 1.0, m + 1)
+    P = np.c_[C[0] + abs(rho) * np.cos(ang), C[1] + abs(rho) * np.sin(ang)]
+    P[0], P[-1] = A, B
+    return P
+
+
+def _turn(T0, T1) -> float:
+    """Signed turning angle (rad, ccw positive) from direction T0 to T1."""
+    return math.atan2(T0[0] * T1[1] - T0[1] * T1[0], T0 @ T1)
+
+
+def fillet_entry(roll_in, cut, radius_mm, roll_radius_mm=1.0, roll_sweep_deg=90.0, ds=0.05, allowed=None,
+                 min_turn_deg=2.0):
+    """Round the corner where the roll-in (along the wall limit) turns into the Thesis III cut.
+
+    The cut leaves the wall at the roll-in end Ps turning by alpha (ccw); a tool arriving along the
+    wall engages the corner left by the previous period's turn at once (the engagement jumps to
+    ~alpha however short the step). The corner is replaced by a G1 arc tangent to the roll-in line
+    (direction T_in) at A and to the cut at the cut point whose tangent circle has the radius
+    closest to ``radius_mm`` (mm; on a straight cut: A = Ps - u T_in and the cut point at arc length
+    u, u = radius tan(alpha / 2)). It runs on the cleared side, so each period rounds the corner
+    and the next one, shifted by the step s, cuts it like a circular trochoid of radius
+    ``radius_mm`` at step s. The roll-in becomes a ``roll_radius_mm`` arc landing on the wall
+    0.5 mm before A, the wall to A, and the fillet; ``ds`` (mm) samples them.
+
+    Returns ``(roll_in, cut)`` (points (n, 2), mm); unchanged when the turn is below ``min_turn_deg``.
+
+    >>> wall = np.c_[np.linspace(-5.0, 0.0, 51), np.zeros(51)]
+    >>> cut = np.c_[np.zeros(51), np.linspace(0.0, 5.0, 51)]          # a 90 deg turn at (0, 0)
+    >>> r_in, c = fillet_entry(wall, cut, 1.0, ds=0.1)
+    >>> c[0].tolist(), np.round(r_in[-1], 9).tolist()               # u = 1 tan 45 deg = 1 mm
+    ([0.0, 1.0], [0.0, 1.0])
+    """
+    roll_in, cut = np.asarray(roll_in, float), np.asarray(cut, float)
+    rf = _pos("radius_mm", radius_mm)
+    Ps = cut[0]
+    d_in = np.diff(roll_in, axis=0)
+    d_in = d_in[np.hypot(*d_in.T) > 1e-9]
+    T_in = _unit2(d_in[-1])
+    sc = _arclength(cut)
+    if sc[-1] < 4 * ds:
+        return roll_in, cut
+    T_out = _unit2(cut[int(np.searchsorted(sc, min(0.5, 0.5 * sc[-1])))] - Ps)
+    alpha = _turn(T_in, T_out)
+    if not math.degrees(alpha) > min_turn_deg:
+        return roll_in, cut
+    # G1 fillet: for each cut point j (tangent T_j) the circle tangent to the roll-in line and to the
+    # cut at j has its corner X_j (the two tangent lines' intersection) equidistant from both
+    # tangent points; take the j whose radius is closest to ``radius_mm``
+    J = np.arange(1, len(cut) - 1)
+    T = cut[J + 1] - cut[J - 1]
+    T = T / np.hypot(*T.T)[:, None]
+    den = T_in[0] * T[:, 1] - T_in[1] * T[:, 0]           # sin of the turn at j
+    w = cut[J] - Ps
+    lam = (w[:, 0] * T[:, 1] - w[:, 1] * T[:, 0]) / np.where(np.abs(den) > 1e-9, den, np.nan)
+    X = Ps + lam[:, None] * T_in
+    dist = np.hypot(*(cut[J] - X).T)
+    turn = np.arctan2(den, T @ T_in)
+    rad = dist / np.tan(0.5 * np.where(turn > 1e-3, turn, np.nan))
+    ok = np.isfinite(rad) & (dist <= 0.6 * sc[-1] + 10 * rf) & (sc[J] <= 0.6 * sc[-1])
+    if ok.any():
+        k = int(np.nanargmin(np.where(ok, np.abs(rad - rf), np.nan)))
+        j = int(J[k])
+        A = X[k] - dist[k] * T_in
+    else:
+        u = min(rf * math.tan(0.5 * alpha), 0.6 * sc[-1])
+        A = Ps - u * T_in
+        j = min(int(np.searchsorted(sc, u)), len(cut) - 2)
+    fil = tangent_arc(A, T_in, cut[j], ds)
+    A0 = A - 0.5 * T_in
+    arc, _ = roll_arc(A0, T_in, roll_radius_mm, roll_sweep_deg, ds=ds, into=True)
+    new_in = np.vstack([arc, subdivide(np.vstack([A0, A]), ds)[1:], fil[1:]])
+    if allowed is not None:
+        new_in = clamp_to_region(new_in, allowed)
+    return new_in, cut[j:]
+
+
+def fillet_exit(cut, wall_direction, radius_mm, ds=0.05, allowed=None, min_turn_deg=2.0):
+    """Round the corner where the cut reaches the far wall limit and turns along it (``wall_direction``).
+
+    Mirror of :func:`fillet_entry`: the cut's last ``u = radius tan(alpha / 2)`` (alpha = turn from
+    the cut's arrival direction to the wall direction) is replaced by the arc tangent to the wall at
+    D = E + u T_wall (E the cut's end on the wall) through the cut point at arc length u before E.
+    Returns ``(cut, D, T_wall)``: the new cut ending at D, where the roll-out starts along T_wall.
+    """
+    cut = np.asarray(cut, float)
+    rf = _pos("radius_mm", radius_mm)
+    TE = _unit2(wall_direction)
+    sc = _arclength(cut)
+    E = cut[-1]
+    if sc[-1] < 4 * ds:
+        return cut, E, TE
+    T_c = _unit2(E - cut[int(np.searchsorted(sc, sc[-1] - min(0.5, 0.5 * sc[-1])))])
+    alpha = _turn(T_c, TE)
+    if not math.degrees(alpha) > min_turn_deg:
+        return cut, E, TE
+    u = min(rf * math.tan(0.5 * alpha), 0.6 * sc[-1])
+    D = E + u * TE
+    if allowed is not None:
+        D = clamp_to_region(D[None, :], allowed)[0]
+    j = max(int(np.searchsorted(sc, sc[-1] - u)), 1)
+    fil = tangent_arc(D, -TE, cut[j], ds)[::-1]
+    new = np.vstack([cut[:j], fil])
+    if allowed is not None:
+        new = clamp_to_region(new, allowed)
+    return new, D, TE
 
 
 def linking_arc(E, S, allowed=None, bulge=0.5, ds=0.05, side=None):
@@ -590,11 +753,14 @@ def _straight_link(E, S, allowed, ds):
 
 
 def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution_mm=0.05,
-                          dt=0.1, a_p=3.0, feed_mm_min=255.0, x_front0=0.0, roll_radius=1.0):
+                          dt=0.1, a_p=3.0, feed_mm_min=255.0, x_front0=0.0, roll_radius=1.0,
+                          fillet_radius_mm="auto"):
     """Thesis IV iteration: plan and cut period after period into a straight slot (front at ``x_front0``).
 
     Per period the front is recomputed from the dixel stock and :func:`ce_period` plans roll-in,
     constant-engagement cut and roll-out; a straight link joins the previous roll-out to it.
+    ``fillet_radius_mm``: corner fillets of :func:`ce_period` ("auto" = the slot's centre-line
+    half-width W/2 - r, the circle trochoid's radius; None = sharp corners, the pre-fillet roll-in).
     Returns :class:`CEIteration`: ``cuts`` (the whole period polylines), ``periods``
     (period :class:`ToolPath` s), ``links`` and a table per period of shift (the trochoidal step, mm),
     shape change (max residual after removing the shift, mm), lengths, removed area, the maximum
@@ -607,9 +773,10 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
     st = dixel.Stock.from_polygon(box(x_front0, -W / 2, length, W / 2), resolution_mm)
     allowed = box(x_front0 - 10 * W, -yl, length + 10 * W, yl)
     cuts, periods, links, rows = [], [], [], []
+    fr = yl if isinstance(fillet_radius_mm, str) and fillet_radius_mm == "auto" else fillet_radius_mm
     for k in range(int(n_periods)):
         per = ce_period(st, r, theta_deg, allowed, dt=dt, step_mm=resolution_mm, roll_radius=roll_radius,
-                        a_p=a_p, feed_mm_min=feed_mm_min)
+                        a_p=a_p, feed_mm_min=feed_mm_min, fillet_radius_mm=fr)
         if per is None:
             break
         P, kinds = per.xyz[:, :2], pattern_kinds(per)
@@ -634,22 +801,11 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
     return CEIteration(cuts, pd.DataFrame(rows), st, periods, links)
 
 
-def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
-                n_iter=8, roll_radius=1.0, iteration: CEIteration | None = None, feed_mm_min=255.0,
-                link_feed_mm_min=None) -> ToolPath:
-    """Repetitive constant-engagement pattern: the last (converged) period of
-    :func:`ce_trochoid_iteration` (roll-in, cut, roll-out) repeated ``n_periods`` times with the
-    converged step, joined by straight linking moves (flagged link) through the cleared slot.
-    """
-    it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, n_iter, resolution_mm, dt,
-                                            roll_radius=roll_radius)
-    if len(it.cuts) < 3:
-        raise ValueError("the constant-engagement iteration produced fewer than 3 periods")
-    per = it.periods[-1]
+def _repeat_period(per: ToolPath, step, n_periods, resolution_mm, feed_mm_min=255.0,
+                   link_feed_mm_min=None) -> ToolPath:
+    """One planned period (roll-in, cut, roll-out) repeated ``n_periods`` times ``step`` mm apart
+    along +x, joined by straight links (flagged link) through the cleared slot."""
     P0, K0 = per.xyz[:, :2], pattern_kinds(per)
-    step = float(it.table.shift_mm.iloc[-1])
-    if not step > 0:
-        raise ValueError(f"non-positive converged step {step}")
     P0 = P0 - np.array([P0[:, 0].min(), 0.0])
     pts, kinds, per_ix = [], [], []
     for k in range(int(n_periods)):
@@ -670,20 +826,123 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
                     link_feed_mm_min)
 
 
+def ce_admissible_step(per: ToolPath, theta_max_deg, width, tool_radius, resolution_mm=0.05, n_periods=5,
+                       s_guess=None, tol_mm=0.005):
+    """Largest step (mm) at which the repeated period ``per`` keeps the simulated steady-state
+    maximum engagement (every cutting move: roll-in, cut, roll-out) at most ``theta_max_deg``.
+
+    The same bisection as :func:`admissible_step` applies to the circle and the cycloid, so the three
+    patterns are compared at equal simulated maximum engagement. ``s_guess`` (mm, e.g. the
+    iteration's shift) seeds the bracket.
+    """
+    r = _pos("tool_radius", tool_radius)
+    s0 = _pos("s_guess", s_guess) if s_guess is not None else 0.5 * r
+
+    def emax(s):
+        p = _repeat_period(per, s, n_periods, resolution_mm)
+        return evaluate_pattern(p, width, r, resolution_mm)[1]["max_engagement_deg"]
+
+    lo, hi = 0.5 * s0, 1.5 * s0
+    while emax(lo) > theta_max_deg:
+        hi, lo = lo, 0.5 * lo
+        if lo < tol_mm:
+            raise ValueError(f"theta_max_deg={theta_max_deg} is below the engagement of the smallest step")
+    while emax(hi) <= theta_max_deg:
+        lo, hi = hi, 1.5 * hi
+        if hi > 4 * r:
+            return lo
+    while hi - lo > tol_mm:
+        mid = 0.5 * (lo + hi)
+        if emax(mid) <= theta_max_deg:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
+                n_iter=8, roll_radius=1.0, iteration: CEIteration | None = None, feed_mm_min=255.0,
+                link_feed_mm_min=None, step="admissible", theta_max_deg=None) -> ToolPath:
+    """Repetitive constant-engagement pattern: the last (converged) period of
+    :func:`ce_trochoid_iteration` (roll-in, cut, roll-out) repeated ``n_periods`` times, joined by
+    straight linking moves (flagged link) through the cleared slot.
+
+    ``step``: ``"admissible"`` (default) — the largest step whose simulated maximum engagement stays
+    at ``theta_max_deg`` (default ``theta_deg``; :func:`ce_admissible_step`); ``"shift"`` — the
+    iteration's last shift (a dixel-noisy estimate: the roll-in end sits where the engagement climbs
+    steeply, so a step a few hundredths of a mm too long shows as an overshoot); or a number (mm).
+    ``info["shift"]`` keeps the iteration's last shift.
+    """
+    it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, n_iter, resolution_mm, dt,
+                                            roll_radius=roll_radius)
+    # the last complete period (roll-in, cut at theta, roll-out); a final period that found no
+    # front in reach (Thesis III failed, rolled straight out) is not a pattern period
+    good = [k for k, q in enumerate(it.periods)
+            if q.info.get("reached_theta", True) and bool((pattern_kinds(q) == "cut").any())]
+    if len(it.cuts) < 3 or not good or good[-1] < 2:
+        raise ValueError("the constant-engagement iteration produced fewer than 3 complete periods")
+    k_last = good[-1]
+    per = it.periods[k_last]
+    shifts = it.table.shift_mm.to_numpy()[:k_last + 1]
+    shift = float(shifts[-1])
+    if isinstance(step, str):
+        if step == "shift":
+            if not shift > 0:
+                raise ValueError(f"non-positive converged step {shift}")
+            s = shift
+        elif step == "admissible":
+            th = theta_deg if theta_max_deg is None else theta_max_deg
+            last = shifts[-3:]
+            last = last[np.isfinite(last) & (last > 0)]     # the bracket's seed only
+            guess = float(np.median(last)) if last.size else circle_front_step(th, width, tool_radius)
+            s = ce_admissible_step(per, th, width, tool_radius, resolution_mm, s_guess=guess)
+        else:
+            raise ValueError(f"step must be 'admissible', 'shift' or a number (mm), got {step!r}")
+    else:
+        s = _pos("step", step)
+    p = _repeat_period(per, s, n_periods, resolution_mm, feed_mm_min, link_feed_mm_min)
+    p.info["shift"] = shift
+    return p
+
+
 def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=3.0,
-                     feed_mm_min=255.0, link_feed_mm_min=None, n_periods=6):
+                     feed_mm_min=255.0, link_feed_mm_min=None, n_periods=6, plan_offsets_deg=(0.0, 3.0),
+                     fillet_fractions=(0.5, 1.0)):
     """The three patterns at the same engagement limit: admissible step, lengths, MRR (one row each).
 
-    Circular and cycloid steps come from :func:`admissible_step`; the constant-engagement pattern
-    is planned at the angle theta' <= theta_max whose simulated maximum engagement respects the
-    limit (:func:`ce_trochoid_at_limit`, column ``theta_plan_deg``), so all three patterns are
-    compared at the same simulated maximum engagement. Returns a pandas DataFrame.
+    All three steps are bisected to the same limit: circular and cycloid by :func:`admissible_step`,
+    the constant-engagement pattern by :func:`ce_admissible_step` — every pattern's simulated
+    steady-state maximum engagement over all cutting moves (roll-in included) is <= theta_max
+    (column ``theta_limit_deg``). The CE period is planned by :func:`ce_trochoid_iteration` with
+    entry/exit fillets; as the cycloid's one parameter (its step) is optimised by the bisection,
+    the CE pattern's two shape parameters are chosen from a small grid by the same simulation: the
+    planning angle theta_plan in ``plan_offsets_deg`` + theta_max and the fillet radius in
+    ``fillet_fractions`` x (W/2 - r); the candidate with the shortest path per mm of slot (at its
+    admissible step) wins (columns ``theta_plan_deg``, ``fillet_radius_mm``, ``shift_mm``).
+    Returns a pandas DataFrame.
     """
-    p = ce_trochoid(width, tool_radius, theta_max_deg, n_periods, resolution_mm)
-    _, m_ce = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
-    # equal *simulated* maximum engagement: the CE pattern planned at theta_max overshoots it by a
-    # few degrees at its roll-in corner, so the conventional patterns get that same limit
-    lim = max(float(theta_max_deg), m_ce["max_engagement_deg"])
+    R = slot_limit(width, tool_radius)
+    best, errs = None, []
+    for d_plan in plan_offsets_deg:
+        for frac in fillet_fractions:
+            th_plan = float(theta_max_deg) + float(d_plan)
+            try:
+                it = ce_trochoid_iteration(width, tool_radius, th_plan, 8, resolution_mm, a_p=a_p,
+                                           feed_mm_min=feed_mm_min, fillet_radius_mm=frac * R)
+                p = ce_trochoid(width, tool_radius, th_plan, n_periods, resolution_mm, iteration=it,
+                                theta_max_deg=theta_max_deg, feed_mm_min=feed_mm_min,
+                                link_feed_mm_min=link_feed_mm_min)
+            except ValueError as e:
+                errs.append(f"theta_plan={th_plan}, fillet={frac * R:.3g} mm: {e}")
+                continue
+            _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
+            m.update(theta_plan_deg=th_plan, fillet_radius_mm=frac * R, shift_mm=p.info["shift"])
+            if best is None or m["length_per_mm_slot"] < best["length_per_mm_slot"]:
+                best = m
+    if best is None:
+        raise ValueError(f"no constant-engagement period keeps theta_max_deg={theta_max_deg}: {'; '.join(errs)}")
+    m_ce = best
+    lim = float(theta_max_deg)
     rows = []
     for kind in ("circular", "cycloid"):
         s = admissible_step(kind, lim, width, tool_radius, resolution_mm)

@@ -147,13 +147,15 @@ def trochoid_comparison(width_mm=12.0, theta_max_deg=60.0, resolution_mm=None):
 def trochoid_sweep(resolution_mm=None):
     """MRR gain of the constant-engagement pattern over W/r and theta_max (slow in full mode).
 
-    Fast mode: W/r = 4, theta_max in {45, 60} deg; full: W/r in {3, 4, 5, 6} x theta_max in
-    {30, 45, 60, 75, 90} deg. Gains are reported with links at 1500 mm/min and with every move at
-    the cutting feed (``mrr_gain_same_feed_vs_*``)."""
+    Every point compares the three patterns at the same simulated maximum engagement theta_max
+    (:func:`cnclab.toolpath.trochoidal.compare_patterns`: all steps bisected to it).
+    Fast mode: W/r = 4 at 0.1 mm dixels; full: W/r in {3, 4, 5, 6} at 0.05 mm; theta_max in
+    {30, 45, 60, 75, 90} deg in both. Gains are reported with links at 1500 mm/min and with every
+    move at the cutting feed (``mrr_gain_same_feed_vs_*``)."""
     t = table41()
     res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     wr = pick((3.0, 4.0, 5.0, 6.0), (4.0,))
-    th = pick((30.0, 45.0, 60.0, 75.0, 90.0), (45.0, 60.0))
+    th = (30.0, 45.0, 60.0, 75.0, 90.0)
     cells = sweep(trochoid_cell, [(w, a, 0.5 * t["tool_diameter_mm"], res, t["a_p_mm"], t["v_f_printed_mm_min"],
                                    t["link_feed_mm_min"]) for w in wr for a in th])
     return pd.concat(cells, ignore_index=True)
