@@ -12,7 +12,9 @@ live when it is installed, for ratios measured in one run).
 
 Columns of a table row (:data:`COLUMNS`; units in the names): engagement p95 / max over cutting moves
 (deg), shares of the cutting length above theta + 5 / + 15 deg (%), entry engagement max (deg,
-helices/ramps/plunges, reported apart), retracts, plunges and rapids into material (counts),
+helices/ramps/plunges, reported apart), retracts (the evaluator's: feed moves of kind ``retract``),
+lifts (:func:`lifts`: every rise from below the stock top to above it, G0 or G1 -- FreeCAD lifts by
+G0, which the evaluator's count does not see), plunges and rapids into material (counts),
 uncut area beyond the unreachable corners (mm^2), program time (min: the written program's
 motion model, rapids at the job's rapid rate), plan time (s, wall clock: noisy on a shared CPU) and
 the wall gouge (mm, :func:`wall_gouge_mm`: how far the tool disc reaches into a wall or island
@@ -50,7 +52,7 @@ from ...toolpath.job import Job, load_job
 from ...toolpath.path import KINDS, ToolPath
 
 __all__ = ["POCKETS", "FIXTURES", "COLUMNS", "PLANNER_ROWS", "FREECAD", "job", "resolution_mm",
-           "freecad_path", "freecad_plan_time_s", "plan_timed", "feed_controlled", "wall_gouge_mm", "row",
+           "freecad_path", "freecad_plan_time_s", "plan_timed", "feed_controlled", "wall_gouge_mm", "lifts", "row",
            "comparison", "ratios"]
 
 #: the pockets of the comparison: name -> job file (relative to the repository)
@@ -70,7 +72,7 @@ FREECAD = "FreeCAD Adaptive"
 #: planner rows: label -> strategy of cnclab.toolpath.planners.STRATEGIES
 PLANNER_ROWS = {"adaptive_clearing": "adaptive", "ce_clearing (old)": "constant-engagement"}
 FEED_CONTROL_SUFFIX = " + §4 feed control"
-COLUMNS = ["p95_deg", "max_deg", "share>θ+5_pct", "share>θ+15_pct", "entry_max_deg", "retracts",
+COLUMNS = ["p95_deg", "max_deg", "share>θ+5_pct", "share>θ+15_pct", "entry_max_deg", "retracts", "lifts",
            "plunges_into_material", "rapids_into_material", "uncut_beyond_mm2", "program_time_min",
            "plan_time_s", "wall_gouge_mm"]
 _CUT = KINDS.index("cut")
@@ -164,12 +166,31 @@ def wall_gouge_mm(ev: Evaluation, jb: Job) -> float:
     return float(max(0.0, jb.tool_radius - d.min()))
 
 
+def lifts(ev: Evaluation, top_z: float = 0.0) -> int:
+    """Number of times the tool rises from below ``top_z`` (mm) to above it along the evaluated samples
+    (any move kind: a G0 lift counts like a G1 retract).
+
+    >>> from shapely.geometry import box
+    >>> from cnclab.toolpath.path import Tool
+    >>> jb = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.0, feed_mm_min=300, spindle_rpm=5000)
+    >>> p = ToolPath.build([[5, 10, 5], [5, 10, -2], [9, 10, -2], [9, 10, 5], [20, 10, -2], [20, 10, 5]],
+    ...                    kind=["rapid", "plunge", "cut", "rapid", "plunge", "retract"], feed=300)
+    >>> lifts(evaluate(p, jb, 0.5))
+    2
+    """
+    z = ev.trace["z"]
+    below = z < top_z - 1e-9
+    return int(np.count_nonzero(below[:-1] & (z[1:] > top_z + 1e-9)) + np.count_nonzero(
+        below[:-1] & (np.abs(z[1:] - top_z) <= 1e-9) & np.r_[z[2:] > top_z + 1e-9, False]))
+
+
 def row(ev: Evaluation, plan_s: float, time_s: float | None = None, jb: Job | None = None) -> dict:
     """One table row (:data:`COLUMNS`) of an evaluation; ``time_s`` overrides the program time (s);
     with ``jb`` the wall gouge is measured (else NaN)."""
     return {"wall_gouge_mm": math.nan if jb is None else wall_gouge_mm(ev, jb),"p95_deg": ev.engagement_p95_deg, "max_deg": ev.engagement_max_deg,
             "share>θ+5_pct": ev.share_above_5_pct, "share>θ+15_pct": ev.share_above_15_pct,
             "entry_max_deg": ev.entry_engagement_max_deg, "retracts": ev.retracts,
+            "lifts": lifts(ev, jb.top_z if jb is not None else 0.0),
             "plunges_into_material": ev.plunges_into_material, "rapids_into_material": ev.rapids_into_material,
             "uncut_beyond_mm2": ev.uncut_beyond_unreachable_mm2,
             "program_time_min": (ev.time_total_s if time_s is None else time_s) / 60.0, "plan_time_s": plan_s}
