@@ -3,9 +3,8 @@
 
 Two halves, one file:
 
-* imported from the project venv (:func:`job_spec`, :func:`run_freecad`, :func:`read_program`):
-  the job JSON is turned into plain polygon rings (the star is built by
-  ``cnclab.toolpath.pocket.star_polygon``), the tool, the stepover (FreeCAD's ``StepOver`` is a % of the
+* imported from the project venv (:func:`job_spec`, :func:`run_freecad`): the job
+  (:class:`cnclab.toolpath.job.Job`) is turned into plain polygon rings, the tool, the stepover (FreeCAD's ``StepOver`` is a % of the
   tool diameter: ``100 a_e / D`` with ``a_e = r (1 - cos theta)``), the depth ``a_p`` and the feeds;
   then FreeCAD's own Python (``/usr/bin/python3``, Debian package ``freecad``) is run on this file;
 * run by FreeCAD's Python (``--worker SPEC.json OUT.ngc``): ``area.Adaptive2d`` is executed with the
@@ -18,16 +17,13 @@ Two halves, one file:
 
 Install FreeCAD: ``apt-get install -y --no-install-recommends freecad``.
 
-:func:`read_program` is a minimal reader of this post's output (G0/G1/G2/G3 with modal X/Y/Z/F,
-comments skipped) into a :class:`cnclab.toolpath.path.ToolPath`, kept here in benchmarks/ until the
-package's G-code reader (``cnclab.nc.gcode.read_toolpath``) replaces it.
+The programs are read back by the package's G-code reader (``cnclab.nc.gcode.read_toolpath``).
 """
 from __future__ import annotations
 
 import json
 import math
 import os
-import re
 import subprocess
 import sys
 import time
@@ -174,7 +170,7 @@ def freecad_available() -> bool:
 
 
 def job_spec(job) -> dict:
-    """Plain settings for the worker from a job (:func:`cnclab_bench_jobs.load_job` object)."""
+    """Plain settings for the worker from a :class:`cnclab.toolpath.job.Job`."""
     import shapely
     from shapely.geometry.polygon import orient
 
@@ -217,66 +213,6 @@ def run_freecad(job, out_ngc, timeout_s: float = 600.0) -> dict:
         "safe_z": SAFE_Z, "post": "linuxcnc_post --no-show-editor --no-header"}
     out["command"] = f"{FREECAD_PYTHON} benchmarks/freecad_adaptive.py --worker SPEC.json OUT.ngc"
     return out
-
-
-_WORD = re.compile(r"([A-Z])\s*([-+]?\d*\.?\d+)")
-
-
-def read_program(text: str, tool=None):
-    """Minimal reader of the linuxcnc post's output into a ToolPath (G0/G1/G2/G3, modal motion and
-    coordinates, absolute mm; comments and other words ignored). Starts at z = clearance above the
-    first point."""
-    import numpy as np
-
-    from cnclab.toolpath.path import ToolPath
-
-    pos = {"X": math.nan, "Y": math.nan, "Z": CLEARANCE_Z}
-    motion, feed = None, math.nan
-    pts, kinds, feeds, arcs, ctrs = [], [], [], [], []
-    for raw in text.splitlines():
-        line = re.sub(r"\([^)]*\)", "", raw.split(";")[0]).upper().strip()
-        if not line:
-            continue
-        words = _WORD.findall(line)
-        g = [float(v) for k, v in words if k == "G"]
-        for v in g:
-            if v in (0, 1, 2, 3):
-                motion = int(v)
-        w = {k: float(v) for k, v in words if k in "XYZIJF"}
-        if "F" in w:
-            feed = w["F"]
-        if not any(k in w for k in "XYZ") or motion is None:
-            continue
-        start = dict(pos)
-        for k in "XYZ":
-            if k in w:
-                pos[k] = w[k]
-        if math.isnan(pos["X"]) or math.isnan(pos["Y"]):
-            continue
-        if not pts and not math.isnan(start["X"]):
-            pts.append([start["X"], start["Y"], start["Z"]])
-        if math.isnan(start["X"]):  # first xy: the tool arrives from above
-            start = dict(pos, Z=start["Z"])
-        end = [pos["X"], pos["Y"], pos["Z"]]
-        if motion == 0:
-            kd = "rapid"
-        elif end[2] > start["Z"] + 1e-6:
-            kd = "retract"
-        elif end[2] < start["Z"] - 1e-6:
-            kd = "helix" if motion in (2, 3) else (
-                "plunge" if math.hypot(end[0] - start["X"], end[1] - start["Y"]) < 1e-6 else "ramp")
-        else:
-            kd = "cut"
-        pts.append(end); kinds.append(kd); feeds.append(feed if motion else math.nan)
-        arcs.append(motion if motion in (2, 3) else 0)
-        ctrs.append((start["X"] + w.get("I", 0.0), start["Y"] + w.get("J", 0.0)) if motion in (2, 3)
-                    else (math.nan, math.nan))
-    if not pts:
-        raise ValueError("the program has no motion with x, y")
-    if len(pts) == len(kinds) + 1:  # leading start point added
-        kinds.insert(0, "rapid"); feeds.insert(0, math.nan); arcs.insert(0, 0); ctrs.insert(0, (math.nan, math.nan))
-    return ToolPath.build(np.array(pts), kind=kinds, feed=np.array(feeds), arc=np.array(arcs),
-                          arc_center=np.array(ctrs, float), tool=tool)
 
 
 if __name__ == "__main__" and len(sys.argv) == 4 and sys.argv[1] == "--worker":

@@ -1,6 +1,6 @@
 """Property tests of the engagement-controlled clearing planner (cnclab.toolpath.adaptive_clearing)
-over random small pockets, scored on the dixel simulator at 0.05 mm (benchmarks/score_paths.py, the
-stand-in for cnclab.toolpath.evaluate until it lands).
+over random small pockets, scored on the dixel simulator at 0.05 mm by the package's one evaluator
+(cnclab.toolpath.evaluate.evaluate).
 
 Tolerances: the planner controls the engagement on its own pixel stock (0.05 mm here) and the
 scorer measures it on the dixel stock at 0.05 mm; one pixel of radial depth at r = 1.5 mm changes
@@ -10,8 +10,6 @@ unreachable corners must be below 1 % of the pocket area + 1 mm^2 (dixel rows of
 walls contribute ~ perimeter x h / 2).
 """
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,21 +18,17 @@ from hypothesis import strategies as st
 from shapely.geometry import Polygon, box
 from shapely.ops import unary_union
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-from score_paths import score  # noqa: E402
-
-from cnclab.toolpath.adaptive_clearing import PlanningError, adaptive_clearing  # noqa: E402
-from cnclab.toolpath.path import Tool  # noqa: E402
+from cnclab.toolpath.adaptive_clearing import PlanningError, adaptive_clearing
+from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.job import Job
+from cnclab.toolpath.path import Tool
 
 R = 1.5
 H = 0.05
 
 
-class _Job:
-    def __init__(self, poly, theta):
-        self.polygon, self.theta_deg, self.a_p, self.feed_mm_min = poly, theta, 1.0, 255.0
-        self.tool, self.tool_radius, self.top_z, self.start_hole = Tool(2 * R), R, 0.0, None
-        self.rapid_mm_min, self.resolution_mm = 10000.0, H
+def _job(poly, theta):
+    return Job(poly, Tool(2 * R), theta, 1.0, feed_mm_min=255.0, spindle_rpm=6366.0, rapid_mm_min=10000.0)
 
 
 def _plan(poly, theta):
@@ -83,7 +77,7 @@ def _scored(poly, theta):
             _plan(poly, theta)
         return None, None
     tp = _plan(poly, theta)
-    return tp, score(tp, _Job(poly, theta), H)
+    return tp, evaluate(tp, _job(poly, theta), H)
 
 
 @settings(**_SETTINGS)
@@ -94,9 +88,9 @@ def test_random_pockets_are_safe_and_covered(poly, theta):
     tp, s = _scored(poly, theta)
     if tp is None:
         return
-    assert s["plunges"] == 0
-    assert s["rapids_in_mat"] == 0
-    assert s["uncut_beyond_mm2"] <= 0.01 * poly.area + 1.0
+    assert s.plunges_into_material == 0
+    assert s.rapids_into_material == 0
+    assert s.uncut_beyond_unreachable_mm2 <= 0.01 * poly.area + 1.0
     K = tp.kinds()
     assert np.all((K != "rapid") | (tp.xyz[:, 2] >= 0.0))
 
@@ -109,7 +103,7 @@ def test_random_pockets_engagement_bounded(poly, theta):
     tp, s = _scored(poly, theta)
     if tp is None:
         return
-    assert s["max"] <= theta + 10 + 2 * math.degrees(H / (R * math.sin(math.radians(theta))))
+    assert s.engagement_max_deg <= theta + 10 + 2 * math.degrees(H / (R * math.sin(math.radians(theta))))
 
 
 def test_refuses_pocket_narrower_than_the_tool():

@@ -1,8 +1,8 @@
-"""Kim & Yang (2006) pocket: constant-MRR path vs a constant-engagement clearing (beyond the paper).
+"""Kim & Yang (2006) pocket: constant-MRR paths vs constant-engagement clearings (beyond the paper).
 
 The same 120 × 85 mm pocket (cnclab's design, ``data/kim_yang2006/pocket_120x85.json``) and Table 1
 conditions (tool Ø10 → r = 5 mm, radial depth b = 3 mm, a_p = 0.5 mm, 500 mm/min, 2000 rpm) are
-cleared three ways and every path is cut through the *same* dixel simulator
+cleared four ways and every path is cut through the *same* dixel simulator
 (:func:`cnclab.toolpath.evaluate.evaluate` on the pocket job ``data/kim_yang2006/pocket_120x85.json``):
 
 * ``original`` — the contour-parallel path (offsets at b = 3 mm, spiral entries), from its G-code;
@@ -10,10 +10,14 @@ cleared three ways and every path is cut through the *same* dixel simulator
 * ``constant engagement`` — :func:`cnclab.toolpath.ce_clearing.ce_clearing` at the engagement of a
   straight cut at b: theta = arccos(1 - b/r) = 66.42 deg (Jacsó Thesis III laps from a helical
   entry in each part of the pocket, limited by the final contour within each lap, then a final
-  contour pass).
+  contour pass) -- the collection's older clearing planner;
+* ``adaptive clearing`` -- the engagement-controlled clearing of issue 16,
+  ``cnclab.toolpath.planners.STRATEGIES["adaptive"]`` (:mod:`cnclab.toolpath.adaptive_clearing`: each step
+  steered to theta on the simulated stock, links at depth through the cleared region, a wall-following
+  finish); fast mode plans it on a coarser pixel stock (``resolution_mm()``) to keep the notebook short.
 
 Times: the programs' own motion model (every feed move at its written feed, rapids at an assumed
-10 m/min) — one rule for all three paths.
+10 m/min) — one rule for all four paths.
 
 The paper prints no number for such a comparison: nothing here is a ledger claim.
 """
@@ -21,18 +25,21 @@ from __future__ import annotations
 
 import functools
 import math
+import time
 
 import numpy as np
 import pandas as pd
 
 from ...nc import gcode
-from ...runtime import pick
+from ...runtime import fast_mode, pick
+from ...toolpath import adaptive_clearing
 from ...toolpath import ce_clearing as cc
+from ...toolpath import planners
 from ...toolpath.evaluate import Evaluation, evaluate
 from ...toolpath.path import ToolPath
 from . import constant_mrr_pocket as ky
 
-PATHS = ("original", "modified", "constant engagement")
+PATHS = ("original", "modified", "constant engagement", "adaptive clearing")
 
 
 def theta_deg() -> float:
@@ -49,6 +56,20 @@ def resolution_mm() -> float:
 def ce_path() -> ToolPath:
     """The constant-engagement clearing of the pocket job (default seeds: one per side of the neck)."""
     return cc.clearing_path(ky.job(), resolution_mm=resolution_mm())
+
+
+@functools.cache
+def adaptive_path() -> ToolPath:
+    """The engagement-controlled clearing (``planners.STRATEGIES["adaptive"]``) of the pocket job; full mode
+    plans with the planner's own defaults (as ``python -m cnclab plan`` does), fast mode on a pixel stock
+    of ``resolution_mm()`` (0.25 mm instead of r/60). ``info["plan_time_s"]``: wall-clock plan time."""
+    t0 = time.perf_counter()
+    if fast_mode():     # the strategy's own function with a coarser planning stock (planners.plan has no such knob)
+        path = adaptive_clearing.plan_job(ky.job(), resolution_mm=resolution_mm())
+    else:
+        path = planners.plan(ky.job(), "adaptive", resolution_mm())
+    path.info["plan_time_s"] = time.perf_counter() - t0
+    return path
 
 
 @functools.cache
@@ -79,11 +100,30 @@ def programme_path(which: str) -> ToolPath:
     return ToolPath.from_moves(moves, tool=ky.job().tool, info={"name": which})
 
 
+def path(which: str) -> ToolPath:
+    """The tool path of ``which`` (a name of :data:`PATHS`)."""
+    if which not in PATHS:
+        raise ValueError(f"which must be one of {PATHS}, got {which!r}")
+    return {"constant engagement": ce_path, "adaptive clearing": adaptive_path}.get(which, lambda: programme_path(which))()
+
+
+def key_figures() -> pd.DataFrame:
+    """The figures the notebook's discussion talks about, per path: share above theta+5 (%), max
+    engagement (deg), max MRR / nominal, retracts, plunges into material, links at depth (mm), total
+    time (min), uncut beyond the unreachable corners (mm^2)."""
+    cols = {"share_above_5_pct": "share > θ+5 [%]", "engagement_max_deg": "max eng. [deg]",
+            "mrr_max_over_nominal": "max MRR / nom", "retracts": "retracts",
+            "plunges_into_material": "plunges into mat.", "link_length_mm": "links at depth [mm]",
+            "uncut_beyond_unreachable_mm2": "uncut beyond [mm2]"}
+    out = {w: {v: getattr(evaluation(w), k) for k, v in cols.items()} | {"time [min]": evaluation(w).time_total_s / 60}
+           for w in PATHS}
+    return pd.DataFrame(out).T
+
+
 @functools.cache
 def evaluation(which: str) -> Evaluation:
     """The one evaluator (:func:`cnclab.toolpath.evaluate.evaluate`) on the pocket job."""
-    path = ce_path() if which == "constant engagement" else programme_path(which)
-    return evaluate(path, ky.job(), resolution_mm())
+    return evaluate(path(which), ky.job(), resolution_mm())
 
 
 def trace_table(which: str) -> pd.DataFrame:
@@ -116,7 +156,7 @@ ROWS = {"mrr_max_over_nominal": "max MRR / nominal (1 mm windows, entries exclud
 
 @functools.cache
 def comparison_table() -> pd.DataFrame:
-    """The three paths side by side (rows: :data:`ROWS`)."""
+    """The four paths side by side (rows: :data:`ROWS`)."""
     return pd.DataFrame({w: {ROWS[k]: getattr(evaluation(w), k) for k in ROWS} for w in PATHS})
 
 

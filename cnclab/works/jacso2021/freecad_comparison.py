@@ -1,0 +1,250 @@
+"""Constant-engagement clearing against FreeCAD Path Adaptive on every pocket of issue 16 (beyond the booklet).
+
+Every path -- the planners of :data:`cnclab.toolpath.planners.STRATEGIES` and FreeCAD Adaptive's
+programs read back from their G-code (:func:`cnclab.nc.gcode.read_toolpath`) -- is scored by the one
+evaluator (:func:`cnclab.toolpath.evaluate.evaluate`) on the pocket's job file
+(:func:`cnclab.toolpath.job.load_job`): same polygon, tool, engagement theta and feeds.
+FreeCAD's programs are the committed ``tests/fixtures/freecad/<pocket>.ngc`` (written by
+``benchmarks/freecad_adaptive.py``: libarea ``Adaptive2d`` + FreeCAD's G-code generation and
+``linuxcnc`` post, StepOver = a_e / D with a_e = r (1 - cos theta)); their plan time is the one
+recorded in ``<pocket>.json`` when they were made (``benchmarks/bench_vs_freecad.py`` re-runs FreeCAD
+live when it is installed, for ratios measured in one run).
+
+Columns of a table row (:data:`COLUMNS`; units in the names): engagement p95 / max over cutting moves
+(deg), shares of the cutting length above theta + 5 / + 15 deg (%), entry engagement max (deg,
+helices/ramps/plunges, reported apart), retracts (the evaluator's: feed moves of kind ``retract``),
+lifts (:func:`lifts`: every rise from below the stock top to above it, G0 or G1 -- FreeCAD lifts by
+G0, which the evaluator's count does not see), plunges and rapids into material (counts),
+uncut area beyond the unreachable corners (mm^2), program time (min: the written program's
+motion model, rapids at the job's rapid rate), plan time (s, wall clock: noisy on a shared CPU) and
+the wall gouge (mm, :func:`wall_gouge_mm`: how far the tool disc reaches into a wall or island
+below the stock top -- the evaluator's stock is the pocket only, so it cannot see such a cut).
+
+Jacsó §4 feed control for any tool path (:func:`feed_controlled`): the evaluator's trace gives the
+removal width per sample; :func:`cnclab.cutting.feed_control.controlled_feed` sets the feed per
+0.5 mm block so that MRR = nominal (capped at the job's ``v_fmax``, nominal where the block's mean
+engagement is within 5 deg of theta); the result is the same geometry with those feeds, a
+ToolPath whose own program time is reported.
+
+Units: mm, deg, mm/min, s (min in the table's time column). Nothing here is a ledger claim.
+
+>>> sorted(POCKETS)[:3]
+['L', 'kim_yang_120x85', 'rectangle']
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import shapely
+
+from ...cutting.feed_control import controlled_feed
+from ...nc.gcode import read_toolpath
+from ...paths import REPO_ROOT
+from ...runtime import pick
+from ...toolpath import planners
+from ...toolpath.evaluate import Evaluation, evaluate
+from ...toolpath.job import Job, load_job
+from ...toolpath.path import KINDS, ToolPath
+
+__all__ = ["POCKETS", "FIXTURES", "COLUMNS", "PLANNER_ROWS", "FREECAD", "job", "resolution_mm",
+           "freecad_path", "freecad_plan_time_s", "plan_timed", "feed_controlled", "wall_gouge_mm", "lifts", "row",
+           "comparison", "ratios"]
+
+#: the pockets of the comparison: name -> job file (relative to the repository)
+POCKETS = {
+    "star": "data/jacso2021/star_pocket.json",
+    "rectangle": "data/jacso2021/rectangle_pocket.json",
+    "L": "data/jacso2021/l_pocket.json",
+    "kim_yang_120x85": "data/kim_yang2006/pocket_120x85.json",
+    "two_islands_neck": "data/pockets/two_islands_neck.json",
+    "spline": "data/pockets/spline_pocket.json",
+    "slot": "data/pockets/long_slot.json",
+    "two_regions": "data/pockets/two_regions.json",
+}
+#: the committed FreeCAD Adaptive programs (<pocket>.ngc) and their provenance (<pocket>.json)
+FIXTURES = REPO_ROOT / "tests" / "fixtures" / "freecad"
+FREECAD = "FreeCAD Adaptive"
+#: planner rows: label -> strategy of cnclab.toolpath.planners.STRATEGIES
+PLANNER_ROWS = {"adaptive_clearing": "adaptive", "ce_clearing (old)": "constant-engagement"}
+FEED_CONTROL_SUFFIX = " + §4 feed control"
+COLUMNS = ["p95_deg", "max_deg", "share>θ+5_pct", "share>θ+15_pct", "entry_max_deg", "retracts", "lifts",
+           "plunges_into_material", "rapids_into_material", "uncut_beyond_mm2", "program_time_min",
+           "plan_time_s", "wall_gouge_mm"]
+_CUT = KINDS.index("cut")
+
+
+def job(name: str) -> Job:
+    """The job of pocket ``name`` (a key of :data:`POCKETS`), read by the package's one loader."""
+    if name not in POCKETS:
+        raise ValueError(f"pocket must be one of {sorted(POCKETS)}, got {name!r}")
+    return load_job(REPO_ROOT / POCKETS[name])
+
+
+def resolution_mm(name: str, fast: bool | None = None) -> float:
+    """Evaluation dixel (mm): 0.05 (0.1 for the 120 x 85 pocket, 4x the area of the others); fast mode
+    (or ``fast=True``) doubles it. The planners that take a resolution plan at the same value."""
+    full = 0.1 if name == "kim_yang_120x85" else 0.05
+    if fast is None:
+        return pick(full, 2 * full)
+    return 2 * full if fast else full
+
+
+def freecad_path(name: str, tool=None, fixtures: Path = FIXTURES) -> ToolPath:
+    """FreeCAD Adaptive's committed program of pocket ``name`` as a ToolPath (the package's G-code
+    reader); ValueError if the program has no motion (FreeCAD planned nothing for the pocket)."""
+    p = read_toolpath(Path(fixtures) / f"{name}.ngc", tool=tool)
+    if len(p) < 2 or not np.any(p.xyz[:, 2] < 0.0):
+        raise ValueError(f"{Path(fixtures) / (name + '.ngc')}: FreeCAD wrote no cutting motion for this pocket")
+    return p
+
+
+def freecad_plan_time_s(name: str, fixtures: Path = FIXTURES) -> float:
+    """Plan time (s) FreeCAD needed when the fixture was made (from ``<pocket>.json``)."""
+    prov = json.loads((Path(fixtures) / f"{name}.json").read_text(encoding="utf-8"))
+    return float(prov["plan_time_s"])
+
+
+def plan_timed(jb: Job, strategy: str, res_mm: float) -> tuple:
+    """``(ToolPath, wall seconds)`` of :func:`cnclab.toolpath.planners.plan` (``res_mm``: the
+    planner's dixel where it takes one)."""
+    t0 = time.perf_counter()
+    tp = planners.plan(jb, strategy, res_mm)
+    return tp, time.perf_counter() - t0
+
+
+def feed_controlled(path: ToolPath, jb: Job, ev: Evaluation, block_mm: float = 0.5) -> ToolPath:
+    """``path`` resampled as ``ev`` was (``ev.resolution_mm``) with Jacsó §4 engagement-based feeds
+    on its cut moves (:func:`cnclab.cutting.feed_control.controlled_feed`: MRR held at a_p a_e v_nom
+    per ``block_mm`` block, at most ``jb.v_fmax``; air cuts at ``v_fmax``); other moves keep their
+    feed. ``ev`` must be ``evaluate(path, jb, h)``.
+
+    >>> from shapely.geometry import box
+    >>> from cnclab.toolpath.path import Tool
+    >>> jb = Job(box(0, 0, 40, 20), Tool(6.0), 180.0, 2.0, feed_mm_min=300, spindle_rpm=5000, v_fmax=1000)
+    >>> p = ToolPath.build([[-20, 10, -2], [45, 10, -2]], kind=["rapid", "cut"], feed=300)
+    >>> q = feed_controlled(p, jb, evaluate(p, jb, 0.1))
+    >>> float(np.nanmax(q.feed)), float(np.nanmin(q.feed))     # air at v_fmax, the slot (theta) at nominal
+    (1000.0, 300.0)
+    """
+    rp = path.resample(ev.resolution_mm)
+    t = ev.trace
+    if len(t["x"]) != len(rp) or not np.allclose(t["x"], rp.xyz[:, 0]):
+        raise ValueError("ev is not the evaluation of this path at ev.resolution_mm")
+    cut = (rp.kind == _CUT) & (t["ds_mm"] > 0)
+    v = controlled_feed(t["removed_mm2"], t["ds_mm"], t["engagement_deg"], cut, jb.a_e, jb.feed_mm_min,
+                        jb.v_fmax, jb.theta_deg, block_mm=block_mm)
+    feed = np.where(cut, v, rp.feed)
+    return ToolPath(rp.xyz, rp.kind, rp.tag, feed, rp.spindle, None, None, rp.tool,
+                    dict(rp.info, feed_control="Jacso 2021 §4, cnclab.cutting.feed_control.controlled_feed"))
+
+
+def wall_gouge_mm(ev: Evaluation, jb: Job) -> float:
+    """Deepest reach (mm) of the tool disc into the walls or islands (outside ``jb.polygon``) over the
+    evaluated samples below the stock top: max(0, r - d), d the signed distance (mm) of the tool centre
+    to the pocket boundary (negative outside). 0 for a path that keeps the centre in ``jb.allowed()``
+    (up to its polygon approximation, quad_segs 64: < 1e-3 mm for r <= 10 mm).
+
+    >>> from shapely.geometry import box
+    >>> from cnclab.toolpath.path import Tool
+    >>> jb = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.0, feed_mm_min=300, spindle_rpm=5000)
+    >>> p = ToolPath.build([[5, 10, 5], [5, 10, -2], [38, 10, -2]], kind=["rapid", "plunge", "cut"], feed=300)
+    >>> round(wall_gouge_mm(evaluate(p, jb, 0.1), jb), 6)          # centre 2 mm from the x = 40 wall, r = 3
+    1.0
+    """
+    t = ev.trace
+    low = t["z"] < jb.top_z - 1e-9
+    if not low.any():
+        return 0.0
+    x, y = t["x"][low], t["y"][low]
+    d = shapely.distance(jb.polygon.boundary, shapely.points(x, y))
+    d = np.where(shapely.contains_xy(jb.polygon, x, y), d, -d)
+    return float(max(0.0, jb.tool_radius - d.min()))
+
+
+def lifts(ev: Evaluation, top_z: float = 0.0) -> int:
+    """Number of times the tool rises from below ``top_z`` (mm) to above it along the evaluated samples
+    (any move kind: a G0 lift counts like a G1 retract).
+
+    >>> from shapely.geometry import box
+    >>> from cnclab.toolpath.path import Tool
+    >>> jb = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.0, feed_mm_min=300, spindle_rpm=5000)
+    >>> p = ToolPath.build([[5, 10, 5], [5, 10, -2], [9, 10, -2], [9, 10, 5], [20, 10, -2], [20, 10, 5]],
+    ...                    kind=["rapid", "plunge", "cut", "rapid", "plunge", "retract"], feed=300)
+    >>> lifts(evaluate(p, jb, 0.5))
+    2
+    """
+    z = ev.trace["z"]
+    below = z < top_z - 1e-9
+    return int(np.count_nonzero(below[:-1] & (z[1:] > top_z + 1e-9)) + np.count_nonzero(
+        below[:-1] & (np.abs(z[1:] - top_z) <= 1e-9) & np.r_[z[2:] > top_z + 1e-9, False]))
+
+
+def row(ev: Evaluation, plan_s: float, time_s: float | None = None, jb: Job | None = None) -> dict:
+    """One table row (:data:`COLUMNS`) of an evaluation; ``time_s`` overrides the program time (s);
+    with ``jb`` the wall gouge is measured (else NaN)."""
+    return {"wall_gouge_mm": math.nan if jb is None else wall_gouge_mm(ev, jb),"p95_deg": ev.engagement_p95_deg, "max_deg": ev.engagement_max_deg,
+            "share>θ+5_pct": ev.share_above_5_pct, "share>θ+15_pct": ev.share_above_15_pct,
+            "entry_max_deg": ev.entry_engagement_max_deg, "retracts": ev.retracts,
+            "lifts": lifts(ev, jb.top_z if jb is not None else 0.0),
+            "plunges_into_material": ev.plunges_into_material, "rapids_into_material": ev.rapids_into_material,
+            "uncut_beyond_mm2": ev.uncut_beyond_unreachable_mm2,
+            "program_time_min": (ev.time_total_s if time_s is None else time_s) / 60.0, "plan_time_s": plan_s}
+
+
+def _nan_row(note: str) -> dict:
+    return {c: math.nan for c in COLUMNS} | {"note": note}
+
+
+def comparison(name: str, planner_rows: dict | None = None, fast: bool | None = None, freecad=None,
+               feed_control: bool = True, keep: dict | None = None) -> pd.DataFrame:
+    """The table of pocket ``name``: one row per planner (``planner_rows``: label -> strategy,
+    default :data:`PLANNER_ROWS`; a planner that refuses the pocket gets a NaN row with its reason in
+    ``note``), the first one again with §4 feed control, and FreeCAD Adaptive. ``freecad``:
+    ``(ToolPath or None, plan seconds, note)`` (default: the committed fixture). ``keep``: a dict
+    that receives the paths and evaluations (label -> (path, evaluation)) for plots."""
+    jb = job(name)
+    h = resolution_mm(name, fast)
+    rows = {}
+    for k, (label, strategy) in enumerate((planner_rows or PLANNER_ROWS).items()):
+        try:
+            tp, t_plan = plan_timed(jb, strategy, h)
+        except ValueError as exc:
+            rows[label] = _nan_row(f"refused: {exc}")
+            continue
+        ev = evaluate(tp, jb, h)
+        rows[label] = row(ev, t_plan, jb=jb) | {"note": ""}
+        if keep is not None:
+            keep[label] = (tp, ev)
+        if feed_control and k == 0:
+            fc = feed_controlled(tp, jb, ev)
+            rows[label + FEED_CONTROL_SUFFIX] = row(ev, t_plan, fc.time_s(jb.rapid_mm_min)["total_s"], jb) | {
+                "note": "same path, feeds per 0.5 mm block (MRR held, <= v_fmax)"}
+    if freecad is None:
+        try:
+            freecad = (freecad_path(name, jb.tool), freecad_plan_time_s(name), "committed program, plan time from its JSON")
+        except ValueError as exc:
+            freecad = (None, freecad_plan_time_s(name), str(exc))
+    fp, t_fc, note = freecad
+    if fp is None:
+        rows[FREECAD] = _nan_row(note) | {"plan_time_s": t_fc}
+    else:
+        ev = evaluate(fp, jb, h)
+        rows[FREECAD] = row(ev, t_fc, jb=jb) | {"note": note}
+        if keep is not None:
+            keep[FREECAD] = (fp, ev)
+    T = pd.DataFrame(rows).T
+    T[COLUMNS] = T[COLUMNS].astype(float)
+    T.attrs.update(pocket=name, job=POCKETS[name], theta_deg=jb.theta_deg, resolution_mm=h)
+    return T
+
+
+def ratios(T: pd.DataFrame) -> pd.DataFrame:
+    """Every row of a :func:`comparison` table divided by the FreeCAD row (NaN where FreeCAD has no
+    program or a zero value)."""
+    fc = T.loc[FREECAD, COLUMNS].astype(float).replace(0.0, np.nan)
+    return T.loc[[i for i in T.index if i != FREECAD], COLUMNS].astype(float).div(fc, axis=1)
