@@ -511,7 +511,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             else:
                 p0 = (c[0] + rho, c[1])
                 add((p0[0], p0[1], clearance_z), "rapid")
-                add((p0[0], p0[1], z_prev + 0.5), "rapid")
+                # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
+                # the previous level cleared (tagged: the program writer allows a rapid there only so)
+                add((p0[0], p0[1], z_prev + 0.5), "rapid", np.nan, "cleared: above the level")
                 add((p0[0], p0[1], z_prev), "plunge", feed_mm_min, "air")
                 drop = 2 * math.pi * rho * math.tan(math.radians(helix_angle_deg))
                 zz = z_prev
