@@ -1,7 +1,8 @@
 """``python -m cnclab plan JOB.json -o PROGRAM.ngc [--strategy NAME]``
 
 Plan a pocket job with one of the collection's 2.5D strategies
-(:func:`cnclab.toolpath.planners.plan`, default constant engagement) and write it as a machine-safe
+(:func:`cnclab.toolpath.planners.plan`; default the engagement-controlled clearing ``adaptive``,
+:data:`cnclab.toolpath.planners.DEFAULT_STRATEGY`) and write it as a machine-safe
 program (:func:`cnclab.nc.program.write_program`: start block, ``T.. M6``, ``S.. M3`` before cutting,
 rapids only at the clearance plane or in cleared area, ``M5 M30``). The program is checked
 (:func:`cnclab.nc.program.check_program`) before it is written; the job file is never overwritten;
@@ -16,13 +17,8 @@ from pathlib import Path
 from ..fileio import atomic_write
 from .program import check_program, write_program
 
-try:  # toolpath-core's modules (issue 12); guarded until that branch is merged
-    from ..toolpath.job import load_job
-    from ..toolpath.planners import plan
-    _MISSING = None
-except ImportError as exc:  # pragma: no cover - depends on the merge state
-    load_job = plan = None
-    _MISSING = str(exc)
+from ..toolpath.job import load_job
+from ..toolpath.planners import DEFAULT_STRATEGY, STRATEGIES, plan
 
 __all__ = ["main", "plan_program"]
 
@@ -31,9 +27,6 @@ def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False
     """Plan ``job_file`` with ``strategy`` (None: the planner's default) and write the program to
     ``out``; returns the output path. Raises ``ValueError`` when the written program fails the
     static safety check (nothing is written then)."""
-    if load_job is None or plan is None:
-        raise RuntimeError("cnclab plan needs cnclab.toolpath.job and cnclab.toolpath.planners "
-                           f"(issue 12, toolpath-core), not available: {_MISSING}")
     job_file, out = Path(job_file), Path(out)
     job = load_job(job_file)
     path = plan(job) if strategy is None else plan(job, strategy)
@@ -54,7 +47,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m cnclab plan", description=__doc__.split("\n\n")[1])
     ap.add_argument("job", help="pocket job JSON (data/jacso2021/*.json format)")
     ap.add_argument("-o", "--output", required=True, help="program to write (.ngc)")
-    ap.add_argument("--strategy", default=None, help="planner name (default: constant engagement)")
+    ap.add_argument("--strategy", default=None, help=f"planner name, one of {', '.join(sorted(STRATEGIES))} (default: {DEFAULT_STRATEGY})")
     args = ap.parse_args(argv)
     try:
         plan_program(args.job, args.output, args.strategy)

@@ -6,6 +6,9 @@ for a pocket deeper than a_p (:meth:`Job.levels`) and joins the levels (each end
 the clearance plane, the next starts with a rapid there). Units: mm, mm/min, deg.
 
 =======================  ===================================================================
+adaptive (default)       :func:`cnclab.toolpath.adaptive_clearing.plan_job` (engagement-controlled
+                         clearing of the simulated stock, links at depth through cleared area;
+                         issue 16: the planner ``python -m cnclab plan`` runs unless told otherwise)
 constant-engagement      :func:`cnclab.toolpath.ce_clearing.clearing_path` (Jacsó Thesis III laps)
 hybrid                   :func:`cnclab.toolpath.pocket.hybrid_path` (Jacsó §4: centre laps + CE trochoid arms)
 contour-parallel         :func:`cnclab.toolpath.pocket.contour_parallel_path` (offsets at a_e)
@@ -13,9 +16,6 @@ zig-zag                  :func:`cnclab.toolpath.pocket.zigzag_path` (raster at a
 kim-yang-original        :func:`cnclab.toolpath.constant_mrr.kim_yang_passes` (offsets at a_e, spiral entries;
                          each pass entered by a helix instead of the paper's plunge)
 kim-yang-modified        the same with Kim & Yang's §3.2 constant-MRR modification
-adaptive                 :func:`cnclab.toolpath.adaptive_clearing.plan_job` (engagement-controlled
-                         clearing of the stock, links at depth; issue 16, not yet the default: its
-                         plan time is 7-38x FreeCAD Adaptive's)
 =======================  ===================================================================
 
 >>> from shapely.geometry import box
@@ -35,7 +35,7 @@ from . import adaptive_clearing, ce_clearing, constant_mrr, pocket
 from .job import Job
 from .path import ToolPath
 
-__all__ = ["STRATEGIES", "plan", "register"]
+__all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "plan", "register"]
 
 #: name -> (planner(job, resolution_mm, **options) -> ToolPath for one level, one-line description)
 STRATEGIES: dict = {}
@@ -85,14 +85,18 @@ def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
     return adaptive_clearing.plan_job(job, **options)
 
 
-def plan(job: Job, strategy: str = "constant-engagement", resolution_mm: float = 0.1, **options) -> ToolPath:
+#: the strategy :func:`plan` (and ``python -m cnclab plan``) uses when none is named
+DEFAULT_STRATEGY = "adaptive"
+
+
+def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1, **options) -> ToolPath:
     """Plan ``job`` with ``strategy`` (a key of :data:`STRATEGIES`) level by level.
 
     ``resolution_mm``: the planners' dixel row height / sampling step (mm); ``options`` go to the
     planner. Returns one :class:`ToolPath`; ``info["levels"]`` holds the cutting z of each level,
     ``info["strategy"]`` the name."""
     if strategy not in STRATEGIES:
-        raise ValueError(f"strategy must be one of {sorted(STRATEGIES)}, got {strategy!r}")
+        raise ValueError(f"unknown strategy {strategy!r}: must be one of {sorted(STRATEGIES)}")
     if not isinstance(job, Job):
         raise TypeError(f"job must be a cnclab.toolpath.job.Job, got {type(job).__name__}")
     f = STRATEGIES[strategy][0]
