@@ -68,7 +68,9 @@ class TriMesh:
         bad = ~np.isfinite(tri).all(axis=(1, 2))
         if bad.any():
             raise STLError(f"{source}: facet {int(np.argmax(bad))} has a non-finite coordinate")
-        areas = facet_areas(tri)
+        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        ln = np.linalg.norm(cross, axis=1)
+        areas = 0.5 * ln                       # = facet_areas(tri), facet_normals(tri) below
         scale = max(float(np.ptp(tri.reshape(-1, 3), axis=0).max()) if len(tri) else 1.0, 1e-300)
         zero = areas <= 1e-12 * scale * scale
         if zero.any():
@@ -77,8 +79,9 @@ class TriMesh:
                                f"({int(zero.sum())} degenerate facet(s); pass degenerate='drop' to skip them)")
             if degenerate != "drop":
                 raise ValueError(f"degenerate must be 'error' or 'drop', got {degenerate!r}")
-            tri = tri[~zero]
-        return cls(tri, facet_normals(tri), name=name, info={"dropped_degenerate": int(zero.sum())})
+            tri, cross, ln = tri[~zero], cross[~zero], ln[~zero]
+        normals = np.divide(cross, ln[:, None], out=np.zeros_like(cross), where=ln[:, None] > 0)
+        return cls(tri, normals, name=name, info={"dropped_degenerate": int(zero.sum())})
 
     @property
     def n_facets(self) -> int:
@@ -440,36 +443,31 @@ def _edge_parity(V):
     """
     F = V.shape[0]
     H = 3 * F
+    nv = V.max() + 1
     size = 16
-    while size < 2 * H:
+    while size * 5 < H * 7:            # load factor <= 0.71 even when no edge is shared
         size *= 2
     mask = np.uint64(size - 1)
-    slot_lo = np.full(size, -1, np.int64)
-    slot_hi = np.empty(size, np.int64)
-    cnt = np.zeros(size, np.int64)
-    f1 = np.empty(size, np.int64)
-    d1 = np.empty(size, np.bool_)
-    f2 = np.empty(size, np.int64)
-    d2 = np.empty(size, np.bool_)
+    # one row per undirected edge: key lo * nv + hi (-1 empty), first and second half-edge
+    # (2 * facet + direction), number of half-edges
+    tab = np.empty((size, 4), np.int64)
+    tab[:, 0] = -1
     for h in range(H):
         f = h // 3
         a = V[f, h % 3]
         b = V[f, (h % 3 + 1) % 3]
-        lo, hi = min(a, b), max(a, b)
-        s = _mix(np.uint64(lo), np.uint64(hi), np.uint64(0)) & mask
+        key = min(a, b) * nv + max(a, b)
+        s = _mix(np.uint64(key), np.uint64(0), np.uint64(0)) & mask
         while True:
-            if slot_lo[s] < 0:
-                slot_lo[s] = lo
-                slot_hi[s] = hi
-                cnt[s] = 1
-                f1[s] = f
-                d1[s] = a < b
+            if tab[s, 0] < 0:
+                tab[s, 0] = key
+                tab[s, 1] = 2 * f + (1 if a < b else 0)
+                tab[s, 3] = 1
                 break
-            if slot_lo[s] == lo and slot_hi[s] == hi:
-                if cnt[s] == 1:
-                    f2[s] = f
-                    d2[s] = a < b
-                cnt[s] += 1
+            if tab[s, 0] == key:
+                if tab[s, 3] == 1:
+                    tab[s, 2] = 2 * f + (1 if a < b else 0)
+                tab[s, 3] += 1
                 break
             s = (s + np.uint64(1)) & mask
     parent = np.arange(F)
@@ -479,19 +477,21 @@ def _edge_parity(V):
     n_nm = 0
     conflict = False
     for s in range(size):
-        c = cnt[s]
-        if c == 0:
+        if tab[s, 0] < 0:
             continue
+        c = tab[s, 3]
+        fa = tab[s, 1] // 2
         if c == 1:
             n_bnd += 1
-            open_mark[f1[s]] = True
+            open_mark[fa] = True
         elif c > 2:
             n_nm += 1
-            open_mark[f1[s]] = True
-        elif f1[s] != f2[s]:
-            same = np.uint8(1) if d1[s] == d2[s] else np.uint8(0)
-            ra, pa = _find(parent, par, f1[s])
-            rb, pb = _find(parent, par, f2[s])
+            open_mark[fa] = True
+        elif fa != tab[s, 2] // 2:
+            fb = tab[s, 2] // 2
+            same = np.uint8(1) if tab[s, 1] % 2 == tab[s, 2] % 2 else np.uint8(0)
+            ra, pa = _find(parent, par, fa)
+            rb, pb = _find(parent, par, fb)
             if ra == rb:
                 if (pa ^ pb) != same:
                     conflict = True
