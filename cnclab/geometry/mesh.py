@@ -323,6 +323,8 @@ def _orient(tri, info, vid=None):
     winding conflicts takes the graph path (:func:`_orient_graph`) unchanged.
     """
     F = len(tri)
+    if F >= 2 ** 30:               # the compiled edge table packs 2 * facet + direction in int32
+        return _orient_graph(tri, info)
     if vid is None:
         vid = _weld_ids(tri)
     res = _edge_parity(np.ascontiguousarray(vid, np.int64).reshape(F, 3))
@@ -445,13 +447,13 @@ def _edge_parity(V):
     H = 3 * F
     nv = V.max() + 1
     size = 16
-    while size * 5 < H * 7:            # load factor <= 0.71 even when no edge is shared
+    while size * 4 < H * 5:            # load factor <= 0.8 even when no edge is shared
         size *= 2
     mask = np.uint64(size - 1)
-    # one row per undirected edge: key lo * nv + hi (-1 empty), first and second half-edge
-    # (2 * facet + direction), number of half-edges
-    tab = np.empty((size, 4), np.int64)
-    tab[:, 0] = -1
+    # one slot per undirected edge: key lo * nv + hi (-1 empty); first and second half-edge
+    # (2 * facet + direction) and the number of half-edges
+    keys = np.full(size, -1, np.int64)
+    tab = np.empty((size, 3), np.int32)
     for h in range(H):
         f = h // 3
         a = V[f, h % 3]
@@ -459,45 +461,51 @@ def _edge_parity(V):
         key = min(a, b) * nv + max(a, b)
         s = _mix(np.uint64(key), np.uint64(0), np.uint64(0)) & mask
         while True:
-            if tab[s, 0] < 0:
-                tab[s, 0] = key
-                tab[s, 1] = 2 * f + (1 if a < b else 0)
-                tab[s, 3] = 1
+            if keys[s] < 0:
+                keys[s] = key
+                tab[s, 0] = 2 * f + (1 if a < b else 0)
+                tab[s, 2] = 1
                 break
-            if tab[s, 0] == key:
-                if tab[s, 3] == 1:
-                    tab[s, 2] = 2 * f + (1 if a < b else 0)
-                tab[s, 3] += 1
+            if keys[s] == key:
+                if tab[s, 2] == 1:
+                    tab[s, 1] = 2 * f + (1 if a < b else 0)
+                tab[s, 2] += 1
                 break
             s = (s + np.uint64(1)) & mask
     parent = np.arange(F)
     par = np.zeros(F, np.uint8)
+    rank = np.ones(F, np.int64)
     open_mark = np.zeros(F, np.bool_)
     n_bnd = 0
     n_nm = 0
     conflict = False
     for s in range(size):
-        if tab[s, 0] < 0:
+        if keys[s] < 0:
             continue
-        c = tab[s, 3]
-        fa = tab[s, 1] // 2
+        c = tab[s, 2]
+        fa = tab[s, 0] // 2
         if c == 1:
             n_bnd += 1
             open_mark[fa] = True
         elif c > 2:
             n_nm += 1
             open_mark[fa] = True
-        elif fa != tab[s, 2] // 2:
-            fb = tab[s, 2] // 2
-            same = np.uint8(1) if tab[s, 1] % 2 == tab[s, 2] % 2 else np.uint8(0)
+        elif fa != tab[s, 1] // 2:
+            fb = tab[s, 1] // 2
+            same = np.uint8(1) if tab[s, 0] % 2 == tab[s, 1] % 2 else np.uint8(0)
             ra, pa = _find(parent, par, fa)
             rb, pb = _find(parent, par, fb)
             if ra == rb:
                 if (pa ^ pb) != same:
                     conflict = True
-            else:
+            elif rank[ra] < rank[rb]:       # union by size keeps the trees shallow
                 parent[ra] = rb
                 par[ra] = pa ^ pb ^ same
+                rank[rb] += rank[ra]
+            else:
+                parent[rb] = ra
+                par[rb] = pa ^ pb ^ same
+                rank[ra] += rank[rb]
     comp = np.empty(F, np.int64)
     flip = np.zeros(F, np.bool_)
     label = np.full(F, -1, np.int64)
