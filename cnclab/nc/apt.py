@@ -129,19 +129,26 @@ def _format_num(v: float, decimals: int) -> str:
 def goto(x: float, y: float, z: float, decimals: int = 3) -> AptRecord:
     """A generated ``GOTO / x, y, z`` record (mm)."""
     text = "GOTO / " + ", ".join(_format_num(v, decimals) for v in (x, y, z))
-    return AptRecord("GOTO", [repr(float(x)), repr(float(y)), repr(float(z))], text + "\n")
+    return AptRecord("GOTO", [repr(float(x)), repr(float(y)), repr(float(z))], text + "\n",
+                     nums=_finite_nums(x, y, z))
+
+
+def _finite_nums(*vals) -> list | None:
+    """The ``values`` of generated arguments ``repr(float(v))`` (None: let ``values`` parse them)."""
+    out = [float(v) for v in vals]
+    return out if all(math.isfinite(v) for v in out) else None
 
 
 def spindl(rpm: float, direction: str = "CLW", decimals: int = 0) -> AptRecord:
     """A generated ``SPINDL / RPM, n, CLW`` record (rpm)."""
     text = f"SPINDL / RPM, {_format_num(rpm, decimals)}, {direction}"
-    return AptRecord("SPINDL", ["RPM", repr(float(rpm)), direction], text + "\n")
+    return AptRecord("SPINDL", ["RPM", repr(float(rpm)), direction], text + "\n", nums=_finite_nums(rpm))
 
 
 def fedrat(feed_mm_min: float, decimals: int = 1) -> AptRecord:
     """A generated ``FEDRAT / f, MMPM`` record (mm/min)."""
     text = f"FEDRAT / {_format_num(feed_mm_min, decimals)}, MMPM"
-    return AptRecord("FEDRAT", [repr(float(feed_mm_min)), "MMPM"], text + "\n")
+    return AptRecord("FEDRAT", [repr(float(feed_mm_min)), "MMPM"], text + "\n", nums=_finite_nums(feed_mm_min))
 
 
 def _word(text: str, word: str, args=()) -> AptRecord:

@@ -30,13 +30,15 @@ import time
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from ..cutting.speeds import feed_speed, spindle_speed
 from ..cutting.spindle_model import POINT_RULES, apply_acceleration_limit, feed_directions, working_diameters
 from ..fileio import atomic_write_many, check_outputs
 from ..geometry.mesh import FacetLocator, TriMesh, closest_point_on_triangles, machined_surface_mask, read_stl
 from ..toolpath.path import Move
-from .apt import AptProgram, CLPoints, GotoRun, fedrat, read_apt, spindl
+from .apt import AptProgram, AptRecord, CLPoints, GotoRun, fedrat, read_apt, spindl
+from .numfmt import fixed, scaled_ints
 from .gcode import write_gcode, write_gcode_linear
 
 __all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
@@ -179,7 +181,14 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
     tgt = np.asarray(cl.record)[sched.index]
     if tgt.size > 1 and not (np.diff(tgt) > 0).all():
         raise ValueError("cl/sched: feed points must be in program order")
-    tgt_l, n_l, f_l = tgt.tolist(), np.asarray(sched.n, float).tolist(), np.asarray(sched.v_f, float).tolist()
+    n_a, f_a = np.asarray(sched.n, float), np.asarray(sched.v_f, float)
+    if not (np.isfinite(n_a).all() and np.isfinite(f_a).all()):
+        raise ValueError("sched: spindle speeds n (rpm) and feeds v_f (mm/min) must be finite")
+    # the values written: round(n) and round(v_f, 1) as Python rounds them (correctly rounded,
+    # ties to even): rint, and the digits of f"{v:.1f}" over 10 (a correctly rounded division)
+    rn_a = np.rint(n_a)
+    rf_a = np.copysign(scaled_ints(f_a, 1) / 10.0, f_a)
+    tgt_l, n_l, f_l = tgt.tolist(), n_a.tolist(), f_a.tolist()
     n_t = len(tgt_l)
     out = []
     cur_n = cur_f = float("nan")
@@ -206,14 +215,26 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
             m = len(it)
             j1 = int(np.searchsorted(tgt, k + m, side="left"))
             a = 0
-            for t in range(j, j1):
-                ins = changes(n_l[t], f_l[t])
-                if ins:
-                    li = tgt_l[t] - k
-                    if li > a:
-                        out.append(it.slice(a, li))
-                    out.extend(ins)
-                    a = li
+            # the threshold walk of changes() over the run's targets, compiled; records built after
+            ins_s, ins_f, cur_n, cur_f = _insertions(n_a[j:j1], f_a[j:j1], rn_a[j:j1], rf_a[j:j1], float(cur_n), float(cur_f),
+                                                     float(rpm_threshold), float(vf_threshold))
+            hit = np.flatnonzero(ins_s | ins_f)
+            n_sp += int(ins_s.sum())
+            n_fr += int(ins_f.sum())
+            sp_rec = _spindl_records(rn_a[j:j1][ins_s])
+            fr_rec = _fedrat_records(rf_a[j:j1][ins_f])
+            i_s = i_f = 0
+            for t, s_, f_ in zip((hit + j).tolist(), ins_s[hit].tolist(), ins_f[hit].tolist()):
+                li = tgt_l[t] - k
+                if li > a:
+                    out.append(it.slice(a, li))
+                if s_:
+                    out.append(sp_rec[i_s])
+                    i_s += 1
+                if f_:
+                    out.append(fr_rec[i_f])
+                    i_f += 1
+                a = li
             if a == 0:
                 out.append(it)
             elif a < m:
@@ -232,6 +253,39 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
         out.append(r)
         k += 1
     return AptProgram(out, program.source), {"spindl_inserted": n_sp, "fedrat_inserted": n_fr}
+
+
+@njit(cache=True, nogil=True)
+def _insertions(n, f, rn, rf, cur_n, cur_f, rpm_threshold, vf_threshold):
+    """Where SPINDL / FEDRAT records go (bool arrays) and the values in force after the run."""
+    m = n.shape[0]
+    ins_s = np.zeros(m, np.bool_)
+    ins_f = np.zeros(m, np.bool_)
+    for t in range(m):
+        if not abs(n[t] - cur_n) <= rpm_threshold:
+            cur_n = rn[t]
+            ins_s[t] = True
+        if not abs(f[t] - cur_f) <= vf_threshold:
+            cur_f = rf[t]
+            ins_f[t] = True
+    return ins_s, ins_f, cur_n, cur_f
+
+
+def _spindl_records(rpm) -> list:
+    """``spindl(v)`` for each value of ``rpm`` (whole numbers >= 0, rpm), texts formatted in bulk."""
+    if np.signbit(rpm).any():
+        return [spindl(v) for v in rpm.tolist()]
+    txt = fixed(rpm, 0).tolist()
+    return [AptRecord("SPINDL", ["RPM", repr(v), "CLW"], f"SPINDL / RPM, {t}, CLW\n", nums=[v])
+            for v, t in zip(rpm.tolist(), txt)]
+
+
+def _fedrat_records(feed) -> list:
+    """``fedrat(v)`` for each value of ``feed`` (mm/min), texts formatted in bulk."""
+    if np.signbit(feed).any():
+        return [fedrat(v) for v in feed.tolist()]
+    txt = fixed(feed, 1).tolist()
+    return [AptRecord("FEDRAT", [repr(v), "MMPM"], f"FEDRAT / {t}, MMPM\n", nums=[v]) for v, t in zip(feed.tolist(), txt)]
 
 
 def to_gcode_moves(program: AptProgram):
@@ -362,21 +416,23 @@ def gcode_text(program: AptProgram, header: str = "") -> str:
     as arrays (same bytes)."""
     if any(getattr(r, "word", None) == "CIRCLE" for r in program.items()):
         return write_gcode(to_gcode_moves(program), header=header)   # arcs: G2/G3 through the Move writer
-    xyz, rap, fe, sp = [], [], [], []
+    xyz, lens, rap0, fe, sp = [], [], [], [], []
     for pts, rapid, f, s, _, _, _ in _motion_blocks(program):
-        m = len(pts)
         xyz.append(pts)
-        flags = np.zeros(m, bool)
-        flags[0] = rapid
-        rap.append(flags)
-        fe.append(np.full(m, np.nan if f is None else f))
-        sp.append(np.full(m, np.nan if s is None else s))
+        lens.append(len(pts))
+        rap0.append(rapid)
+        fe.append(np.nan if f is None else f)
+        sp.append(np.nan if s is None else s)
     if not xyz:
         return write_gcode([], header=header)
-    rap_a, fe_a = np.concatenate(rap), np.concatenate(fe)
+    lens_a = np.asarray(lens, np.int64)
+    rap_a = np.zeros(int(lens_a.sum()), bool)
+    rap_a[np.concatenate([[0], np.cumsum(lens_a)[:-1]])] = rap0       # only a block's first point is a rapid
+    fe_a = np.repeat(np.asarray(fe, float), lens_a)
+    sp = np.repeat(np.asarray(sp, float), lens_a)
     if np.isnan(fe_a[~rap_a]).any():   # a feed move without FEDRAT: let the Move writer report it
         return write_gcode(to_gcode_moves(program), header=header)
-    return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, np.concatenate(sp), header=header)
+    return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, sp, header=header)
 
 
 def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, teeth: int, a_p: float,
