@@ -226,3 +226,12 @@ def test_bulk_goto_values_bit_identical_to_float_on_hard_numbers():
         assert got.tobytes() == want.tobytes()          # bit for bit, signs of zeros included
         careful = apt.parse_apt(text, "x.apt", fast=False)
         assert fast.records == careful.records and fast.to_text() == text
+
+
+def test_statement_without_word_is_an_error_naming_the_line():
+    """A form feed is a line break for the careful parser: '/ RPM, ...' left without a word is an
+    AptError naming file and line (was an IndexError, found by tests/test_fuzz_inputs.py)."""
+    text = "UNITS / MM\nSPIND\x0c / RPM, 2000, CLW\nFEDRAT / 500\nGOTO / 1, 2, 3\n"
+    for fast in (True, False):
+        with pytest.raises(apt.AptError, match=r"x\.apt:3: '/ RPM, 2000, CLW' does not start with an APT word"):
+            apt.parse_apt(text, "x.apt", fast=fast)

@@ -24,6 +24,7 @@ nearest facet in Euclidean distance (``nearest_facet``) and the true incentre (`
 from __future__ import annotations
 
 import dataclasses
+import functools
 import re
 import warnings
 from pathlib import Path
@@ -816,7 +817,11 @@ class FacetLocator:
         self.mesh = mesh
         self.centroids = mesh.centroids
         self.tree = cKDTree(self.centroids, leafsize=leafsize, balanced_tree=False, compact_nodes=False)
-        self.circumradius = float(np.linalg.norm(mesh.triangles - self.centroids[:, None], axis=2).max())
+
+    @functools.cached_property
+    def circumradius(self) -> float:
+        """Largest distance (mm) from a facet centroid to one of its corners (computed on first use)."""
+        return float(np.linalg.norm(self.mesh.triangles - self.centroids[:, None], axis=2).max())
 
     def nearest_centroid(self, points, workers: int = 1) -> np.ndarray:
         """Index of the facet whose centroid ("incentre", thesis rule) is nearest each point (N,)."""

@@ -498,7 +498,7 @@ def _parse_careful(lines, first_line: int, records: list, st: _State, source: st
         word = word.strip().upper()
         rec = AptRecord(word, args, raw, lineno, comment.strip())
         where = f"{source}:{lineno}"
-        head = word.split()[0]
+        head = word.split()[0] if word.split() else ""     # '/ ...' with no word (e.g. after a form feed)
         if not _WORD_RE.fullmatch(head):
             raise AptError(f"{where}: {stmt[:40]!r} does not start with an APT word (ASCII letters, digits, '_')")
         if head in REFUSED_MOTION:

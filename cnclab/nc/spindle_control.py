@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +43,7 @@ from .numfmt import fixed, scaled_ints
 from .gcode import write_gcode, write_gcode_linear
 
 __all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
-           "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files",
+           "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files", "read_inputs",
            "path_surface_deviation",
            "POINT_RULES"]
 
@@ -106,12 +107,13 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
                      facet_rule: str = "centroid", point: str = "max", n_max: float | None = None,
                      n_min: float | None = None, vf_max: float | None = None,
                      accel_rpm_s: float | None = None, filter_facets: bool = True,
-                     locator: FacetLocator | None = None) -> SpindleSchedule:
+                     locator: FacetLocator | None = None, workers: int = -1) -> SpindleSchedule:
     """Compute the point-by-point spindle speed and feed for the feed points of ``cl``.
 
     Parameters: tool_diameter (mm), a_p (mm), v_c nominal cutting speed (m/min), f_z (mm), teeth;
     feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule 'centroid' | 'nearest';
-    point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s).
+    point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s);
+    workers: threads of the KD-tree queries (-1: every core; the result does not depend on it).
     """
 
     for name, v in (("tool_diameter", tool_diameter), ("a_p", a_p), ("v_c", v_c), ("f_z", f_z)):
@@ -119,6 +121,8 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
             raise ValueError(f"{name} must be > 0, got {v}")
     if int(teeth) != teeth or teeth < 1:
         raise ValueError(f"teeth must be a positive integer, got {teeth}")
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers == 0 or workers < -1:
+        raise ValueError(f"workers must be -1 (every core) or an integer >= 1, got {workers!r}")
     if facet_rule not in ("centroid", "nearest"):
         raise ValueError(f"facet_rule must be 'centroid' or 'nearest', got {facet_rule!r}")
     for name, v in (("n_max", n_max), ("n_min", n_min), ("vf_max", vf_max)):
@@ -145,7 +149,8 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
         A_f = feed_directions(xyz_all, cl.start)[idx]
     else:
         A_f = np.full(idx.size, float(feed_direction_deg))
-    facet = locator.nearest_centroid(pts) if facet_rule == "centroid" else locator.nearest_facet(pts)
+    facet = (locator.nearest_centroid(pts, workers=workers) if facet_rule == "centroid"
+             else locator.nearest_facet(pts, workers=workers))
     normals = locator.mesh.normals[facet]
     d_eff, a1, a2 = working_diameters(normals, A_f, tool_diameter, a_p, point, feed_direction_deg)
     d_safe = np.maximum(d_eff, 1e-6)
@@ -435,6 +440,25 @@ def gcode_text(program: AptProgram, header: str = "") -> str:
     return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, sp, header=header)
 
 
+def read_inputs(stl_path, apt_path):
+    """``read_stl(stl_path)`` and ``read_apt(apt_path)`` with its ``cl_points()``, read concurrently
+    (the STL in a second thread; its compiled kernels and numpy release the GIL). Returns
+    (mesh, program, cl). Errors as when read one after the other: the STL's first, then the APT's.
+    """
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        fut = pool.submit(read_stl, stl_path)
+        try:
+            prog = read_apt(apt_path)
+            cl = prog.cl_points()
+            err = None
+        except Exception as exc:                 # reported after the STL's own error, if any
+            err = exc
+        mesh = fut.result()
+    if err is not None:
+        raise err
+    return mesh, prog, cl
+
+
 def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, teeth: int, a_p: float,
                       tool_diameter: float | None = None, gcode_path=None, rpm_threshold: float = 50.0,
                       vf_threshold: float = 10.0, progress: bool = False, mismatch_tol: float = 1.0,
@@ -478,10 +502,8 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
             bar.update(1)
 
     try:
-        mesh = read_stl(stl_path)
+        mesh, prog, cl = read_inputs(stl_path, apt_path)
         tick("STL")
-        prog = read_apt(apt_path)
-        cl = prog.cl_points()
         tick("APT")
         D = tool_diameter if tool_diameter is not None else prog.tool_diameter()
         if D is None:
