@@ -153,8 +153,9 @@ def machined_surface_mask(normals, tol_deg: float = 1e-3) -> np.ndarray:
     """
     n = np.asarray(normals, float)
     c = np.cos(np.radians(tol_deg))
-    axes = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, -1]], float)
-    return ~((n @ axes.T) >= c).any(axis=1)
+    # n . axis for the axes +-X, +-Y, -Z is +-one component (what n @ axes.T gives, without the product)
+    nx, ny, nz = n[..., 0], n[..., 1], n[..., 2]
+    return ~((nx >= c) | (-nx >= c) | (ny >= c) | (-ny >= c) | (-nz >= c))
 
 
 # ----------------------------------------------------------------------------- STL files
