@@ -325,8 +325,6 @@ def _orient(tri, info, vid=None):
     winding conflicts takes the graph path (:func:`_orient_graph`) unchanged.
     """
     F = len(tri)
-    if F >= 2 ** 30:               # the compiled edge table packs 2 * facet + direction in int32
-        return _orient_graph(tri, info)
     if vid is None:
         vid = _weld_ids(tri)
     res = _edge_parity(np.ascontiguousarray(vid, np.int64).reshape(F, 3))
@@ -440,7 +438,7 @@ def _find(parent, par, x):
 
 @njit(cache=True, nogil=True)
 def _edge_parity(V):
-    """Edges of the facets ``V`` (F, 3) by hashing, winding parity by union-find.
+    """Edges of the facets ``V`` (F, 3) by bucketing half-edges, winding parity by union-find.
 
     Returns (conflict, boundary edges, non-manifold edges, components, component label per facet
     (in order of the lowest facet), flip parity to that facet, facets of boundary/non-manifold edges).
@@ -448,32 +446,56 @@ def _edge_parity(V):
     F = V.shape[0]
     H = 3 * F
     nv = V.max() + 1
-    size = 16
-    while size * 4 < H * 5:            # load factor <= 0.8 even when no edge is shared
-        size *= 2
-    mask = np.uint64(size - 1)
-    # one slot per undirected edge: key lo * nv + hi (-1 empty); first and second half-edge
-    # (2 * facet + direction) and the number of half-edges
-    keys = np.full(size, -1, np.int64)
-    tab = np.empty((size, 3), np.int32)
+    # half-edges bucketed by their lower vertex (counting sort: h order kept inside a bucket), then
+    # grouped by the upper vertex inside each bucket: one group per undirected edge
+    start = np.zeros(nv + 1, np.int64)
     for h in range(H):
         f = h // 3
         a = V[f, h % 3]
         b = V[f, (h % 3 + 1) % 3]
-        key = min(a, b) * nv + max(a, b)
-        s = _mix(np.uint64(key), np.uint64(0), np.uint64(0)) & mask
-        while True:
-            if keys[s] < 0:
-                keys[s] = key
-                tab[s, 0] = 2 * f + (1 if a < b else 0)
-                tab[s, 2] = 1
-                break
-            if keys[s] == key:
-                if tab[s, 2] == 1:
-                    tab[s, 1] = 2 * f + (1 if a < b else 0)
-                tab[s, 2] += 1
-                break
-            s = (s + np.uint64(1)) & mask
+        start[min(a, b) + 1] += 1
+    for v in range(nv):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    bucket = np.empty(H, np.int64)
+    upper = np.empty(H, np.int64)
+    for h in range(H):
+        f = h // 3
+        a = V[f, h % 3]
+        b = V[f, (h % 3 + 1) % 3]
+        lo = min(a, b)
+        bucket[fill[lo]] = h
+        upper[fill[lo]] = max(a, b)
+        fill[lo] += 1
+    n_edges = 0
+    e_first = np.empty(H, np.int64)       # per edge: first and second half-edge, count
+    e_second = np.empty(H, np.int64)
+    e_cnt = np.zeros(H, np.int64)
+    scratch = np.empty(64, np.int64)
+    for v in range(nv):
+        s0, s1 = start[v], start[v + 1]
+        k = s1 - s0
+        if k > 64:
+            o = np.argsort(upper[s0:s1], kind="mergesort") + s0     # stable: h order among equals
+        else:                                                       # stable insertion sort
+            o = scratch[:k]
+            for i in range(k):
+                x = s0 + i
+                j = i
+                while j > 0 and upper[o[j - 1]] > upper[x]:
+                    o[j] = o[j - 1]
+                    j -= 1
+                o[j] = x
+        i = 0
+        while i < k:
+            j = i + 1
+            while j < k and upper[o[j]] == upper[o[i]]:
+                j += 1
+            e_first[n_edges] = bucket[o[i]]
+            e_second[n_edges] = bucket[o[i + 1]] if j - i > 1 else -1
+            e_cnt[n_edges] = j - i
+            n_edges += 1
+            i = j
     parent = np.arange(F)
     par = np.zeros(F, np.uint8)
     rank = np.ones(F, np.int64)
@@ -481,20 +503,22 @@ def _edge_parity(V):
     n_bnd = 0
     n_nm = 0
     conflict = False
-    for s in range(size):
-        if keys[s] < 0:
-            continue
-        c = tab[s, 2]
-        fa = tab[s, 0] // 2
+    for e in range(n_edges):
+        c = e_cnt[e]
+        ha = e_first[e]
+        fa = ha // 3
         if c == 1:
             n_bnd += 1
             open_mark[fa] = True
         elif c > 2:
             n_nm += 1
             open_mark[fa] = True
-        elif fa != tab[s, 1] // 2:
-            fb = tab[s, 1] // 2
-            same = np.uint8(1) if tab[s, 0] % 2 == tab[s, 1] % 2 else np.uint8(0)
+        elif fa != e_second[e] // 3:
+            hb = e_second[e]
+            fb = hb // 3
+            da = V[fa, ha % 3] < V[fa, (ha % 3 + 1) % 3]
+            db = V[fb, hb % 3] < V[fb, (hb % 3 + 1) % 3]
+            same = np.uint8(1) if da == db else np.uint8(0)
             ra, pa = _find(parent, par, fa)
             rb, pb = _find(parent, par, fb)
             if ra == rb:
