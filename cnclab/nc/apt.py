@@ -210,10 +210,11 @@ class GotoRun:
     1-based source line of the first one. Expanded to :class:`AptRecord` objects only on demand.
     """
 
-    __slots__ = ("text", "xyz", "line", "_starts")
+    __slots__ = ("text", "xyz", "line", "_starts", "_off")
 
-    def __init__(self, text: str, xyz: np.ndarray, line: int, starts: np.ndarray | None = None):
-        self.text, self.xyz, self.line, self._starts = text, xyz, line, starts
+    def __init__(self, text: str, xyz: np.ndarray, line: int, starts: np.ndarray | None = None, off: int = 0):
+        # starts - off: the line starts (a view of the parent run's offsets until first needed)
+        self.text, self.xyz, self.line, self._starts, self._off = text, xyz, line, starts, off
 
     def __len__(self):
         return len(self.xyz)
@@ -226,13 +227,18 @@ class GotoRun:
         """Offsets of the M line starts in ``text`` plus ``len(text)`` (M + 1 values)."""
         if self._starts is None:
             nl = np.flatnonzero(np.frombuffer(self.text.encode("ascii"), np.uint8) == 10)
-            self._starts = np.concatenate([[0], nl + 1])
+            self._starts, self._off = np.concatenate([[0], nl + 1]), 0
+        elif self._off:
+            self._starts, self._off = self._starts - self._off, 0
         return self._starts
 
     def slice(self, a: int, b: int) -> "GotoRun":
         """Lines a..b-1 as a new run."""
-        st = self.starts()
-        return GotoRun(self.text[st[a]:st[b]], self.xyz[a:b], self.line + a, st[a:b + 1] - st[a])
+        if self._starts is None:
+            self.starts()
+        st, off = self._starts, self._off
+        s0, s1 = int(st[a]) - off, int(st[b]) - off
+        return GotoRun(self.text[s0:s1], self.xyz[a:b], self.line + a, st[a:b + 1], s0 + off)
 
     def records(self) -> list:
         st = self.starts().tolist()
