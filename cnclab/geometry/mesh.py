@@ -317,7 +317,7 @@ def orient_facets(triangles, rule: str = "auto"):
 def _orient(tri, info, vid=None):
     """orient_facets on a float copy ``tri`` (F > 0); ``vid`` (F, 3) welded vertex ids if known.
 
-    Fast path (compiled): weld, hash the undirected edges, and propagate the winding parity by a
+    Fast path (compiled): weld, group the half-edges by edge, and propagate the winding parity by a
     union-find. When no edge disagrees with the propagated winding (every orientable mesh), the
     parity relative to the lowest-index facet of each component is the one the breadth-first
     propagation gives, and the components are labelled in order of their lowest facet as
