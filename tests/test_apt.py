@@ -192,3 +192,46 @@ def test_bulk_insertion_equals_record_insertion():
         outs.append((new.to_text(), counts, [(m.x, m.y, m.z, m.feed, m.spindle) for m in sc.to_gcode_moves(new)]))
     assert outs[0] == outs[1]
     assert outs[0][1]["spindl_inserted"] > 3
+
+
+def test_bulk_goto_values_bit_identical_to_float_on_hard_numbers():
+    """The compiled GOTO-run reader converts exactly as ``float``: Clinger's fast path (<= 15 digits,
+    |10-power| <= 22) and ``float`` for the rest; every line of these runs is read in bulk."""
+    import random
+
+    rng = random.Random(17)
+    fixed_cases = ["0", "-0", "+0.", ".5", "-.25e-3", "1e22", "1E23", "123456789012345678901234",
+                   "0.000000000000000000012345", "1e300", "1e-400", "5.", "+7", "9007199254740993",
+                   "0.1", "2.2250738585072014e-308", "4.9e-324", "999999999999999.9", "1.7976931348623157e308"]
+
+    def num():
+        c = rng.random()
+        if c < 0.3:
+            return f"{rng.uniform(-1e3, 1e3):.{rng.randint(0, 6)}f}"
+        if c < 0.6:
+            return repr(rng.uniform(-1e5, 1e5) * 10.0 ** rng.randint(-30, 30))
+        if c < 0.75:
+            return rng.choice(fixed_cases)
+        return str(rng.randint(-10 ** 6, 10 ** 6))
+
+    for _ in range(60):
+        toks = [[num() for _ in range(3)] for _ in range(20)]
+        text = "UNITS / MM\nFEDRAT / 500, MMPM\n" + "".join(
+            "GOTO" + rng.choice([" / ", "/", "\t/ "]) + rng.choice([", ", ",", " ,\t"]).join(t)
+            + rng.choice(["", " ", "\r"]) + "\n" for t in toks)
+        fast = apt.parse_apt(text, "x.apt")
+        assert sum(len(it) for it in fast.items() if isinstance(it, apt.GotoRun)) == 20
+        want = np.array([[float(v) for v in t] for t in toks])
+        got = fast.cl_points().xyz
+        assert got.tobytes() == want.tobytes()          # bit for bit, signs of zeros included
+        careful = apt.parse_apt(text, "x.apt", fast=False)
+        assert fast.records == careful.records and fast.to_text() == text
+
+
+def test_statement_without_word_is_an_error_naming_the_line():
+    """A form feed is a line break for the careful parser: '/ RPM, ...' left without a word is an
+    AptError naming file and line (was an IndexError, found by tests/test_fuzz_inputs.py)."""
+    text = "UNITS / MM\nSPIND\x0c / RPM, 2000, CLW\nFEDRAT / 500\nGOTO / 1, 2, 3\n"
+    for fast in (True, False):
+        with pytest.raises(apt.AptError, match=r"x\.apt:3: '/ RPM, 2000, CLW' does not start with an APT word"):
+            apt.parse_apt(text, "x.apt", fast=fast)

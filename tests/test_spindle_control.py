@@ -101,3 +101,50 @@ def test_cli_writes_apt_and_gcode_and_refuses_bad_input(tmp_path, capsys):
                 "--ap", "0.3"]) == 2
     assert "bad.apt:3" in capsys.readouterr().err and not out2.exists()
     assert not list(tmp_path.glob(".never.apt*"))   # no partial output
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_insertions_match_a_python_walk(seed):
+    """The compiled threshold walk of insert_spindle_records gives exactly the records of the plain
+    Python walk (round(n), round(v_f, 1) as Python rounds, ties at .x5 included), also around an
+    original SPINDL/FEDRAT of the file, which resets the value in force."""
+    rng = np.random.default_rng(seed)
+    P = np.column_stack([np.arange(300.0), np.zeros(300), np.zeros(300)])
+    text = apt.cl_program([P], 500, 2000, 10, 30).to_text()
+    lines = text.splitlines(keepends=True)
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("GOTO / 150.000"))
+    text = "".join(lines[:k] + ["SPINDL / RPM, 3000, CLW\n", "FEDRAT / 700.0, MMPM\n"] + lines[k:])
+    prog = apt.parse_apt(text, "p.apt")
+    cl = prog.cl_points()
+    idx = np.flatnonzero(~cl.rapid)
+    thr_n, thr_f = rng.choice([0.0, 20.0, 300.0]), rng.choice([0.0, 5.0, 80.0])
+    if seed % 2:
+        n = np.round(rng.uniform(1000, 5000, idx.size) * 2) / 2         # many .5 ties for round()
+        f = np.round(rng.uniform(100, 1500, idx.size) * 20) / 20        # many .x5 ties for round(., 1)
+    else:                                                               # differences exactly at the thresholds
+        thr_n, thr_f = 20.0, 5.0
+        n = 3000.0 + thr_n * rng.integers(-2, 3, idx.size)
+        f = 700.0 + thr_f * rng.integers(-2, 3, idx.size)
+    s = sc.SpindleSchedule(idx, cl.xyz[idx], idx, *(np.zeros(idx.size),) * 4, n, n, f,
+                           np.ones(idx.size), np.zeros(idx.size, bool), 63.0, {})
+    new, counts = sc.insert_spindle_records(prog, cl, s, thr_n, thr_f)
+    # reference: the walk over the expanded records, one Python step per feed point
+    want, cur_n, cur_f, j = [], float("nan"), float("nan"), 0
+    tgt = cl.record[idx].tolist()
+    for r_i, r in enumerate(prog.records):
+        if r.word == "SPINDL":
+            cur_n = r.values[-1]
+        elif r.word == "FEDRAT":
+            cur_f = r.values[0]
+        if j < len(tgt) and tgt[j] == r_i:
+            if not abs(n[j] - cur_n) <= thr_n:
+                cur_n = round(float(n[j]))
+                want.append(apt.spindl(cur_n).raw)
+            if not abs(f[j] - cur_f) <= thr_f:
+                cur_f = round(float(f[j]), 1)
+                want.append(apt.fedrat(cur_f).raw)
+            j += 1
+        want.append(r.raw)
+    assert new.to_text() == "".join(want)
+    assert counts["spindl_inserted"] == sum(w.startswith("SPINDL / RPM") for w in want) - 2
+    assert counts["fedrat_inserted"] == sum(w.startswith("FEDRAT") for w in want) - 2

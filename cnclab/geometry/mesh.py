@@ -24,11 +24,13 @@ nearest facet in Euclidean distance (``nearest_facet``) and the true incentre (`
 from __future__ import annotations
 
 import dataclasses
+import functools
 import re
 import warnings
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 from scipy.spatial import cKDTree
 
 from ..fileio import atomic_output
@@ -67,7 +69,9 @@ class TriMesh:
         bad = ~np.isfinite(tri).all(axis=(1, 2))
         if bad.any():
             raise STLError(f"{source}: facet {int(np.argmax(bad))} has a non-finite coordinate")
-        areas = facet_areas(tri)
+        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        ln = np.linalg.norm(cross, axis=1)
+        areas = 0.5 * ln                       # = facet_areas(tri), facet_normals(tri) below
         scale = max(float(np.ptp(tri.reshape(-1, 3), axis=0).max()) if len(tri) else 1.0, 1e-300)
         zero = areas <= 1e-12 * scale * scale
         if zero.any():
@@ -76,8 +80,9 @@ class TriMesh:
                                f"({int(zero.sum())} degenerate facet(s); pass degenerate='drop' to skip them)")
             if degenerate != "drop":
                 raise ValueError(f"degenerate must be 'error' or 'drop', got {degenerate!r}")
-            tri = tri[~zero]
-        return cls(tri, facet_normals(tri), name=name, info={"dropped_degenerate": int(zero.sum())})
+            tri, cross, ln = tri[~zero], cross[~zero], ln[~zero]
+        normals = np.divide(cross, ln[:, None], out=np.zeros_like(cross), where=ln[:, None] > 0)
+        return cls(tri, normals, name=name, info={"dropped_degenerate": int(zero.sum())})
 
     @property
     def n_facets(self) -> int:
@@ -148,8 +153,9 @@ def machined_surface_mask(normals, tol_deg: float = 1e-3) -> np.ndarray:
     """
     n = np.asarray(normals, float)
     c = np.cos(np.radians(tol_deg))
-    axes = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, -1]], float)
-    return ~((n @ axes.T) >= c).any(axis=1)
+    # n . axis for the axes +-X, +-Y, -Z is +-one component (what n @ axes.T gives, without the product)
+    nx, ny, nz = n[..., 0], n[..., 1], n[..., 2]
+    return ~((nx >= c) | (-nx >= c) | (ny >= c) | (-ny >= c) | (-nz >= c))
 
 
 # ----------------------------------------------------------------------------- STL files
@@ -296,9 +302,6 @@ def orient_facets(triangles, rule: str = "auto"):
     >>> flipped.tolist(), facet_normals(t)[:, 2].tolist()
     ([False, True], [1.0, 1.0])
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import breadth_first_order, connected_components
-
     tri = np.array(triangles, dtype=float, copy=True)
     F = len(tri)
     info = {"components": 0, "non_manifold_edges": 0, "winding_conflicts": 0, "boundary_edges": 0}
@@ -308,6 +311,249 @@ def orient_facets(triangles, rule: str = "auto"):
         raise ValueError(f"orient must be 'auto' or 'keep', got {rule!r}")
     if F == 0:
         return tri, np.zeros(0, bool), info
+    return _orient(tri, info)
+
+
+def _orient(tri, info, vid=None):
+    """orient_facets on a float copy ``tri`` (F > 0); ``vid`` (F, 3) welded vertex ids if known.
+
+    Fast path (compiled): weld, group the half-edges by edge, and propagate the winding parity by a
+    union-find. When no edge disagrees with the propagated winding (every orientable mesh), the
+    parity relative to the lowest-index facet of each component is the one the breadth-first
+    propagation gives, and the components are labelled in order of their lowest facet as
+    ``scipy.sparse.csgraph.connected_components`` does, so the result is identical. A mesh with
+    winding conflicts takes the graph path (:func:`_orient_graph`) unchanged.
+    """
+    F = len(tri)
+    if vid is None:
+        vid = _weld_ids(tri)
+    res = _edge_parity(np.ascontiguousarray(vid, np.int64).reshape(F, 3))
+    conflict, n_bnd, n_nm, ncomp, comp, flip, open_fac = res
+    if conflict:
+        return _orient_graph(tri, info)
+    info["boundary_edges"] = int(n_bnd)
+    info["non_manifold_edges"] = int(n_nm)
+    info["components"] = int(ncomp)
+    open_comp = np.zeros(ncomp, bool)
+    open_comp[comp[open_fac]] = True
+    return _orient_turn(tri, info, comp, ncomp, flip, open_comp)
+
+
+def _weld_ids(tri) -> np.ndarray:
+    """Vertex ids (F, 3) welding exactly equal coordinates (-0.0 == 0.0), numbered by first use."""
+    flat = np.ascontiguousarray(tri.reshape(-1, 3)) + 0.0
+    return _weld(flat.view(np.uint64)).reshape(-1, 3)
+
+
+@njit(cache=True, nogil=True)
+def _mix(x, y, z):
+    h = x * np.uint64(0x9E3779B97F4A7C15) ^ y * np.uint64(0xC2B2AE3D27D4EB4F) ^ z * np.uint64(0x165667B19E3779F9)
+    h ^= h >> np.uint64(31)
+    h *= np.uint64(0xBF58476D1CE4E5B9)
+    h ^= h >> np.uint64(29)
+    return h
+
+
+@njit(cache=True, nogil=True)
+def _weld(bits):
+    """Id per row of ``bits`` (N, 3) uint64: rows equal bit for bit share an id (open addressing)."""
+    n = bits.shape[0]
+    size = 16
+    while size < 2 * n:
+        size *= 2
+    mask = np.uint64(size - 1)
+    table = np.full(size, -1, np.int64)
+    vid = np.empty(n, np.int64)
+    nv = 0
+    for i in range(n):
+        slot = _mix(bits[i, 0], bits[i, 1], bits[i, 2]) & mask
+        while True:
+            j = table[slot]
+            if j < 0:
+                table[slot] = i
+                vid[i] = nv
+                nv += 1
+                break
+            if bits[j, 0] == bits[i, 0] and bits[j, 1] == bits[i, 1] and bits[j, 2] == bits[i, 2]:
+                vid[i] = vid[j]
+                break
+            slot = (slot + np.uint64(1)) & mask
+    return vid
+
+
+@njit(cache=True, nogil=True)
+def _first_equal_triple(vid):
+    """For each row of ``vid`` (F, 3) the first row with the same three ids in any order."""
+    F = vid.shape[0]
+    size = 16
+    while size < 2 * F:
+        size *= 2
+    mask = np.uint64(size - 1)
+    table = np.full(size, -1, np.int64)
+    key = np.empty((F, 3), np.int64)
+    first = np.empty(F, np.int64)
+    for i in range(F):
+        a, b, c = vid[i, 0], vid[i, 1], vid[i, 2]
+        if a > b:
+            a, b = b, a
+        if b > c:
+            b, c = c, b
+        if a > b:
+            a, b = b, a
+        key[i, 0], key[i, 1], key[i, 2] = a, b, c
+        slot = _mix(np.uint64(a), np.uint64(b), np.uint64(c)) & mask
+        while True:
+            j = table[slot]
+            if j < 0:
+                table[slot] = i
+                first[i] = i
+                break
+            if key[j, 0] == a and key[j, 1] == b and key[j, 2] == c:
+                first[i] = j
+                break
+            slot = (slot + np.uint64(1)) & mask
+    return first
+
+
+@njit(cache=True)
+def _find(parent, par, x):
+    """Root of x and the parity of x relative to it (path compression keeps the parities)."""
+    p = 0
+    r = x
+    while parent[r] != r:
+        p ^= par[r]
+        r = parent[r]
+    # compress: point every node of the path at the root with its own parity
+    q = p
+    y = x
+    while parent[y] != y:
+        nxt = parent[y]
+        py = par[y]
+        parent[y] = r
+        par[y] = q
+        q ^= py
+        y = nxt
+    return r, p
+
+
+@njit(cache=True, nogil=True)
+def _edge_parity(V):
+    """Edges of the facets ``V`` (F, 3) by bucketing half-edges, winding parity by union-find.
+
+    Returns (conflict, boundary edges, non-manifold edges, components, component label per facet
+    (in order of the lowest facet), flip parity to that facet, facets of boundary/non-manifold edges).
+    """
+    F = V.shape[0]
+    H = 3 * F
+    nv = V.max() + 1
+    # half-edges bucketed by their lower vertex (counting sort: h order kept inside a bucket), then
+    # grouped by the upper vertex inside each bucket: one group per undirected edge
+    start = np.zeros(nv + 1, np.int64)
+    for h in range(H):
+        f = h // 3
+        a = V[f, h % 3]
+        b = V[f, (h % 3 + 1) % 3]
+        start[min(a, b) + 1] += 1
+    for v in range(nv):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    bucket = np.empty(H, np.int64)
+    upper = np.empty(H, np.int64)
+    for h in range(H):
+        f = h // 3
+        a = V[f, h % 3]
+        b = V[f, (h % 3 + 1) % 3]
+        lo = min(a, b)
+        bucket[fill[lo]] = h
+        upper[fill[lo]] = max(a, b)
+        fill[lo] += 1
+    n_edges = 0
+    e_first = np.empty(H, np.int64)       # per edge: first and second half-edge, count
+    e_second = np.empty(H, np.int64)
+    e_cnt = np.zeros(H, np.int64)
+    scratch = np.empty(64, np.int64)
+    for v in range(nv):
+        s0, s1 = start[v], start[v + 1]
+        k = s1 - s0
+        if k > 64:
+            o = np.argsort(upper[s0:s1], kind="mergesort") + s0     # stable: h order among equals
+        else:                                                       # stable insertion sort
+            o = scratch[:k]
+            for i in range(k):
+                x = s0 + i
+                j = i
+                while j > 0 and upper[o[j - 1]] > upper[x]:
+                    o[j] = o[j - 1]
+                    j -= 1
+                o[j] = x
+        i = 0
+        while i < k:
+            j = i + 1
+            while j < k and upper[o[j]] == upper[o[i]]:
+                j += 1
+            e_first[n_edges] = bucket[o[i]]
+            e_second[n_edges] = bucket[o[i + 1]] if j - i > 1 else -1
+            e_cnt[n_edges] = j - i
+            n_edges += 1
+            i = j
+    parent = np.arange(F)
+    par = np.zeros(F, np.uint8)
+    rank = np.ones(F, np.int64)
+    open_mark = np.zeros(F, np.bool_)
+    n_bnd = 0
+    n_nm = 0
+    conflict = False
+    for e in range(n_edges):
+        c = e_cnt[e]
+        ha = e_first[e]
+        fa = ha // 3
+        if c == 1:
+            n_bnd += 1
+            open_mark[fa] = True
+        elif c > 2:
+            n_nm += 1
+            open_mark[fa] = True
+        elif fa != e_second[e] // 3:
+            hb = e_second[e]
+            fb = hb // 3
+            da = V[fa, ha % 3] < V[fa, (ha % 3 + 1) % 3]
+            db = V[fb, hb % 3] < V[fb, (hb % 3 + 1) % 3]
+            same = np.uint8(1) if da == db else np.uint8(0)
+            ra, pa = _find(parent, par, fa)
+            rb, pb = _find(parent, par, fb)
+            if ra == rb:
+                if (pa ^ pb) != same:
+                    conflict = True
+            elif rank[ra] < rank[rb]:       # union by size keeps the trees shallow
+                parent[ra] = rb
+                par[ra] = pa ^ pb ^ same
+                rank[rb] += rank[ra]
+            else:
+                parent[rb] = ra
+                par[rb] = pa ^ pb ^ same
+                rank[ra] += rank[rb]
+    comp = np.empty(F, np.int64)
+    flip = np.zeros(F, np.bool_)
+    label = np.full(F, -1, np.int64)
+    rootpar = np.zeros(F, np.uint8)
+    ncomp = 0
+    for f in range(F):
+        r, p = _find(parent, par, f)
+        if label[r] < 0:
+            label[r] = ncomp
+            rootpar[ncomp] = p
+            ncomp += 1
+        comp[f] = label[r]
+        flip[f] = (p ^ rootpar[label[r]]) != 0
+    return conflict, n_bnd, n_nm, ncomp, comp, flip, np.flatnonzero(open_mark)
+
+
+def _orient_graph(tri, info):
+    """The graph path of orient_facets (scipy breadth-first propagation; any mesh)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import breadth_first_order, connected_components
+
+    F = len(tri)
     flat = np.ascontiguousarray(tri.reshape(-1, 3)) + 0.0          # + 0.0: -0.0 welds with 0.0
     _, vid = np.unique(flat.view(np.dtype((np.void, 24))).ravel(), return_inverse=True)
     V = vid.reshape(F, 3)
@@ -363,13 +609,19 @@ def orient_facets(triangles, rule: str = "auto"):
         anc = np.where(moving, anc[anc], anc)
     flip = par.astype(bool)
     info["winding_conflicts"] = int(((flip[f1] ^ flip[f2]) != same).sum())
-    t2 = np.where(flip[:, None, None], tri[:, ::-1], tri)
-    # one sign per component: closed -> outward (signed volume), open -> upward (sum of N_z * area)
     bnd_fac = fac[order[first[cnt[gid[first]] == 1]]]
     open_comp = np.zeros(ncomp, bool)
     open_comp[comp[bnd_fac]] = True
     nm_fac = fac[order[first[cnt[gid[first]] > 2]]]
     open_comp[comp[nm_fac]] = True
+    return _orient_turn(tri, info, comp, ncomp, flip, open_comp)
+
+
+def _orient_turn(tri, info, comp, ncomp, flip, open_comp):
+    """One sign per component: closed -> outward (signed volume), open -> upward (sum of N_z * area)
+    or by ray parity (see :func:`orient_facets`); returns (triangles, flipped, info)."""
+    F = len(tri)
+    t2 = np.where(flip[:, None, None], tri[:, ::-1], tri) if flip.any() else tri
     cross = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
     vol = np.bincount(comp, (t2[:, 0] * cross).sum(axis=1), ncomp)
     upz = np.bincount(comp, cross[:, 2], ncomp)
@@ -400,7 +652,7 @@ def orient_facets(triangles, rule: str = "auto"):
                 inside = along % 2 == 1 if sgn > 0 else against % 2 == 1
                 turn[c] = inside
     flip = flip ^ turn[comp]
-    out = np.where(flip[:, None, None], tri[:, ::-1], tri)
+    out = np.where(flip[:, None, None], tri[:, ::-1], tri) if flip.any() else tri
     return out, flip, info
 
 
@@ -486,21 +738,28 @@ def read_stl(path, degenerate: str = "error", orient: str = "auto", orient_up: b
         raise STLError(f"{where(k)}: {str(exc).split(': ', 1)[1]}") from None
     if mesh.info["dropped_degenerate"]:
         stored = stored[facet_areas(tri) > 1e-12 * max(float(np.ptp(tri.reshape(-1, 3), axis=0).max()), 1e-300) ** 2]
-    key = np.sort(np.ascontiguousarray(mesh.triangles + 0.0).view(np.dtype((np.void, 24))).reshape(-1, 3), axis=1)
-    _, first, inv = np.unique(key.view(np.dtype((np.void, 72))).ravel(), return_index=True, return_inverse=True)
-    dup = np.flatnonzero(first[inv.ravel()] != np.arange(len(key)))
+    # repeated facets: the same three welded corners (exact coordinates, -0.0 == 0.0) in any order
+    vid = _weld_ids(mesh.triangles)
+    first = _first_equal_triple(vid)
+    dup = np.flatnonzero(first != np.arange(len(first)))
     if dup.size and degenerate == "error":
-        k, j = int(dup[0]), int(first[inv.ravel()[dup[0]]])
+        k, j = int(dup[0]), int(first[dup[0]])
         raise STLError(f"{where(k)}: facet {k} repeats facet {j} (same three corners; {dup.size} duplicate "
                        "facet(s); pass degenerate='drop' to skip them)")
     if dup.size:
         keep = np.ones(len(key), bool)
         keep[dup] = False
         mesh.triangles, mesh.normals, stored = mesh.triangles[keep], mesh.normals[keep], stored[keep]
+        vid = vid[keep]
     mesh.info["dropped_duplicate"] = int(dup.size)
-    t2, flipped, oinfo = orient_facets(mesh.triangles, orient)
-    mesh.triangles = t2
-    mesh.normals = facet_normals(t2)
+    if orient == "auto":          # = orient_facets(mesh.triangles), reusing the welded vertex ids
+        oinfo = {"components": 0, "non_manifold_edges": 0, "winding_conflicts": 0, "boundary_edges": 0}
+        t2, flipped, oinfo = _orient(np.array(mesh.triangles, dtype=float, copy=True), oinfo, vid)
+    else:
+        t2, flipped, oinfo = orient_facets(mesh.triangles, orient)
+    if flipped.any():
+        mesh.triangles = t2
+        mesh.normals = facet_normals(t2)
     ln = np.linalg.norm(stored, axis=1)
     missing = ln == 0
     unit = np.divide(stored, ln[:, None], out=np.zeros_like(stored), where=ln[:, None] > 0)
@@ -583,7 +842,11 @@ class FacetLocator:
         self.mesh = mesh
         self.centroids = mesh.centroids
         self.tree = cKDTree(self.centroids, leafsize=leafsize, balanced_tree=False, compact_nodes=False)
-        self.circumradius = float(np.linalg.norm(mesh.triangles - self.centroids[:, None], axis=2).max())
+
+    @functools.cached_property
+    def circumradius(self) -> float:
+        """Largest distance (mm) from a facet centroid to one of its corners (computed on first use)."""
+        return float(np.linalg.norm(self.mesh.triangles - self.centroids[:, None], axis=2).max())
 
     def nearest_centroid(self, points, workers: int = 1) -> np.ndarray:
         """Index of the facet whose centroid ("incentre", thesis rule) is nearest each point (N,)."""

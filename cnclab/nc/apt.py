@@ -33,8 +33,8 @@ Dialect
   values, a feed motion before any ``FEDRAT``, a program without motion, a motion before ``UNITS``.
 
 Speed: runs of plain ``GOTO / x, y, z`` lines (the bulk of a CL file) are located with one regular
-expression, checked strictly with numpy (one '/', two commas, exactly one number token per field) and
-converted with ``numpy.fromstring`` (the same correctly rounded conversion as ``float``); they stay in
+expression, then checked and converted in one compiled pass (``GOTO``, '/', three numbers of the strict
+grammar separated by commas; values exactly as ``float`` gives them, see ``_bulk_goto``); they stay in
 bulk (:class:`GotoRun`) until ``AptProgram.records`` is accessed. Any line that does not pass the
 check goes through the careful per-line parser, so records, text and error messages are identical to
 ``parse_apt(..., fast=False)`` (tested). About 7-8x faster on 1e6 points (benchmarks/bench_spindle_postprocess.py).
@@ -54,10 +54,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-import warnings
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from ..fileio import atomic_write
 
@@ -129,19 +129,26 @@ def _format_num(v: float, decimals: int) -> str:
 def goto(x: float, y: float, z: float, decimals: int = 3) -> AptRecord:
     """A generated ``GOTO / x, y, z`` record (mm)."""
     text = "GOTO / " + ", ".join(_format_num(v, decimals) for v in (x, y, z))
-    return AptRecord("GOTO", [repr(float(x)), repr(float(y)), repr(float(z))], text + "\n")
+    return AptRecord("GOTO", [repr(float(x)), repr(float(y)), repr(float(z))], text + "\n",
+                     nums=_finite_nums(x, y, z))
+
+
+def _finite_nums(*vals) -> list | None:
+    """The ``values`` of generated arguments ``repr(float(v))`` (None: let ``values`` parse them)."""
+    out = [float(v) for v in vals]
+    return out if all(math.isfinite(v) for v in out) else None
 
 
 def spindl(rpm: float, direction: str = "CLW", decimals: int = 0) -> AptRecord:
     """A generated ``SPINDL / RPM, n, CLW`` record (rpm)."""
     text = f"SPINDL / RPM, {_format_num(rpm, decimals)}, {direction}"
-    return AptRecord("SPINDL", ["RPM", repr(float(rpm)), direction], text + "\n")
+    return AptRecord("SPINDL", ["RPM", repr(float(rpm)), direction], text + "\n", nums=_finite_nums(rpm))
 
 
 def fedrat(feed_mm_min: float, decimals: int = 1) -> AptRecord:
     """A generated ``FEDRAT / f, MMPM`` record (mm/min)."""
     text = f"FEDRAT / {_format_num(feed_mm_min, decimals)}, MMPM"
-    return AptRecord("FEDRAT", [repr(float(feed_mm_min)), "MMPM"], text + "\n")
+    return AptRecord("FEDRAT", [repr(float(feed_mm_min)), "MMPM"], text + "\n", nums=_finite_nums(feed_mm_min))
 
 
 def _word(text: str, word: str, args=()) -> AptRecord:
@@ -203,10 +210,11 @@ class GotoRun:
     1-based source line of the first one. Expanded to :class:`AptRecord` objects only on demand.
     """
 
-    __slots__ = ("text", "xyz", "line", "_starts")
+    __slots__ = ("text", "xyz", "line", "_starts", "_off")
 
-    def __init__(self, text: str, xyz: np.ndarray, line: int, starts: np.ndarray | None = None):
-        self.text, self.xyz, self.line, self._starts = text, xyz, line, starts
+    def __init__(self, text: str, xyz: np.ndarray, line: int, starts: np.ndarray | None = None, off: int = 0):
+        # starts - off: the line starts (a view of the parent run's offsets until first needed)
+        self.text, self.xyz, self.line, self._starts, self._off = text, xyz, line, starts, off
 
     def __len__(self):
         return len(self.xyz)
@@ -219,13 +227,18 @@ class GotoRun:
         """Offsets of the M line starts in ``text`` plus ``len(text)`` (M + 1 values)."""
         if self._starts is None:
             nl = np.flatnonzero(np.frombuffer(self.text.encode("ascii"), np.uint8) == 10)
-            self._starts = np.concatenate([[0], nl + 1])
+            self._starts, self._off = np.concatenate([[0], nl + 1]), 0
+        elif self._off:
+            self._starts, self._off = self._starts - self._off, 0
         return self._starts
 
     def slice(self, a: int, b: int) -> "GotoRun":
         """Lines a..b-1 as a new run."""
-        st = self.starts()
-        return GotoRun(self.text[st[a]:st[b]], self.xyz[a:b], self.line + a, st[a:b + 1] - st[a])
+        if self._starts is None:
+            self.starts()
+        st, off = self._starts, self._off
+        s0, s1 = int(st[a]) - off, int(st[b]) - off
+        return GotoRun(self.text[s0:s1], self.xyz[a:b], self.line + a, st[a:b + 1], s0 + off)
 
     def records(self) -> list:
         st = self.starts().tolist()
@@ -491,7 +504,7 @@ def _parse_careful(lines, first_line: int, records: list, st: _State, source: st
         word = word.strip().upper()
         rec = AptRecord(word, args, raw, lineno, comment.strip())
         where = f"{source}:{lineno}"
-        head = word.split()[0]
+        head = word.split()[0] if word.split() else ""     # '/ ...' with no word (e.g. after a form feed)
         if not _WORD_RE.fullmatch(head):
             raise AptError(f"{where}: {stmt[:40]!r} does not start with an APT word (ASCII letters, digits, '_')")
         if head in REFUSED_MOTION:
@@ -563,50 +576,132 @@ def _parse_careful(lines, first_line: int, records: list, st: _State, source: st
 # the careful parser, which gives the same records and the same error messages.
 _RUN_RE = re.compile(r"(?:^GOTO[ \t]*/[-+0-9.eE, \t]*\r?\n)+", re.M)
 _MIN_RUN = 8
-_NUMCH = np.zeros(256, bool)
-_NUMCH[np.frombuffer(b"0123456789.+-eE", np.uint8)] = True
 
 
 def _bulk_goto(text: str) -> np.ndarray | None:
-    """(M, 3) values of a candidate run if every line is exactly ``GOTO / a, b, c`` with three finite
-    numbers that Python's ``float`` reads as ``numpy.fromstring`` does; else None."""
+    """(M, 3) values of a candidate run if every line is exactly ``GOTO / a, b, c`` (blanks and tabs
+    around the fields, ``\\r\\n`` or ``\\n``) with three numbers of the strict grammar; else None.
+
+    One compiled pass checks the lines and converts the numbers exactly (Clinger's fast path: at
+    most 15 significant digits and a power of ten up to 22 are two exact doubles, so one
+    multiplication or division gives the correctly rounded value ``float`` gives); the rare other
+    numbers are converted by ``float``.
+    """
     b = np.frombuffer(text.encode("ascii"), np.uint8)
-    nl = np.flatnonzero(b == 10)
-    m = nl.size
-    slash = np.flatnonzero(b == 47)
-    if slash.size != m:
+    ok, vals, hard, t0, t1 = _goto_lines(b)
+    if not ok:
         return None
-    body = _after_slash(b.size, slash, nl)             # characters after each line's '/'
-    num = _NUMCH[b] & body
-    tok_start = num & ~np.concatenate([[False], num[:-1]])
-    comma = b == 44
-    ev = np.flatnonzero(tok_start | comma)
-    if ev.size != 5 * m:
+    for i in np.flatnonzero(hard).tolist():
+        vals[i] = float(text[t0[i]:t1[i]])
+    if not np.isfinite(vals).all():
         return None
-    ev_line = np.searchsorted(nl, ev)
-    if not (np.bincount(ev_line, minlength=m) == 5).all():
-        return None
-    pattern = comma[ev].reshape(m, 5)
-    if not (pattern == np.array([False, True, False, True, False])).all():
-        return None
-    clean = text.replace("GOTO", "    ").replace("/", " ").replace(",", " ")
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        try:
-            vals = np.fromstring(clean, sep=" ")
-        except (ValueError, DeprecationWarning):
-            return None
-    if vals.size != 3 * m or not np.isfinite(vals).all():
-        return None
-    return vals.reshape(m, 3)
+    return vals.reshape(-1, 3)
 
 
-def _after_slash(n: int, slash: np.ndarray, nl: np.ndarray) -> np.ndarray:
-    """Bool mask of the positions strictly between each line's '/' and its newline."""
-    d = np.zeros(n + 1, np.int8)
-    d[slash + 1] += 1
-    d[nl] -= 1
-    return np.cumsum(d[:n]) > 0
+_POW10 = np.array([10.0 ** k for k in range(23)])
+
+
+@njit(cache=True, nogil=True)
+def _goto_lines(b):
+    """Check and convert a candidate run (bytes): (ok, values (3M,), hard (3M,), token start/end)."""
+    n = b.shape[0]
+    m = 0
+    for i in range(n):
+        if b[i] == 10:
+            m += 1
+    vals = np.zeros(3 * m, np.float64)
+    hard = np.zeros(3 * m, np.bool_)
+    t0 = np.zeros(3 * m, np.int64)
+    t1 = np.zeros(3 * m, np.int64)
+    pos = 0
+    k = 0
+    for _ in range(m):
+        if pos + 4 > n or b[pos] != 71 or b[pos + 1] != 79 or b[pos + 2] != 84 or b[pos + 3] != 79:  # GOTO
+            return False, vals, hard, t0, t1
+        pos += 4
+        while pos < n and (b[pos] == 32 or b[pos] == 9):
+            pos += 1
+        if pos >= n or b[pos] != 47:  # '/'
+            return False, vals, hard, t0, t1
+        pos += 1
+        for fld in range(3):
+            while pos < n and (b[pos] == 32 or b[pos] == 9):
+                pos += 1
+            t0[k] = pos
+            neg = False
+            if pos < n and (b[pos] == 43 or b[pos] == 45):
+                neg = b[pos] == 45
+                pos += 1
+            w = 0
+            nd = 0        # significant digits kept in w
+            scale = 0     # decimal exponent correction
+            n_int = 0
+            n_frac = 0
+            while pos < n and 48 <= b[pos] <= 57:
+                if w > 0 or b[pos] != 48:
+                    if nd < 18:
+                        w = w * 10 + (b[pos] - 48)
+                        nd += 1
+                    else:
+                        scale += 1
+                        hard[k] = True
+                n_int += 1
+                pos += 1
+            if pos < n and b[pos] == 46:  # '.'
+                pos += 1
+                while pos < n and 48 <= b[pos] <= 57:
+                    if w > 0 or b[pos] != 48:
+                        if nd < 18:
+                            w = w * 10 + (b[pos] - 48)
+                            nd += 1
+                            scale -= 1
+                        else:
+                            hard[k] = True
+                    else:
+                        scale -= 1
+                    n_frac += 1
+                    pos += 1
+            if n_int + n_frac == 0:
+                return False, vals, hard, t0, t1
+            if pos < n and (b[pos] == 101 or b[pos] == 69):  # exponent
+                pos += 1
+                eneg = False
+                if pos < n and (b[pos] == 43 or b[pos] == 45):
+                    eneg = b[pos] == 45
+                    pos += 1
+                ne = 0
+                ev = 0
+                while pos < n and 48 <= b[pos] <= 57:
+                    if ev < 100000:
+                        ev = ev * 10 + (b[pos] - 48)
+                    ne += 1
+                    pos += 1
+                if ne == 0:
+                    return False, vals, hard, t0, t1
+                scale += -ev if eneg else ev
+            t1[k] = pos
+            if nd > 15 or scale > 22 or scale < -22:
+                hard[k] = True
+            if not hard[k]:
+                v = float(w)
+                if scale >= 0:
+                    v = v * _POW10[scale]
+                else:
+                    v = v / _POW10[-scale]
+                vals[k] = -v if neg else v
+            k += 1
+            while pos < n and (b[pos] == 32 or b[pos] == 9):
+                pos += 1
+            if fld < 2:
+                if pos >= n or b[pos] != 44:  # ','
+                    return False, vals, hard, t0, t1
+                pos += 1
+        if pos < n and b[pos] == 13:
+            pos += 1
+        if pos >= n or b[pos] != 10:
+            return False, vals, hard, t0, t1
+        pos += 1
+    return pos == n, vals, hard, t0, t1
 
 
 def parse_apt(text: str, source: str = "<apt>", fast: bool = True, require_units: bool = True) -> AptProgram:

@@ -27,20 +27,23 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from ..cutting.speeds import feed_speed, spindle_speed
 from ..cutting.spindle_model import POINT_RULES, apply_acceleration_limit, feed_directions, working_diameters
 from ..fileio import atomic_write_many, check_outputs
 from ..geometry.mesh import FacetLocator, TriMesh, closest_point_on_triangles, machined_surface_mask, read_stl
 from ..toolpath.path import Move
-from .apt import AptProgram, CLPoints, GotoRun, fedrat, read_apt, spindl
+from .apt import AptProgram, AptRecord, CLPoints, GotoRun, fedrat, read_apt, spindl
+from .numfmt import fixed, scaled_ints
 from .gcode import write_gcode, write_gcode_linear
 
 __all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
-           "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files",
+           "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files", "read_inputs",
            "path_surface_deviation",
            "POINT_RULES"]
 
@@ -104,12 +107,13 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
                      facet_rule: str = "centroid", point: str = "max", n_max: float | None = None,
                      n_min: float | None = None, vf_max: float | None = None,
                      accel_rpm_s: float | None = None, filter_facets: bool = True,
-                     locator: FacetLocator | None = None) -> SpindleSchedule:
+                     locator: FacetLocator | None = None, workers: int = -1) -> SpindleSchedule:
     """Compute the point-by-point spindle speed and feed for the feed points of ``cl``.
 
     Parameters: tool_diameter (mm), a_p (mm), v_c nominal cutting speed (m/min), f_z (mm), teeth;
     feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule 'centroid' | 'nearest';
-    point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s).
+    point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s);
+    workers: threads of the KD-tree queries (-1: every core; the result does not depend on it).
     """
 
     for name, v in (("tool_diameter", tool_diameter), ("a_p", a_p), ("v_c", v_c), ("f_z", f_z)):
@@ -117,6 +121,8 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
             raise ValueError(f"{name} must be > 0, got {v}")
     if int(teeth) != teeth or teeth < 1:
         raise ValueError(f"teeth must be a positive integer, got {teeth}")
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers == 0 or workers < -1:
+        raise ValueError(f"workers must be -1 (every core) or an integer >= 1, got {workers!r}")
     if facet_rule not in ("centroid", "nearest"):
         raise ValueError(f"facet_rule must be 'centroid' or 'nearest', got {facet_rule!r}")
     for name, v in (("n_max", n_max), ("n_min", n_min), ("vf_max", vf_max)):
@@ -143,7 +149,8 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
         A_f = feed_directions(xyz_all, cl.start)[idx]
     else:
         A_f = np.full(idx.size, float(feed_direction_deg))
-    facet = locator.nearest_centroid(pts) if facet_rule == "centroid" else locator.nearest_facet(pts)
+    facet = (locator.nearest_centroid(pts, workers=workers) if facet_rule == "centroid"
+             else locator.nearest_facet(pts, workers=workers))
     normals = locator.mesh.normals[facet]
     d_eff, a1, a2 = working_diameters(normals, A_f, tool_diameter, a_p, point, feed_direction_deg)
     d_safe = np.maximum(d_eff, 1e-6)
@@ -179,7 +186,14 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
     tgt = np.asarray(cl.record)[sched.index]
     if tgt.size > 1 and not (np.diff(tgt) > 0).all():
         raise ValueError("cl/sched: feed points must be in program order")
-    tgt_l, n_l, f_l = tgt.tolist(), np.asarray(sched.n, float).tolist(), np.asarray(sched.v_f, float).tolist()
+    n_a, f_a = np.asarray(sched.n, float), np.asarray(sched.v_f, float)
+    if not (np.isfinite(n_a).all() and np.isfinite(f_a).all()):
+        raise ValueError("sched: spindle speeds n (rpm) and feeds v_f (mm/min) must be finite")
+    # the values written: round(n) and round(v_f, 1) as Python rounds them (correctly rounded,
+    # ties to even): rint, and the digits of f"{v:.1f}" over 10 (a correctly rounded division)
+    rn_a = np.rint(n_a)
+    rf_a = np.copysign(scaled_ints(f_a, 1) / 10.0, f_a)
+    tgt_l, n_l, f_l = tgt.tolist(), n_a.tolist(), f_a.tolist()
     n_t = len(tgt_l)
     out = []
     cur_n = cur_f = float("nan")
@@ -206,14 +220,26 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
             m = len(it)
             j1 = int(np.searchsorted(tgt, k + m, side="left"))
             a = 0
-            for t in range(j, j1):
-                ins = changes(n_l[t], f_l[t])
-                if ins:
-                    li = tgt_l[t] - k
-                    if li > a:
-                        out.append(it.slice(a, li))
-                    out.extend(ins)
-                    a = li
+            # the threshold walk of changes() over the run's targets, compiled; records built after
+            ins_s, ins_f, cur_n, cur_f = _insertions(n_a[j:j1], f_a[j:j1], rn_a[j:j1], rf_a[j:j1], float(cur_n), float(cur_f),
+                                                     float(rpm_threshold), float(vf_threshold))
+            hit = np.flatnonzero(ins_s | ins_f)
+            n_sp += int(ins_s.sum())
+            n_fr += int(ins_f.sum())
+            sp_rec = _spindl_records(rn_a[j:j1][ins_s])
+            fr_rec = _fedrat_records(rf_a[j:j1][ins_f])
+            i_s = i_f = 0
+            for t, s_, f_ in zip((hit + j).tolist(), ins_s[hit].tolist(), ins_f[hit].tolist()):
+                li = tgt_l[t] - k
+                if li > a:
+                    out.append(it.slice(a, li))
+                if s_:
+                    out.append(sp_rec[i_s])
+                    i_s += 1
+                if f_:
+                    out.append(fr_rec[i_f])
+                    i_f += 1
+                a = li
             if a == 0:
                 out.append(it)
             elif a < m:
@@ -232,6 +258,39 @@ def insert_spindle_records(program: AptProgram, cl: CLPoints, sched: SpindleSche
         out.append(r)
         k += 1
     return AptProgram(out, program.source), {"spindl_inserted": n_sp, "fedrat_inserted": n_fr}
+
+
+@njit(cache=True, nogil=True)
+def _insertions(n, f, rn, rf, cur_n, cur_f, rpm_threshold, vf_threshold):
+    """Where SPINDL / FEDRAT records go (bool arrays) and the values in force after the run."""
+    m = n.shape[0]
+    ins_s = np.zeros(m, np.bool_)
+    ins_f = np.zeros(m, np.bool_)
+    for t in range(m):
+        if not abs(n[t] - cur_n) <= rpm_threshold:
+            cur_n = rn[t]
+            ins_s[t] = True
+        if not abs(f[t] - cur_f) <= vf_threshold:
+            cur_f = rf[t]
+            ins_f[t] = True
+    return ins_s, ins_f, cur_n, cur_f
+
+
+def _spindl_records(rpm) -> list:
+    """``spindl(v)`` for each value of ``rpm`` (whole numbers >= 0, rpm), texts formatted in bulk."""
+    if np.signbit(rpm).any():
+        return [spindl(v) for v in rpm.tolist()]
+    txt = fixed(rpm, 0).tolist()
+    return [AptRecord("SPINDL", ["RPM", repr(v), "CLW"], f"SPINDL / RPM, {t}, CLW\n", nums=[v])
+            for v, t in zip(rpm.tolist(), txt)]
+
+
+def _fedrat_records(feed) -> list:
+    """``fedrat(v)`` for each value of ``feed`` (mm/min), texts formatted in bulk."""
+    if np.signbit(feed).any():
+        return [fedrat(v) for v in feed.tolist()]
+    txt = fixed(feed, 1).tolist()
+    return [AptRecord("FEDRAT", [repr(v), "MMPM"], f"FEDRAT / {t}, MMPM\n", nums=[v]) for v, t in zip(feed.tolist(), txt)]
 
 
 def to_gcode_moves(program: AptProgram):
@@ -362,21 +421,42 @@ def gcode_text(program: AptProgram, header: str = "") -> str:
     as arrays (same bytes)."""
     if any(getattr(r, "word", None) == "CIRCLE" for r in program.items()):
         return write_gcode(to_gcode_moves(program), header=header)   # arcs: G2/G3 through the Move writer
-    xyz, rap, fe, sp = [], [], [], []
+    xyz, lens, rap0, fe, sp = [], [], [], [], []
     for pts, rapid, f, s, _, _, _ in _motion_blocks(program):
-        m = len(pts)
         xyz.append(pts)
-        flags = np.zeros(m, bool)
-        flags[0] = rapid
-        rap.append(flags)
-        fe.append(np.full(m, np.nan if f is None else f))
-        sp.append(np.full(m, np.nan if s is None else s))
+        lens.append(len(pts))
+        rap0.append(rapid)
+        fe.append(np.nan if f is None else f)
+        sp.append(np.nan if s is None else s)
     if not xyz:
         return write_gcode([], header=header)
-    rap_a, fe_a = np.concatenate(rap), np.concatenate(fe)
+    lens_a = np.asarray(lens, np.int64)
+    rap_a = np.zeros(int(lens_a.sum()), bool)
+    rap_a[np.concatenate([[0], np.cumsum(lens_a)[:-1]])] = rap0       # only a block's first point is a rapid
+    fe_a = np.repeat(np.asarray(fe, float), lens_a)
+    sp = np.repeat(np.asarray(sp, float), lens_a)
     if np.isnan(fe_a[~rap_a]).any():   # a feed move without FEDRAT: let the Move writer report it
         return write_gcode(to_gcode_moves(program), header=header)
-    return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, np.concatenate(sp), header=header)
+    return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, sp, header=header)
+
+
+def read_inputs(stl_path, apt_path):
+    """``read_stl(stl_path)`` and ``read_apt(apt_path)`` with its ``cl_points()``, read concurrently
+    (the STL in a second thread; its compiled kernels and numpy release the GIL). Returns
+    (mesh, program, cl). Errors as when read one after the other: the STL's first, then the APT's.
+    """
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        fut = pool.submit(read_stl, stl_path)
+        try:
+            prog = read_apt(apt_path)
+            cl = prog.cl_points()
+            err = None
+        except Exception as exc:                 # reported after the STL's own error, if any
+            err = exc
+        mesh = fut.result()
+    if err is not None:
+        raise err
+    return mesh, prog, cl
 
 
 def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, teeth: int, a_p: float,
@@ -422,10 +502,8 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
             bar.update(1)
 
     try:
-        mesh = read_stl(stl_path)
+        mesh, prog, cl = read_inputs(stl_path, apt_path)
         tick("STL")
-        prog = read_apt(apt_path)
-        cl = prog.cl_points()
         tick("APT")
         D = tool_diameter if tool_diameter is not None else prog.tool_diameter()
         if D is None:
