@@ -83,9 +83,24 @@ def _to_toolpath(segs, job: Job, name: str, info: dict, resolution_mm: float = 0
             raise ValueError(f"kind must be one of {SEGMENT_KINDS} or 'rapid', got {sorted(bad)}")
         tags = np.array([ph if k in ("cut", "link") else f"{ph}:{k}" for k in K], dtype=object)
         out.append((P, np.where(K == "link", "link", "cut"), tags))
-    return ToolPath.from_segments(out, z_cut=job.top_z - job.a_p, feed=job.feed_mm_min, clearance_z=job.clearance_z,
+    path = ToolPath.from_segments(out, z_cut=job.top_z - job.a_p, feed=job.feed_mm_min, clearance_z=job.clearance_z,
                                   top_z=job.top_z, link_feed=job.link_feed_mm_min, spindle=job.spindle_rpm,
                                   tool=job.tool, info=dict(info, name=name), reentry="ramp")
+    return _tag_hole_plunges(path, job)
+
+
+def _tag_hole_plunges(path: ToolPath, job: Job) -> ToolPath:
+    """Tag ``cleared`` every vertical plunge below the stock top whose tool disc lies inside the
+    pre-drilled start hole (air: the program marks it ``(cleared)``); in place, returned."""
+    if job.start_hole is None:
+        return path
+    (cx, cy), d, _ = entry_hole(job)
+    down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
+    pl = path.is_kind("plunge") & down & (path.xyz[:, 2] < job.top_z - 1e-9)
+    inside = np.hypot(path.xyz[:, 0] - cx, path.xyz[:, 1] - cy) <= 0.5 * d - job.tool_radius + 1e-9
+    for k in np.flatnonzero(pl & inside):
+        path.tag[k] = "cleared" if not path.tag[k] else f"{path.tag[k]} cleared"
+    return path
 
 
 # ---------------------------------------------------------------------------------------------

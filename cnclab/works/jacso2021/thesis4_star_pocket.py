@@ -78,6 +78,11 @@ def _hybrid_row():
     return df.loc[[i for i in df.index if i.startswith("developed hybrid")][0]]
 
 
+def printed_hybrid_time_s() -> float:
+    """The booklet's measured machining time of its hybrid path (s, §4: 134)."""
+    return float(_hybrid_row()["time_s"])
+
+
 def excess_of_printed_time_pct() -> float:
     """(t_hybrid / t_min - 1) in % with the printed 134 s and t_min = V/MRR_nom from the printed
     V = 2098 mm³ and MRR_nom = 1147.5 mm³/min — consistency of the printed 22 %."""
