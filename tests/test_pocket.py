@@ -250,3 +250,22 @@ def test_l_shaped_pocket_from_json():
     assert shapely.distance(shapely.points(hp.xyz[:, :2]), job.allowed()).max() < 1e-3
     dmax, dlen, _ = gcode_roundtrip_error(hp, job)
     assert dmax < 1e-4 and dlen < 1e-2
+
+
+def test_plunge_into_the_predrilled_hole_is_marked_cleared():
+    """The comparison strategies start by plunging into the pre-drilled start hole: the move is
+    tagged ``cleared`` (the tool disc lies inside the hole), so the written program counts no plunge
+    into material; a plunge outside the hole keeps its plain tag."""
+    from cnclab.nc.program import check_program, write_program
+
+    job = pk.Job.from_dict(RECT)
+    for f in (pk.contour_parallel_path, pk.zigzag_path):
+        p = f(job)
+        down = np.r_[False, np.diff(p.xyz[:, 2]) < 0]
+        pl = np.flatnonzero(p.is_kind("plunge") & down & (p.xyz[:, 2] < job.top_z - 1e-9))
+        assert len(pl) >= 1
+        for k in pl:
+            inside = np.hypot(*(p.xyz[k, :2] - [20, 12])) <= 5.5 - job.tool_radius + 1e-9
+            assert ("cleared" in str(p.tag[k])) == inside
+        chk = check_program(write_program(p, job), clearance_z=job.clearance_z, top_z=job.top_z)
+        assert chk.plunges_into_material == 0

@@ -102,12 +102,13 @@ def _job_files() -> dict:
 
 
 def _is_job_file(p) -> bool:
-    """A pocket job file (a ``polygon`` and a ``tool_diameter``), not a parameter table."""
+    """A pocket job file (the job format's ``tool_diameter`` and a ``polygon``, ``regions`` or
+    ``star``), not a parameter table (those name their fields with units: ``tool_diameter_mm``)."""
     try:
         d = json.loads(Path(p).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return False
-    return isinstance(d, dict) and "polygon" in d and "tool_diameter" in d
+    return isinstance(d, dict) and "tool_diameter" in d and any(k in d for k in ("polygon", "regions", "star"))
 
 
 def _mgherony(angle):
