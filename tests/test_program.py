@@ -160,3 +160,16 @@ def test_programs_cover_the_default_plan_of_every_job_file():
     assert got == expected and {"kim_yang2006/pocket_120x85_plan_default", "jacso2021/star_pocket_plan_default",
                                 "pockets/two_regions_plan_default"} <= got
     assert "jacso2021/table4_1_cutting_parameters_plan_default" not in got
+
+
+def test_drop_cut_descent_tagged_cleared_only_when_vertical():
+    """ch. 8 programs: the vertical feed down onto a drop-cut CL point is tagged cleared (the ball
+    above the contact height touches no facet); a sloped descent (a ramp) is not."""
+    from cnclab.works.programs import _tag_drop_cut_descents
+
+    p = ToolPath.build([[0, 0, 30], [0, 0, 2], [1, 0, 2], [2, 0, 1.5], [2, 0, 1.0]],
+                       kind=["rapid", "plunge", "cut", "cut", "plunge"], feed=500)
+    _tag_drop_cut_descents(p)
+    assert ["cleared" in str(t) for t in p.tag] == [False, True, False, False, True]
+    chk = check_program(write_program(p, clearance_z=30, spindle_rpm=2000, top_z=10), clearance_z=30, top_z=10)
+    assert chk.plunges_into_material == 0 and chk.entries == {"helix": 0, "ramp": 1, "plunge": 2}

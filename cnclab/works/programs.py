@@ -11,7 +11,8 @@ path's own time (:meth:`ToolPath.time_s`) that ``make gcode-check`` compares wit
 * kim_yang2006 — original and modified constant-MRR contour-parallel paths, constant-engagement
   clearing of the same pocket;
 * jacso2021 — hybrid, contour-parallel and zig-zag on the star, rectangle and L pockets;
-* mgherony2024 — the ch. 8 drop-cut zig-zag finishing path at the five feed directions;
+* mgherony2024 — the ch. 8 drop-cut zig-zag finishing path at the five feed directions (the feed
+  down onto the first CL point is tagged ``cleared``: its z is the drop cutter's contact height);
 * every pocket job file of ``data/`` (``data/jacso2021/*.json``, ``data/kim_yang2006/pocket_*.json``,
   ``data/pockets/*.json``): the default planner's program, ``<job>_plan_default.ngc`` in the folder
   of its work (or ``pockets``), written by the code path of ``python -m cnclab plan JOB.json``
@@ -111,11 +112,25 @@ def _is_job_file(p) -> bool:
     return isinstance(d, dict) and "tool_diameter" in d and any(k in d for k in ("polygon", "regions", "star"))
 
 
+def _tag_drop_cut_descents(path: ToolPath) -> ToolPath:
+    """Tag ``cleared`` the vertical feed moves that come down onto a drop-cut CL point of a finishing
+    path (the ch. 8 approach from the clearance plane). The point's z is the ball's first contact
+    height over the part mesh (:func:`cnclab.toolpath.dropcutter.drop_cutter_z`, the maximum over
+    every facet in reach), so the ball above it touches no facet: the descent meets no part
+    material (the model has no finishing allowance above the surface). In place, returned."""
+    down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
+    xy_same = np.r_[False, np.all(np.abs(np.diff(path.xyz[:, :2], axis=0)) <= 1e-9, axis=1)]
+    for k in np.flatnonzero(path.is_kind("plunge") & down & xy_same):
+        path.tag[k] = "cleared (drop-cut contact point)" if not path.tag[k] else f"{path.tag[k]} cleared"
+    return path
+
+
 def _mgherony(angle):
     def make():
         tp = ch7_9.parameters()["table7_1"]
         moves = apt_to_moves(read_apt(ch7_9.zigzag_apt(angle)))
         path = ToolPath.from_moves(moves, tool=Tool(tp["D"], corner_radius=0.5 * tp["D"], flutes=tp["teeth"]))
+        _tag_drop_cut_descents(path)
         hdr = [f"Mgherony 2024 ch. 8 drop-cut zig-zag finishing, A_f = {angle:g} deg, D{tp['D']:g} ball"]
         on_part = path.xyz[(~path.is_kind("rapid")) & (path.xyz[:, 2] < 30.0), 2]
         top = float(on_part.max())   # the part's highest CL point: the stock top of a finishing path
