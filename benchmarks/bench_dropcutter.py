@@ -16,7 +16,8 @@ import numpy as np
 
 from cnclab.geometry.mesh import read_stl
 from cnclab.paths import data_path
-from cnclab.toolpath.dropcutter import drop_cutter_z, zigzag_xy
+from cnclab.toolpath.dropcutter import drop_cutter_z
+from cnclab.toolpath.zigzag import raster_passes
 from cnclab.works.mgherony2024 import ch7_9
 
 try:
@@ -51,7 +52,7 @@ def cases(n_points):
     fine = ch7_9.surface_mesh(0.5)
     for name, m in (("sample STL", sample), ("ch. 8 part, cell 0.5 mm", fine)):
         lo, hi = m.triangles.reshape(-1, 3).min(0), m.triangles.reshape(-1, 3).max(0)
-        xy = np.vstack(zigzag_xy((lo[0], hi[0], lo[1], hi[1]), 0.25, 0.0, 0.5))
+        xy = np.vstack(raster_passes((lo[0], hi[0], lo[1], hi[1]), 0.25, 0.0, last="edge", step=0.5, links=True))
         yield name, m, xy[np.linspace(0, len(xy) - 1, min(n_points, len(xy))).astype(int)]
 
 

@@ -16,6 +16,7 @@ import pandas as pd
 
 from cnclab.paths import data_path
 from cnclab.toolpath import pocket as pk
+from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import load_job
 from cnclab.works.jacso2021.thesis4_star_pocket import star_job
 
@@ -36,7 +37,7 @@ def main(resolutions=(0.2, 0.1)):
                 t0 = time.perf_counter()
                 p = plan(res)
                 t1 = time.perf_counter()
-                _, s = pk.evaluate_strategy(p, job, res, feed_control=name == "hybrid")
+                s = evaluate(p, job, res, feed_control=name == "hybrid", level_only=True).trace["level_summary"]
                 t2 = time.perf_counter()
                 row = {"shape": shape, "resolution_mm": res, "strategy": name, "plan_s": t1 - t0,
                        "simulate_s": t2 - t1, "total_s": t2 - t0, "points": len(p),

@@ -142,3 +142,34 @@ def test_bad_input_names_the_parameter():
         cc.default_seeds(pk, 1.5)
     with pytest.raises(ValueError, match="z_cut"):
         cc.ce_clearing(pk, R, THETA, top_z=0.0, clearance_z=-1.0)
+
+
+@pytest.mark.parametrize("name", ["plain", "island"])
+def test_reentry_plunges_are_tagged_cleared_and_the_program_counts_none(name):
+    """Every vertical plunge below the stock top follows a jump into the cleared region: the planner
+    tags it ``cleared`` (written ``(cleared)``), the static checker counts no plunge into material,
+    and the dixel evaluator (independently) finds none either."""
+    from cnclab.nc.program import check_program, write_program
+
+    job, path, ev = _run(name)
+    down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
+    pl = path.is_kind("plunge") & down & (path.xyz[:, 2] < job.top_z - 1e-9)
+    assert pl.sum() >= 1 and all("cleared" in str(t) for t in path.tag[pl])
+    text = write_program(path, job)
+    chk = check_program(text, clearance_z=job.clearance_z, top_z=job.top_z)
+    assert chk.plunges_into_material == 0 and chk.entries["plunge"] >= pl.sum()
+    assert text.count("(cleared)") >= pl.sum()
+    assert ev.plunges_into_material == 0
+
+
+def test_untagged_plunge_is_counted_by_the_checker():
+    """The tag is what the checker reads: the same program with the tags removed counts each plunge."""
+    from cnclab.nc.program import check_program, write_program
+
+    job, path, _ = _run("island")
+    bare = ToolPath.build(path.xyz, kind=path.kinds(), tag=[str(t).replace("cleared", "").strip() for t in path.tag],
+                          feed=path.feed, spindle=path.spindle, tool=path.tool)
+    down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
+    n = int((path.is_kind("plunge") & down & (path.xyz[:, 2] < job.top_z - 1e-9)).sum())
+    chk = check_program(write_program(bare, job), clearance_z=job.clearance_z, top_z=job.top_z)
+    assert chk.plunges_into_material == n >= 1

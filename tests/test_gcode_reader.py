@@ -243,3 +243,37 @@ def test_gcode_check_rows_from_committed_canonical_output(tmp_path, monkeypatch)
     prog.write_text(prog.read_text().replace("X100.000\n", "X110.000\n", 1))
     rows, ok = gcode_check.check_all(tmp_path)
     assert not rows[0]["ok"] and "feed length differs from rs274" in rows[0]["problem"]
+
+
+def test_gcode_check_fails_an_unmarked_plunge_below_the_stock_top(tmp_path, monkeypatch):
+    """A vertical plunge below the stock top without the ``(cleared)`` mark fails `make gcode-check`
+    (the planners tag the plunges into area they cleared; the static count must be 0)."""
+    import json
+
+    from cnclab.nc import gcode_check
+    from cnclab.nc.program import write_program
+
+    for tag, ok_expected in (("cleared", True), ("", False)):
+        p = ToolPath.build([[0, 0, 5], [0, 0, -1], [10, 0, -1]], kind=["rapid", "plunge", "cut"], tag=["", tag, ""],
+                           feed=300)
+        text = write_program(p, clearance_z=5, spindle_rpm=6000)
+        prog = tmp_path / "w" / "p.ngc"
+        prog.parent.mkdir(exist_ok=True)
+        prog.write_text(text)
+        t = program_time(parse_gcode(text), 10000.0)
+        man = {"rapid_mm_min": 10000.0, "programs": {"w/p": {"file": "w/p.ngc", "clearance_z": 5.0, "top_z": 0.0,
+                                                             "path_time_s": t["total_s"]}}}
+        (tmp_path / "manifest.json").write_text(json.dumps(man))
+        # rs274 replaced: its totals taken from cnclab's own reader (from the origin, as rs274 starts)
+        t0 = program_time(parse_gcode(text, start=(0, 0, 0)), 10000.0, start=(0, 0, 0))
+        monkeypatch.setattr(gcode_check, "run_rs274", lambda f: "")
+        monkeypatch.setattr(gcode_check, "parse_canonical", lambda text, source=None: _Canon(t0))
+        rows, ok = gcode_check.check_all(tmp_path)
+        assert ok is ok_expected and (rows[0]["plunges_below_top"] == (0 if ok_expected else 1)), rows
+
+
+class _Canon:
+    """Stand-in for rs274's parsed totals (feed length/time from cnclab's reader, spindle on)."""
+
+    def __init__(self, t):
+        self.feed_mm, self.feed_s, self.spindle_on_before_feed = t["feed_mm"], t["feed_s"], True

@@ -8,6 +8,13 @@ import shapely
 
 from cnclab.nc.gcode import gcode_roundtrip_error
 from cnclab.toolpath import pocket as pk
+from cnclab.toolpath.evaluate import evaluate
+
+
+def level(path, job, res, feed_control=False):
+    """The one evaluator's cutting-level model: (per-step table, level summary, Evaluation)."""
+    ev = evaluate(path, job, res, feed_control=feed_control)
+    return ev.trace["level"], ev.trace["level_summary"], ev
 
 TOOL = {"tool_diameter": 6.0, "teeth": 1, "v_c": 120.0, "f_z": 0.04, "a_p": 3.0, "theta_deg": 60.0}
 RECT = dict(TOOL, polygon=[[0, 0], [40, 0], [40, 24], [0, 24]], start_hole={"center": [20, 12], "diameter": 11},
@@ -34,7 +41,7 @@ def test_star_design_volume_and_arms():
 def planned(request):
     job = _star_job() if request.param == "star" else pk.Job.from_dict(RECT)
     hp = pk.hybrid_path(job, 0.1)                                   # max_wall_share="auto"
-    T, s = pk.evaluate_strategy(hp, job, 0.1, feed_control=True)
+    T, s, _ = level(hp, job, 0.1, feed_control=True)
     return request.param, job, hp, T, s
 
 
@@ -147,13 +154,19 @@ def test_engagement_bounded_and_pocket_cleared(planned):
     assert np.all(v[~free_link] <= job.v_fmax + 1e-9) and np.all(v[free_link] == job.link_feed_mm_min)
     assert np.all(v[T.kind.to_numpy() == "cut"] == job.feed_mm_min)
     assert v[roll].max() == job.v_fmax                                 # air parts of roll-ins capped
-    assert s["time_s"] < pk.evaluate_strategy(hp, job, 0.1)[1]["time_s"]
+    T0, s0, ev0 = level(hp, job, 0.1)
+    assert s["time_s"] < s0["time_s"]
+    ev = evaluate(hp, job, 0.1, feed_control=True)
+    # the program's time changes by exactly the cutting level's change (same path, feeds differ there)
+    assert ev.time_feed_controlled_s - ev0.time_feed_controlled_s == pytest.approx(s["time_s"] - s0["time_s"], rel=1e-9)
+    # constant feed: cut steps at the path's feed; link steps that cut run at the (slower) cutting feed
+    assert ev0.time_feed_controlled_s >= ev0.time_total_s - 1e-9
 
 
 def test_comparison_paths_cover_rectangle():
     job = pk.Job.from_dict(RECT)
     for f in (pk.contour_parallel_path, pk.zigzag_path):
-        T, s = pk.evaluate_strategy(f(job), job, 0.1)
+        T, s, _ = level(f(job), job, 0.1)
         assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 1.0     # sharp corners: unreachable
         assert s["max_engagement_deg"] >= 60.0 - 1.0
 
@@ -221,7 +234,7 @@ def test_l_shaped_pocket_from_json():
 
     job = pk.load_job(data_path("jacso2021", "l_pocket.json"))
     hp = pk.hybrid_path(job, 0.1)
-    T, s = pk.evaluate_strategy(hp, job, 0.1, feed_control=True)
+    T, s, _ = level(hp, job, 0.1, feed_control=True)
     c = hp.info["wall_share_candidates"]
     assert hp.info["max_wall_share"] == 0.5 and hp.info["wall_share_choice"]["clean"] == [False, True]
     assert c[0]["uncut_beyond_unreachable_mm2"] > c[1]["uncut_beyond_unreachable_mm2"] + 0.0025 * job.polygon.area
@@ -237,3 +250,22 @@ def test_l_shaped_pocket_from_json():
     assert shapely.distance(shapely.points(hp.xyz[:, :2]), job.allowed()).max() < 1e-3
     dmax, dlen, _ = gcode_roundtrip_error(hp, job)
     assert dmax < 1e-4 and dlen < 1e-2
+
+
+def test_plunge_into_the_predrilled_hole_is_marked_cleared():
+    """The comparison strategies start by plunging into the pre-drilled start hole: the move is
+    tagged ``cleared`` (the tool disc lies inside the hole), so the written program counts no plunge
+    into material; a plunge outside the hole keeps its plain tag."""
+    from cnclab.nc.program import check_program, write_program
+
+    job = pk.Job.from_dict(RECT)
+    for f in (pk.contour_parallel_path, pk.zigzag_path):
+        p = f(job)
+        down = np.r_[False, np.diff(p.xyz[:, 2]) < 0]
+        pl = np.flatnonzero(p.is_kind("plunge") & down & (p.xyz[:, 2] < job.top_z - 1e-9))
+        assert len(pl) >= 1
+        for k in pl:
+            inside = np.hypot(*(p.xyz[k, :2] - [20, 12])) <= 5.5 - job.tool_radius + 1e-9
+            assert ("cleared" in str(p.tag[k])) == inside
+        chk = check_program(write_program(p, job), clearance_z=job.clearance_z, top_z=job.top_z)
+        assert chk.plunges_into_material == 0

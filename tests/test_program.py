@@ -140,3 +140,36 @@ def test_plunge_tagged_cleared_is_written_as_such():
     untagged = write_program(ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], feed=300),
                              clearance_z=5, spindle_rpm=5000)
     assert check_program(untagged, clearance_z=5).plunges_into_material == 1
+
+
+def test_programs_cover_the_default_plan_of_every_job_file():
+    """``python -m cnclab programs`` writes the default planner's program of every pocket job file
+    of data/ (jacso2021, kim_yang2006 pocket, pockets) next to the works' programs."""
+    import json
+
+    from cnclab.paths import DATA_DIR
+    from cnclab.works.programs import PROGRAM_RECIPES
+
+    expected = set()
+    for folder, pattern in (("jacso2021", "*.json"), ("kim_yang2006", "pocket_*.json"), ("pockets", "*.json")):
+        for f in (DATA_DIR / folder).glob(pattern):
+            d = json.loads(f.read_text(encoding="utf-8"))
+            if "tool_diameter" in d:
+                expected.add(f"{folder}/{f.stem}_plan_default")
+    got = {f"{w}/{n}" for w, r in PROGRAM_RECIPES.items() for n in r if n.endswith("_plan_default")}
+    assert got == expected and {"kim_yang2006/pocket_120x85_plan_default", "jacso2021/star_pocket_plan_default",
+                                "pockets/two_regions_plan_default"} <= got
+    assert "jacso2021/table4_1_cutting_parameters_plan_default" not in got
+
+
+def test_drop_cut_descent_tagged_cleared_only_when_vertical():
+    """ch. 8 programs: the vertical feed down onto a drop-cut CL point is tagged cleared (the ball
+    above the contact height touches no facet); a sloped descent (a ramp) is not."""
+    from cnclab.works.programs import _tag_drop_cut_descents
+
+    p = ToolPath.build([[0, 0, 30], [0, 0, 2], [1, 0, 2], [2, 0, 1.5], [2, 0, 1.0]],
+                       kind=["rapid", "plunge", "cut", "cut", "plunge"], feed=500)
+    _tag_drop_cut_descents(p)
+    assert ["cleared" in str(t) for t in p.tag] == [False, True, False, False, True]
+    chk = check_program(write_program(p, clearance_z=30, spindle_rpm=2000, top_z=10), clearance_z=30, top_z=10)
+    assert chk.plunges_into_material == 0 and chk.entries == {"helix": 0, "ramp": 1, "plunge": 2}

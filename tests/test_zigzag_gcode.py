@@ -150,3 +150,59 @@ def test_table3_accounting_and_gcode_round_trip():
     assert chk.ok, chk.errors
     assert text.index("S8000 M3") < text.index("\nG1 ")
     assert text.rstrip().endswith("M5\nM30\n%")
+
+
+# ---------------------------------------------------------------- the one raster generator
+@settings(max_examples=40, deadline=None)
+@given(st.floats(-90, 180), st.floats(0.3, 5.0), st.floats(0.2, 3.0))
+def test_raster_passes_rectangle_properties(angle, ae, step):
+    """Rectangle at any feed angle: passes along +-u alternating, on lines ae apart (the last on the
+    far edge, closer; lines that only touch a corner dropped), sampled at most ``step`` apart, inside the rectangle, links at most ``step``."""
+    rect = (-3.0, 17.0, 2.0, 13.0)
+    passes = zigzag.raster_passes(rect, ae, angle, last="edge", step=step)
+    u = np.array([math.cos(math.radians(angle)), math.sin(math.radians(angle))])
+    v = np.array([-u[1], u[0]])
+    corners = np.array([[-3, 2], [17, 2], [17, 13], [-3, 13]], float)
+    offs = np.array([q[0] @ v for q in passes])
+    assert np.all(np.diff(offs) > 0) and np.all(np.diff(offs)[:-1] == pytest.approx(ae, abs=1e-9))
+    # covered: a line on or within one stepover of each extreme (a line touching only a corner is dropped)
+    assert np.diff(offs)[-1] <= ae + 1e-9 and -1e-9 <= (corners @ v).max() - offs[-1] <= ae + 1e-9
+    assert -1e-9 <= offs[0] - (corners @ v).min() <= ae + 1e-9
+    for k, q in enumerate(passes):
+        d = np.diff(q, axis=0)
+        assert np.allclose(q @ v, q[0] @ v, atol=1e-9)                         # a straight pass
+        assert np.all(d @ u * (1 if k % 2 == 0 else -1) > 0)                  # alternating direction
+        assert np.hypot(*d.T).max() <= step + 1e-9
+        assert np.all((q >= [-3 - 1e-9, 2 - 1e-9]) & (q <= [17 + 1e-9, 13 + 1e-9]))
+    linked = zigzag.raster_passes(rect, ae, angle, last="edge", step=step, links=True)
+    P = np.vstack(linked)
+    assert np.hypot(*np.diff(P, axis=0).T).max() <= step + 1e-9                 # one continuous path
+    assert [len(q) for q in passes] == [len(q) - len(q) + len(p) for q, p in zip(linked, passes)]
+
+
+def test_raster_passes_region_matches_hand_computed_lines():
+    """A region with a hole: each line splits in two pieces, pieces ordered along +x, reversed on odd
+    lines; the first line sits start_offset above the bottom; lines strictly below the top."""
+    from shapely.geometry import box
+
+    region = box(0, 0, 10, 3).difference(box(4, -1, 6, 2.2))
+    lines = zigzag.raster_passes(region, 1.0, start_offset_mm=0.5)
+    ys = [q[0, 1] for q in lines]
+    assert ys == [0.5, 0.5, 1.5, 1.5, 2.5]
+    assert lines[0].tolist() == [[0.0, 0.5], [4.0, 0.5]] and lines[1].tolist() == [[6.0, 0.5], [10.0, 0.5]]
+    assert lines[2].tolist() == [[4.0, 1.5], [0.0, 1.5]] and lines[3].tolist() == [[10.0, 1.5], [6.0, 1.5]]
+    assert lines[4].tolist() == [[0.0, 2.5], [10.0, 2.5]]
+
+
+def test_the_three_users_share_the_generator():
+    """Hoang's points, the pocket raster and the drop-cutter raster are raster_passes outputs."""
+    from shapely.geometry import box
+
+    p = zigzag.zigzag_points((0, 0), 2.0, 10.0, 1.0)
+    assert np.array_equal(p, np.vstack(zigzag.raster_passes((0, 10, 0, 2), 1.0, last="edge")))
+    r = zigzag.raster_lines(box(0, 0, 10, 2), 1.0)
+    assert all(np.array_equal(a, b) for a, b in zip(r, zigzag.raster_passes(box(0, 0, 10, 2), 1.0, start_offset_mm=1e-6, min_length=1e-6)))
+    with pytest.raises(ValueError, match="last"):
+        zigzag.raster_passes((0, 1, 0, 1), 1.0, last="beyond")
+    with pytest.raises(ValueError, match="stepover"):
+        zigzag.raster_passes((0, 1, 0, 1), 0.0)

@@ -20,7 +20,28 @@ from .program import check_program, write_program
 from ..toolpath.job import load_job
 from ..toolpath.planners import DEFAULT_STRATEGY, STRATEGIES, plan
 
-__all__ = ["main", "plan_program"]
+__all__ = ["main", "plan_program", "planned_program"]
+
+
+def planned_program(job_file, strategy: str | None = None, source: str | None = None):
+    """Plan ``job_file`` with ``strategy`` (None: the planner's default) and write its program text:
+    ``(text, job, path, check)`` — what ``python -m cnclab plan`` writes (also used by
+    ``python -m cnclab programs``). Raises ``ValueError`` when the program fails the static safety
+    check; ``source`` names the program in the messages."""
+    if load_job is None or plan is None:
+        raise RuntimeError("cnclab plan needs cnclab.toolpath.job and cnclab.toolpath.planners "
+                           f"(issue 12, toolpath-core), not available: {_MISSING}")
+    job_file = Path(job_file)
+    job = load_job(job_file)
+    path = plan(job) if strategy is None else plan(job, strategy)
+    name = strategy or path.info.get("strategy", "default")
+    text = write_program(path, job, header=[f"cnclab plan {job_file.name} strategy {name}"])
+    src = str(source or job_file.with_suffix(".ngc").name)
+    chk = check_program(text, clearance_z=job.clearance_z, top_z=getattr(job, "top_z", 0.0), source=src)
+    unsafe = [e for e in chk.errors if "plunge into material" not in e]
+    if unsafe:
+        raise ValueError(f"{src}: the planned program fails the safety check: " + "; ".join(unsafe[:5]))
+    return text, job, path, chk
 
 
 def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False) -> Path:
@@ -28,14 +49,8 @@ def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False
     ``out``; returns the output path. Raises ``ValueError`` when the written program fails the
     static safety check (nothing is written then)."""
     job_file, out = Path(job_file), Path(out)
-    job = load_job(job_file)
-    path = plan(job) if strategy is None else plan(job, strategy)
+    text, job, path, chk = planned_program(job_file, strategy, source=str(out))
     name = strategy or path.info.get("strategy", "default")
-    text = write_program(path, job, header=[f"cnclab plan {job_file.name} strategy {name}"])
-    chk = check_program(text, clearance_z=job.clearance_z, top_z=getattr(job, "top_z", 0.0), source=str(out))
-    unsafe = [e for e in chk.errors if "plunge into material" not in e]
-    if unsafe:
-        raise ValueError(f"{out}: the planned program fails the safety check: " + "; ".join(unsafe[:5]))
     atomic_write(out, text, inputs=[job_file])
     if not quiet:
         print(f"wrote {out}: {len(path)} moves, strategy {name}, entries {chk.entries}, "

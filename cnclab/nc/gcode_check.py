@@ -7,9 +7,9 @@ For each program of ``build/gcode/manifest.json`` (written by ``python -m cnclab
    :func:`cnclab.nc.gcode.program_time` within 0.1 % (both start at the origin, as rs274 does);
 3. the static safety check (:func:`cnclab.nc.program.check_program`) finds no rapid below the
    clearance plane outside marked cleared area, the spindle on before the first feed move, ``M5`` and
-   ``M30``; plunges below the stock top that are not marked cleared are counted and reported (the
-   simulator decides whether they meet material: for 2.5D pocket programs the manifest carries the
-   dixel simulator's counts of plunges and rapids into material, which must both be 0);
+   ``M30``, and no vertical plunge below the stock top that is not marked cleared (the planners tag
+   the plunges into area they cleared; for 2.5D pocket programs the manifest also carries the dixel
+   simulator's counts of plunges and rapids into material, which must both be 0);
 4. the planner's path time (:meth:`ToolPath.time_s`, in the manifest) and the written program's
    time agree within 0.5 % (the writer adds only the approach from and the retract to the
    clearance plane).
@@ -63,7 +63,9 @@ def check_all(root="build/gcode") -> tuple[list, bool]:
             problems.append(f"feed time differs from rs274 by {100 * d_time:+.3f} %")
         if abs(d_path) > TIME_TOL:
             problems.append(f"path time differs from the program time by {100 * d_path:+.3f} %")
-        problems += [e for e in chk.errors if "plunge into material" not in e][:3]
+        problems += chk.errors[:3]
+        if chk.plunges_into_material > 3:
+            problems.append(f"{chk.plunges_into_material} plunges below the stock top not marked cleared")
         for k in ("sim_plunges_into_material", "sim_rapids_into_material"):
             if meta.get(k):
                 problems.append(f"{k.replace('sim_', '').replace('_', ' ')}: {meta[k]} (dixel simulator)")

@@ -82,6 +82,14 @@ __all__ = ["PLAN_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "g
 
 #: Planning labels of the clearing's points (written as ToolPath kinds/tags, see the module docstring).
 PLAN_KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
+#: tag of a move into area the planner cleared (the NC writer writes it as a ``(cleared)`` comment)
+CLEARED = "cleared"
+#: planning label of a jump's last point when it lies in the cleared region (the descent meets air)
+CLEARED_LANDING = "rapid-cleared"
+#: tag of a move into area the planner cleared (the NC writer writes it as a ``(cleared)`` comment)
+CLEARED = "cleared"
+#: planning label of a jump's last point when it lies in the cleared region (the descent meets air)
+CLEARED_LANDING = "rapid-cleared"
 
 
 def _polys(g) -> list:
@@ -469,12 +477,13 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
         # (into air) and link at depth to Q0 (its steps that touch material become linkcut)
         fr = free()
         safe = fr.buffer(-2.0 * resolution_mm)
-        F = Q0
+        F, landing = Q0, "rapid"
         for g in (safe, fr):
             if not g.is_empty:
                 F = np.asarray(shapely.get_coordinates(nearest_points(g, Point(Q0))[0])[0])
+                landing = CLEARED_LANDING           # F is in the cleared region: the plunge meets air
                 break
-        emit(np.vstack([a, F]), ["rapid", "rapid"], k)
+        emit(np.vstack([a, F]), ["rapid", landing], k)
         if np.hypot(*(F - Q0)) > 1e-9:
             link(np.vstack([F, Q0]), k)
 
@@ -544,9 +553,29 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
     info = {"seeds": seeds, "laps_per_seed": laps, "entry_radius_mm": entry_r,
             "planning_uncut_area_mm2": stock.area(), "theta_deg": float(theta_deg),
             "resolution_mm": float(resolution_mm), "step_mm": step, "name": "constant-engagement clearing"}
-    return ToolPath.from_segments(_segments(segs), z_cut=top_z - a_p, feed=feed_mm_min, clearance_z=clearance_z,
+    out = _segments(segs)
+    path = ToolPath.from_segments(out, z_cut=top_z - a_p, feed=feed_mm_min, clearance_z=clearance_z,
                                   top_z=top_z, link_feed=link_feed_mm_min, spindle=spindle_rpm, tool=tool,
                                   info=info)
+    return _tag_cleared_plunges(path, out, top_z)
+
+
+def _tag_cleared_plunges(path: ToolPath, segments, top_z: float) -> ToolPath:
+    """Tag ``cleared`` the vertical plunges below ``top_z`` that follow a jump landing in the cleared
+    region (a jump segment tagged ``cleared`` by :func:`_segments`): the written program marks them
+    ``(cleared)`` and the static checker does not count them as plunges into material (the dixel
+    evaluator proves them: ``plunges_into_material``). ``path`` is changed in place and returned."""
+    landings = [t == CLEARED for i, (P, k, t) in enumerate(segments) if isinstance(k, str) and k == "jump"
+                and not (i + 1 < len(segments) and isinstance(segments[i + 1][1], str) and segments[i + 1][1] == "helix")]
+    down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
+    plunges = np.flatnonzero(path.is_kind("plunge") & down & (path.xyz[:, 2] < top_z - 1e-9))
+    first = 1 if len(segments) and not (isinstance(segments[0][1], str) and segments[0][1] == "helix") else 0
+    if len(plunges) != first + len(landings):
+        raise RuntimeError(f"ce_clearing: {len(plunges)} plunges for {len(landings)} jumps")   # planner invariant
+    for k, ok in zip(plunges[first:], landings):
+        if ok:
+            path.tag[k] = CLEARED if not path.tag[k] else f"{path.tag[k]} {CLEARED}"
+    return path
 
 
 def _segments(segs):
@@ -557,8 +586,8 @@ def _segments(segs):
         if (K == "entry").all():
             out.append((P, "helix", f"seed {g}"))
             continue
-        if (K == "rapid").all():
-            out.append((P[[0, -1]], "jump", ""))
+        if K[0] == "rapid" and np.isin(K, ("rapid", CLEARED_LANDING)).all():
+            out.append((P[[0, -1]], "jump", CLEARED if K[-1] == CLEARED_LANDING else ""))
             continue
         kind = np.where(K == "link", "link", "cut")
         tag = np.where(np.isin(K, ("cleanup", "linkcut")), K, np.where(K == "link", "", f"seed {g}" if g >= 0 else ""))

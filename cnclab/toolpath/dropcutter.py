@@ -24,8 +24,9 @@ from scipy.spatial import cKDTree
 
 from ..geometry.mesh import TriMesh
 from .path import Tool, ToolPath
+from .zigzag import raster_passes
 
-__all__ = ["drop_cutter_z", "zigzag_xy", "zigzag_finishing_path", "split_passes"]
+__all__ = ["drop_cutter_z", "zigzag_finishing_path", "split_passes"]
 
 
 def _pair_heights(px, py, T, N, R):
@@ -266,59 +267,13 @@ def _grid_drop(xy, T, n, lo, hi, zmax, start, items, x0, y0, hx, hy, nx, ny, R):
     return out
 
 
-def zigzag_xy(bounds, a_e: float, feed_angle_deg: float, step: float) -> list[np.ndarray]:
-    """Zig-zag passes (list of (M, 2) arrays, mm) covering the rectangle ``bounds`` = (x0, x1, y0, y1).
-
-    Passes run along (cos A_f, sin A_f), spaced ``a_e`` apart, alternating direction; each is
-    sampled every ``step`` mm or less (end points included). The link to the next pass is appended
-    to the end of each pass (along the boundary), so concatenating the passes gives the full path.
-    """
-    x0, x1, y0, y1 = map(float, bounds)
-    if not (a_e > 0 and step > 0):
-        raise ValueError(f"a_e and step must be > 0 mm, got {a_e}, {step}")
-    A = np.radians(feed_angle_deg)
-    u = np.array([np.cos(A), np.sin(A)])
-    v = np.array([-np.sin(A), np.cos(A)])
-    corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-    cv = corners @ v
-    offs = np.arange(cv.min(), cv.max() + 1e-9, a_e)
-    if offs.size == 0 or cv.max() - offs[-1] > 1e-9:
-        offs = np.append(offs, cv.max())
-    lines = []
-    for k, o in enumerate(offs):
-        p0 = o * v
-        # clip the line p0 + t u to the rectangle
-        tmin, tmax = -np.inf, np.inf
-        for ax, lo, hi in ((0, x0, x1), (1, y0, y1)):
-            if abs(u[ax]) < 1e-12:
-                if not (lo - 1e-9 <= p0[ax] <= hi + 1e-9):
-                    tmin, tmax = 1.0, 0.0
-                continue
-            ta, tb = (lo - p0[ax]) / u[ax], (hi - p0[ax]) / u[ax]
-            tmin, tmax = max(tmin, min(ta, tb)), min(tmax, max(ta, tb))
-        if tmax - tmin < 1e-9:
-            continue
-        n = int(np.ceil((tmax - tmin) / step))
-        t = np.linspace(tmin, tmax, n + 1)
-        seg = p0 + t[:, None] * u
-        lines.append(seg if len(lines) % 2 == 0 else seg[::-1])
-    passes = []
-    for k, seg in enumerate(lines):
-        if k + 1 < len(lines):
-            nxt = lines[k + 1][0]
-            d = np.linalg.norm(nxt - seg[-1])
-            m = int(np.ceil(d / step))
-            link = seg[-1] + np.linspace(0, 1, m + 1)[1:-1, None] * (nxt - seg[-1]) if m > 1 else np.zeros((0, 2))
-            seg = np.vstack([seg, link])
-        passes.append(np.clip(seg, [x0, y0], [x1, y1]))
-    return passes
-
-
 def zigzag_finishing_path(mesh: TriMesh, tool_diameter: float, a_e: float, feed_angle_deg: float,
                           step: float = 0.5, bounds=None, feed_mm_min: float = 1000.0) -> ToolPath:
     """Drop-cut zig-zag finishing path over ``mesh``: a :class:`ToolPath` of tool-tip CL points (mm),
     every move a ``cut`` at ``feed_mm_min`` tagged ``"pass k"`` (the link to the next pass, along
-    the boundary, belongs to pass k); :func:`split_passes` gives the passes back.
+    the boundary, belongs to pass k); :func:`split_passes` gives the passes back. The xy points are
+    :func:`cnclab.toolpath.zigzag.raster_passes` on the rectangle (last pass on its edge, sampled
+    evenly every ``step`` mm or less, links included).
 
     ``bounds`` (x0, x1, y0, y1) defaults to the mesh's xy extent (the tool centre line stays inside).
     """
@@ -327,7 +282,7 @@ def zigzag_finishing_path(mesh: TriMesh, tool_diameter: float, a_e: float, feed_
     if bounds is None:
         lo, hi = mesh.triangles.reshape(-1, 3).min(0), mesh.triangles.reshape(-1, 3).max(0)
         bounds = (lo[0], hi[0], lo[1], hi[1])
-    passes = zigzag_xy(bounds, a_e, feed_angle_deg, step)
+    passes = raster_passes(tuple(bounds), a_e, feed_angle_deg, last="edge", step=step, links=True)
     xy = np.vstack(passes)
     z = drop_cutter_z(mesh, xy, tool_diameter / 2.0)
     if np.isnan(z).any():

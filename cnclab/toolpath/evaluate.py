@@ -24,6 +24,16 @@ Model (units: mm, deg, mm/min, s):
   discs over the allowed tool-centre region).
 * **Times**: :meth:`ToolPath.time_s` at ``job.rapid_mm_min`` — the motion model of the written program
   (feed moves at their feed, rapids at the rapid rate, no acceleration).
+* **Feed control** (``feed_control=True``, Jacsó Thesis IV / §4): the cutting level (the lowest z
+  of the path, :func:`planar_view`) is cut through one dixel stock of the pocket minus the entry hole
+  (:func:`entry_hole`) with segment kinds from the tags (cut / roll-in / roll-out / link); the
+  roll-in/roll-out steps get the MRR-holding feed (:func:`cnclab.cutting.feed_control.controlled_feed`,
+  capped at ``job.v_fmax``); link steps that remove more than ``link_tol_mm2`` run at the cutting
+  feed. ``time_feed_controlled_s`` is the written program's time with those feeds (the path time
+  plus, per level sample, ``ds (1/v_controlled - 1/v_path)``), ``mrr_error_cut_pct`` the windowed
+  MRR error of the "cut" steps; the per-step table and the level summary (per segment kind) are
+  ``trace["level"]`` and ``trace["level_summary"]``. With ``feed_control=False`` the same level
+  model runs at constant feed (the comparison baseline); ``None`` (default) skips it.
 
 >>> from cnclab.toolpath.job import Job
 >>> from cnclab.toolpath.path import Tool, ToolPath
@@ -43,13 +53,19 @@ import math
 import numpy as np
 import pandas as pd
 import shapely
+from shapely.geometry import Point
 
+from ..cutting.feed_control import controlled_feed, mrr_error_windowed
 from ..simulation import dixel
-from ..simulation.common import simulate
+from ..simulation.common import simulate, simulate_runs
 from .job import Job
 from .path import KINDS, ToolPath
 
-__all__ = ["Evaluation", "evaluate", "UNITS", "weighted_percentile", "unreachable_region"]
+__all__ = ["Evaluation", "evaluate", "UNITS", "weighted_percentile", "unreachable_region", "planar_view",
+           "entry_hole", "SEGMENT_KINDS"]
+
+#: segment kinds of the cutting level (from the move kind and the tag's ``phase:kind``)
+SEGMENT_KINDS = ("cut", "roll-in", "roll-out", "link")
 
 _K = {k: i for i, k in enumerate(KINDS)}
 
@@ -91,6 +107,9 @@ class Evaluation:
     time_total_s: float
     theta_deg: float
     resolution_mm: float
+    time_feed_controlled_s: float = float("nan")
+    mrr_error_cut_pct: float = float("nan")
+    mrr_error_cut_p95_pct: float = float("nan")
     trace: dict = dataclasses.field(repr=False, compare=False, default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -145,8 +164,105 @@ def _count_runs(kind, k):
     return int(np.count_nonzero(m & ~np.r_[False, m[:-1]]))
 
 
+def entry_hole(job: Job):
+    """``(centre (x, y), diameter mm, predrilled)``: the job's start hole, or a hole to bore by a
+    helical entry at :attr:`Job.start_center` (diameter 1.8 D, reduced to fit the pocket)."""
+    if job.start_hole is not None:
+        return (job.start_hole[0], job.start_hole[1]), job.start_hole[2], True
+    c = job.start_center
+    clear = float(job.polygon.boundary.distance(Point(c)))
+    return c, min(1.8 * job.tool_diameter, 2.0 * clear - 0.2), False
+
+
+def planar_view(path: ToolPath, step_mm: float, z_tol: float = 1e-6):
+    """The cutting level of ``path`` as planar samples: ``(points (n, 2), kinds, phase, jump)``.
+
+    The path is resampled every ``step_mm`` (:meth:`ToolPath.resample`); samples at the lowest z
+    (cut, link or the end of a descent) are kept; ``kinds`` is cut / roll-in / roll-out / link (from
+    the move kind and its tag), ``phase`` the tag's phase, ``jump[i]`` True when sample i is reached
+    after leaving the level (a retract-rapid-descent)."""
+    P, kinds, phase, jump, _ = _level_samples(path, step_mm, z_tol)
+    return P, kinds, phase, jump
+
+
+def _level_samples(path: ToolPath, step_mm: float, z_tol: float = 1e-6):
+    """:func:`planar_view` plus the path's feed (mm/min) at each kept sample."""
+    rp, _ = path.resample(step_mm, return_index=True)
+    z0 = float(rp.xyz[:, 2].min())
+    at = np.flatnonzero(np.abs(rp.xyz[:, 2] - z0) <= z_tol)
+    if at.size < 2:
+        raise ValueError("the path has fewer than 2 points at its cutting level")
+    names = rp.kinds()[at]
+    tags = rp.tag[at]
+    phase = np.array([str(t).split(":")[0] for t in tags], dtype=object)
+    roll = np.array([str(t).split(":")[1] if ":" in str(t) else "" for t in tags], dtype=object)
+    kinds = np.where(names == "link", "link", np.where(roll != "", roll, "cut")).astype(object)
+    kinds[names == "plunge"] = "link"
+    jump = np.r_[False, np.diff(at) > 1]
+    return rp.xyz[at, :2], kinds, phase, jump, rp.feed[at]
+
+
+def _cutting_level(path: ToolPath, job: Job, resolution_mm, feed_control, block_mm, margin_deg,
+                   link_tol_mm2, mrr_window_mm):
+    """The Thesis IV cutting-level model (module docstring): ``(table, summary, extra_time_s)``."""
+    P, kinds_p, phase_p, jump, feed_p = _level_samples(path, resolution_mm)
+    centre, hole_d, _ = entry_hole(job)
+    stock = dixel.Stock.from_polygon(job.polygon.difference(Point(centre).buffer(0.5 * hole_d, 256)), resolution_mm)
+    T = simulate_runs(stock, P, jump, job.tool_radius, job.a_p, job.feed_mm_min, f_z=job.f_z, teeth=job.teeth)
+    idx = T.point.to_numpy()
+    # the descent after a jump is a link
+    T["kind"] = np.where(T.plunge.to_numpy() & (idx > 0), "link", kinds_p[idx])
+    T["phase"] = phase_p[idx]
+    kinds = T.kind.to_numpy()
+    rem = T.removed_mm2.to_numpy()
+    T["link_cuts"] = (kinds == "link") & (rem > link_tol_mm2)
+    cut = (kinds != "link") | T.link_cuts.to_numpy()
+    feed, link_feed = job.feed_mm_min, job.link_feed_mm_min
+    v = np.where(cut, feed, link_feed)
+    if feed_control:
+        adj = np.isin(kinds, ("roll-in", "roll-out"))
+        vc = controlled_feed(rem, T.ds.to_numpy(), T.engagement_deg.to_numpy(), cut, job.a_e, feed,
+                             job.v_fmax, job.theta_deg, block_mm, margin_deg, adjust=adj)
+        v = np.where(cut, vc, link_feed)
+    T["feed_mm_min"] = v
+    ds = T.ds.to_numpy()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        T["mrr_ctrl_mm3_min"] = np.where(ds > 0, job.a_p * rem / ds * v, np.nan)
+    eng = T.engagement_deg.to_numpy()
+    time_s = 60.0 * float(np.sum(ds / v))
+    # the written program runs these steps at the path's feed: the difference is the program's change
+    fp = feed_p[idx]
+    ok = np.isfinite(fp) & (fp > 0) & (ds > 0)
+    extra_s = 60.0 * float(np.sum(ds[ok] / v[ok] - ds[ok] / fp[ok]))
+    Lc = float(ds[cut].sum())
+    lim = job.theta_deg + margin_deg
+    summary = {"strategy": path.info.get("name", ""), "max_engagement_deg": float(np.nanmax(eng[cut])),
+               "share_above_theta_plus5": float(ds[cut & (eng > lim)].sum()) / Lc,
+               "cut_length_mm": Lc, "link_length_mm": float(ds[~cut].sum()),
+               "rapid_length_mm": path.lengths()["rapid_mm"],
+               "link_cutting_length_mm": float(ds[T.link_cuts.to_numpy()].sum()),
+               "link_removed_mm3": job.a_p * float(rem[kinds == "link"].sum())}
+    for k in SEGMENT_KINDS:
+        m = kinds == k
+        Lk = float(ds[m].sum())
+        summary[f"length_{k}_mm"] = Lk
+        summary[f"max_eng_{k}_deg"] = float(np.nanmax(eng[m])) if np.isfinite(eng[m]).any() else float("nan")
+        summary[f"share_above_{k}"] = float(ds[m & (eng > lim)].sum()) / Lk if Lk > 0 else float("nan")
+    reach = job.allowed().buffer(job.tool_radius, 64)
+    summary.update({"time_s": time_s, "uncut_area_mm2": stock.area(),
+                    "unreachable_area_mm2": float(job.polygon.difference(reach).area),
+                    "removed_volume_mm3": job.a_p * float(rem.sum()),
+                    "t_min_s": 60.0 * job.volume_mm3() / job.mrr_nominal()})
+    summary["time_over_min"] = summary["time_s"] / summary["t_min_s"]
+    err = mrr_error_windowed(rem, ds, v, job.a_p, job.mrr_nominal(), kinds == "cut", mrr_window_mm)
+    summary["mrr_error_cut_pct"] = err["mean_abs_pct"]
+    summary["mrr_error_cut_p95_pct"] = err["p95_abs_pct"]
+    return T, summary, extra_s
+
+
 def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2: float | None = None,
-             mrr_window_mm: float = 1.0) -> Evaluation:
+             mrr_window_mm: float = 1.0, feed_control: bool | None = None, block_mm: float = 0.5,
+             margin_deg: float = 5.0, link_tol_mm2: float = 1e-3, level_only: bool = False) -> Evaluation:
     """Cut ``path`` through a fresh stock of ``job`` (level by level) and measure it.
 
     Parameters
@@ -157,6 +273,15 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     air_tol_mm2 : a sample removing at most this area (mm^2) removes nothing (default 0.5 h^2).
     mrr_window_mm : MRR is averaged over windows of this cutting length (mm) before its maximum is
         taken (single dixel steps are noisy by +-h / ds).
+    feed_control : None: no cutting-level model; True / False: the Thesis IV cutting-level model
+        with / without the roll-in/roll-out feed control (module docstring): fills
+        ``time_feed_controlled_s``, ``mrr_error_cut_pct``, ``mrr_error_cut_p95_pct`` and
+        ``trace["level"]`` (per-step table), ``trace["level_summary"]`` (dict).
+    block_mm, margin_deg : feed-control block length (mm) and engagement margin over theta (deg).
+    link_tol_mm2 : a link step removing more than this (mm^2) cuts (runs at the cutting feed).
+    level_only : with ``feed_control`` set, skip the level-by-level slab simulation (its float
+        fields are NaN and its counts of plunges/rapids into material -1, "not simulated"; lengths,
+        times and the cutting-level figures are filled): for planners that only need the latter.
 
     Returns an :class:`Evaluation`.
     """
@@ -169,6 +294,13 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         raise ValueError(f"mrr_window_mm must be > 0 mm, got {mrr_window_mm!r}")
     if len(path) < 2:
         raise ValueError("path must have at least 2 points")
+    level = None
+    if feed_control is not None:
+        level = _cutting_level(path, job, h, bool(feed_control), block_mm, margin_deg, link_tol_mm2, mrr_window_mm)
+    elif level_only:
+        raise ValueError("level_only needs feed_control=True or False")
+    if level_only:
+        return _level_evaluation(path, job, h, level)
     air = 0.5 * h * h if air_tol_mm2 is None else float(air_tol_mm2)
     r = job.tool_radius
     rp, src = path.resample(h, return_index=True)
@@ -271,4 +403,38 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         uncut_area_mm2=uncut, uncut_beyond_unreachable_mm2=beyond,
         time_cut_s=times["cut_s"], time_link_s=times["link_s"], time_rapid_s=times["rapid_s"],
         time_entry_s=times["helix_s"] + times["ramp_s"] + times["plunge_s"], time_retract_s=times["retract_s"],
-        time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h, trace=trace)
+        time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h,
+        **_level_fields(times, level, trace))
+
+
+def _level_fields(times, level, trace) -> dict:
+    """The feed-control fields of :class:`Evaluation` (NaN without the level model) and the trace."""
+    if level is None:
+        return {"trace": trace}
+    T, summary, extra_s = level
+    trace = dict(trace, level=T, level_summary=summary)
+    return {"time_feed_controlled_s": times["total_s"] + extra_s, "mrr_error_cut_pct": summary["mrr_error_cut_pct"],
+            "mrr_error_cut_p95_pct": summary["mrr_error_cut_p95_pct"], "trace": trace}
+
+
+def _level_evaluation(path: ToolPath, job: Job, h: float, level) -> Evaluation:
+    """An :class:`Evaluation` with only the path's lengths/times and the cutting-level figures."""
+    nan = float("nan")
+    lengths, times = path.lengths(), path.time_s(job.rapid_mm_min)
+    T, summary, _ = level
+    return Evaluation(
+        engagement_p50_deg=nan, engagement_p95_deg=nan, engagement_max_deg=summary["max_engagement_deg"],
+        share_above_5_pct=100.0 * summary["share_above_theta_plus5"], share_above_15_pct=nan,
+        entry_engagement_max_deg=nan, mrr_max_over_nominal=nan,
+        entries_helix=_count_runs(path.kind, "helix"), entries_ramp=_count_runs(path.kind, "ramp"),
+        entries_plunge=_count_runs(path.kind, "plunge"), plunges_into_material=-1, plunge_swept_area_mm2=nan,
+        rapids_into_material=-1, retracts=_count_runs(path.kind, "retract"),
+        cut_length_mm=lengths["cut_mm"], link_length_mm=lengths["link_mm"], rapid_length_mm=lengths["rapid_mm"],
+        entry_length_mm=lengths["helix_mm"] + lengths["ramp_mm"] + lengths["plunge_mm"],
+        retract_length_mm=lengths["retract_mm"], air_cut_length_mm=nan,
+        uncut_area_mm2=summary["uncut_area_mm2"],
+        uncut_beyond_unreachable_mm2=summary["uncut_area_mm2"] - summary["unreachable_area_mm2"],
+        time_cut_s=times["cut_s"], time_link_s=times["link_s"], time_rapid_s=times["rapid_s"],
+        time_entry_s=times["helix_s"] + times["ramp_s"] + times["plunge_s"], time_retract_s=times["retract_s"],
+        time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h,
+        **_level_fields(times, level, {}))

@@ -17,8 +17,8 @@ Hybrid path (:func:`hybrid_path`), after the medial axis transformation (:func:`
 
 Every strategy returns a :class:`~cnclab.toolpath.path.ToolPath` at the cutting level (move tags:
 ``"<phase>"`` or ``"<phase>:roll-in"`` / ``"<phase>:roll-out"``, phase e.g. ``centre``, ``arm 2``,
-``cp``, ``zz``); :func:`evaluate_strategy` cuts its cutting level through one dixel stock with the
-Thesis IV feed control (the general metrics are :func:`cnclab.toolpath.evaluate.evaluate`).
+``cp``, ``zz``); the one evaluator :func:`cnclab.toolpath.evaluate.evaluate` measures it, with
+``feed_control=True`` also its cutting level through one dixel stock with the Thesis IV feed control.
 
 >>> job = Job.from_dict({"polygon": [[0, 0], [40, 0], [40, 30], [0, 30]], "tool_diameter": 6, "teeth": 1,
 ...                      "v_c": 120, "f_z": 0.04, "a_p": 3, "theta_deg": 60,
@@ -38,9 +38,9 @@ from scipy.optimize import brentq
 from shapely import affinity
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 
-from ..cutting.feed_control import controlled_feed, mrr_error_windowed
 from ..simulation import dixel
-from ..simulation.common import simulate, simulate_runs
+from ..simulation.common import simulate
+from .evaluate import SEGMENT_KINDS, entry_hole, evaluate, planar_view
 from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
                                   resample_path, thesis3_path)
 from .job import Job, load_job, star_polygon
@@ -51,17 +51,7 @@ from .zigzag import raster_lines
 
 __all__ = ["Job", "load_job", "star_polygon", "design_star", "medial_axis", "arm_branches", "arm_regions",
            "centre_lap", "hybrid_path", "choose_candidate", "contour_parallel_path", "zigzag_path",
-           "evaluate_strategy", "planar_view", "entry_hole", "SEGMENT_KINDS"]
-
-
-def entry_hole(job: Job):
-    """``(centre (x, y), diameter mm, predrilled)``: the job's start hole, or a hole to bore by a
-    helical entry at :attr:`Job.start_center` (diameter 1.8 D, reduced to fit the pocket)."""
-    if job.start_hole is not None:
-        return (job.start_hole[0], job.start_hole[1]), job.start_hole[2], True
-    c = job.start_center
-    clear = float(job.polygon.boundary.distance(Point(c)))
-    return c, min(1.8 * job.tool_diameter, 2.0 * clear - 0.2), False
+           "planar_view", "entry_hole", "SEGMENT_KINDS"]
 
 
 def _entry_segments(job: Job, resolution_mm: float):
@@ -93,9 +83,24 @@ def _to_toolpath(segs, job: Job, name: str, info: dict, resolution_mm: float = 0
             raise ValueError(f"kind must be one of {SEGMENT_KINDS} or 'rapid', got {sorted(bad)}")
         tags = np.array([ph if k in ("cut", "link") else f"{ph}:{k}" for k in K], dtype=object)
         out.append((P, np.where(K == "link", "link", "cut"), tags))
-    return ToolPath.from_segments(out, z_cut=job.top_z - job.a_p, feed=job.feed_mm_min, clearance_z=job.clearance_z,
+    path = ToolPath.from_segments(out, z_cut=job.top_z - job.a_p, feed=job.feed_mm_min, clearance_z=job.clearance_z,
                                   top_z=job.top_z, link_feed=job.link_feed_mm_min, spindle=job.spindle_rpm,
                                   tool=job.tool, info=dict(info, name=name), reentry="ramp")
+    return _tag_hole_plunges(path, job)
+
+
+def _tag_hole_plunges(path: ToolPath, job: Job) -> ToolPath:
+    """Tag ``cleared`` every vertical plunge below the stock top whose tool disc lies inside the
+    pre-drilled start hole (air: the program marks it ``(cleared)``); in place, returned."""
+    if job.start_hole is None:
+        return path
+    (cx, cy), d, _ = entry_hole(job)
+    down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
+    pl = path.is_kind("plunge") & down & (path.xyz[:, 2] < job.top_z - 1e-9)
+    inside = np.hypot(path.xyz[:, 0] - cx, path.xyz[:, 1] - cy) <= 0.5 * d - job.tool_radius + 1e-9
+    for k in np.flatnonzero(pl & inside):
+        path.tag[k] = "cleared" if not path.tag[k] else f"{path.tag[k]} cleared"
+    return path
 
 
 # ---------------------------------------------------------------------------------------------
@@ -243,7 +248,8 @@ def hybrid_path(job: Job, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=2
 
     ``max_wall_share`` (fraction in (0, 1], or ``"auto"``, the default): with ``"auto"`` the path
     is planned for every value of ``wall_share_candidates`` (ascending), each plan is cut through
-    the dixel simulator (:func:`evaluate_strategy` at ``resolution_mm``, feed control on) and the
+    the dixel simulator (the cutting-level model of :func:`cnclab.toolpath.evaluate.evaluate` at
+    ``resolution_mm``, feed control on) and the
     winner is chosen by :func:`choose_candidate` (uncut area beyond the unreachable corners, then
     share above theta + 5 deg, then maximum engagement, then time, each with a tolerance). A
     candidate whose centre would stop at the same lap as the previous one gives the identical path
@@ -283,7 +289,7 @@ def hybrid_path(job: Job, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=2
         hp = _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds,
                               arm_min_area_mm2, w)
         t1 = time.perf_counter()
-        _, s = evaluate_strategy(hp, job, resolution_mm, feed_control=True)
+        s = evaluate(hp, job, resolution_mm, feed_control=True, level_only=True).trace["level_summary"]
         paths.append(hp)
         rows.append({"max_wall_share": w, "same_as": None, "laps": hp.info["laps"], "arms": len(hp.info["arms"]),
                      "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"],
@@ -620,102 +626,3 @@ def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0
             segs.append((np.vstack([segs[-1][0][-1], ring[0]]), "rapid", "zz"))
             segs.append((ring, "cut", "zz"))
     return _to_toolpath(segs, job, "zig-zag", {"stepover": ae}, resolution_mm)
-
-
-# ---------------------------------------------------------------------------------------------
-# evaluation with feed control
-# ---------------------------------------------------------------------------------------------
-SEGMENT_KINDS = ("cut", "roll-in", "roll-out", "link")
-
-
-def planar_view(path: ToolPath, step_mm: float, z_tol: float = 1e-6):
-    """The cutting level of ``path`` as planar samples: ``(points (n, 2), kinds, phase, jump)``.
-
-    The path is resampled every ``step_mm`` (:meth:`ToolPath.resample`); samples at the lowest z
-    (cut, link or the end of a descent) are kept; ``kinds`` is cut / roll-in / roll-out / link (from
-    the move kind and its tag), ``phase`` the tag's phase, ``jump[i]`` True when sample i is reached
-    after leaving the level (a retract-rapid-descent)."""
-    rp, _ = path.resample(step_mm, return_index=True)
-    z0 = float(rp.xyz[:, 2].min())
-    at = np.flatnonzero(np.abs(rp.xyz[:, 2] - z0) <= z_tol)
-    if at.size < 2:
-        raise ValueError("the path has fewer than 2 points at its cutting level")
-    names = rp.kinds()[at]
-    tags = rp.tag[at]
-    phase = np.array([str(t).split(":")[0] for t in tags], dtype=object)
-    roll = np.array([str(t).split(":")[1] if ":" in str(t) else "" for t in tags], dtype=object)
-    kinds = np.where(names == "link", "link", np.where(roll != "", roll, "cut")).astype(object)
-    kinds[names == "plunge"] = "link"
-    jump = np.r_[False, np.diff(at) > 1]
-    return rp.xyz[at, :2], kinds, phase, jump
-
-
-def evaluate_strategy(path: ToolPath, job: Job, resolution_mm=0.05, feed_control=False,
-                      block_mm=0.5, margin_deg=5.0, link_tol_mm2=1e-3, mrr_window_mm=1.0):
-    """Cut the cutting level of ``path`` (:func:`planar_view`) through the pocket stock (pocket minus
-    the entry hole) with the dixel simulator, with the Thesis IV feed control.
-
-    Jumps are not simulated (the tool is above the part). Linking moves run at the linking
-    feed only if they remove (almost) nothing: a link step removing more than ``link_tol_mm2`` is
-    flagged ``link_cuts`` and runs at the cutting feed and counts as cutting. With
-    ``feed_control`` the roll-in/roll-out steps get the MRR-holding feed
-    (:func:`cnclab.cutting.feed_control.controlled_feed`, capped at ``job.v_fmax``).
-
-    Returns ``(table, summary)``: the per-step DataFrame (columns of
-    :func:`cnclab.simulation.common.simulate` plus ``kind``, ``phase``, ``link_cuts``,
-    ``feed_mm_min``, ``mrr_ctrl_mm3_min``) and a dict: engagement maximum and share of length
-    above theta + ``margin_deg`` overall and per segment kind (``max_eng_<kind>_deg``,
-    ``share_above_<kind>``), lengths, machining time at depth (s, the feed-controlled cutting-level
-    time; the whole program's time is :func:`cnclab.toolpath.evaluate.evaluate`'s), uncut area
-    (mm^2), the theoretical minimum V / MRR_nom and the MRR error over the "cut" segments
-    (:func:`cnclab.cutting.feed_control.mrr_error_windowed`, windows of ``mrr_window_mm``).
-    """
-    P, kinds_p, phase_p, jump = planar_view(path, resolution_mm)
-    centre, hole_d, _ = entry_hole(job)
-    stock = dixel.Stock.from_polygon(job.polygon.difference(Point(centre).buffer(0.5 * hole_d, 256)), resolution_mm)
-    T = simulate_runs(stock, P, jump, job.tool_radius, job.a_p, job.feed_mm_min, f_z=job.f_z, teeth=job.teeth)
-    idx = T.point.to_numpy()
-    # the descent after a jump is a link
-    T["kind"] = np.where(T.plunge.to_numpy() & (idx > 0), "link", kinds_p[idx])
-    T["phase"] = phase_p[idx]
-    kinds = T.kind.to_numpy()
-    rem = T.removed_mm2.to_numpy()
-    T["link_cuts"] = (kinds == "link") & (rem > link_tol_mm2)
-    cut = (kinds != "link") | T.link_cuts.to_numpy()
-    feed, link_feed = job.feed_mm_min, job.link_feed_mm_min
-    v = np.where(cut, feed, link_feed)
-    if feed_control:
-        adj = np.isin(kinds, ("roll-in", "roll-out"))
-        vc = controlled_feed(rem, T.ds.to_numpy(), T.engagement_deg.to_numpy(), cut, job.a_e, feed,
-                             job.v_fmax, job.theta_deg, block_mm, margin_deg, adjust=adj)
-        v = np.where(cut, vc, link_feed)
-    T["feed_mm_min"] = v
-    ds = T.ds.to_numpy()
-    with np.errstate(divide="ignore", invalid="ignore"):
-        T["mrr_ctrl_mm3_min"] = np.where(ds > 0, job.a_p * rem / ds * v, np.nan)
-    eng = T.engagement_deg.to_numpy()
-    time_s = 60.0 * float(np.sum(ds / v))
-    Lc = float(ds[cut].sum())
-    lim = job.theta_deg + margin_deg
-    summary = {"strategy": path.info.get("name", ""), "max_engagement_deg": float(np.nanmax(eng[cut])),
-               "share_above_theta_plus5": float(ds[cut & (eng > lim)].sum()) / Lc,
-               "cut_length_mm": Lc, "link_length_mm": float(ds[~cut].sum()),
-               "rapid_length_mm": path.lengths()["rapid_mm"],
-               "link_cutting_length_mm": float(ds[T.link_cuts.to_numpy()].sum()),
-               "link_removed_mm3": job.a_p * float(rem[kinds == "link"].sum())}
-    for k in SEGMENT_KINDS:
-        m = kinds == k
-        Lk = float(ds[m].sum())
-        summary[f"length_{k}_mm"] = Lk
-        summary[f"max_eng_{k}_deg"] = float(np.nanmax(eng[m])) if np.isfinite(eng[m]).any() else float("nan")
-        summary[f"share_above_{k}"] = float(ds[m & (eng > lim)].sum()) / Lk if Lk > 0 else float("nan")
-    reach = job.allowed().buffer(job.tool_radius, 64)
-    summary.update({"time_s": time_s, "uncut_area_mm2": stock.area(),
-                    "unreachable_area_mm2": float(job.polygon.difference(reach).area),
-                    "removed_volume_mm3": job.a_p * float(rem.sum()),
-                    "t_min_s": 60.0 * job.volume_mm3() / job.mrr_nominal()})
-    summary["time_over_min"] = summary["time_s"] / summary["t_min_s"]
-    err = mrr_error_windowed(rem, ds, v, job.a_p, job.mrr_nominal(), kinds == "cut", mrr_window_mm)
-    summary["mrr_error_cut_pct"] = err["mean_abs_pct"]
-    summary["mrr_error_cut_p95_pct"] = err["p95_abs_pct"]
-    return T, summary

@@ -24,7 +24,8 @@ from shapely.geometry import LineString
 
 from .path import ToolPath
 
-__all__ = ["hoang_table1_points", "zigzag_points", "zigzag_path", "n_passes_covering", "raster_lines"]
+__all__ = ["hoang_table1_points", "zigzag_points", "zigzag_path", "n_passes_covering", "raster_lines",
+           "raster_passes"]
 
 
 def _positive(name, v):
@@ -74,6 +75,8 @@ def zigzag_points(start, width: float, length: float, stepover: float, forward_s
 
     ``n_passes`` defaults to :func:`n_passes_covering`; with ``forward_step`` [mm] each pass carries
     CC points every ``forward_step`` (the last interval may be shorter), else only its two ends.
+    The passes are those of :func:`raster_passes` on the rectangle ``length`` x ``(n_passes - 1)
+    stepover`` (last pass on its far edge), concatenated (the stepovers are the straight links).
     """
     x0, y0 = (float(v) for v in start)
     width, length = _positive("width", width), _positive("length", length)
@@ -82,17 +85,9 @@ def zigzag_points(start, width: float, length: float, stepover: float, forward_s
         n_passes = n_passes_covering(width, sz)
     if int(n_passes) != n_passes or n_passes < 1:
         raise ValueError(f"n_passes must be an int >= 1, got {n_passes!r}")
-    if forward_step is None:
-        xs = np.array([0.0, length])
-    else:
-        fr = _positive("forward_step", forward_step)
-        xs = np.append(np.arange(0.0, length, fr), length)
-        xs = xs[np.r_[True, np.diff(xs) > 1e-12]]
-    pts = []
-    for k in range(int(n_passes)):
-        xk = xs if k % 2 == 0 else xs[::-1]
-        pts.append(np.column_stack([x0 + xk, np.full(len(xk), y0 + k * sz)]))
-    return np.vstack(pts)
+    rect = (x0, x0 + length, y0, y0 + (int(n_passes) - 1) * sz)
+    step = None if forward_step is None else _positive("forward_step", forward_step)
+    return np.vstack(raster_passes(rect, sz, last="edge", step=step, sampling="fixed"))
 
 
 def zigzag_path(points, z_cut: float, z_clear: float, feed: float, spindle: float | None = None,
@@ -126,21 +121,127 @@ def zigzag_path(points, z_cut: float, z_clear: float, feed: float, spindle: floa
 
 def raster_lines(region, stepover: float, min_length: float = 1e-6) -> list[np.ndarray]:
     """Zig-zag raster over a shapely (Multi)Polygon ``region`` (mm): lines along x every ``stepover``
-    mm in y from the bottom, clipped to the region (pieces shorter than ``min_length`` mm dropped),
-    alternate lines reversed; list of (2, 2) arrays.
+    mm in y from the bottom (+1e-6 mm), clipped to the region (pieces shorter than ``min_length`` mm
+    dropped), alternate lines reversed; list of (2, 2) arrays (:func:`raster_passes` at 0 deg).
 
     >>> from shapely.geometry import box
     >>> [q.round(6).tolist() for q in raster_lines(box(0, 0, 10, 2), 1.0)]
     [[[0.0, 1e-06], [10.0, 1e-06]], [[10.0, 1.000001], [0.0, 1.000001]]]
     """
+    return raster_passes(region, stepover, start_offset_mm=1e-6, min_length=min_length)
+
+
+def _rect_clip(p0, u, rect, tol=1e-9):
+    """Parameter range (tmin, tmax) of the line ``p0 + t u`` inside the rectangle (x0, x1, y0, y1)."""
+    x0, x1, y0, y1 = rect
+    tmin, tmax = -np.inf, np.inf
+    for ax, lo, hi in ((0, x0, x1), (1, y0, y1)):
+        if abs(u[ax]) < 1e-12:
+            if not (lo - tol <= p0[ax] <= hi + tol):
+                return 1.0, 0.0
+            continue
+        ta, tb = (lo - p0[ax]) / u[ax], (hi - p0[ax]) / u[ax]
+        tmin, tmax = max(tmin, min(ta, tb)), min(tmax, max(ta, tb))
+    return tmin, tmax
+
+
+def _sample(a, b, step, sampling):
+    """Parameters from a to b: ends only (step None), ``ceil((b-a)/step)`` even intervals
+    (``"even"``) or every ``step`` from a with a shorter last interval (``"fixed"``)."""
+    if step is None:
+        return np.array([a, b])
+    if sampling == "even":
+        return np.linspace(a, b, int(np.ceil((b - a) / step)) + 1)
+    t = np.append(a + np.arange(0.0, b - a, step), b)
+    return t[np.r_[True, np.diff(t) > 1e-12]]
+
+
+def raster_passes(region, stepover: float, angle_deg: float = 0.0, *, start_offset_mm: float = 0.0,
+                  last: str = "inside", step: float | None = None, sampling: str = "even",
+                  min_length: float = 0.0, links: bool = False) -> list[np.ndarray]:
+    """The zig-zag raster of the collection: passes (list of (M, 2) arrays, mm) covering ``region``.
+
+    Passes run along u = (cos A, sin A) (``angle_deg`` A from +x), on lines spaced ``stepover`` mm
+    along v = (-sin A, cos A) from the region's lowest v plus ``start_offset_mm``; consecutive
+    non-empty lines alternate direction (the first runs along +u).
+
+    Parameters
+    ----------
+    region : shapely (Multi)Polygon (lines clipped to it; a line crossing it several times gives one
+        pass per piece, ordered along +u, each reversed on reversed lines), or a rectangle
+        ``(x0, x1, y0, y1)`` (mm, clipped analytically, points clamped into it).
+    stepover : line spacing a_e (mm).
+    last : ``"inside"``: lines strictly below the highest v; ``"edge"``: lines up to the highest v
+        inclusive, plus one on it when the spacing misses it by more than 1e-9 mm.
+    step : sampling step (mm) of passes and links; None: pass ends only.
+    sampling : ``"even"`` (``ceil(L/step)`` equal intervals) or ``"fixed"`` (every ``step`` from the
+        pass start, shorter last interval).
+    min_length : pieces not longer than this (mm) are dropped.
+    links : append to each pass the interior points (every ``step``) of the straight link to the
+        next pass (for a convex region it stays inside), so the concatenated passes are the path.
+
+    >>> [q.tolist() for q in raster_passes((0, 4, 0, 2), 1.0, last="edge")]
+    [[[0.0, 0.0], [4.0, 0.0]], [[4.0, 1.0], [0.0, 1.0]], [[0.0, 2.0], [4.0, 2.0]]]
+    """
     sz = _positive("stepover", stepover)
-    x0, y0, x1, y1 = region.bounds
-    lines = []
-    for i, y in enumerate(np.arange(y0 + 1e-6, y1, sz)):
-        g = region.intersection(LineString([(x0 - 1, y), (x1 + 1, y)]))
-        parts = sorted((np.asarray(p.coords) for p in shapely.get_parts(g) if p.length > min_length),
-                       key=lambda q: q[:, 0].min())
-        for q in parts:
-            q = q[np.argsort(q[:, 0])]
-            lines.append(q if i % 2 == 0 else q[::-1])
-    return lines
+    if step is not None:
+        step = _positive("step", step)
+    if last not in ("inside", "edge"):
+        raise ValueError(f"last must be 'inside' or 'edge', got {last!r}")
+    if sampling not in ("even", "fixed"):
+        raise ValueError(f"sampling must be 'even' or 'fixed', got {sampling!r}")
+    A = np.radians(angle_deg)
+    u = np.array([np.cos(A), np.sin(A)])
+    v = np.array([-np.sin(A), np.cos(A)])
+    rect = None
+    if isinstance(region, (tuple, list, np.ndarray)):
+        rect = tuple(map(float, region))
+        if len(rect) != 4 or not (rect[0] <= rect[1] and rect[2] <= rect[3]):
+            raise ValueError(f"region rectangle must be (x0, x1, y0, y1) with x0 <= x1, y0 <= y1 (mm), got {region!r}")
+        x0, x1, y0, y1 = rect
+        coords = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    else:
+        coords = shapely.get_coordinates(region)
+        if region.is_empty:
+            return []
+    cv, cu = coords @ v, coords @ u
+    if last == "edge":
+        offs = np.arange(cv.min() + start_offset_mm, cv.max() + 1e-9, sz)
+        if offs.size == 0 or cv.max() - offs[-1] > 1e-9:
+            offs = np.append(offs, cv.max())
+    else:
+        offs = np.arange(cv.min() + start_offset_mm, cv.max(), sz)
+    passes, n_lines = [], 0
+    for o in offs:
+        p0 = o * v
+        if rect is not None:
+            tmin, tmax = _rect_clip(p0, u, rect)
+            spans = [(tmin, tmax)] if tmax - tmin >= 1e-9 and tmax - tmin > min_length else []
+            pieces = [p0 + _sample(a, b, step, sampling)[:, None] * u for a, b in spans]
+        else:
+            g = region.intersection(LineString([p0 + (cu.min() - 1) * u, p0 + (cu.max() + 1) * u]))
+            pieces = []
+            for q in sorted((np.asarray(p.coords) for p in shapely.get_parts(g) if p.length > min_length),
+                            key=lambda q: (q @ u).min()):
+                q = q[np.argsort(q @ u)]
+                if step is not None:
+                    t = q @ u
+                    q = p0 + _sample(t[0], t[-1], step, sampling)[:, None] * u
+                pieces.append(q)
+        if not pieces:
+            continue
+        passes += pieces if n_lines % 2 == 0 else [q[::-1] for q in pieces]
+        n_lines += 1
+    if links:
+        for k in range(len(passes) - 1):
+            a, b = passes[k][-1], passes[k + 1][0]
+            d = float(np.linalg.norm(b - a))
+            if step is None or d <= 0:
+                continue
+            m = int(np.ceil(d / step))
+            f = np.linspace(0, 1, m + 1)[1:-1] if sampling == "even" else np.arange(step, d - 1e-12, step) / d
+            if f.size:
+                passes[k] = np.vstack([passes[k], a + f[:, None] * (b - a)])
+    if rect is not None:
+        passes = [np.clip(q, [rect[0], rect[2]], [rect[1], rect[3]]) for q in passes]
+    return passes

@@ -11,7 +11,12 @@ path's own time (:meth:`ToolPath.time_s`) that ``make gcode-check`` compares wit
 * kim_yang2006 — original and modified constant-MRR contour-parallel paths, constant-engagement
   clearing of the same pocket;
 * jacso2021 — hybrid, contour-parallel and zig-zag on the star, rectangle and L pockets;
-* mgherony2024 — the ch. 8 drop-cut zig-zag finishing path at the five feed directions.
+* mgherony2024 — the ch. 8 drop-cut zig-zag finishing path at the five feed directions (the feed
+  down onto the first CL point is tagged ``cleared``: its z is the drop cutter's contact height);
+* every pocket job file of ``data/`` (``data/jacso2021/*.json``, ``data/kim_yang2006/pocket_*.json``,
+  ``data/pockets/*.json``): the default planner's program, ``<job>_plan_default.ngc`` in the folder
+  of its work (or ``pockets``), written by the code path of ``python -m cnclab plan JOB.json``
+  (:func:`cnclab.nc.cli_plan.planned_program`; the planner's own resolution in either mode).
 
 A program whose path the writer refuses (a rapid below the clearance plane that the path does not
 mark as cleared, a non-finite number) is not written; its error goes into the manifest and the
@@ -29,6 +34,7 @@ import numpy as np
 
 from ..fileio import atomic_write
 from ..nc.apt import read_apt
+from ..nc.cli_plan import planned_program
 from ..nc.program import write_program
 from ..nc.spindle_control import to_gcode_moves as apt_to_moves
 from ..paths import build_dir, data_path
@@ -78,11 +84,53 @@ def _jacso(job_file, strategy):
     return make
 
 
+def _planned(job_file):
+    def make():
+        text, job, path, _ = planned_program(job_file)
+        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path, "job": job,
+                      "strategy": path.info.get("strategy", "")}
+    return make
+
+
+def _job_files() -> dict:
+    """Every pocket job file of ``data/``: ``{folder: [file, ...]}`` (folder = work id or ``pockets``)."""
+    out = {}
+    for folder, pattern in (("jacso2021", "*.json"), ("kim_yang2006", "pocket_*.json"), ("pockets", "*.json")):
+        files = sorted(p for p in data_path(folder).glob(pattern) if _is_job_file(p))
+        if files:
+            out[folder] = files
+    return out
+
+
+def _is_job_file(p) -> bool:
+    """A pocket job file (the job format's ``tool_diameter`` and a ``polygon``, ``regions`` or
+    ``star``), not a parameter table (those name their fields with units: ``tool_diameter_mm``)."""
+    try:
+        d = json.loads(Path(p).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(d, dict) and "tool_diameter" in d and any(k in d for k in ("polygon", "regions", "star"))
+
+
+def _tag_drop_cut_descents(path: ToolPath) -> ToolPath:
+    """Tag ``cleared`` the vertical feed moves that come down onto a drop-cut CL point of a finishing
+    path (the ch. 8 approach from the clearance plane). The point's z is the ball's first contact
+    height over the part mesh (:func:`cnclab.toolpath.dropcutter.drop_cutter_z`, the maximum over
+    every facet in reach), so the ball above it touches no facet: the descent meets no part
+    material (the model has no finishing allowance above the surface). In place, returned."""
+    down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
+    xy_same = np.r_[False, np.all(np.abs(np.diff(path.xyz[:, :2], axis=0)) <= 1e-9, axis=1)]
+    for k in np.flatnonzero(path.is_kind("plunge") & down & xy_same):
+        path.tag[k] = "cleared (drop-cut contact point)" if not path.tag[k] else f"{path.tag[k]} cleared"
+    return path
+
+
 def _mgherony(angle):
     def make():
         tp = ch7_9.parameters()["table7_1"]
         moves = apt_to_moves(read_apt(ch7_9.zigzag_apt(angle)))
         path = ToolPath.from_moves(moves, tool=Tool(tp["D"], corner_radius=0.5 * tp["D"], flutes=tp["teeth"]))
+        _tag_drop_cut_descents(path)
         hdr = [f"Mgherony 2024 ch. 8 drop-cut zig-zag finishing, A_f = {angle:g} deg, D{tp['D']:g} ball"]
         on_part = path.xyz[(~path.is_kind("rapid")) & (path.xyz[:, 2] < 30.0), 2]
         top = float(on_part.max())   # the part's highest CL point: the stock top of a finishing path
@@ -99,7 +147,11 @@ PROGRAM_RECIPES = {
                                                                 "l_pocket.json")
                   for s in ("hybrid", "contour-parallel", "zig-zag")},
     "mgherony2024": {f"ch8_zigzag_Af{a:g}": _mgherony(a) for a in ch7_9.DIRECTIONS},
+    "pockets": {},
 }
+# the default planner's program (``python -m cnclab plan JOB.json``) of every job file of data/
+for _folder, _files in _job_files().items():
+    PROGRAM_RECIPES[_folder].update({f"{f.stem}_plan_default": _planned(f) for f in _files})
 
 
 def write_programs(outdir=None, works=None, quiet=False) -> dict:
