@@ -355,14 +355,19 @@ def _mix(x, y, z):
 
 
 @njit(cache=True, nogil=True)
-def _weld(bits):
-    """Id per row of ``bits`` (N, 3) uint64: rows equal bit for bit share an id (open addressing)."""
-    n = bits.shape[0]
+def _hash_table(n):
+    """Empty open-addressing table (-1 = free) of a power-of-two size >= 2 n, and its index mask."""
     size = 16
     while size < 2 * n:
         size *= 2
-    mask = np.uint64(size - 1)
-    table = np.full(size, -1, np.int64)
+    return np.full(size, -1, np.int64), np.uint64(size - 1)
+
+
+@njit(cache=True, nogil=True)
+def _weld(bits):
+    """Id per row of ``bits`` (N, 3) uint64: rows equal bit for bit share an id (open addressing)."""
+    n = bits.shape[0]
+    table, mask = _hash_table(n)
     vid = np.empty(n, np.int64)
     nv = 0
     for i in range(n):
@@ -385,11 +390,7 @@ def _weld(bits):
 def _first_equal_triple(vid):
     """For each row of ``vid`` (F, 3) the first row with the same three ids in any order."""
     F = vid.shape[0]
-    size = 16
-    while size < 2 * F:
-        size *= 2
-    mask = np.uint64(size - 1)
-    table = np.full(size, -1, np.int64)
+    table, mask = _hash_table(F)
     key = np.empty((F, 3), np.int64)
     first = np.empty(F, np.int64)
     for i in range(F):

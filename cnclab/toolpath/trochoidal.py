@@ -299,12 +299,22 @@ def admissible_step(pattern, theta_max_deg, width, tool_radius, resolution_mm=0.
 
     # bracket: the exact front-point step of the circle (a lower bound of the maximum engagement)
     s_front = circle_front_step(theta_max_deg, width, r)
-    hi = 1.5 * s_front if s_max is None else s_max
-    lo = 0.5 * s_front
+    return _largest_step(emax, theta_max_deg, 0.5 * s_front, 1.5 * s_front if s_max is None else s_max, tol_mm)
+
+
+def _largest_step(emax, theta_max_deg, lo, hi, tol_mm, grow_limit=None):
+    """Largest step s (mm, to ``tol_mm``) with ``emax(s) <= theta_max_deg``, emax growing with s:
+    halve ``lo`` until it is admissible; with ``grow_limit`` (mm) also grow ``hi`` by 1.5x until it
+    is not (returning the last admissible step if hi passes the limit); then bisect."""
     while emax(lo) > theta_max_deg:
         hi, lo = lo, 0.5 * lo
         if lo < tol_mm:
             raise ValueError(f"theta_max_deg={theta_max_deg} is below the engagement of the smallest step")
+    if grow_limit is not None:
+        while emax(hi) <= theta_max_deg:
+            lo, hi = hi, 1.5 * hi
+            if hi > grow_limit:
+                return lo
     while hi - lo > tol_mm:
         mid = 0.5 * (lo + hi)
         if emax(mid) <= theta_max_deg:
@@ -842,22 +852,7 @@ def ce_admissible_step(per: ToolPath, theta_max_deg, width, tool_radius, resolut
         p = _repeat_period(per, s, n_periods, resolution_mm)
         return evaluate_pattern(p, width, r, resolution_mm)[1]["max_engagement_deg"]
 
-    lo, hi = 0.5 * s0, 1.5 * s0
-    while emax(lo) > theta_max_deg:
-        hi, lo = lo, 0.5 * lo
-        if lo < tol_mm:
-            raise ValueError(f"theta_max_deg={theta_max_deg} is below the engagement of the smallest step")
-    while emax(hi) <= theta_max_deg:
-        lo, hi = hi, 1.5 * hi
-        if hi > 4 * r:
-            return lo
-    while hi - lo > tol_mm:
-        mid = 0.5 * (lo + hi)
-        if emax(mid) <= theta_max_deg:
-            lo = mid
-        else:
-            hi = mid
-    return lo
+    return _largest_step(emax, theta_max_deg, 0.5 * s0, 1.5 * s0, tol_mm, grow_limit=4 * r)
 
 
 def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
