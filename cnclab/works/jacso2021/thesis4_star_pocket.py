@@ -19,6 +19,7 @@ import pandas as pd
 
 from cnclab.cutting.speeds import spindle_speed
 from cnclab.geometry.engagement import stepover_straight
+from cnclab.cache import cached
 from cnclab.paths import data_path
 from cnclab.runtime import pick
 from cnclab.sweep import sweep
@@ -115,16 +116,19 @@ def level_evaluation(path, job, resolution_mm, feed_control=False):
     return ev.trace["level"], s
 
 
-@functools.cache
 def star_strategies(resolution_mm=None):
     """Hybrid (with and without feed control), contour-parallel and zig-zag on the star: summaries
-    (:func:`level_evaluation`).
+    (:func:`level_evaluation`); ``resolution_mm`` None: 0.05 mm (0.1 in fast mode).
 
-    Returns ``(summaries DataFrame, {name: (path, table)})``.
+    Returns ``(summaries DataFrame, {name: (path, table)})``. Cached on disk (build/cache, keyed
+    by the code and the resolution): the s4 notebook and the claims report share one computation.
     """
-    import pandas as pd
+    return _star_strategies(pick(0.05, 0.1) if resolution_mm is None else float(resolution_mm))
 
-    res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
+
+@functools.cache
+@cached()
+def _star_strategies(res: float):
     job = star_job()
     hp = pk.hybrid_path(job, res)
     out, rows = {}, []
