@@ -8,6 +8,11 @@ simulated): ``chosen_plan_s`` is the planning time of the chosen candidate alone
 
 Run: ``.venv/bin/python benchmarks/bench_pocket.py`` (resolutions 0.2 and 0.1 mm) or
 ``--quick`` (0.1 mm only: the fast-mode resolution of the notebook and the tests).
+
+The cells (shape x resolution x strategy) go through :func:`cnclab.sweep.sweep`: serial by default
+(the times compare like with like), ``CNCLAB_SWEEP_JOBS=N`` on N processes or
+``CNCLAB_DASK_SCHEDULER=tcp://host:port`` on a Dask cluster (then each cell's times are the
+worker's, measured inside the cell).
 """
 import argparse
 import time
@@ -15,6 +20,7 @@ import time
 import pandas as pd
 
 from cnclab.paths import data_path
+from cnclab.sweep import sweep
 from cnclab.toolpath import pocket as pk
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import load_job
@@ -25,30 +31,33 @@ SHAPES = {"star": star_job,
           "L-shape": lambda: load_job(data_path("jacso2021", "l_pocket.json"))}
 
 
+STRATEGIES = {"hybrid": lambda job, res: pk.hybrid_path(job, res),
+              "contour-parallel": lambda job, res: pk.contour_parallel_path(job),
+              "zig-zag": lambda job, res: pk.zigzag_path(job)}
+
+
+def bench_cell(shape: str, res: float, name: str) -> dict:
+    """Plan and simulate one (shape, resolution mm, strategy) cell; its times measured inside."""
+    job = SHAPES[shape]()
+    t0 = time.perf_counter()
+    p = STRATEGIES[name](job, res)
+    t1 = time.perf_counter()
+    s = evaluate(p, job, res, feed_control=name == "hybrid", level_only=True).trace["level_summary"]
+    t2 = time.perf_counter()
+    row = {"shape": shape, "resolution_mm": res, "strategy": name, "plan_s": t1 - t0,
+           "simulate_s": t2 - t1, "total_s": t2 - t0, "points": len(p),
+           "machining_time_s": s["time_s"], "max_eng_deg": s["max_engagement_deg"],
+           "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"]}
+    if name == "hybrid":
+        c = p.info["wall_share_candidates"]
+        chosen = next(m for m in c if m["max_wall_share"] == p.info["max_wall_share"])
+        row.update(max_wall_share=p.info["max_wall_share"], chosen_plan_s=chosen["plan_s"],
+                   auto_cost=(t1 - t0) / chosen["plan_s"])
+    return row
+
+
 def main(resolutions=(0.2, 0.1)):
-    rows = []
-    for shape, make in SHAPES.items():
-        job = make()
-        plans = {"hybrid": lambda res: pk.hybrid_path(job, res),
-                 "contour-parallel": lambda res: pk.contour_parallel_path(job),
-                 "zig-zag": lambda res: pk.zigzag_path(job)}
-        for res in resolutions:
-            for name, plan in plans.items():
-                t0 = time.perf_counter()
-                p = plan(res)
-                t1 = time.perf_counter()
-                s = evaluate(p, job, res, feed_control=name == "hybrid", level_only=True).trace["level_summary"]
-                t2 = time.perf_counter()
-                row = {"shape": shape, "resolution_mm": res, "strategy": name, "plan_s": t1 - t0,
-                       "simulate_s": t2 - t1, "total_s": t2 - t0, "points": len(p),
-                       "machining_time_s": s["time_s"], "max_eng_deg": s["max_engagement_deg"],
-                       "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"]}
-                if name == "hybrid":
-                    c = p.info["wall_share_candidates"]
-                    chosen = next(m for m in c if m["max_wall_share"] == p.info["max_wall_share"])
-                    row.update(max_wall_share=p.info["max_wall_share"], chosen_plan_s=chosen["plan_s"],
-                               auto_cost=(t1 - t0) / chosen["plan_s"])
-                rows.append(row)
+    rows = sweep(bench_cell, [(shape, res, name) for shape in SHAPES for res in resolutions for name in STRATEGIES])
     df = pd.DataFrame(rows)
     ref = df[df.strategy == "zig-zag"].set_index(["shape", "resolution_mm"]).total_s
     df["total_vs_zigzag"] = df.total_s / pd.Series(list(zip(df["shape"], df.resolution_mm))).map(ref).to_numpy()
