@@ -20,6 +20,9 @@ plan time is the one in <pocket>.json (then the plan-time ratio is NOT from one 
 Times are wall clock on a shared CPU: noisy.
 
     .venv/bin/python benchmarks/bench_vs_freecad.py [pocket ...] [--fixtures] [--update-fixtures] [--fast]
+                                                    [--adaptive-only]
+
+``--adaptive-only`` leaves out the old ce_clearing and hybrid_path rows (tens of minutes in all).
 """
 from __future__ import annotations
 
@@ -37,8 +40,10 @@ from cnclab.nc.gcode import read_toolpath  # noqa: E402
 from cnclab.works.jacso2021 import freecad_comparison as fx  # noqa: E402
 
 
-def planner_rows(job) -> dict:
+def planner_rows(job, adaptive_only=False) -> dict:
     rows = dict(fx.PLANNER_ROWS)
+    if adaptive_only:
+        return {k: v for k, v in rows.items() if v == "adaptive"}
     if job.start_hole is not None:
         rows["hybrid_path"] = "hybrid"
     return rows
@@ -65,6 +70,7 @@ def main(argv):
     update = "--update-fixtures" in argv
     live = "--fixtures" not in argv and freecad_available()
     fast = "--fast" in argv
+    adaptive_only = "--adaptive-only" in argv
     names = [a for a in argv if not a.startswith("--")] or list(fx.POCKETS)
     unknown = [n for n in names if n not in fx.POCKETS]
     if unknown:
@@ -77,7 +83,7 @@ def main(argv):
     for name in names:
         job = fx.job(name)
         freecad = freecad_live(name, job, update) if live else None
-        T = fx.comparison(name, planner_rows(job), fast=fast, freecad=freecad)
+        T = fx.comparison(name, planner_rows(job, adaptive_only), fast=fast, freecad=freecad)
         tables[name] = T
         R = fx.ratios(T)
         print(f"\n== {name} ({fx.POCKETS[name]}; theta = {job.theta_deg:.2f} deg, dixel {T.attrs['resolution_mm']} mm"

@@ -18,6 +18,7 @@ import concurrent.futures as cf
 import functools
 import hashlib
 import json
+import logging
 import os
 import shutil
 import sys
@@ -32,6 +33,17 @@ from .notebook_tools import INDEX_NOTEBOOK, list_notebooks
 from .paths import DATA_DIR, NOTEBOOKS_DIR, PACKAGE_DIR, REPO_ROOT, build_dir
 from .runtime import fast_mode
 from .works import programs as nc_programs
+
+
+class _KernelPollNoise(logging.Filter):
+    """Drop asyncio's "Task exception was never retrieved" for nbclient's kernel-alive poll, which
+    fails harmlessly (an AssertionError on the already closed client) once a notebook has finished."""
+
+    def filter(self, record):
+        return "_async_poll_kernel_alive" not in str(getattr(record, "msg", "")) + str(record.args or "")
+
+
+logging.getLogger("asyncio").addFilter(_KernelPollNoise())
 
 
 def execute_notebook(path: Path, timeout: int = 3600, env: dict | None = None):

@@ -92,4 +92,5 @@ def test_analyze_real_freecad_program_reports_engagement(tmp_path):
                                        or '"star"' in p.read_text()))
 def test_plan_real_every_job_file(tmp_path, job):
     out = cli_plan.plan_program(job, tmp_path / "p.ngc", quiet=True)
-    assert check_program(out.read_text(), clearance_z=5.0).rapids_below_clearance == 0
+    chk = check_program(out.read_text(), clearance_z=5.0)
+    assert chk.ok, chk.errors[:3]           # rapids above clearance or in cleared area, no plunge into stock

@@ -504,7 +504,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 c = np.array(hole[:2])
                 rho = 0.0
                 add((c[0], c[1], clearance_z), "rapid")
-                add((c[0], c[1], z), "plunge", feed_mm_min, "start-hole")
+                add((c[0], c[1], z), "plunge", feed_mm_min, "cleared: pre-drilled start hole")
             elif rho < 0.02:
                 raise PlanningError(f"{source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
                                     "the region is too narrow for the tool")

@@ -30,6 +30,7 @@ import time
 import numpy as np
 import pandas as pd
 
+from ...cache import cached
 from ...nc import gcode
 from ...runtime import fast_mode, pick
 from ...toolpath import adaptive_clearing
@@ -52,10 +53,17 @@ def resolution_mm() -> float:
     return pick(0.1, 0.25)
 
 
-@functools.cache
 def ce_path() -> ToolPath:
-    """The constant-engagement clearing of the pocket job (default seeds: one per side of the neck)."""
-    return cc.clearing_path(ky.job(), resolution_mm=resolution_mm())
+    """The constant-engagement clearing of the pocket job (default seeds: one per side of the neck);
+    cached on disk (build/cache, keyed by the code and the resolution: minutes at full resolution,
+    shared by the notebook, the claims report and ``python -m cnclab programs``)."""
+    return _ce_path(resolution_mm())
+
+
+@functools.cache
+@cached()
+def _ce_path(res: float) -> ToolPath:
+    return cc.clearing_path(ky.job(), resolution_mm=res)
 
 
 @functools.cache
