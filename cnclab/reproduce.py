@@ -273,8 +273,10 @@ def _previous_seconds(rel: str) -> float:
 
 #: notebooks that take minutes (measured on the 2-core reference machine): on a fresh clone, with no
 #: previous times in build/cache/reproduce, they start first so the parallel run ends sooner.
-_KNOWN_LONG = ("kim_yang2006/ce_vs_constant_mrr.ipynb", "mgherony2024/ch6_neural_networks.ipynb",
-               "jacso2021/s4_star_pocket_hybrid_path.ipynb", "mgherony2024/ch7_spindle_speed_control.ipynb")
+_KNOWN_LONG = ("kim_yang2006/ce_vs_constant_mrr.ipynb", "jacso2021/s4_star_pocket_hybrid_path.ipynb",
+               "jacso2021/ce_clearing_vs_adaptive.ipynb", "jacso2021/thesis4_trochoidal_slots.ipynb",
+               "mgherony2024/ch7_spindle_speed_control.ipynb", "mgherony2024/ch9_toolpath_reordering.ipynb",
+               "mgherony2024/ch6_neural_networks.ipynb")
 
 
 def run_all(only: str | None = None, jobs: int | None = None, force: bool = False) -> int:
@@ -299,7 +301,8 @@ def run_all(only: str | None = None, jobs: int | None = None, force: bool = Fals
         else:
             todo.append((p, rel, key))
     # longest first: by the last run's times, else the notebooks known to be long start first
-    todo.sort(key=lambda t: (-_previous_seconds(t[1]), t[1] not in _KNOWN_LONG))
+    todo.sort(key=lambda t: (-_previous_seconds(t[1]),
+                             _KNOWN_LONG.index(t[1]) if t[1] in _KNOWN_LONG else len(_KNOWN_LONG)))
     rkey = report_inputs()
     report_cached = _read_stamp("claims-report", rkey, force) is not None
     pkey = _sha(rkey.encode(), str(fast_mode()).encode())
