@@ -273,10 +273,10 @@ def _previous_seconds(rel: str) -> float:
 
 #: notebooks that take minutes (measured on the 2-core reference machine): on a fresh clone, with no
 #: previous times in build/cache/reproduce, they start first so the parallel run ends sooner.
-_KNOWN_LONG = ("kim_yang2006/ce_vs_constant_mrr.ipynb", "jacso2021/s4_star_pocket_hybrid_path.ipynb",
-               "jacso2021/ce_clearing_vs_adaptive.ipynb", "jacso2021/thesis4_trochoidal_slots.ipynb",
-               "mgherony2024/ch7_spindle_speed_control.ipynb", "mgherony2024/ch9_toolpath_reordering.ipynb",
-               "mgherony2024/ch6_neural_networks.ipynb")
+_KNOWN_LONG = ("kim_yang2006/ce_vs_constant_mrr.ipynb", "mgherony2024/ch6_neural_networks.ipynb",
+               "jacso2021/ce_clearing_vs_adaptive.ipynb", "jacso2021/s4_star_pocket_hybrid_path.ipynb",
+               "jacso2021/thesis4_trochoidal_slots.ipynb", "mgherony2024/ch7_spindle_speed_control.ipynb",
+               "mgherony2024/ch9_toolpath_reordering.ipynb")
 
 
 def run_all(only: str | None = None, jobs: int | None = None, force: bool = False) -> int:
