@@ -73,10 +73,11 @@ def _compare_runs(mod, seed, h, **kw):
 
 @settings(max_examples=N_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**32 - 1), h=st.sampled_from([0.05, 0.08, 0.13]),
-       central=st.booleans(), front_only=st.booleans(), lag=st.sampled_from([None, 0.0, 0.7]))
-def test_dixel_simulate_compiled_equals_reference(seed, h, central, front_only, lag):
+       central=st.booleans(), front_only=st.booleans(), lag=st.sampled_from([None, 0.0, 0.7]),
+       lag_rule=st.sampled_from(["path", "front"]))
+def test_dixel_simulate_compiled_equals_reference(seed, h, central, front_only, lag, lag_rule):
     sa, sb, df = _compare_runs(dixel, seed, h, feed_direction="central" if central else "backward",
-                               front_only=front_only, lag_mm=lag)
+                               front_only=front_only, lag_mm=lag, lag_rule=lag_rule)
     ra, aa, ba = sa.intervals()
     rb, ab, bb = sb.intervals()
     assert np.array_equal(ra, rb)                            # same intervals in every row
@@ -84,9 +85,10 @@ def test_dixel_simulate_compiled_equals_reference(seed, h, central, front_only, 
 
 
 @settings(max_examples=N_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 2**32 - 1), h=st.sampled_from([0.05, 0.08]), front_only=st.booleans())
-def test_pixel_simulate_compiled_equals_reference(seed, h, front_only):
-    sa, sb, _ = _compare_runs(pixel, seed, h, front_only=front_only)
+@given(seed=st.integers(0, 2**32 - 1), h=st.sampled_from([0.05, 0.08]), front_only=st.booleans(),
+       lag_rule=st.sampled_from(["path", "front"]))
+def test_pixel_simulate_compiled_equals_reference(seed, h, front_only, lag_rule):
+    sa, sb, _ = _compare_runs(pixel, seed, h, front_only=front_only, lag_rule=lag_rule)
     assert np.array_equal(sa.grid, sb.grid)                 # the same pixels removed
 
 
@@ -177,3 +179,32 @@ def test_dixel_engagement_few_rows_under_the_tool():
         e1 = s.engagement(c, r, f, front_only=fo, backend="numpy")
         e2 = s.engagement(c, r, f, front_only=fo, backend="numba")
         assert e1.intervals.shape == e2.intervals.shape and np.allclose(e1.intervals, e2.intervals, rtol=0, atol=TOL)
+
+
+@pytest.mark.parametrize("mod", [dixel, pixel])
+def test_lag_rule_front_no_phantom_engagement_on_a_u_turn(mod):
+    # a slot along y = 5 to x = 20, then straight back along the same line: on the way back the tool
+    # is in its own slot, the true engagement is 0. The path lag (1.2 mm here) still holds the last
+    # disks of the way out when the tool turns: it sees them as material ahead (phantom engagement);
+    # lag_rule="front" cuts those disks first (they cover the front half-circle): 0 deg.
+    h, r = 0.05, 3.0
+    xs = np.arange(0.0, 20.0 + 1e-9, h)
+    P = np.r_[np.c_[xs, np.full_like(xs, 5.0)], np.c_[xs[::-1][1:], np.full(len(xs) - 1, 5.0)]]
+    back = np.arange(len(xs), len(P))
+    res = {}
+    for rule in ("path", "front"):
+        st_ = mod.Stock.from_polygon(box(0, 0, 30, 10), h)
+        res[rule] = mod.simulate(st_, P, r, 1.0, 100.0, lag_rule=rule).engagement_deg.to_numpy()
+    assert np.nanmax(res["path"][back]) > 15.0              # the phantom the old rule reports (21.7 deg)
+    # the front rule: 0 deg from the third sample of the way back on; at the turning point itself the
+    # two samples keep the row artefact the lag exists for (disc edges at +-90 deg, <= 2 sqrt(2h/r) rad)
+    assert np.all(res["front"][back][2:] <= 1e-4)       # 1e-4 deg: the transition bisection (24 halvings of ~pi)
+    assert np.nanmax(res["front"][back]) <= math.degrees(2 * math.sqrt(2 * h / r))
+    assert np.count_nonzero(res["path"][back] > 0) > 10     # the old rule: a phantom over ~0.6 mm
+    out = np.arange(int(3.0 / h), len(xs) - 1)               # the way out (past the first tool length) unchanged
+    np.testing.assert_allclose(res["front"][out], res["path"][out], atol=1e-9)
+
+
+def test_lag_rule_rejects_unknown():
+    with pytest.raises(ValueError, match="lag_rule"):
+        dixel.simulate(dixel.Stock.from_polygon(box(0, 0, 5, 5), 0.1), [[1, 1], [2, 1]], 1.0, 1.0, 1.0, lag_rule="x")

@@ -750,9 +750,36 @@ def _cut_one(model, A, B, grid, x0, y0, h, cx, cy, r):
 
 
 @njit(cache=True)
+def reaches_front(qx, qy, px, py, g0, g1, r, margin):
+    """True when the tool disc at (qx, qy) (radius r, mm) covers part of the front half-circle of the
+    tool at (px, py) with feed direction (g0, g1) deeper than ``margin`` (mm): the distance from the
+    disc centre to that arc is below ``r - margin`` (a disc ahead of the tool, centre closer than
+    2 r, always does). A disc behind the tool on a path whose curvature radius exceeds r never does:
+    it only touches the arc's ends, where the margin keeps the row-discretisation artefact out."""
+    vx = qx - px
+    vy = qy - py
+    rho = math.hypot(vx, vy)
+    if rho < 1e-12:
+        return False
+    gn = math.hypot(g0, g1)
+    fx = g0 / gn
+    fy = g1 / gn
+    if vx * fx + vy * fy > 0.0:
+        return rho < 2.0 * r         # a disc ahead of the tool always covers part of its front arc
+    else:
+        nx = -fy * r
+        ny = fx * r
+        dist = min(math.hypot(vx - nx, vy - ny), math.hypot(vx + nx, vy + ny))
+    return dist < r - margin
+
+
+@njit(cache=True)
 def simulate_path(model, A, B, grid, x0, y0, h, P, d, ds, s, r, lag, central, front_only, polyline,
-                  bisections, n_samples, f_z, i_start, k_start, fd0, fd1, eng, ent, ext, rem, hmax, havg):
-    """Port of the loop of :func:`.common.simulate` (model 0 dixel, 1 pixel).
+                  bisections, n_samples, f_z, i_start, k_start, fd0, fd1, eng, ent, ext, rem, hmax, havg,
+                  hold_front=False):
+    """Port of the loop of :func:`.common.simulate` (model 0 dixel, 1 pixel); ``hold_front``: the
+    ``lag_rule="front"`` of :func:`.common.simulate` (held-back disks reaching the front half-circle
+    are cut before the engagement is measured).
 
     Fills the per-step arrays from step ``i_start`` / cut ``k_start`` on. Returns (i, k, fd0, fd1):
     i = k = N when done; otherwise a dixel row ran out of interval capacity at cut k (the caller
@@ -764,12 +791,6 @@ def simulate_path(model, A, B, grid, x0, y0, h, P, d, ds, s, r, lag, central, fr
         if i > 0 and ds[i] > 0:
             fd0 = d[i - 1, 0]
             fd1 = d[i - 1, 1]
-        while k < i and s[i] - s[k] > lag:
-            v = _cut_one(model, A, B, grid, x0, y0, h, P[k, 0], P[k, 1], r)
-            if v < 0:
-                return i, k, fd0, fd1
-            rem[k] = v
-            k += 1
         g0 = fd0
         g1 = fd1
         if central and 0 < i < n - 1:
@@ -778,6 +799,18 @@ def simulate_path(model, A, B, grid, x0, y0, h, P, d, ds, s, r, lag, central, fr
             if v0 != 0 or v1 != 0:
                 g0 = v0
                 g1 = v1
+        m = k
+        if hold_front and (g0 != 0 or g1 != 0):
+            for q in range(i - 1, k - 1, -1):
+                if reaches_front(P[q, 0], P[q, 1], P[i, 0], P[i, 1], g0, g1, r, h):
+                    m = q + 1
+                    break
+        while k < i and (s[i] - s[k] > lag or k < m):
+            v = _cut_one(model, A, B, grid, x0, y0, h, P[k, 0], P[k, 1], r)
+            if v < 0:
+                return i, k, fd0, fd1
+            rem[k] = v
+            k += 1
         if g0 != 0 or g1 != 0:
             if model == 0:
                 iv = dixel_engagement(A, B, y0, h, P[i, 0], P[i, 1], r, g0, g1, front_only, polyline, bisections)

@@ -309,7 +309,7 @@ class StockBase:
         ang = float((iv[:, 1] - iv[:, 0]).sum())
         return Engagement(math.degrees(ang), math.degrees(iv[0, 0]), math.degrees(iv[-1, 1]), iv)
 
-    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out):  # pragma: no cover
+    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out, hold_front=False):  # pragma: no cover
         """Run the whole path in one compiled call (see :func:`simulate`); False if not available."""
         return False
 
@@ -340,7 +340,7 @@ def default_lag_mm(resolution_mm: float, tool_radius: float) -> float:
 
 def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None, teeth=None,
              front_only: bool = True, copy: bool = False, lag_mm: float | None = None,
-             feed_direction: str = "backward", backend: str | None = None):
+             feed_direction: str = "backward", backend: str | None = None, lag_rule: str = "path"):
     """Move the tool through ``centres`` cutting ``stock``; return a per-step pandas DataFrame.
 
     Works for both stock models (dixel and pixel). At step i the engagement is measured on the
@@ -359,6 +359,12 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     lag_mm : engagement at step i is measured on the stock with the disks of the last ``lag_mm`` of
         path not yet cut (default :func:`default_lag_mm`; 0 = measure on the fully updated stock).
         The removed area of every step is still exact: disks are cut in path order.
+    lag_rule : ``"path"`` (default): every disk of the last ``lag_mm`` is held back. ``"front"``: a
+        held-back disk that truly covers part of the front half-circle (deeper than one resolution
+        step, :func:`._kernels.reaches_front`) is cut before the engagement is measured, with the
+        disks before it -- where the path turns back on itself (a pass starting beside the end of the
+        previous one, a U-turn, a corner sharper than radius r) the lag would otherwise leave
+        material the tool has already removed in front of it (phantom engagement).
     feed_direction : ``"backward"`` (default): centres[i] - centres[i-1], the chord just travelled;
         ``"central"``: centres[i+1] - centres[i-1], the tangent of a smoothly sampled path to
         O(ds^2) (the backward chord lags the tangent by half the step's turning angle, e.g. 0.09 deg
@@ -405,6 +411,9 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     if feed_direction not in ("backward", "central"):
         raise ValueError(f"feed_direction must be 'backward' or 'central', got {feed_direction!r}")
     central = feed_direction == "central"
+    if lag_rule not in ("path", "front"):
+        raise ValueError(f"lag_rule must be 'path' or 'front', got {lag_rule!r}")
+    hold_front = lag_rule == "front"
     d = np.diff(P, axis=0)
     ds = np.r_[0.0, np.hypot(d[:, 0], d[:, 1])]
     n = len(P)
@@ -423,10 +432,10 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     plain = stock._plain()
     compiled = (be == "numba" and plain
                 and stock._simulate_compiled(P, d, ds, s_cum, r, lag, central, front_only, fz,
-                                             (eng, ent, ext, rem, hmax, havg)))
+                                             (eng, ent, ext, rem, hmax, havg), hold_front))
     if not compiled:
         _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z,
-                       (eng, ent, ext, rem, hmax, havg), {"backend": be} if plain else {})
+                       (eng, ent, ext, rem, hmax, havg), {"backend": be} if plain else {}, hold_front)
     mrr = material_removal_rate(rem, ds, a_p, feed_mm_min)
     df = pd.DataFrame({"x": P[:, 0], "y": P[:, 1], "s": s_cum, "ds": ds,
                        "engagement_deg": eng, "entry_deg": ent, "exit_deg": ext,
@@ -475,7 +484,7 @@ def simulate_runs(stock: StockBase, centres, rapid, tool_radius, a_p, feed_mm_mi
     return pd.concat(tables, ignore_index=True)
 
 
-def _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z, out, kw):
+def _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z, out, kw, hold_front=False):
     """The reference loop of :func:`simulate` (a Python loop over the steps calling
     ``stock.engagement(..., **kw)`` and ``stock.cut_disk(..., **kw)``): fills the arrays ``out``."""
     eng, ent, ext, rem, hmax, havg = out
@@ -486,14 +495,20 @@ def _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z, out
     for i in range(n):
         if i > 0 and ds_l[i] > 0:
             fdir = d[i - 1]
-        while k < i and s_l[i] - s_l[k] > lag:
-            rem[k] = stock.cut_disk(P[k], r, **kw)
-            k += 1
         fd = fdir
         if central and 0 < i < n - 1:
             v = P[i + 1] - P[i - 1]
             if v[0] != 0 or v[1] != 0:
                 fd = v
+        m = k
+        if hold_front and (fd[0] != 0 or fd[1] != 0):
+            for q in range(i - 1, k - 1, -1):
+                if _reaches_front(P[q, 0], P[q, 1], P[i, 0], P[i, 1], fd[0], fd[1], r, stock.resolution_mm):
+                    m = q + 1
+                    break
+        while k < i and (s_l[i] - s_l[k] > lag or k < m):
+            rem[k] = stock.cut_disk(P[k], r, **kw)
+            k += 1
         if fd[0] != 0 or fd[1] != 0:
             e = stock.engagement(P[i], r, fd, front_only=front_only, **kw)
             eng[i], ent[i], ext[i] = e.angle_deg, e.entry_deg, e.exit_deg
@@ -504,3 +519,19 @@ def _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z, out
     while k < n:
         rem[k] = stock.cut_disk(P[k], r, **kw)
         k += 1
+
+
+def _reaches_front(qx, qy, px, py, g0, g1, r, margin) -> bool:
+    """Python twin of :func:`._kernels.reaches_front` (the reference loop's rule ``lag_rule="front"``)."""
+    vx, vy = qx - px, qy - py
+    rho = math.hypot(vx, vy)
+    if rho < 1e-12:
+        return False
+    gn = math.hypot(g0, g1)
+    fx, fy = g0 / gn, g1 / gn
+    if vx * fx + vy * fy > 0.0:
+        return rho < 2.0 * r
+    else:
+        nx, ny = -fy * r, fx * r
+        dist = min(math.hypot(vx - nx, vy - ny), math.hypot(vx + nx, vy + ny))
+    return dist < r - margin

@@ -298,7 +298,7 @@ class Stock(StockBase):
         cls = type(self)
         return cls.cut_disk is Stock.cut_disk and cls.engagement is Stock.engagement
 
-    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out):
+    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out, hold_front=False):
         from . import _kernels as K
 
         n = len(P)
@@ -307,7 +307,7 @@ class Stock(StockBase):
         while True:
             i, k, f0, f1 = K.simulate_path(0, self._A, self._B, dummy, 0.0, self.y0, self.resolution_mm,
                                            P, d, ds, s, r, lag, central, front_only, True, 16, 0, f_z,
-                                           i, k, f0, f1, *out)
+                                           i, k, f0, f1, *out, hold_front)
             if i == n and k == n:
                 return True
             self._grow(2 * self._A.shape[0])          # a row ran out of interval slots: grow, resume

@@ -84,12 +84,12 @@ class Stock(StockBase):
         return (cls.cut_disk is Stock.cut_disk and cls.cut_disk_pixels is Stock.cut_disk_pixels
                 and cls.engagement is Stock.engagement)
 
-    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out):
+    def _simulate_compiled(self, P, d, ds, s, r, lag, central, front_only, f_z, out, hold_front=False):
         from . import _kernels as K
 
         dummy = np.empty((1, 1))
         K.simulate_path(1, dummy, dummy, self.grid, self.x0, self.y0, self.resolution_mm, P, d, ds, s, r, lag,
-                        central, front_only, True, 24, 0, f_z, 0, 0, float(d[0, 0]), float(d[0, 1]), *out)
+                        central, front_only, True, 24, 0, f_z, 0, 0, float(d[0, 0]), float(d[0, 1]), *out, hold_front)
         return True
 
     def engagement(self, center_xy, tool_radius, feed_direction_xy, front_only: bool = True,

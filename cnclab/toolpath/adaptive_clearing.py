@@ -120,13 +120,28 @@ def _frac(M, x0, y0, h, x, y):
 
 @njit(cache=True)
 def _eng(M, x0, y0, h, cx, cy, r, psi, n):
-    """Engagement (rad) of the front half circle (heading psi) with the material."""
+    """Engagement (rad) of the front half circle (heading psi) with the material.
+
+    The material is the region where the bilinear pixel fraction is >= 1/2 (its boundary passes
+    half-way between a material and an empty pixel centre: on the wall for pixel-aligned walls);
+    the arc is sampled at n + 1 angles and the crossings between samples are interpolated linearly,
+    so a thin rest along a wall counts with its full arc (an averaged fraction would under-count
+    an arc running nearly tangent to it)."""
     tot = 0.0
     da = math.pi / n
-    for k in range(n):
-        a = psi - 0.5 * math.pi + (k + 0.5) * da
-        tot += _frac(M, x0, y0, h, cx + r * math.cos(a), cy + r * math.sin(a))
-    return tot * da
+    a = psi - 0.5 * math.pi
+    fa = _frac(M, x0, y0, h, cx + r * math.cos(a), cy + r * math.sin(a)) - 0.5
+    for k in range(1, n + 1):
+        b = psi - 0.5 * math.pi + k * da
+        fb = _frac(M, x0, y0, h, cx + r * math.cos(b), cy + r * math.sin(b)) - 0.5
+        if fa >= 0.0 and fb >= 0.0:
+            tot += da
+        elif fa >= 0.0:
+            tot += da * fa / (fa - fb)
+        elif fb >= 0.0:
+            tot += da * fb / (fb - fa)
+        fa = fb
+    return tot
 
 
 @njit(cache=True)
@@ -140,7 +155,8 @@ def _inside(Amask, x0, y0, h, x, y):
 
 
 @njit(cache=True)
-def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len=1e18):
+def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len=1e18,
+          cap=1e9):
     """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end).
 
     Returns (points (n, 2), removed area mm^2, reason, engagement (n,) rad of each step): reason 0
@@ -162,7 +178,10 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             break
         px = P[n - 1, 0]
         py = P[n - 1, 1]
-        while k_cut < n and s[n - 1] - s[k_cut] > lag:
+        # during a run through air the disks are held back: the run may be dropped from the pass
+        # (air stop), and the stock must hold exactly what the emitted path removes
+        k_hold = n_air_start if air > 0.0 else n
+        while k_cut < k_hold and s[n - 1] - s[k_cut] > lag:
             removed += _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
             k_cut += 1
         lo = phi + turn          # hard left: least engagement
@@ -204,6 +223,11 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             qx = px + ds * math.cos(psi)
             qy = py + ds * math.sin(psi)
             e = _eng(M, x0, y0, h, qx, qy, r, psi, n_samp)
+            if e > cap:
+                # sliding along the wall would take more than the cap (a concave corner of the
+                # tool-centre region): the pass ends here, the corner is left to later passes
+                reason = 1
+                break
         if e < 0.3 * target:
             if air == 0.0:
                 n_air_start = n
@@ -444,6 +468,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     air_rad = math.radians(0.5)   # a step whose front half meets less than 0.5 deg of material is air
     a_e = r * (1 - math.cos(target))
     target_finish = math.radians(theta_deg + finish_margin_deg)
+    cap_pass = target + math.radians(1.0)        # a wall slide may exceed the target by 1 deg
+    cap_finish = target_finish
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
     n_samp = 90
     turn = math.radians(90.0)
@@ -589,7 +615,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 continue
             heading = math.atan2(gy, gx) - 0.5 * math.pi
             P, removed, reason, E = _pass(g.M, g.A, g.x0, g.y0, h, r, cur[0], cur[1], heading, target, ds, lag,
-                                       20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)))
+                                       20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18, cap_pass)
             stats["passes"] += 1
             if removed < 0.2 * r * h or len(P) < 2:
                 rad = int(math.ceil(r / g.hc))
@@ -638,7 +664,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
                         P, _, _, E = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
                                         int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
-                                        min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds)
+                                        min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish)
                         # points the grid kept within 2 h of the wall go onto the exact wall
                         # (the grid mask is shrunk by h/2 for safety: no skin is left on the walls)
                         pp = shapely.points(P)

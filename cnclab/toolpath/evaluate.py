@@ -10,7 +10,12 @@ Model (units: mm, deg, mm/min, s):
   top cuts the tool disc out of that slab, in path order (:func:`cnclab.simulation.common.simulate`
   on each run of consecutive samples inside the slab). The slab is 2D: a tool that has entered it
   removes its full thickness under the disc, so ramps and helices are approximated by the level
-  they cross (they are entries: excluded from the engagement statistics anyway).
+  they cross (they are entries: excluded from the engagement statistics anyway). The engagement is
+  measured with the simulator's lag (the disks of the last ``2 sqrt(2 r h) + 2 h`` mm are cut after
+  the measurement, against the row-discretisation artefact at the ends of the front half-circle)
+  under ``lag_rule="front"``: a held-back disk that truly covers the front half-circle -- the path
+  came back beside itself within the lag, e.g. a pass starting where the previous one ended -- is
+  cut first, so material the tool has already removed is never counted as engaged.
 * **Cutting samples**: cut or link moves (at depth) that remove more than ``air_tol_mm2`` (default
   half a dixel row squared); engagement (max over the slabs the tool is in) and MRR statistics are
   length-weighted over them. A *cut* move removing nothing is **air cut**.
@@ -337,7 +342,7 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
                     rem = np.array([stock.cut_disk(P[idx[0], :2], r)])
                     e = np.array([np.nan])
                 else:
-                    df = simulate(stock, P[idx, :2], r, 1.0, 1.0)
+                    df = simulate(stock, P[idx, :2], r, 1.0, 1.0, lag_rule="front")
                     rem = df.removed_mm2.to_numpy()
                     e = df.engagement_deg.to_numpy().copy()
                     e[0] = np.nan                     # no feed direction from behind at the run start
