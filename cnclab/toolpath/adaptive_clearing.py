@@ -251,6 +251,30 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
 
 
 @njit(cache=True)
+def _replay(M, x0, y0, h, r, P, lag, n_samp):
+    """Cut the fixed points P (n, 2) into M in order, the disks of the last ``lag`` mm held back as
+    in :func:`_pass`; the engagement (rad) measured at each point (heading: the chord from the point
+    before; 0 at P[0])."""
+    n = P.shape[0]
+    E = np.zeros(n)
+    s = np.zeros(n)
+    k_cut = 0
+    for i in range(1, n):
+        dx = P[i, 0] - P[i - 1, 0]
+        dy = P[i, 1] - P[i - 1, 1]
+        s[i] = s[i - 1] + math.hypot(dx, dy)
+        while k_cut < i and s[i] - s[k_cut] > lag + 1e-12:
+            _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
+            k_cut += 1
+        if dx != 0.0 or dy != 0.0:
+            E[i] = _eng(M, x0, y0, h, P[i, 0], P[i, 1], r, math.atan2(dy, dx), n_samp)
+    while k_cut < n:
+        _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
+        k_cut += 1
+    return E
+
+
+@njit(cache=True)
 def _cut_path(M, x0, y0, h, P, r):
     rem = 0.0
     for k in range(P.shape[0]):
@@ -659,9 +683,14 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                                 raise PlanningError(f"{source}: no cleared place to start the finishing pass")
                         else:
                             add((Rl[0, 0], Rl[0, 1], z), "link", link_feed_mm_min)
-                        # the wall-following pass: the same engagement control, sliding along the wall
-                        L_ring = float(np.hypot(*np.diff(Rl, axis=0).T).sum())
+                        # the wall-following pass: the same engagement control, sliding along the wall;
+                        # it ends 2 r past the last ring point that still has material within reach
+                        sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
+                        dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
+                        mat = np.flatnonzero(dml < r + g.hc)
+                        L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * r)
                         hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
+                        M_before = g.M.copy()
                         P, _, _, E = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
                                         int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
                                         min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish)
@@ -671,8 +700,19 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         near = shapely.distance(wall, pp) < 2.0 * h
                         if near.any():
                             snapped = shapely.line_interpolate_point(wall, shapely.line_locate_point(wall, pp[near]))
-                            P = P.copy()
-                            P[near] = shapely.get_coordinates(snapped)
+                            Q = P.copy()
+                            Q[near] = shapely.get_coordinates(snapped)
+                            # the snap moves points up to 2 h outwards: near a concave corner that can
+                            # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
+                            # on the stock as it was before this lap, a snapped point whose engagement
+                            # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
+                            Es = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp)
+                            over = near & (Es > cap_finish)
+                            if over.any():
+                                Q[over] = P[over]
+                            g.M[:] = M_before
+                            E = _replay(g.M, g.x0, g.y0, h, r, Q, lag, n_samp)
+                            P = Q
                         for q, e in zip(P[1:], E[1:]):
                             air_step = e < air_rad
                             add((q[0], q[1], z), "link" if air_step else "cut",
