@@ -23,7 +23,10 @@ def test_every_strategy_plans_a_safe_toolpath(rect, name):
     p = plan(rect, name, resolution_mm=RES)
     assert isinstance(p, ToolPath) and p.info["strategy"] == name and p.tool == rect.tool
     rapid = p.is_kind("rapid")
-    assert np.all(p.xyz[rapid, 2] == rect.clearance_z)                       # rapids only at clearance
+    low = rapid & (p.xyz[:, 2] < rect.clearance_z)
+    # rapids at clearance, or below it only where the planner marks them inside cleared area (the
+    # evaluator below proves that no rapid removes material)
+    assert all("cleared" in str(t) for t in p.tag[low])
     assert p.kinds()[0] == "rapid" and p.kinds()[-1] == "retract"
     assert p.xyz[:, 2].min() == pytest.approx(rect.top_z - rect.a_p)
     ev = evaluate(p, rect, RES)

@@ -30,8 +30,10 @@ Design (the ideas and where they come from; the code is cnclab's own)
 * **Links** (Adaptive2d's ``keepToolDown`` linking through cleared area): the start of the next
   pass is found by a Dijkstra search over the cells whose tool disk is free of material (distance
   transform of the stock, coarse grid) inside the tool-centre region, starting where the tool is;
-  the cell route is shortened to straight chords that stay in that free set and written as feed
-  moves at depth (``link``, link feed). Only when no free route exists (a disjoint region, material
+  the cell route is shortened to straight chords that stay in that free set and written as rapids
+  at depth tagged ``cleared`` (FreeCAD writes its keep-tool-down links as G0 too; the evaluator
+  counts any rapid that removes material) or, with ``rapid_links=False``, as feed moves (``link``,
+  link feed). Only when no free route exists (a disjoint region, material
   closing the way) does the tool retract, rapid at clearance and enter again.
 * **Entries**: a pre-drilled start hole is used as it is (plunge into the hole, air); otherwise a
   helix (G3 turns, 5 deg ramp like FreeCAD's default) at the point of the tool-centre region
@@ -275,6 +277,32 @@ def _replay(M, x0, y0, h, r, P, lag, n_samp):
 
 
 @njit(cache=True)
+def _capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
+    """True when no material pixel centre lies within ``rr`` of the segment (a, b): the tool disc
+    (radius < rr - h/sqrt(2)) swept along it removes nothing."""
+    ny, nx = M.shape
+    i0 = max(int(math.floor((min(ax, bx) - rr - x0) / h)), 0)
+    i1 = min(int(math.ceil((max(ax, bx) + rr - x0) / h)), nx - 1)
+    j0 = max(int(math.floor((min(ay, by) - rr - y0) / h)), 0)
+    j1 = min(int(math.ceil((max(ay, by) + rr - y0) / h)), ny - 1)
+    dx = bx - ax
+    dy = by - ay
+    L2 = dx * dx + dy * dy
+    for j in range(j0, j1 + 1):
+        py = y0 + (j + 0.5) * h
+        for i in range(i0, i1 + 1):
+            if M[j, i]:
+                px = x0 + (i + 0.5) * h
+                t = 0.0 if L2 == 0.0 else ((px - ax) * dx + (py - ay) * dy) / L2
+                t = min(max(t, 0.0), 1.0)
+                ex = ax + t * dx - px
+                ey = ay + t * dy - py
+                if ex * ex + ey * ey < rr * rr:
+                    return False
+    return True
+
+
+@njit(cache=True)
 def _cut_path(M, x0, y0, h, P, r):
     rem = 0.0
     for k in range(P.shape[0]):
@@ -451,6 +479,7 @@ def _shortcut(pts, ok):
 # ------------------------------------------------------------------------------------------------
 def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, feed_mm_min: float,
                       depth: float | None = None, start_hole=None, link_feed_mm_min: float = 1500.0,
+                      rapid_links: bool = True,
                       clearance_z: float = 5.0, top_z: float = 0.0, spindle_rpm: float | None = None,
                       tool: Tool | None = None, resolution_mm: float | None = None, step_mm: float | None = None,
                       helix_angle_deg: float = 5.0, finish: bool = True, finish_margin_deg: float = 8.0, finish_laps: int = 3, source: str = "<pocket>",
@@ -464,7 +493,12 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     (default r/30); ``finish_margin_deg``: the wall-following finish is held at ``theta +
     finish_margin_deg`` (it takes the wedges the passes could not reach at ``theta``); ``source``
     names the job in error messages; ``finish_laps``: at most so many wall-following laps per ring,
-    a further lap only while material deeper than max(0.3 mm, a_e/4) is left along the ring.
+    a further lap only while material deeper than max(0.3 mm, a_e/4) is left along the ring;
+    ``rapid_links``: the links at depth between passes (chords proven free of material on the
+    planning stock, the tool disc at least 0.75 coarse cells clear of it) are written as G0 tagged
+    ``cleared`` (as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
+    G0 is a straight line on LinuxCNC (and on any controller with interpolated rapids); on a
+    controller whose rapids dog-leg, set it False (job key ``"rapid_links": false``).
     """
     t_start = time.perf_counter()
     if not isinstance(pocket, (Polygon, MultiPolygon)) or pocket.is_empty or not pocket.is_valid:
@@ -611,7 +645,11 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             chords = _shortcut(pts_r, ok)
             for q in chords[1:]:
                 if math.hypot(q[0] - cur[0], q[1] - cur[1]) > 1e-9:
-                    add((q[0], q[1], z), "link", link_feed_mm_min)
+                    if rapid_links and _capsule_free(g.M, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], r + h):
+                        # G0 at depth: no material pixel within r + h of the chord (tag: cleared)
+                        add((q[0], q[1], z), "rapid", np.nan, "cleared: link through cleared area")
+                    else:
+                        add((q[0], q[1], z), "link", link_feed_mm_min)
                     cur = (float(q[0]), float(q[1]))
             stats["links"] += 1
             return route[-1]
@@ -737,6 +775,7 @@ def plan_job(job, **kw) -> ToolPath:
     return adaptive_clearing(job.polygon, job.tool.radius, job.theta_deg, job.a_p, job.feed_mm_min,
                              depth=getattr(job, "depth", None), start_hole=sh,
                              link_feed_mm_min=getattr(job, "link_feed_mm_min", 1500.0),
+                             rapid_links=bool(getattr(job, "rapid_links", True)),
                              clearance_z=getattr(job, "clearance_z", 5.0), top_z=getattr(job, "top_z", 0.0),
                              spindle_rpm=getattr(job, "spindle_rpm", None), tool=job.tool,
                              source=str(getattr(job, "source", "<job>")), **kw)

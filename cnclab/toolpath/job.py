@@ -106,6 +106,8 @@ JOB_SCHEMA = {
         "f_z": _pos("feed per tooth, mm"),
         "feed_mm_min": _pos("nominal cutting feed, mm/min"),
         "link_feed": _pos("linking feed, mm/min"),
+        "rapid_links": {"type": "boolean", "description": "links at depth through cleared area as G0 "
+                        "(default true; false on a controller whose rapids dog-leg: G1 at link_feed)"},
         "v_fmax": _pos("maximum feed of the feed control, mm/min"),
         "roll_radius": _pos("roll-in/roll-out radius, mm"),
         "rapid_mm_min": _pos("rapid traverse rate, mm/min"),
@@ -219,7 +221,8 @@ class Job:
     ``depth`` (None: a_p), ``start_hole`` (None or (x, y, diameter)), ``v_c``, ``f_z``,
     ``feed_mm_min`` (nominal cutting feed), ``spindle_rpm``, ``link_feed_mm_min``, ``rapid_mm_min``,
     ``clearance_z``, ``top_z``, ``v_fmax`` (feed-control cap), ``roll_radius`` (roll-in radius of the
-    hybrid path), ``source`` (file name for messages), ``description``.
+    hybrid path), ``rapid_links`` (links at depth through cleared area written as G0; False: G1 at
+    ``link_feed_mm_min``), ``source`` (file name for messages), ``description``.
     Build with :meth:`from_dict` / :func:`load_job` (validated).
     """
 
@@ -239,6 +242,7 @@ class Job:
     top_z: float = 0.0
     v_fmax: float = 1000.0
     roll_radius: float = 1.0
+    rapid_links: bool = True
     source: str = "<dict>"
     description: str = ""
 
@@ -422,6 +426,8 @@ class Job:
                                         "top_z", "v_fmax", "roll_radius", "depth") if k in d}
         if "link_feed" in d:
             kw["link_feed_mm_min"] = float(d["link_feed"])
+        if "rapid_links" in d:
+            kw["rapid_links"] = bool(d["rapid_links"])
         try:
             return cls(poly, tool, theta, a_p, start_hole=hole, source=str(source),
                        description=str(d.get("description", "")), **kw)
@@ -441,7 +447,7 @@ class Job:
              "f_z": self.f_z, "feed_mm_min": self.feed_mm_min, "spindle_rpm": self.spindle_rpm,
              "link_feed": self.link_feed_mm_min, "rapid_mm_min": self.rapid_mm_min,
              "clearance_z": self.clearance_z, "top_z": self.top_z, "v_fmax": self.v_fmax,
-             "roll_radius": self.roll_radius}
+             "roll_radius": self.roll_radius, "rapid_links": self.rapid_links}
         if p.interiors:
             d["islands"] = [ring(i) for i in p.interiors]
         if len(polys) > 1:
