@@ -51,7 +51,7 @@ Design (the ideas and where they come from; the code is cnclab's own)
 >>> from shapely.geometry import box
 >>> tp = adaptive_clearing(box(0, 0, 24, 18), tool_radius=3, theta_deg=60, a_p=1, feed_mm_min=255)
 >>> sorted(set(tp.kinds()))
-['cut', 'helix', 'link', 'plunge', 'rapid', 'retract']
+['cut', 'helix', 'link', 'plunge', 'rapid']
 >>> bool(np.all(tp.xyz[tp.is_kind("plunge"), 2] >= 0.0))   # the only plunge ends on the stock top (air)
 True
 """
@@ -513,7 +513,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     depth = float(a_p if depth is None else depth)
     h = float(resolution_mm or r / 60.0)
     ds = float(step_mm or r / 30.0)
-    allowed = pocket.buffer(-r, quad_segs=32)
+    allowed = pocket.buffer(-r, quad_segs=64)
     if allowed.is_empty or allowed.area < 4 * h * h:
         raise PlanningError(f"{source}: the tool (diameter {2 * r:g} mm) does not fit in the pocket "
                             "(no room for the tool centre)")
@@ -555,7 +555,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
         def retract():
             nonlocal cur
             if cur is not None:
-                add((cur[0], cur[1], clearance_z), "retract", feed_mm_min)
+                # straight up out of the tool's own cut: G0 (as FreeCAD lifts); the writer and the
+                # static check accept a rapid only so below the clearance plane
+                add((cur[0], cur[1], clearance_z), "rapid")
                 stats["retracts"] += 1
                 cur = None
 
@@ -654,6 +656,96 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             stats["links"] += 1
             return route[-1]
 
+        def finish_part(part):
+            """The wall-following finish laps along every ring of one part of the tool-centre region."""
+            nonlocal cur
+            # the tool-centre limit (as the evaluator and Job.allowed() draw it: 64 segments a quarter circle),
+            # 1 um inside it: the chords of its arcs never put the tool centre past the true limit
+            wall = shapely.boundary(allowed.buffer(-1e-3))
+            for ring in [part.exterior, *part.interiors]:
+                R = np.asarray(ring.coords)[:-1]
+                if len(R) < 3:
+                    continue
+                Rs = _resample(np.vstack([R, R[:1]]), ds)[:-1]
+                for lap in range(finish_laps):   # repeated while the corner wedges are peeled
+                    D, Ac = g.free_field()
+                    jj = np.clip(((Rs[:, 1] - g.y0) // g.hc).astype(int), 0, D.shape[0] - 1)
+                    ii = np.clip(((Rs[:, 0] - g.x0) // g.hc).astype(int), 0, D.shape[1] - 1)
+                    dm = D[jj, ii]
+                    if dm.min() > (r + g.hc if lap == 0 else r - max(0.3, 0.25 * a_e)):
+                        break                # nothing (more) to take along this ring
+                    k0 = int(np.argmax(dm))
+                    Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
+                    goal = np.zeros_like(Ac)
+                    goal[jj[k0], ii[k0]] = True
+                    if cur is not None:
+                        Acx = Ac.copy(); Acx[jj[k0], ii[k0]] = True
+                        Dx = D.copy(); Dx[jj[k0], ii[k0]] = max(D[jj[k0], ii[k0]], r_free)
+                        e = link_to(goal, Dx, Acx, r_free)
+                    else:
+                        e = None
+                    if e is None:
+                        retract()
+                        add((Rl[0, 0], Rl[0, 1], clearance_z), "rapid")
+                        if dm[k0] >= r:          # free of material under the tool: feed down into cleared area
+                            add((Rl[0, 0], Rl[0, 1], z), "plunge", feed_mm_min, "cleared")
+                        else:
+                            raise PlanningError(f"{source}: no cleared place to start the finishing pass")
+                    else:
+                        add((Rl[0, 0], Rl[0, 1], z), "link", link_feed_mm_min)
+                    # the wall-following pass: the same engagement control, sliding along the wall;
+                    # it ends 2 r past the last ring point that still has material within reach
+                    sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
+                    dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
+                    mat = np.flatnonzero(dml < r + g.hc)
+                    L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * r)
+                    hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
+                    M_before = g.M.copy()
+                    P, _, _, E = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
+                                    int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
+                                    min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish)
+                    # points the grid kept within 2 h of the wall go onto the exact wall
+                    # (the grid mask is shrunk by h/2 for safety: no skin is left on the walls)
+                    pp = shapely.points(P)
+                    near = shapely.distance(wall, pp) < 2.0 * h
+                    if near.any():
+                        snapped = shapely.line_interpolate_point(wall, shapely.line_locate_point(wall, pp[near]))
+                        Q = P.copy()
+                        Q[near] = shapely.get_coordinates(snapped)
+                        # the snap moves points up to 2 h outwards: near a concave corner that can
+                        # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
+                        # on the stock as it was before this lap, a snapped point whose engagement
+                        # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
+                        Es = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp)
+                        over = near & (Es > cap_finish)
+                        if over.any():
+                            Q[over] = P[over]
+                        g.M[:] = M_before
+                        E = _replay(g.M, g.x0, g.y0, h, r, Q, lag, n_samp)
+                        P = Q
+                    for q, e in zip(P[1:], E[1:]):
+                        air_step = e < air_rad
+                        add((q[0], q[1], z), "link" if air_step else "cut",
+                            link_feed_mm_min if air_step else feed_mm_min, "finish")
+                    cur = (float(P[-1, 0]), float(P[-1, 1]))
+
+        todo_parts = [orient(q, 1.0) for q in shapely.get_parts(allowed.buffer(-1.5 * h))] if finish else []
+
+        def finish_if_done(D, Ac, banned):
+            """Before the tool leaves its part of the tool-centre region (a retract and a new entry),
+            finish that part if its clearing is done (no material within reach of its free cells)."""
+            if cur is None or not todo_parts:
+                return
+            dd = [q.distance(Point(*cur)) for q in todo_parts]
+            kk = int(np.argmin(dd))
+            if dd[kk] > 2 * g.hc:
+                return
+            J, I = np.nonzero(Ac & (D < r) & ~banned)
+            if len(J) and shapely.contains_xy(todo_parts[kk].buffer(2 * g.hc), g.x0 + (I + 0.5) * g.hc,
+                                              g.y0 + (J + 0.5) * g.hc).any():
+                return
+            finish_part(todo_parts.pop(kk))
+
         if not enter():
             continue
         banned = np.zeros((g.ny // g.k, g.nx // g.k), bool)
@@ -665,6 +757,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             if end is None:
                 if not (Ac & (D < r) & ~banned).any():
                     break
+                finish_if_done(D, Ac, banned)
                 if enter(banned) is False:
                     break
                 continue
@@ -687,75 +780,14 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 add((q[0], q[1], z), "link" if air_step else "cut", link_feed_mm_min if air_step else feed_mm_min)
             cur = (float(P[-1, 0]), float(P[-1, 1]))
         if finish:
-            for part in shapely.get_parts(allowed.buffer(-1.5 * h)):   # inside the grid mask
-                wall = shapely.boundary(allowed.buffer(-1e-6))   # the exact tool-centre limit
-                part = orient(part, 1.0)
-                for ring in [part.exterior, *part.interiors]:
-                    R = np.asarray(ring.coords)[:-1]
-                    if len(R) < 3:
-                        continue
-                    Rs = _resample(np.vstack([R, R[:1]]), ds)[:-1]
-                    for lap in range(finish_laps):   # repeated while the corner wedges are peeled
-                        D, Ac = g.free_field()
-                        jj = np.clip(((Rs[:, 1] - g.y0) // g.hc).astype(int), 0, D.shape[0] - 1)
-                        ii = np.clip(((Rs[:, 0] - g.x0) // g.hc).astype(int), 0, D.shape[1] - 1)
-                        dm = D[jj, ii]
-                        if dm.min() > (r + g.hc if lap == 0 else r - max(0.3, 0.25 * a_e)):
-                            break                # nothing (more) to take along this ring
-                        k0 = int(np.argmax(dm))
-                        Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
-                        goal = np.zeros_like(Ac)
-                        goal[jj[k0], ii[k0]] = True
-                        if cur is not None:
-                            Acx = Ac.copy(); Acx[jj[k0], ii[k0]] = True
-                            Dx = D.copy(); Dx[jj[k0], ii[k0]] = max(D[jj[k0], ii[k0]], r_free)
-                            e = link_to(goal, Dx, Acx, r_free)
-                        else:
-                            e = None
-                        if e is None:
-                            retract()
-                            add((Rl[0, 0], Rl[0, 1], clearance_z), "rapid")
-                            if dm[k0] >= r:          # free of material under the tool: feed down into cleared area
-                                add((Rl[0, 0], Rl[0, 1], z), "plunge", feed_mm_min, "cleared")
-                            else:
-                                raise PlanningError(f"{source}: no cleared place to start the finishing pass")
-                        else:
-                            add((Rl[0, 0], Rl[0, 1], z), "link", link_feed_mm_min)
-                        # the wall-following pass: the same engagement control, sliding along the wall;
-                        # it ends 2 r past the last ring point that still has material within reach
-                        sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
-                        dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
-                        mat = np.flatnonzero(dml < r + g.hc)
-                        L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * r)
-                        hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
-                        M_before = g.M.copy()
-                        P, _, _, E = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
-                                        int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
-                                        min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish)
-                        # points the grid kept within 2 h of the wall go onto the exact wall
-                        # (the grid mask is shrunk by h/2 for safety: no skin is left on the walls)
-                        pp = shapely.points(P)
-                        near = shapely.distance(wall, pp) < 2.0 * h
-                        if near.any():
-                            snapped = shapely.line_interpolate_point(wall, shapely.line_locate_point(wall, pp[near]))
-                            Q = P.copy()
-                            Q[near] = shapely.get_coordinates(snapped)
-                            # the snap moves points up to 2 h outwards: near a concave corner that can
-                            # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
-                            # on the stock as it was before this lap, a snapped point whose engagement
-                            # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
-                            Es = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp)
-                            over = near & (Es > cap_finish)
-                            if over.any():
-                                Q[over] = P[over]
-                            g.M[:] = M_before
-                            E = _replay(g.M, g.x0, g.y0, h, r, Q, lag, n_samp)
-                            P = Q
-                        for q, e in zip(P[1:], E[1:]):
-                            air_step = e < air_rad
-                            add((q[0], q[1], z), "link" if air_step else "cut",
-                                link_feed_mm_min if air_step else feed_mm_min, "finish")
-                        cur = (float(P[-1, 0]), float(P[-1, 1]))
+            # every part of the tool-centre region is finished once, the nearest to the tool first (a part
+            # is also finished as soon as its clearing is done, before the tool leaves it: no extra lift)
+            while todo_parts:
+                kk = 0
+                if cur is not None:
+                    dd = [q.distance(Point(*cur)) for q in todo_parts]
+                    kk = int(np.argmin(dd))
+                finish_part(todo_parts.pop(kk))
         retract()
     if not pts:
         raise PlanningError(f"{source}: nothing to machine")
