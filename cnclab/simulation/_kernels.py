@@ -802,7 +802,7 @@ def simulate_path(model, A, B, grid, x0, y0, h, P, d, ds, s, r, lag, central, fr
         m = k
         if hold_front and (g0 != 0 or g1 != 0):
             for q in range(i - 1, k - 1, -1):
-                if reaches_front(P[q, 0], P[q, 1], P[i, 0], P[i, 1], g0, g1, r, h):
+                if reaches_front(P[q, 0], P[q, 1], P[i, 0], P[i, 1], g0, g1, r, 1e-9):
                     m = q + 1
                     break
         while k < i and (s[i] - s[k] > lag or k < m):

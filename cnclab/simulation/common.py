@@ -360,9 +360,10 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
         path not yet cut (default :func:`default_lag_mm`; 0 = measure on the fully updated stock).
         The removed area of every step is still exact: disks are cut in path order.
     lag_rule : ``"path"`` (default): every disk of the last ``lag_mm`` is held back. ``"front"``: a
-        held-back disk that truly covers part of the front half-circle (deeper than one resolution
-        step, :func:`._kernels.reaches_front`) is cut before the engagement is measured, with the
-        disks before it -- where the path turns back on itself (a pass starting beside the end of the
+        held-back disk that truly covers part of the front half-circle (exact geometry,
+        :func:`._kernels.reaches_front`; a disk behind the tool on a path whose curvature radius
+        exceeds r never does, so smooth paths are measured as with ``"path"``) is cut before the
+        engagement is measured, with the disks before it -- where the path turns back on itself (a pass starting beside the end of the
         previous one, a U-turn, a corner sharper than radius r) the lag would otherwise leave
         material the tool has already removed in front of it (phantom engagement).
     feed_direction : ``"backward"`` (default): centres[i] - centres[i-1], the chord just travelled;
@@ -503,7 +504,7 @@ def _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z, out
         m = k
         if hold_front and (fd[0] != 0 or fd[1] != 0):
             for q in range(i - 1, k - 1, -1):
-                if _reaches_front(P[q, 0], P[q, 1], P[i, 0], P[i, 1], fd[0], fd[1], r, stock.resolution_mm):
+                if _reaches_front(P[q, 0], P[q, 1], P[i, 0], P[i, 1], fd[0], fd[1], r, 1e-9):
                     m = q + 1
                     break
         while k < i and (s_l[i] - s_l[k] > lag or k < m):

@@ -15,11 +15,21 @@ Design (the ideas and where they come from; the code is cnclab's own)
   heading is found by bisection between a hard left turn (away from the material, material on the
   right: climb milling with an M3 spindle) and a hard right turn so that the engagement measured
   on the stock -- the material fraction of the front half of the tool circle, the quantity the
-  evaluator scores -- equals ``theta``. Libarea's ``Adaptive2d`` does the same with the *area cut
+  evaluator scores, on the 1/2 contour of the bilinear pixel stock with the crossings between the
+  arc samples interpolated -- equals ``theta``. Libarea's ``Adaptive2d`` does the same with the *area cut
   per unit length* (its ``stepOverFactor``); at a constant step the two are equivalent to first
   order, and the angle is what is promised, so the angle is controlled directly. Disks are cut
   into the planning stock with the evaluator's lag (the last ``2 sqrt(2 r h) + 2 h`` mm not yet
   cut) so the planner measures what the evaluator will measure.
+* **Sliver guard**: where the tool circle runs nearly tangent to a cut boundary -- re-entering a
+  corner another pass left, a pass start beside a crescent -- the engagement angle jumps although
+  the chip is thin, and the 1/2 contour can miss a sub-pixel crescent. Every step is therefore also
+  measured with any material counted (bilinear fraction >= ``GUARD_LEVEL``); where that exceeds
+  ``theta + guard_deg`` (5 deg) the heading turns left until it holds, or the pass ends.
+  Consequence: the tool centre stops short of a concave corner of the tool-centre region (reaching
+  it means touching the unreachable corner over ~180 deg minus the corner angle): a wedge about as
+  large as the unreachable corner itself stays (less than FreeCAD Adaptive leaves, see
+  ``benchmarks/bench_vs_freecad.py``).
 * **A pass ends** when the next point would leave the tool-centre region (pocket shrunk by r), when
   even the hardest left turn cannot bring the engagement down to the target, or when the tool has
   run ``2 r`` through air. Kim & Yang's insertion idea -- insert a path only where the regular
@@ -44,7 +54,14 @@ Design (the ideas and where they come from; the code is cnclab's own)
   material, takes the thin rests the passes left against the walls (thinner than ``a_e`` where the
   passes reached the walls); it runs under the same engagement control with the target raised by
   ``finish_margin_deg`` (8 deg: inside the theta + 10 deg bound) so that the corner wedges are
-  peeled instead of refused.
+  peeled instead of refused. Points planned within 2 h of the wall are snapped onto it (1 um inside
+  the 64-segment tool-centre limit); the lap is replayed on the stock and a snapped point whose
+  engagement would exceed the finish target or the guard keeps its planned place. Each part of the
+  tool-centre region is finished before the tool leaves it (no extra lift). Up to ``clean_rounds``
+  further rounds of passes and finishing take material the bans left (only while some lies deeper
+  than 2 coarse cells inside the tool's reach).
+* **Lifts** are G0 straight up (as FreeCAD's); links at depth are G0 only where no material pixel
+  lies within r + h of the chord (``rapid_links``).
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
@@ -120,22 +137,28 @@ def _frac(M, x0, y0, h, x, y):
     return s
 
 
+#: material level of the sliver guard (see _pass): a bilinear fraction of 0.1 counts crescents
+#: down to ~ h/20 thick (the evaluator's dixel rows resolve them along the arc)
+GUARD_LEVEL = 0.1
+
+
 @njit(cache=True)
-def _eng(M, x0, y0, h, cx, cy, r, psi, n):
+def _eng(M, x0, y0, h, cx, cy, r, psi, n, level=0.5):
     """Engagement (rad) of the front half circle (heading psi) with the material.
 
-    The material is the region where the bilinear pixel fraction is >= 1/2 (its boundary passes
-    half-way between a material and an empty pixel centre: on the wall for pixel-aligned walls);
+    The material is the region where the bilinear pixel fraction is >= ``level`` (1/2: its boundary
+    passes half-way between a material and an empty pixel centre, on the wall for pixel-aligned
+    walls; a lower level also counts slivers thinner than a pixel: the conservative guard);
     the arc is sampled at n + 1 angles and the crossings between samples are interpolated linearly,
     so a thin rest along a wall counts with its full arc (an averaged fraction would under-count
     an arc running nearly tangent to it)."""
     tot = 0.0
     da = math.pi / n
     a = psi - 0.5 * math.pi
-    fa = _frac(M, x0, y0, h, cx + r * math.cos(a), cy + r * math.sin(a)) - 0.5
+    fa = _frac(M, x0, y0, h, cx + r * math.cos(a), cy + r * math.sin(a)) - level
     for k in range(1, n + 1):
         b = psi - 0.5 * math.pi + k * da
-        fb = _frac(M, x0, y0, h, cx + r * math.cos(b), cy + r * math.sin(b)) - 0.5
+        fb = _frac(M, x0, y0, h, cx + r * math.cos(b), cy + r * math.sin(b)) - level
         if fa >= 0.0 and fb >= 0.0:
             tot += da
         elif fa >= 0.0:
@@ -158,7 +181,7 @@ def _inside(Amask, x0, y0, h, x, y):
 
 @njit(cache=True)
 def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len=1e18,
-          cap=1e9):
+          cap=1e9, guard=1e9, guard_level=GUARD_LEVEL):
     """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end).
 
     Returns (points (n, 2), removed area mm^2, reason, engagement (n,) rad of each step): reason 0
@@ -230,6 +253,29 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
                 # tool-centre region): the pass ends here, the corner is left to later passes
                 reason = 1
                 break
+        if guard < 1e8:
+            # the guard: the engagement with every sliver of material counted (level 1/4) stays within
+            # ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests, crescents
+            # between passes) the 1/2 level can miss a few degrees of thin slivers: turn left until it holds
+            eg = _eng(M, x0, y0, h, qx, qy, r, psi, n_samp, guard_level)
+            if eg > guard:
+                if _eng(M, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo), r, lo, n_samp, guard_level) > guard:
+                    reason = 1
+                    break
+                a, b = lo, psi
+                for _ in range(12):
+                    m = 0.5 * (a + b)
+                    if _eng(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, guard_level) > guard:
+                        b = m
+                    else:
+                        a = m
+                psi = a
+                qx = px + ds * math.cos(psi)
+                qy = py + ds * math.sin(psi)
+                if not _inside(Amask, x0, y0, h, qx, qy):
+                    reason = 0
+                    break
+                e = _eng(M, x0, y0, h, qx, qy, r, psi, n_samp)
         if e < 0.3 * target:
             if air == 0.0:
                 n_air_start = n
@@ -253,7 +299,7 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
 
 
 @njit(cache=True)
-def _replay(M, x0, y0, h, r, P, lag, n_samp):
+def _replay(M, x0, y0, h, r, P, lag, n_samp, level=0.5):
     """Cut the fixed points P (n, 2) into M in order, the disks of the last ``lag`` mm held back as
     in :func:`_pass`; the engagement (rad) measured at each point (heading: the chord from the point
     before; 0 at P[0])."""
@@ -269,7 +315,7 @@ def _replay(M, x0, y0, h, r, P, lag, n_samp):
             _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
             k_cut += 1
         if dx != 0.0 or dy != 0.0:
-            E[i] = _eng(M, x0, y0, h, P[i, 0], P[i, 1], r, math.atan2(dy, dx), n_samp)
+            E[i] = _eng(M, x0, y0, h, P[i, 0], P[i, 1], r, math.atan2(dy, dx), n_samp, level)
     while k_cut < n:
         _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
         k_cut += 1
@@ -479,7 +525,7 @@ def _shortcut(pts, ok):
 # ------------------------------------------------------------------------------------------------
 def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, feed_mm_min: float,
                       depth: float | None = None, start_hole=None, link_feed_mm_min: float = 1500.0,
-                      rapid_links: bool = True,
+                      rapid_links: bool = True, guard_deg: float = 5.0, clean_rounds: int = 2,
                       clearance_z: float = 5.0, top_z: float = 0.0, spindle_rpm: float | None = None,
                       tool: Tool | None = None, resolution_mm: float | None = None, step_mm: float | None = None,
                       helix_angle_deg: float = 5.0, finish: bool = True, finish_margin_deg: float = 8.0, finish_laps: int = 3, source: str = "<pocket>",
@@ -528,6 +574,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     target_finish = math.radians(theta_deg + finish_margin_deg)
     cap_pass = target + math.radians(1.0)        # a wall slide may exceed the target by 1 deg
     cap_finish = target_finish
+    # the sliver guard (see _pass): theta + guard_deg for the clearing passes, theta + 9.5 deg for the finish
+    guard_pass = math.radians(theta_deg + guard_deg)
+    guard_finish = math.radians(theta_deg + max(guard_deg, 9.5))
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
     n_samp = 90
     turn = math.radians(90.0)
@@ -540,7 +589,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     def add(p, kind, feed=np.nan, tag="", arc=0, ctr=(np.nan, np.nan)):
         pts.append(p); kinds.append(kind); feeds.append(feed); tags.append(tag); arcs.append(arc); ctrs.append(ctr)
 
-    stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0}
+    stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0}
     hole = None if start_hole is None else tuple(float(v) for v in start_hole)
     if hole is not None and not pocket.buffer(1e-9).contains(Point(hole[0], hole[1]).buffer(0.5 * hole[2] - 1e-6)):
         raise PlanningError(f"{source}: the start hole is not inside the pocket")
@@ -703,7 +752,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     M_before = g.M.copy()
                     P, _, _, E = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
                                     int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
-                                    min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish)
+                                    min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish, guard_finish)
                     # points the grid kept within 2 h of the wall go onto the exact wall
                     # (the grid mask is shrunk by h/2 for safety: no skin is left on the walls)
                     pp = shapely.points(P)
@@ -716,9 +765,12 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
                         # on the stock as it was before this lap, a snapped point whose engagement
                         # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
-                        Es = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp)
-                        over = near & (Es > cap_finish)
-                        if over.any():
+                        for _ in range(4):       # a reverted point changes the stock the later ones meet
+                            Es = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp)
+                            Eg = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp, GUARD_LEVEL)
+                            over = near & ((Es > cap_finish) | (Eg > guard_finish)) & np.any(Q != P, axis=1)
+                            if not over.any():
+                                break
                             Q[over] = P[over]
                         g.M[:] = M_before
                         E = _replay(g.M, g.x0, g.y0, h, r, Q, lag, n_samp)
@@ -748,46 +800,56 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
 
         if not enter():
             continue
-        banned = np.zeros((g.ny // g.k, g.nx // g.k), bool)
         r_free = r + 0.75 * g.hc      # coarse cell centre to material, with the cell half-diagonal margin
-        for _ in range(max_passes):
-            D, Ac = g.free_field()
-            border = Ac & (D >= r_free) & (D < r_free + 1.5 * g.hc) & ~banned
-            end = link_to(border, D, Ac, r_free) if border.any() else None
-            if end is None:
-                if not (Ac & (D < r) & ~banned).any():
+        for rnd in range(clean_rounds + 1):
+            # round 0 clears and finishes; a clean-up round takes what the sliver guard and the bans left
+            # (a pass refused where its first steps would graze a crescent), then finishes again
+            if rnd > 0:
+                D, Ac = g.free_field()
+                if not (Ac & (D < r - 2 * g.hc)).any():
                     break
-                finish_if_done(D, Ac, banned)
-                if enter(banned) is False:
-                    break
-                continue
-            # heading: along the material boundary, material on the right
-            j, i = end
-            gy = D[min(j + 1, D.shape[0] - 1), i] - D[max(j - 1, 0), i]
-            gx = D[j, min(i + 1, D.shape[1] - 1)] - D[j, max(i - 1, 0)]
-            if not (np.isfinite(gx) and np.isfinite(gy)) or gx == gy == 0:
-                banned[j, i] = True
-                continue
-            heading = math.atan2(gy, gx) - 0.5 * math.pi
-            P, removed, reason, E = _pass(g.M, g.A, g.x0, g.y0, h, r, cur[0], cur[1], heading, target, ds, lag,
-                                       20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18, cap_pass)
-            stats["passes"] += 1
-            if removed < 0.2 * r * h or len(P) < 2:
-                rad = int(math.ceil(r / g.hc))
-                banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
-            for q, e in zip(P[1:], E[1:]):
-                air_step = e < air_rad       # nothing in front of the tool: a link at the link feed
-                add((q[0], q[1], z), "link" if air_step else "cut", link_feed_mm_min if air_step else feed_mm_min)
-            cur = (float(P[-1, 0]), float(P[-1, 1]))
-        if finish:
-            # every part of the tool-centre region is finished once, the nearest to the tool first (a part
-            # is also finished as soon as its clearing is done, before the tool leaves it: no extra lift)
-            while todo_parts:
-                kk = 0
-                if cur is not None:
-                    dd = [q.distance(Point(*cur)) for q in todo_parts]
-                    kk = int(np.argmin(dd))
-                finish_part(todo_parts.pop(kk))
+                todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(allowed.buffer(-1.5 * h))] if finish else []
+                stats["clean_rounds"] += 1
+            banned = np.zeros((g.ny // g.k, g.nx // g.k), bool)
+            for _ in range(max_passes):
+                D, Ac = g.free_field()
+                border = Ac & (D >= r_free) & (D < r_free + 1.5 * g.hc) & ~banned
+                end = link_to(border, D, Ac, r_free) if border.any() else None
+                if end is None:
+                    if not (Ac & (D < r) & ~banned).any():
+                        break
+                    finish_if_done(D, Ac, banned)
+                    if enter(banned) is False:
+                        break
+                    continue
+                # heading: along the material boundary, material on the right
+                j, i = end
+                gy = D[min(j + 1, D.shape[0] - 1), i] - D[max(j - 1, 0), i]
+                gx = D[j, min(i + 1, D.shape[1] - 1)] - D[j, max(i - 1, 0)]
+                if not (np.isfinite(gx) and np.isfinite(gy)) or gx == gy == 0:
+                    banned[j, i] = True
+                    continue
+                heading = math.atan2(gy, gx) - 0.5 * math.pi
+                P, removed, reason, E = _pass(g.M, g.A, g.x0, g.y0, h, r, cur[0], cur[1], heading, target, ds, lag,
+                                           20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18, cap_pass,
+                                           guard_pass)
+                stats["passes"] += 1
+                if removed < 0.2 * r * h or len(P) < 2:
+                    rad = int(math.ceil(r / g.hc))
+                    banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+                for q, e in zip(P[1:], E[1:]):
+                    air_step = e < air_rad       # nothing in front of the tool: a link at the link feed
+                    add((q[0], q[1], z), "link" if air_step else "cut", link_feed_mm_min if air_step else feed_mm_min)
+                cur = (float(P[-1, 0]), float(P[-1, 1]))
+            if finish:
+                # every part of the tool-centre region is finished once, the nearest to the tool first (a part
+                # is also finished as soon as its clearing is done, before the tool leaves it: no extra lift)
+                while todo_parts:
+                    kk = 0
+                    if cur is not None:
+                        dd = [q.distance(Point(*cur)) for q in todo_parts]
+                        kk = int(np.argmin(dd))
+                    finish_part(todo_parts.pop(kk))
         retract()
     if not pts:
         raise PlanningError(f"{source}: nothing to machine")
