@@ -158,7 +158,8 @@ def test_capsule_free_hand_case():
 
 
 def test_rapid_links_switch():
-    # the default writes the links at depth as G0 tagged cleared, rapid_links=False as G1 at the link feed;
+    # the default writes the links at depth (and air steps whose chord is clear of the stock the pass
+    # started on) as G0 tagged cleared, rapid_links=False as G1 at the link feed;
     # the same geometry either way, and no rapid removes material (evaluator)
     poly = box(0, 0, 16, 11)
     a = adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05)
@@ -166,7 +167,7 @@ def test_rapid_links_switch():
                           rapid_links=False)
     np.testing.assert_array_equal(a.xyz, b.xyz)
     low_a = a.is_kind("rapid") & (a.xyz[:, 2] < 0)
-    assert low_a.any() and all(t == "cleared: link through cleared area" for t in a.tag[low_a])
+    assert low_a.any() and set(a.tag[low_a]) <= {"cleared: link through cleared area", "cleared: air inside cleared area"}
     assert not (b.is_kind("rapid") & (b.xyz[:, 2] < 0)).any()
     assert evaluate(a, _job(poly, 60.0), H).rapids_into_material == 0
     assert a.time_s(10000.0)["total_s"] < b.time_s(10000.0)["total_s"]

@@ -61,7 +61,7 @@ Design (the ideas and where they come from; the code is cnclab's own)
   further rounds of passes and finishing take material the bans left (only while some lies deeper
   than 2 coarse cells inside the tool's reach).
 * **Lifts** are G0 straight up (as FreeCAD's); links at depth are G0 only where no material pixel
-  lies within r + h of the chord (``rapid_links``).
+  lies within r + 2 h of the chord (``rapid_links``).
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
@@ -541,7 +541,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     names the job in error messages; ``finish_laps``: at most so many wall-following laps per ring,
     a further lap only while material deeper than max(0.3 mm, a_e/4) is left along the ring;
     ``rapid_links``: the links at depth between passes (chords proven free of material on the
-    planning stock, the tool disc at least 0.75 coarse cells clear of it) are written as G0 tagged
+    planning stock: no material pixel within r + 2 h of the chord) are written as G0 tagged
     ``cleared`` (as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
     G0 is a straight line on LinuxCNC (and on any controller with interpolated rapids); on a
     controller whose rapids dog-leg, set it False (job key ``"rapid_links": false``).
@@ -651,13 +651,21 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 add((p0[0], p0[1], z_prev + 0.5), "rapid", np.nan, "cleared: above the level")
                 add((p0[0], p0[1], z_prev), "plunge", feed_mm_min, "air")
                 drop = 2 * math.pi * rho * math.tan(math.radians(helix_angle_deg))
+                turns = (z_prev - z) / drop          # the helix ends where it reaches z (last turn partial)
                 zz = z_prev
-                while zz > z + 1e-9:
-                    zz = max(z, zz - drop)
-                    add((p0[0], p0[1], zz), "helix", feed_mm_min, "entry", 3, (c[0], c[1]))
-                add((p0[0], p0[1], z), "cut", feed_mm_min, "entry-floor", 3, (c[0], c[1]))
+                for _ in range(int(math.floor(turns + 1e-9))):
+                    zz -= drop
+                    add((p0[0], p0[1], max(zz, z)), "helix", feed_mm_min, "entry", 3, (c[0], c[1]))
+                phi = 2 * math.pi * (turns - math.floor(turns + 1e-9))
+                pe = (c[0] + rho * math.cos(phi), c[1] + rho * math.sin(phi)) if phi > 1e-6 else p0
+                if phi > 1e-6:
+                    add((pe[0], pe[1], z), "helix", feed_mm_min, "entry", 3, (c[0], c[1]))
+                add((pe[0], pe[1], z), "cut", feed_mm_min, "entry-floor", 3, (c[0], c[1]))
                 circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
                 _cut_path(g.M, g.x0, g.y0, h, circ, r)
+                stats["entries"] += 1
+                cur = (float(pe[0]), float(pe[1]))
+                return True
             stats["entries"] += 1
             cur = (c[0] + rho, c[1])
             return True
@@ -696,8 +704,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             chords = _shortcut(pts_r, ok)
             for q in chords[1:]:
                 if math.hypot(q[0] - cur[0], q[1] - cur[1]) > 1e-9:
-                    if rapid_links and _capsule_free(g.M, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], r + h):
-                        # G0 at depth: no material pixel within r + h of the chord (tag: cleared)
+                    if rapid_links and _capsule_free(g.M, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], r + 2 * h):
+                        # G0 at depth: no material pixel within r + 2 h of the chord (tag: cleared; the
+                        # margin covers slivers thinner than a pixel the evaluator's dixels still hold)
                         add((q[0], q[1], z), "rapid", np.nan, "cleared: link through cleared area")
                     else:
                         add((q[0], q[1], z), "link", link_feed_mm_min)
@@ -809,7 +818,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 if not (Ac & (D < r - 2 * g.hc)).any():
                     break
                 todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(allowed.buffer(-1.5 * h))] if finish else []
-                stats["clean_rounds"] += 1
+                saved = (len(pts), g.M.copy(), cur, dict(stats))
             banned = np.zeros((g.ny // g.k, g.nx // g.k), bool)
             for _ in range(max_passes):
                 D, Ac = g.free_field()
@@ -830,6 +839,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     banned[j, i] = True
                     continue
                 heading = math.atan2(gy, gx) - 0.5 * math.pi
+                M_pre = g.M.copy() if rapid_links else None
                 P, removed, reason, E = _pass(g.M, g.A, g.x0, g.y0, h, r, cur[0], cur[1], heading, target, ds, lag,
                                            20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18, cap_pass,
                                            guard_pass)
@@ -837,9 +847,19 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 if removed < 0.2 * r * h or len(P) < 2:
                     rad = int(math.ceil(r / g.hc))
                     banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
-                for q, e in zip(P[1:], E[1:]):
-                    air_step = e < air_rad       # nothing in front of the tool: a link at the link feed
-                    add((q[0], q[1], z), "link" if air_step else "cut", link_feed_mm_min if air_step else feed_mm_min)
+                air = E < air_rad                # nothing in front of the tool: a link at the link feed
+                free = np.zeros(len(P), bool)    # ... or a G0 where the chord is clear of the stock the
+                if rapid_links:                  # pass started on (it only loses material as it runs)
+                    for k in np.flatnonzero(air[1:]) + 1:
+                        free[k] = _capsule_free(M_pre, g.x0, g.y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], r + 2 * h)
+                for k in range(1, len(P)):
+                    q = P[k]
+                    if free[k]:
+                        add((q[0], q[1], z), "rapid", np.nan, "cleared: air inside cleared area")
+                    elif air[k]:
+                        add((q[0], q[1], z), "link", link_feed_mm_min)
+                    else:
+                        add((q[0], q[1], z), "cut", feed_mm_min)
                 cur = (float(P[-1, 0]), float(P[-1, 1]))
             if finish:
                 # every part of the tool-centre region is finished once, the nearest to the tool first (a part
@@ -850,6 +870,24 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         dd = [q.distance(Point(*cur)) for q in todo_parts]
                         kk = int(np.argmin(dd))
                     finish_part(todo_parts.pop(kk))
+            if rnd > 0:
+                # keep the clean-up round only when it pays: the area it removed is at least 10 % of what
+                # the nominal cut (a_e wide at the cutting feed) removes in the feed time the round adds
+                # (its rapids not counted); else roll it back
+                n0, M0, cur0, st0 = saved
+                took = float(M0.sum() - g.M.sum()) * h * h
+                P3 = np.asarray(pts[n0 - 1:], float)
+                F3 = np.asarray(feeds[n0:], float)
+                L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
+                t_feed = float(np.sum(np.where(np.isfinite(F3) & (F3 > 0), L3 / np.where(F3 > 0, F3, 1.0), 0.0)))
+                if took < 0.1 * a_e * feed_mm_min * t_feed or took <= 0.0:
+                    for lst in (pts, kinds, tags, feeds, arcs, ctrs):
+                        del lst[n0:]
+                    g.M[:] = M0
+                    cur = cur0
+                    stats.clear(); stats.update(st0)
+                    break
+                stats["clean_rounds"] += 1
         retract()
     if not pts:
         raise PlanningError(f"{source}: nothing to machine")
