@@ -61,7 +61,7 @@ Design (the ideas and where they come from; the code is cnclab's own)
   further rounds of passes and finishing take material the bans left (only while some lies deeper
   than 2 coarse cells inside the tool's reach).
 * **Lifts** are G0 straight up (as FreeCAD's); links at depth are G0 only where no material pixel
-  lies within r + 2 h of the chord (``rapid_links``).
+  lies within r + 1.5 h of the chord (``rapid_links``).
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
@@ -541,7 +541,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     names the job in error messages; ``finish_laps``: at most so many wall-following laps per ring,
     a further lap only while material deeper than max(0.3 mm, a_e/4) is left along the ring;
     ``rapid_links``: the links at depth between passes (chords proven free of material on the
-    planning stock: no material pixel within r + 2 h of the chord) are written as G0 tagged
+    planning stock: no material pixel within r + 1.5 h of the chord) are written as G0 tagged
     ``cleared`` (as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
     G0 is a straight line on LinuxCNC (and on any controller with interpolated rapids); on a
     controller whose rapids dog-leg, set it False (job key ``"rapid_links": false``).
@@ -651,7 +651,10 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 add((p0[0], p0[1], z_prev + 0.5), "rapid", np.nan, "cleared: above the level")
                 add((p0[0], p0[1], z_prev), "plunge", feed_mm_min, "air")
                 drop = 2 * math.pi * rho * math.tan(math.radians(helix_angle_deg))
-                turns = (z_prev - z) / drop          # the helix ends where it reaches z (last turn partial)
+                # the helix ends where it reaches z (the last turn partial); at least one full turn, so
+                # that the floor circle after it cuts in the helix's own groove
+                turns = max((z_prev - z) / drop, 1.0)
+                drop = (z_prev - z) / turns
                 zz = z_prev
                 for _ in range(int(math.floor(turns + 1e-9))):
                     zz -= drop
@@ -704,8 +707,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             chords = _shortcut(pts_r, ok)
             for q in chords[1:]:
                 if math.hypot(q[0] - cur[0], q[1] - cur[1]) > 1e-9:
-                    if rapid_links and _capsule_free(g.M, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], r + 2 * h):
-                        # G0 at depth: no material pixel within r + 2 h of the chord (tag: cleared; the
+                    if rapid_links and _capsule_free(g.M, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], r + 1.5 * h):
+                        # G0 at depth: no material pixel within r + 1.5 h of the chord (tag: cleared; the
                         # margin covers slivers thinner than a pixel the evaluator's dixels still hold)
                         add((q[0], q[1], z), "rapid", np.nan, "cleared: link through cleared area")
                     else:
@@ -851,7 +854,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 free = np.zeros(len(P), bool)    # ... or a G0 where the chord is clear of the stock the
                 if rapid_links:                  # pass started on (it only loses material as it runs)
                     for k in np.flatnonzero(air[1:]) + 1:
-                        free[k] = _capsule_free(M_pre, g.x0, g.y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], r + 2 * h)
+                        free[k] = _capsule_free(M_pre, g.x0, g.y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], r + 1.5 * h)
                 for k in range(1, len(P)):
                     q = P[k]
                     if free[k]:
