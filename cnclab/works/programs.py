@@ -53,6 +53,8 @@ __all__ = ["PROGRAM_RECIPES", "write_programs", "main"]
 
 #: rapid traverse rate [mm/min] stated for every written program's time (the issue's 10 m/min)
 RAPID_MM_MIN = 10000.0
+#: programs written last (their path is cached on disk and also computed by a notebook)
+LAST = ("kim_yang2006/constant_engagement",)
 
 
 def _hoang(covering):
@@ -159,34 +161,36 @@ def write_programs(outdir=None, works=None, quiet=False) -> dict:
     returns the manifest ``{work/name: {...}}`` (also written as ``manifest.json``)."""
     outdir = Path(outdir) if outdir is not None else build_dir() / "gcode"
     manifest = {"rapid_mm_min": RAPID_MM_MIN, "fast_mode": fast_mode(), "programs": {}}
-    for work, recipes in PROGRAM_RECIPES.items():
-        if works and work not in works:
-            continue
-        for name, make in recipes.items():
-            key = f"{work}/{name}"
-            t0 = time.perf_counter()
-            try:
-                text, meta = make()
-            except ValueError as exc:
-                manifest["programs"][key] = {"error": str(exc)}
-                if not quiet:
-                    print(f"{key}: NOT WRITTEN: {exc}", file=sys.stderr)
-                continue
-            path = meta.pop("path")
-            job = meta.pop("job", None)
-            if job is not None:   # 2.5D pocket: the simulator proves entries and rapids (issue 12)
-                ev = evaluate(path, job, resolution_mm=pick(0.1, 0.25))
-                meta.update(sim_resolution_mm=ev.resolution_mm, sim_plunges_into_material=ev.plunges_into_material,
-                            sim_rapids_into_material=ev.rapids_into_material)
-            f = atomic_write(outdir / work / f"{name}.ngc", text)
-            t = path.time_s(RAPID_MM_MIN)
-            L = path.lengths()
-            manifest["programs"][key] = {"file": str(f.relative_to(outdir)), **meta,
-                                         "path_feed_mm": L["feed_mm"], "path_time_s": t["total_s"],
-                                         "moves": len(path)}
+    todo = [(w, n, m) for w, recipes in PROGRAM_RECIPES.items() if not (works and w not in works)
+            for n, m in recipes.items()]
+    # the programs whose path a notebook also computes (cached on disk) go last: `make reproduce` runs
+    # that notebook beside this command, and the cache lock would otherwise hold this process idle
+    todo.sort(key=lambda t: f"{t[0]}/{t[1]}" in LAST)
+    for work, name, make in todo:
+        key = f"{work}/{name}"
+        t0 = time.perf_counter()
+        try:
+            text, meta = make()
+        except ValueError as exc:
+            manifest["programs"][key] = {"error": str(exc)}
             if not quiet:
-                print(f"{key}: {len(path)} moves, feed {L['feed_mm']:.1f} mm, path time {t['total_s']:.1f} s "
-                      f"({time.perf_counter() - t0:.1f} s to plan)")
+                print(f"{key}: NOT WRITTEN: {exc}", file=sys.stderr)
+            continue
+        path = meta.pop("path")
+        job = meta.pop("job", None)
+        if job is not None:   # 2.5D pocket: the simulator proves entries and rapids (issue 12)
+            ev = evaluate(path, job, resolution_mm=pick(0.1, 0.25))
+            meta.update(sim_resolution_mm=ev.resolution_mm, sim_plunges_into_material=ev.plunges_into_material,
+                        sim_rapids_into_material=ev.rapids_into_material)
+        f = atomic_write(outdir / work / f"{name}.ngc", text)
+        t = path.time_s(RAPID_MM_MIN)
+        L = path.lengths()
+        manifest["programs"][key] = {"file": str(f.relative_to(outdir)), **meta,
+                                     "path_feed_mm": L["feed_mm"], "path_time_s": t["total_s"],
+                                     "moves": len(path)}
+        if not quiet:
+            print(f"{key}: {len(path)} moves, feed {L['feed_mm']:.1f} mm, path time {t['total_s']:.1f} s "
+                  f"({time.perf_counter() - t0:.1f} s to plan)")
     atomic_write(outdir / "manifest.json", json.dumps(manifest, indent=1) + "\n")
     return manifest
 
