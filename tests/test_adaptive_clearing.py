@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Polygon, box
@@ -103,7 +104,14 @@ def _scored(poly, theta):
         with pytest.raises(PlanningError, match="hypothesis"):
             _plan(poly, theta)
         return None, None
-    tp = _plan(poly, theta)
+    try:
+        tp = _plan(poly, theta)
+    except PlanningError as exc:
+        # a refusal is right only for a pocket too narrow for the tool: some part of its tool-centre
+        # region has an inscribed radius below R / 2 (no room to clear it under engagement control)
+        narrow = min(shapely.maximum_inscribed_circle(q).length for q in shapely.get_parts(poly.buffer(-R, 64)))
+        assert "too narrow" in str(exc) and narrow < 0.5 * R, (str(exc), narrow)
+        return None, None
     return tp, evaluate(tp, _job(poly, theta), H)
 
 
@@ -174,3 +182,18 @@ def test_rapid_links_switch():
     job = Job.from_dict({"polygon": [[0, 0], [16, 0], [16, 11], [0, 11]], "tool_diameter": 3.0, "theta_deg": 60,
                          "a_p": 1.0, "feed_mm_min": 255, "spindle_rpm": 6000, "rapid_links": False})
     assert job.rapid_links is False and Job.from_dict(job.to_dict()).rapid_links is False
+
+
+# a random star pocket (hypothesis found it) whose tool-centre region is a 0.5 mm^2 sliver, inscribed radius 0.2 mm
+_SLIVER_WKT = ('POLYGON ((-4.916339044839923 0.576290201359072, 4.881874450970326 -6.2127850347776015, -2.66839'
+    '7659143814 -4.7438233887726104, -4.723983831250046 -6.240018494358061, -3.6669612046935347 -4.1'
+    '14643005055887, -5.675759822888521 -5.307154383198031, -4.916339044839923 0.576290201359072))')
+
+
+def test_sliver_pocket_refused_with_reason():
+    from shapely import wkt
+
+    poly = wkt.loads(_SLIVER_WKT)
+    with pytest.raises(PlanningError, match="sliver-test: .*too narrow"):
+        adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05,
+                          source="sliver-test")

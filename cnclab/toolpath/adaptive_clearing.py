@@ -751,7 +751,12 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         if dm[k0] >= r:          # free of material under the tool: feed down into cleared area
                             add((Rl[0, 0], Rl[0, 1], z), "plunge", feed_mm_min, "cleared")
                         else:
-                            raise PlanningError(f"{source}: no cleared place to start the finishing pass")
+                            ins = shapely.maximum_inscribed_circle(part)
+                            raise PlanningError(
+                                f"{source}: a part of the tool-centre region (area {part.area:.2f} mm^2, inscribed "
+                                f"radius {ins.length:.2f} mm near ({ins.coords[0][0]:.2f}, {ins.coords[0][1]:.2f})) "
+                                "is too narrow to be cleared under engagement control: no cleared place to start "
+                                "its finishing pass (the pocket is too narrow for the tool)")
                     else:
                         add((Rl[0, 0], Rl[0, 1], z), "link", link_feed_mm_min)
                     # the wall-following pass: the same engagement control, sliding along the wall;
