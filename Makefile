@@ -33,6 +33,7 @@ reproduce: $(STAMP)
 	$(if $(FORCE),CNCLAB_NO_CACHE=1 )$(PY) -m cnclab reproduce --jobs $(or $(REPRO_JOBS),$(JOBS)) $(if $(FORCE),--force)
 
 test: $(STAMP)
+	$(PY) -m cnclab warm
 	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --durations=15 tests
 
 site: $(STAMP)

@@ -17,6 +17,7 @@ COMMANDS = {
     "analyze": ("cnclab.nc.cli_analyze", "score any G-code program on a pocket job (summary, traces, engagement map)"),
     "plan": ("cnclab.nc.cli_plan", "plan a pocket job and write a machine-safe program"),
     "programs": ("cnclab.works.programs", "write every program the collection produces to build/gcode/<work>/"),
+    "warm": ("cnclab.warm", "compile the shared numba kernels once into their cache (make test/reproduce run it first)"),
 }
 
 

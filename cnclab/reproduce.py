@@ -33,6 +33,7 @@ from .notebook_tools import INDEX_NOTEBOOK, list_notebooks
 from .paths import DATA_DIR, NOTEBOOKS_DIR, PACKAGE_DIR, REPO_ROOT, build_dir
 from .runtime import fast_mode
 from .works import programs as nc_programs
+from .warm import warm
 
 
 class _KernelPollNoise(logging.Filter):
@@ -314,6 +315,9 @@ def run_all(only: str | None = None, jobs: int | None = None, force: bool = Fals
     summ_path = out / "cache" / "reproduce" / "claims_summary.json"
     if not report_cached:
         summ_path.unlink(missing_ok=True)   # never print a previous run's summary for this one
+    if todo or not programs_cached or not report_cached:
+        # compile the shared numba kernels once before the processes that all need them start
+        print(f"numba kernels ready in {warm():.1f} s", flush=True)
     # the NC programs start first (long, independent); the claims report is queued last, so the
     # expensive recipes it shares with the notebooks (disk-cached by cnclab.cache) are mostly done
     with cf.ProcessPoolExecutor(max_workers=jobs) as pool:
