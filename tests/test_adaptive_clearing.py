@@ -197,3 +197,11 @@ def test_sliver_pocket_refused_with_reason():
     with pytest.raises(PlanningError, match="sliver-test: .*too narrow"):
         adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05,
                           source="sliver-test")
+
+
+def test_coarse_planning_stock_refused():
+    # coarser than r/30 the pixel stock cannot resolve the engagement (measured: r/20 left 169 mm^2 of
+    # the Kim & Yang pocket uncut): a clear error naming the parameter, not a poor path
+    with pytest.raises(PlanningError, match="coarse-test: resolution_mm must be in"):
+        adaptive_clearing(box(0, 0, 16, 11), R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=R / 20,
+                          source="coarse-test")

@@ -558,6 +558,10 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
         raise PlanningError(f"{source}: a_p must be > 0 mm, got {a_p!r}")
     depth = float(a_p if depth is None else depth)
     h = float(resolution_mm or r / 60.0)
+    if not (math.isfinite(h) and 0 < h <= r / 30.0 * (1 + 1e-9)):
+        # measured: at h = r/20 the K&Y pocket plans with 169 mm^2 left uncut (r/30: 5 mm^2, as at r/60)
+        raise PlanningError(f"{source}: resolution_mm must be in (0, r/30 = {r / 30.0:.4g}] mm (default r/60): a "
+                            f"coarser planning stock cannot resolve the engagement; got {resolution_mm!r}")
     ds = float(step_mm or r / 30.0)
     allowed = pocket.buffer(-r, quad_segs=64)
     if allowed.is_empty or allowed.area < 4 * h * h:

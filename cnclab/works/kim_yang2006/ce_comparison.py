@@ -24,6 +24,7 @@ The paper prints no number for such a comparison: nothing here is a ledger claim
 from __future__ import annotations
 
 import functools
+import inspect
 import math
 import time
 
@@ -38,6 +39,7 @@ from ...toolpath import ce_clearing as cc
 from ...toolpath import planners
 from ...toolpath.evaluate import Evaluation, evaluate
 from ...toolpath.path import ToolPath
+from ..jacso2021.freecad_comparison import lifts
 from . import constant_mrr_pocket as ky
 
 PATHS = ("original", "modified", "constant engagement", "adaptive clearing")
@@ -70,10 +72,10 @@ def _ce_path(res: float) -> ToolPath:
 def adaptive_path() -> ToolPath:
     """The engagement-controlled clearing (``planners.STRATEGIES["adaptive"]``) of the pocket job; full mode
     plans with the planner's own defaults (as ``python -m cnclab plan`` does), fast mode on a pixel stock
-    of ``resolution_mm()`` (0.25 mm instead of r/60). ``info["plan_time_s"]``: wall-clock plan time."""
+    of r/30 (the planner's coarsest, instead of r/60). ``info["plan_time_s"]``: wall-clock plan time."""
     t0 = time.perf_counter()
     if fast_mode():     # the strategy's own function with a coarser planning stock (planners.plan has no such knob)
-        path = adaptive_clearing.plan_job(ky.job(), resolution_mm=resolution_mm())
+        path = adaptive_clearing.plan_job(ky.job(), resolution_mm=min(resolution_mm(), ky.job().tool_radius / 30))
     else:
         path = planners.plan(ky.job(), "adaptive", resolution_mm())
     path.info["plan_time_s"] = time.perf_counter() - t0
@@ -117,20 +119,23 @@ def path(which: str) -> ToolPath:
 
 def key_figures() -> pd.DataFrame:
     """The figures the notebook's discussion talks about, per path: share above theta+5 (%), max
-    engagement (deg), max MRR / nominal, retracts, plunges into material, links at depth (mm), total
-    time (min), uncut beyond the unreachable corners (mm^2)."""
+    engagement (deg), max MRR / nominal, retracts (feed moves), lifts (every rise out of the stock, G0
+    or G1: :func:`cnclab.works.jacso2021.freecad_comparison.lifts`), plunges into material, links at
+    depth (mm), total time (min), uncut beyond the unreachable corners (mm^2)."""
     cols = {"share_above_5_pct": "share > θ+5 [%]", "engagement_max_deg": "max eng. [deg]",
             "mrr_max_over_nominal": "max MRR / nom", "retracts": "retracts",
             "plunges_into_material": "plunges into mat.", "link_length_mm": "links at depth [mm]",
             "uncut_beyond_unreachable_mm2": "uncut beyond [mm2]"}
-    out = {w: {v: getattr(evaluation(w), k) for k, v in cols.items()} | {"time [min]": evaluation(w).time_total_s / 60}
+    out = {w: {v: getattr(evaluation(w), k) for k, v in cols.items()}
+           | {"lifts (G0 or G1)": lifts(evaluation(w), ky.job().top_z), "time [min]": evaluation(w).time_total_s / 60}
            for w in PATHS}
     return pd.DataFrame(out).T
 
 
 @functools.cache
 def evaluation(which: str) -> Evaluation:
-    """The one evaluator (:func:`cnclab.toolpath.evaluate.evaluate`) on the pocket job."""
+    """The one evaluator (:func:`cnclab.toolpath.evaluate.evaluate`) on the pocket job (computed once
+    per process: the tables and traces of the notebook share it)."""
     return evaluate(path(which), ky.job(), resolution_mm())
 
 
@@ -195,11 +200,16 @@ def ce_breakdown() -> pd.DataFrame:
 def wall_modes(modes: tuple = ("clamp", "gate")) -> pd.DataFrame:
     """Lap statistics of the CE clearing under each final-contour handling ``wall`` (see
     :func:`cnclab.toolpath.ce_clearing.ce_clearing`): max engagement and share above theta+5 of the
-    laps, of the whole path (entries excluded), retracts, total time. Each mode plans and evaluates anew."""
+    laps, of the whole path (entries excluded), retracts, total time. Each mode plans and evaluates anew,
+    except the planner's default ("gate"), which is :func:`ce_path` and its evaluation."""
     rows = {}
+    default_wall = inspect.signature(cc.ce_clearing).parameters["wall"].default
     for w in modes:
-        path = cc.clearing_path(ky.job(), resolution_mm=resolution_mm(), wall=w)
-        ev = evaluate(path, ky.job(), resolution_mm())
+        if w == default_wall:
+            ev = evaluation("constant engagement")
+        else:
+            path = cc.clearing_path(ky.job(), resolution_mm=resolution_mm(), wall=w)
+            ev = evaluate(path, ky.job(), resolution_mm())
         laps = _by_tag(ev)["laps"]
         rows[w] = {"laps: max engagement [deg]": laps["max engagement [deg]"],
                    "laps: share above theta+5": laps["share above theta+5"],
