@@ -274,6 +274,8 @@ def _previous_seconds(rel: str) -> float:
 
 #: notebooks that take minutes (measured on the 2-core reference machine): on a fresh clone, with no
 #: previous times in build/cache/reproduce, they start first so the parallel run ends sooner.
+#: notebooks that use none of the kernels ``cnclab warm`` compiles (they start while it runs)
+_NO_SHARED_KERNELS = ("mgherony2024/ch6_neural_networks.ipynb",)
 _KNOWN_LONG = ("kim_yang2006/ce_vs_constant_mrr.ipynb", "mgherony2024/ch6_neural_networks.ipynb",
                "jacso2021/ce_clearing_vs_adaptive.ipynb", "jacso2021/s4_star_pocket_hybrid_path.ipynb",
                "jacso2021/thesis4_trochoidal_slots.ipynb", "mgherony2024/ch7_spindle_speed_control.ipynb",
@@ -315,16 +317,23 @@ def run_all(only: str | None = None, jobs: int | None = None, force: bool = Fals
     summ_path = out / "cache" / "reproduce" / "claims_summary.json"
     if not report_cached:
         summ_path.unlink(missing_ok=True)   # never print a previous run's summary for this one
-    if todo or not programs_cached or not report_cached:
-        # compile the shared numba kernels once before the processes that all need them start
-        print(f"numba kernels ready in {warm():.1f} s", flush=True)
     # the NC programs start first (long, independent); the claims report is queued last, so the
     # expensive recipes it shares with the notebooks (disk-cached by cnclab.cache) are mostly done
     with cf.ProcessPoolExecutor(max_workers=jobs) as pool:
         futs = {}
+        # a notebook that needs none of the shared numba kernels starts while they compile
+        early = [t for t in todo if t[1] in _NO_SHARED_KERNELS]
+        for p, rel, key in early:
+            futs[pool.submit(_run_notebook_job, str(p), key)] = rel
+            print(f"      queued {rel}", flush=True)
+        if todo or not programs_cached or not report_cached:
+            # compile the shared numba kernels once before the processes that all need them start
+            print(f"numba kernels ready in {warm():.1f} s", flush=True)
         if not programs_cached:
             futs[pool.submit(_run_programs_job, pkey)] = "NC programs"
         for p, rel, key in todo:
+            if (p, rel, key) in early:
+                continue
             futs[pool.submit(_run_notebook_job, str(p), key)] = rel
             print(f"      queued {rel}", flush=True)
         if not report_cached:
