@@ -317,7 +317,7 @@ def run_all(only: str | None = None, jobs: int | None = None, force: bool = Fals
     summ_path = out / "cache" / "reproduce" / "claims_summary.json"
     if not report_cached:
         summ_path.unlink(missing_ok=True)   # never print a previous run's summary for this one
-    # the NC programs start first (long, independent); the claims report is queued last, so the
+    # the NC programs start early (long, independent); the claims report is queued last, so the
     # expensive recipes it shares with the notebooks (disk-cached by cnclab.cache) are mostly done
     with cf.ProcessPoolExecutor(max_workers=jobs) as pool:
         futs = {}
@@ -329,13 +329,16 @@ def run_all(only: str | None = None, jobs: int | None = None, force: bool = Fals
         if todo or not programs_cached or not report_cached:
             # compile the shared numba kernels once before the processes that all need them start
             print(f"numba kernels ready in {warm():.1f} s", flush=True)
-        if not programs_cached:
-            futs[pool.submit(_run_programs_job, pkey)] = "NC programs"
-        for p, rel, key in todo:
-            if (p, rel, key) in early:
-                continue
+        rest = [t for t in todo if t not in early]
+        # the longest notebook first (the K&Y comparison: it computes the ce_clearing path the NC programs
+        # also write, cached on disk; the programs write that one last and find it there), then the programs
+        for k, (p, rel, key) in enumerate(rest):
+            if k == 1 and not programs_cached:
+                futs[pool.submit(_run_programs_job, pkey)] = "NC programs"
             futs[pool.submit(_run_notebook_job, str(p), key)] = rel
             print(f"      queued {rel}", flush=True)
+        if len(rest) < 2 and not programs_cached:
+            futs[pool.submit(_run_programs_job, pkey)] = "NC programs"
         if not report_cached:
             futs[pool.submit(_run_claims_job, rkey)] = "claims report"
         for fut in cf.as_completed(futs):
