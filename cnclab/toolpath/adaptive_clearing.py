@@ -254,7 +254,7 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
                 reason = 1
                 break
         if guard < 1e8:
-            # the guard: the engagement with every sliver of material counted (level 1/4) stays within
+            # the guard: the engagement with every sliver of material counted (level GUARD_LEVEL) stays within
             # ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests, crescents
             # between passes) the 1/2 level can miss a few degrees of thin slivers: turn left until it holds
             eg = _eng(M, x0, y0, h, qx, qy, r, psi, n_samp, guard_level)
