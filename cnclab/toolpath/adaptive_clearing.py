@@ -97,20 +97,44 @@ class PlanningError(ValueError):
 # compiled kernels (pixel stock: M[j, i] = 1 material, pixel centre x0 + (i + 0.5) h, y0 + (j + 0.5) h)
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _cut(M, x0, y0, h, cx, cy, r):
+def _cut(M, x0, y0, h, cx, cy, r, pcx=np.nan, pcy=np.nan):
+    """Clear the pixels whose centre lies within ``r`` of (cx, cy); the area removed (mm^2).
+
+    (pcx, pcy): the centre of the disc cut just before on the same path (NaN: none). Its pixels are
+    already clear, so each row only scans the part of its span outside that disc's span (the same
+    span arithmetic: exactly the pixels a full scan would clear)."""
     ny, nx = M.shape
     j0 = max(int(math.floor((cy - r - y0) / h - 0.5)), 0)
     j1 = min(int(math.ceil((cy + r - y0) / h - 0.5)), ny - 1)
+    has_prev = pcx == pcx
     rem = 0
     for j in range(j0, j1 + 1):
-        yy = y0 + (j + 0.5) * h - cy
+        yc = y0 + (j + 0.5) * h
+        yy = yc - cy
         w2 = r * r - yy * yy
         if w2 < 0:
             continue
         w = math.sqrt(w2)
         i0 = max(int(math.ceil((cx - w - x0) / h - 0.5)), 0)
         i1 = min(int(math.floor((cx + w - x0) / h - 0.5)), nx - 1)
-        for i in range(i0, i1 + 1):
+        p0 = 1
+        p1 = 0
+        if has_prev:
+            vy = yc - pcy
+            v2 = r * r - vy * vy
+            if v2 >= 0:
+                v = math.sqrt(v2)
+                p0 = max(int(math.ceil((pcx - v - x0) / h - 0.5)), 0)
+                p1 = min(int(math.floor((pcx + v - x0) / h - 0.5)), nx - 1)
+        if p0 > p1:
+            a0, a1, b0, b1 = i0, i1, 1, 0
+        else:
+            a0, a1, b0, b1 = i0, min(i1, p0 - 1), max(i0, p1 + 1), i1
+        for i in range(a0, a1 + 1):
+            if M[j, i]:
+                M[j, i] = 0
+                rem += 1
+        for i in range(b0, b1 + 1):
             if M[j, i]:
                 M[j, i] = 0
                 rem += 1
@@ -143,30 +167,144 @@ GUARD_LEVEL = 0.1
 
 
 @njit(cache=True)
-def _eng(M, x0, y0, h, cx, cy, r, psi, n, level=0.5):
-    """Engagement (rad) of the front half circle (heading psi) with the material.
+def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
+    """Engagement (rad) of the front half circle (heading psi) with the material, at two material
+    levels from the same arc samples: ``(engagement at level, engagement at level2)``.
 
     The material is the region where the bilinear pixel fraction is >= ``level`` (1/2: its boundary
     passes half-way between a material and an empty pixel centre, on the wall for pixel-aligned
     walls; a lower level also counts slivers thinner than a pixel: the conservative guard);
-    the arc is sampled at n + 1 angles and the crossings between samples are interpolated linearly,
-    so a thin rest along a wall counts with its full arc (an averaged fraction would under-count
-    an arc running nearly tangent to it)."""
+    the arc is sampled at n + 1 angles (rotated by a fixed step) and the crossings between samples
+    are interpolated linearly, so a thin rest along a wall counts with its full arc (an averaged
+    fraction would under-count an arc running nearly tangent to it)."""
     tot = 0.0
+    tot2 = 0.0
     da = math.pi / n
+    cd = math.cos(da)
+    sd = math.sin(da)
     a = psi - 0.5 * math.pi
-    fa = _frac(M, x0, y0, h, cx + r * math.cos(a), cy + r * math.sin(a)) - level
+    c = math.cos(a)
+    s = math.sin(a)
+    f = _frac(M, x0, y0, h, cx + r * c, cy + r * s)
+    fa = f - level
+    ga = f - level2
     for k in range(1, n + 1):
-        b = psi - 0.5 * math.pi + k * da
-        fb = _frac(M, x0, y0, h, cx + r * math.cos(b), cy + r * math.sin(b)) - level
+        c, s = c * cd - s * sd, s * cd + c * sd
+        f = _frac(M, x0, y0, h, cx + r * c, cy + r * s)
+        fb = f - level
+        gb = f - level2
         if fa >= 0.0 and fb >= 0.0:
             tot += da
         elif fa >= 0.0:
             tot += da * fa / (fa - fb)
         elif fb >= 0.0:
             tot += da * fb / (fb - fa)
+        if ga >= 0.0 and gb >= 0.0:
+            tot2 += da
+        elif ga >= 0.0:
+            tot2 += da * ga / (ga - gb)
+        elif gb >= 0.0:
+            tot2 += da * gb / (gb - ga)
         fa = fb
-    return tot
+        ga = gb
+    return tot, tot2
+
+
+@njit(cache=True)
+def _eng(M, x0, y0, h, cx, cy, r, psi, n, level=0.5):
+    """Engagement (rad) at one material level (see :func:`_eng2`)."""
+    return _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level)[0]
+
+
+#: heading root finding (_root): stop once the engagement is within this (rad) below its bound
+ROOT_TOL = math.radians(0.2)
+
+
+@njit(cache=True)
+def _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g_a, bound, which):
+    """Heading between ``a`` (engagement <= bound: f(a) = fa <= 0, engagements e_a at the 1/2 level
+    and g_a at the guard level) and ``b`` (f(b) = fb > 0) of the step of length ``ds`` from (px, py)
+    whose engagement -- the 1/2 level (``which`` 0) or the guard level (1) -- is at most ``bound``
+    and within ROOT_TOL of it (Illinois false position: a bracketing method, 3-6 evaluations where
+    bisection needs 16). Returns (heading, engagement at 1/2, at the guard level) of the ``a`` end."""
+    ta = fa          # the true f(a) (fa itself is halved by the Illinois rule)
+    side = 0
+    for _ in range(40):
+        if ta >= -ROOT_TOL or abs(b - a) < 1e-6:
+            break
+        m = (a * fb - b * fa) / (fb - fa)
+        if not (min(a, b) < m < max(a, b)):
+            m = 0.5 * (a + b)
+        e, g = _eng2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+        fm = (e if which == 0 else g) - bound
+        if fm > 0.0:
+            b = m
+            fb = fm
+            if side == -1:
+                fa *= 0.5
+            side = -1
+        else:
+            a = m
+            fa = fm
+            ta = fm
+            e_a = e
+            g_a = g
+            if side == 1:
+                fb *= 0.5
+            side = 1
+    return a, e_a, g_a
+
+
+#: first bracketing step (rad) of :func:`_heading` from its guess; doubled until the root is bracketed
+BRACKET_STEP = math.radians(2.0)
+
+
+@njit(cache=True)
+def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound, which):
+    """Heading of the step of length ``ds`` from (px, py) whose engagement (1/2 level: ``which`` 0;
+    guard level: 1) is at most ``bound`` and within ROOT_TOL of it, searched in [hi, lo] (rad; ``lo``
+    the hard left turn, least engagement) from the guess ``m0``: bracketed by steps from the guess
+    (BRACKET_STEP, doubling), then :func:`_root`. Returns (status, heading, engagement at 1/2, at the
+    guard level): status 0 found (or the hard right ``hi`` already holds: taken), 1 even the hard
+    left exceeds ``bound`` (stuck)."""
+    m0 = min(max(m0, hi), lo)
+    e0, g0 = _eng2(M, x0, y0, h, px + ds * math.cos(m0), py + ds * math.sin(m0), r, m0, n_samp, 0.5, guard_level)
+    f0 = (e0 if which == 0 else g0) - bound
+    st = BRACKET_STEP
+    if f0 <= 0.0:
+        if f0 >= -ROOT_TOL:
+            return 0, m0, e0, g0
+        a, fa, ea, ga = m0, f0, e0, g0
+        if g0 == 0.0:
+            st = a - hi                  # nothing in front of the tool: straight to the hard right turn
+        while True:                      # turn right until the bound is exceeded
+            if a <= hi:
+                return 0, a, ea, ga
+            m = max(a - st, hi)
+            e, g = _eng2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+            f = (e if which == 0 else g) - bound
+            if f > 0.0:
+                b, fb = m, f
+                break
+            a, fa, ea, ga = m, f, e, g
+            if f >= -ROOT_TOL:
+                return 0, a, ea, ga
+            st *= 2.0
+    else:
+        b, fb = m0, f0
+        while True:                      # turn left until the bound holds
+            if b >= lo:
+                return 1, b, e0, g0
+            m = min(b + st, lo)
+            e, g = _eng2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+            f = (e if which == 0 else g) - bound
+            if f <= 0.0:
+                a, fa, ea, ga = m, f, e, g
+                break
+            b, fb = m, f
+            st *= 2.0
+    psi, e, g = _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, ea, ga, bound, which)
+    return 0, psi, e, g
 
 
 @njit(cache=True)
@@ -180,9 +318,14 @@ def _inside(Amask, x0, y0, h, x, y):
 
 
 @njit(cache=True)
-def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len=1e18,
-          cap=1e9, guard=1e9, guard_level=GUARD_LEVEL):
+def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
+          cap, guard, guard_level, D, hc):
     """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end).
+
+    ``D``: the coarse distance field (cells of ``hc`` mm) of the stock as it was at the start or
+    earlier (material only goes: a lower bound of the distance now); where it proves that no
+    material lies within reach of any candidate step (r + ds + the cell and pixel margins), the
+    step is air without sampling the arc: the hard right turn, engagement 0.
 
     Returns (points (n, 2), removed area mm^2, reason, engagement (n,) rad of each step): reason 0
     left the region, 1 stuck (cannot lower the engagement), 2 air, 3 step limit."""
@@ -198,6 +341,12 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
     n_air_start = 1
     reason = 3
     phi = heading
+    dpsi = 0.0       # the last heading change: the guess of the next one
+    # no material pixel centre within r + ds + h of any arc sample point: the coarse cell centre may be
+    # hc/sqrt(2) from the point, the material pixel hc/sqrt(2) from its cell's centre
+    air_reach = r + ds + h + math.sqrt(2.0) * hc
+    pcx = np.nan     # centre of the disc cut last (its pixels are clear: _cut skips them)
+    pcy = np.nan
     for step in range(max_steps):
         if s[n - 1] >= max_len:
             break
@@ -207,29 +356,23 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         # (air stop), and the stock must hold exactly what the emitted path removes
         k_hold = n_air_start if air > 0.0 else n
         while k_cut < k_hold and s[n - 1] - s[k_cut] > lag:
-            removed += _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
+            removed += _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
+            pcx = P[k_cut, 0]
+            pcy = P[k_cut, 1]
             k_cut += 1
         lo = phi + turn          # hard left: least engagement
         hi = phi - turn_right    # hard right (curvature limited): most engagement
-        e_lo = _eng(M, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo), r, lo, n_samp)
-        if e_lo > target:
-            reason = 1
-            break
-        e_hi = _eng(M, x0, y0, h, px + ds * math.cos(hi), py + ds * math.sin(hi), r, hi, n_samp)
-        if e_hi <= target:
+        jc = int(math.floor((py - y0) / hc))
+        ic = int(math.floor((px - x0) / hc))
+        if 0 <= jc < D.shape[0] and 0 <= ic < D.shape[1] and D[jc, ic] > air_reach:
             psi = hi
-            e = e_hi
+            e = 0.0
+            eg = 0.0
         else:
-            a, b = lo, hi
-            for _ in range(16):
-                m = 0.5 * (a + b)
-                em = _eng(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp)
-                if em > target:
-                    b = m
-                else:
-                    a = m
-            psi = a
-            e = target
+            st, psi, e, eg = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, phi + dpsi, target, 0)
+            if st == 1:
+                reason = 1
+                break
         qx = px + ds * math.cos(psi)
         qy = py + ds * math.sin(psi)
         if not _inside(Amask, x0, y0, h, qx, qy):
@@ -247,35 +390,26 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             psi = a
             qx = px + ds * math.cos(psi)
             qy = py + ds * math.sin(psi)
-            e = _eng(M, x0, y0, h, qx, qy, r, psi, n_samp)
+            e, eg = _eng2(M, x0, y0, h, qx, qy, r, psi, n_samp, 0.5, guard_level)
             if e > cap:
                 # sliding along the wall would take more than the cap (a concave corner of the
                 # tool-centre region): the pass ends here, the corner is left to later passes
                 reason = 1
                 break
-        if guard < 1e8:
-            # the guard: the engagement with every sliver of material counted (level GUARD_LEVEL) stays within
-            # ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests, crescents
-            # between passes) the 1/2 level can miss a few degrees of thin slivers: turn left until it holds
-            eg = _eng(M, x0, y0, h, qx, qy, r, psi, n_samp, guard_level)
-            if eg > guard:
-                if _eng(M, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo), r, lo, n_samp, guard_level) > guard:
-                    reason = 1
-                    break
-                a, b = lo, psi
-                for _ in range(12):
-                    m = 0.5 * (a + b)
-                    if _eng(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, guard_level) > guard:
-                        b = m
-                    else:
-                        a = m
-                psi = a
-                qx = px + ds * math.cos(psi)
-                qy = py + ds * math.sin(psi)
-                if not _inside(Amask, x0, y0, h, qx, qy):
-                    reason = 0
-                    break
-                e = _eng(M, x0, y0, h, qx, qy, r, psi, n_samp)
+        if eg > guard:
+            # the guard: the engagement with every sliver of material counted (level GUARD_LEVEL) stays
+            # within ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests,
+            # crescents between passes) the 1/2 level can miss a few degrees of thin slivers: turn left
+            # until it holds
+            st, psi, e, eg = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi, guard, 1)
+            if st == 1:
+                reason = 1
+                break
+            qx = px + ds * math.cos(psi)
+            qy = py + ds * math.sin(psi)
+            if not _inside(Amask, x0, y0, h, qx, qy):
+                reason = 0
+                break
         if e < 0.3 * target:
             if air == 0.0:
                 n_air_start = n
@@ -291,9 +425,12 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         E[n] = e
         s[n] = s[n - 1] + ds
         n += 1
+        dpsi = psi - phi
         phi = psi
     while k_cut < n:
-        removed += _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
+        removed += _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
+        pcx = P[k_cut, 0]
+        pcy = P[k_cut, 1]
         k_cut += 1
     return P[:n].copy(), removed, reason, E[:n].copy()
 
@@ -307,17 +444,23 @@ def _replay(M, x0, y0, h, r, P, lag, n_samp, level=0.5):
     E = np.zeros(n)
     s = np.zeros(n)
     k_cut = 0
+    pcx = np.nan
+    pcy = np.nan
     for i in range(1, n):
         dx = P[i, 0] - P[i - 1, 0]
         dy = P[i, 1] - P[i - 1, 1]
         s[i] = s[i - 1] + math.hypot(dx, dy)
         while k_cut < i and s[i] - s[k_cut] > lag + 1e-12:
-            _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
+            _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
+            pcx = P[k_cut, 0]
+            pcy = P[k_cut, 1]
             k_cut += 1
         if dx != 0.0 or dy != 0.0:
             E[i] = _eng(M, x0, y0, h, P[i, 0], P[i, 1], r, math.atan2(dy, dx), n_samp, level)
     while k_cut < n:
-        _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r)
+        _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
+        pcx = P[k_cut, 0]
+        pcy = P[k_cut, 1]
         k_cut += 1
     return E
 
@@ -351,8 +494,12 @@ def _capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
 @njit(cache=True)
 def _cut_path(M, x0, y0, h, P, r):
     rem = 0.0
+    pcx = np.nan
+    pcy = np.nan
     for k in range(P.shape[0]):
-        rem += _cut(M, x0, y0, h, P[k, 0], P[k, 1], r)
+        rem += _cut(M, x0, y0, h, P[k, 0], P[k, 1], r, pcx, pcy)
+        pcx = P[k, 0]
+        pcy = P[k, 1]
     return rem
 
 
@@ -372,8 +519,28 @@ def _resample(P, step):
     return np.c_[np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])]
 
 
+@njit(cache=True)
+def _coarse_any(M, k, mat, J0, J1, I0, I1):
+    """mat[J, I] = any material pixel in coarse cell (J, I) (k x k pixels), for J0 <= J < J1, I0 <= I < I1."""
+    for J in range(J0, J1):
+        for I in range(I0, I1):
+            v = False
+            for j in range(J * k, J * k + k):
+                for i in range(I * k, I * k + k):
+                    if M[j, i]:
+                        v = True
+                        break
+                if v:
+                    break
+            mat[J, I] = v
+
+
 class _Grid:
-    """The planning stock, the tool-centre mask and the coarse free-space search."""
+    """The planning stock ``M`` (pixels of ``h`` mm), the tool-centre mask ``A`` and, on a coarse grid
+    (cells of ``hc = k h``), the distance from each cell centre to the nearest material, kept up to date
+    incrementally: every change of ``M`` goes through a method that marks the changed box, and
+    :meth:`free_field` recomputes the coarse field only in the window the change can affect. The field
+    is capped at ``cap`` (mm): the planner only compares it with thresholds below ``cap``."""
 
     def __init__(self, pocket, allowed, r, h, hole):
         self.r, self.h = r, h
@@ -393,21 +560,84 @@ class _Grid:
         # coarse grid for the free-space search
         self.k = max(1, int(round(0.2 / h))) if r >= 2 else 1
         self.hc = self.k * h
+        self.Ac = self.coarse(self.A).min(axis=(1, 3)) > 0
+        self.dA = ndimage.distance_transform_edt(self.Ac) * self.hc   # cell to the region's boundary (mm)
+        self.cap = r + 4.0 * self.hc + r / 30.0   # > the air test of _pass at the default step r/30
+        self.mat = np.zeros(self.Ac.shape, bool)
+        self.D = np.empty(self.Ac.shape)
+        self._dirty = (-np.inf, -np.inf, np.inf, np.inf)
+        n = self.Ac.size            # Dijkstra buffers, reset after each search
+        self._dist = np.full(n, np.inf)
+        self._prev = -np.ones(n, np.int64)
+        self._hk = np.empty(8 * n + 8)
+        self._hv = np.empty(8 * n + 8, np.int64)
+        self._touched = np.empty(n, np.int64)
 
     def coarse(self, a):
         k = self.k
         ny, nx = (a.shape[0] // k) * k, (a.shape[1] // k) * k
         return a[:ny, :nx].reshape(ny // k, k, nx // k, k)
 
+    # -- every change of M goes through these -------------------------------------------------
+    def touch(self, P, rad):
+        """Mark the box of the points P (n, 2) grown by ``rad`` mm as changed."""
+        P = np.asarray(P, float).reshape(-1, 2)
+        lo = P.min(axis=0) - rad
+        hi = P.max(axis=0) + rad
+        d = self._dirty
+        self._dirty = (lo[0], lo[1], hi[0], hi[1]) if d is None else \
+            (min(d[0], lo[0]), min(d[1], lo[1]), max(d[2], hi[0]), max(d[3], hi[1]))
+
+    def run_pass(self, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
+                 cap, guard):
+        """:func:`_pass` on this stock (every argument given: numba's fast dispatch)."""
+        P, removed, reason, E = _pass(self.M, self.A, float(self.x0), float(self.y0), float(self.h), float(self.r),
+                                      float(sx), float(sy), float(heading), float(target), float(ds), float(lag),
+                                      int(max_steps), int(n_samp), float(air_stop), float(turn), float(turn_right),
+                                      float(max_len), float(cap), float(guard), float(GUARD_LEVEL),
+                                      self.free_field()[0], float(self.hc))
+        self.touch(P, self.r + self.h)
+        return P, removed, reason, E
+
+    def cut_path(self, P):
+        _cut_path(self.M, self.x0, self.y0, self.h, P, self.r)
+        self.touch(P, self.r + self.h)
+
+    def replay(self, P, lag, n_samp):
+        E = _replay(self.M, self.x0, self.y0, self.h, self.r, P, lag, n_samp)
+        self.touch(P, self.r + self.h)
+        return E
+
+    def restore(self, M):
+        """Set the stock back to ``M`` (a copy taken before)."""
+        self.M[:] = M
+        self._dirty = (-np.inf, -np.inf, np.inf, np.inf)
+
     def free_field(self):
-        """(distance from each coarse cell centre to the nearest material, mm; coarse A mask)."""
-        mat = self.coarse(self.M).max(axis=(1, 3)) > 0
-        Ac = self.coarse(self.A).min(axis=(1, 3)) > 0
-        if not mat.any():
-            D = np.full(mat.shape, np.inf)
-        else:
-            D = ndimage.distance_transform_edt(~mat) * self.hc
-        return D, Ac
+        """(distance from each coarse cell centre to the nearest material, mm, capped at ``cap``;
+        coarse tool-centre mask). Read-only views: copy before changing them."""
+        d = self._dirty
+        if d is not None:
+            hc, cap = self.hc, self.cap
+            nJ, nI = self.mat.shape
+            c = int(math.ceil(cap / hc)) + 1
+            J0 = max(int(math.floor((d[1] - self.y0) / hc)) - 1, 0) if np.isfinite(d[1]) else 0
+            I0 = max(int(math.floor((d[0] - self.x0) / hc)) - 1, 0) if np.isfinite(d[0]) else 0
+            J1 = min(int(math.ceil((d[3] - self.y0) / hc)) + 1, nJ) if np.isfinite(d[3]) else nJ
+            I1 = min(int(math.ceil((d[2] - self.x0) / hc)) + 1, nI) if np.isfinite(d[2]) else nI
+            if J0 < J1 and I0 < I1:
+                _coarse_any(self.M, self.k, self.mat, J0, J1, I0, I1)
+                # the cells within cap of the change, from the material within cap of those cells
+                wj0, wj1, wi0, wi1 = max(J0 - c, 0), min(J1 + c, nJ), max(I0 - c, 0), min(I1 + c, nI)
+                ej0, ej1, ei0, ei1 = max(wj0 - c, 0), min(wj1 + c, nJ), max(wi0 - c, 0), min(wi1 + c, nI)
+                sub = self.mat[ej0:ej1, ei0:ei1]
+                if sub.any():
+                    E = ndimage.distance_transform_edt(~sub) * hc
+                    self.D[wj0:wj1, wi0:wi1] = np.minimum(E[wj0 - ej0:wj1 - ej0, wi0 - ei0:wi1 - ei0], cap)
+                else:
+                    self.D[wj0:wj1, wi0:wi1] = cap
+            self._dirty = None
+        return self.D, self.Ac
 
     def cell(self, x, y):
         return (int((y - self.y0) // self.hc), int((x - self.x0) // self.hc))
@@ -415,20 +645,55 @@ class _Grid:
     def centre(self, j, i):
         return (self.x0 + (i + 0.5) * self.hc, self.y0 + (j + 0.5) * self.hc)
 
+    def route(self, cur, r_free, band_hi=-np.inf, banned=None, cell=(-1, -1)):
+        """Shortest 8-neighbour route (cells) from the cell of ``cur`` through free cells (in the
+        tool-centre region, D >= r_free; ``cell`` counts as free) to the nearest goal cell (free with
+        D < band_hi and not banned, or ``cell``); starting off the free set, first to the nearest free
+        cell within 2 r. None when no goal is reachable."""
+        D, Ac = self.free_field()
+        if banned is None:
+            banned = np.zeros((1, 1), bool)
+        route = _dijkstra_nb(D, Ac, banned, r_free, band_hi, cell[0], cell[1], cur[0], cur[1], self.x0, self.y0,
+                             self.hc, 2.0 * self.r, self._dist, self._prev, self._hk, self._hv, self._touched)
+        return None if len(route) == 0 else [tuple(x) for x in route]
+
 
 @njit(cache=True)
-def _dijkstra_nb(free, goal, j0, i0):
-    """8-neighbour Dijkstra over ``free`` from (j0, i0) to the nearest ``goal`` cell (binary heap);
-    the route as (n, 2) cell indices (empty when no goal is reachable)."""
-    ny, nx = free.shape
-    N = ny * nx
-    dist = np.full(N, np.inf)
-    prev = -np.ones(N, np.int64)
-    hk = np.empty(8 * N + 8)
-    hv = np.empty(8 * N + 8, np.int64)
-    n = 0
+def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, dist, prev, hk, hv, touched):
+    """8-neighbour Dijkstra (binary heap, lazy deletion) over the free cells (Ac and D >= r_free, or
+    (gj, gi)) from the cell of (cx, cy) (off the free set: from the nearest free cell centre within
+    ``reach`` mm) to the nearest goal cell (free, and D < band_hi and not banned, or (gj, gi));
+    the route as (n, 2) cell indices (empty when none). ``dist``/``prev`` are all inf/-1 on entry
+    and are left so (the cells touched are reset)."""
+    ny, nx = D.shape
+    nb = banned.shape[0] > 1
+    j0 = min(max(int((cy - y0) // hc), 0), ny - 1)
+    i0 = min(max(int((cx - x0) // hc), 0), nx - 1)
+    if not ((Ac[j0, i0] and D[j0, i0] >= r_free) or (j0 == gj and i0 == gi)):
+        # step off the material: the nearest free cell (first in row order among equals) within reach
+        best = np.inf
+        bj = -1
+        bi = -1
+        for j in range(ny):
+            ycc = y0 + (j + 0.5) * hc
+            if abs(ycc - cy) > reach + hc:
+                continue
+            for i in range(nx):
+                if (Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi):
+                    xcc = x0 + (i + 0.5) * hc
+                    d2 = (xcc - cx) ** 2 + (ycc - cy) ** 2
+                    if d2 < best:
+                        best = d2
+                        bj = j
+                        bi = i
+        if bj < 0 or best > reach * reach:
+            return np.empty((0, 2), np.int64)
+        j0 = bj
+        i0 = bi
     s0 = j0 * nx + i0
     dist[s0] = 0.0
+    touched[0] = s0
+    nt = 1
     hk[0] = 0.0
     hv[0] = s0
     n = 1
@@ -440,7 +705,6 @@ def _dijkstra_nb(free, goal, j0, i0):
         d = hk[0]
         v = hv[0]
         n -= 1
-        # pop: move last to root, sift down
         hk[0] = hk[n]
         hv[0] = hv[n]
         p = 0
@@ -460,16 +724,19 @@ def _dijkstra_nb(free, goal, j0, i0):
             continue
         j = v // nx
         i = v % nx
-        if goal[j, i]:
+        if (j == gj and i == gi) or (D[j, i] < band_hi and not (nb and banned[j, i])):
             found = v
             break
         for q in range(8):
             jj = j + dj[q]
             ii = i + di[q]
-            if 0 <= jj < ny and 0 <= ii < nx and free[jj, ii]:
+            if 0 <= jj < ny and 0 <= ii < nx and ((Ac[jj, ii] and D[jj, ii] >= r_free) or (jj == gj and ii == gi)):
                 u = jj * nx + ii
                 nd = d + ww[q]
                 if nd < dist[u]:
+                    if dist[u] == np.inf:
+                        touched[nt] = u
+                        nt += 1
                     dist[u] = nd
                     prev[u] = v
                     hk[n] = nd
@@ -485,26 +752,23 @@ def _dijkstra_nb(free, goal, j0, i0):
                         else:
                             break
     if found < 0:
-        return np.empty((0, 2), np.int64)
-    m = 0
-    v = found
-    while v >= 0:
-        m += 1
-        v = prev[v]
-    out = np.empty((m, 2), np.int64)
-    v = found
-    for k in range(m - 1, -1, -1):
-        out[k, 0] = v // nx
-        out[k, 1] = v % nx
-        v = prev[v]
+        out = np.empty((0, 2), np.int64)
+    else:
+        m = 0
+        v = found
+        while v >= 0:
+            m += 1
+            v = prev[v]
+        out = np.empty((m, 2), np.int64)
+        v = found
+        for k in range(m - 1, -1, -1):
+            out[k, 0] = v // nx
+            out[k, 1] = v % nx
+            v = prev[v]
+    for t in range(nt):
+        dist[touched[t]] = np.inf
+        prev[touched[t]] = -1
     return out
-
-
-def _dijkstra(free, start, goal_mask):
-    """8-neighbour Dijkstra over ``free`` from ``start`` (j, i) to the nearest cell of ``goal_mask``;
-    the cell route or None."""
-    route = _dijkstra_nb(np.ascontiguousarray(free), np.ascontiguousarray(goal_mask), int(start[0]), int(start[1]))
-    return None if len(route) == 0 else [tuple(x) for x in route]
 
 
 def _shortcut(pts, ok):
@@ -625,7 +889,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             if not need.any():
                 return False
             # the farthest point from the tool-centre region's boundary among those cells
-            dA = ndimage.distance_transform_edt(Ac) * g.hc
+            dA = g.dA
             lbl, _ = ndimage.label(need)
             j, i = np.unravel_index(np.argmax(np.where(need, dA, -1)), need.shape)
             c = np.array(g.centre(j, i))
@@ -669,7 +933,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     add((pe[0], pe[1], z), "helix", feed_mm_min, "entry", 3, (c[0], c[1]))
                 add((pe[0], pe[1], z), "cut", feed_mm_min, "entry-floor", 3, (c[0], c[1]))
                 circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
-                _cut_path(g.M, g.x0, g.y0, h, circ, r)
+                g.cut_path(circ)
                 stats["entries"] += 1
                 cur = (float(pe[0]), float(pe[1]))
                 return True
@@ -677,26 +941,14 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             cur = (c[0] + rho, c[1])
             return True
 
-        def link_to(goal_mask, D, Ac, r_free):
-            """Link at depth to the nearest cell of goal_mask through free cells; end point or None."""
+        def link_to(r_free, band_hi=-np.inf, banned=None, cell=(-1, -1)):
+            """Link at depth through free cells to the nearest goal cell (:meth:`_Grid.route`); its
+            cell or None."""
             nonlocal cur
-            free = Ac & (D >= r_free)
-            j, i = g.cell(*cur)
-            j = min(max(j, 0), free.shape[0] - 1); i = min(max(i, 0), free.shape[1] - 1)
-            if not free[j, i]:
-                # step off the material: nearest free cell within 2 r
-                J, I = np.nonzero(free)
-                if len(J) == 0:
-                    return None
-                cx = g.x0 + (I + 0.5) * g.hc; cy = g.y0 + (J + 0.5) * g.hc
-                d2 = (cx - cur[0]) ** 2 + (cy - cur[1]) ** 2
-                k = int(np.argmin(d2))
-                if d2[k] > (2 * r) ** 2:
-                    return None
-                j, i = J[k], I[k]
-            route = _dijkstra(free, (j, i), goal_mask & free)
+            route = g.route(cur, r_free, band_hi, banned, cell)
             if route is None:
                 return None
+            D, Ac = g.free_field()
             pts_r = np.array([cur] + [g.centre(a, b) for a, b in route[1:]] if len(route) > 1 else [cur, g.centre(*route[0])])
 
             def ok(a, b):
@@ -704,9 +956,12 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 t = np.linspace(0, 1, n)
                 xs = a[0] + t * (b[0] - a[0]); ys = a[1] + t * (b[1] - a[1])
                 jj = ((ys - g.y0) // g.hc).astype(int); ii = ((xs - g.x0) // g.hc).astype(int)
-                if (jj < 0).any() or (ii < 0).any() or (jj >= free.shape[0]).any() or (ii >= free.shape[1]).any():
+                if (jj < 0).any() or (ii < 0).any() or (jj >= D.shape[0]).any() or (ii >= D.shape[1]).any():
                     return False
-                return bool(free[jj[1:-1], ii[1:-1]].all()) if n > 2 else True
+                if n <= 2:
+                    return True
+                jj, ii = jj[1:-1], ii[1:-1]
+                return bool(((Ac[jj, ii] & (D[jj, ii] >= r_free)) | ((jj == cell[0]) & (ii == cell[1]))).all())
 
             chords = _shortcut(pts_r, ok)
             for q in chords[1:]:
@@ -741,12 +996,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         break                # nothing (more) to take along this ring
                     k0 = int(np.argmax(dm))
                     Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
-                    goal = np.zeros_like(Ac)
-                    goal[jj[k0], ii[k0]] = True
                     if cur is not None:
-                        Acx = Ac.copy(); Acx[jj[k0], ii[k0]] = True
-                        Dx = D.copy(); Dx[jj[k0], ii[k0]] = max(D[jj[k0], ii[k0]], r_free)
-                        e = link_to(goal, Dx, Acx, r_free)
+                        e = link_to(r_free, cell=(int(jj[k0]), int(ii[k0])))
                     else:
                         e = None
                     if e is None:
@@ -771,7 +1022,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * r)
                     hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
                     M_before = g.M.copy()
-                    P, _, _, E = _pass(g.M, g.A, g.x0, g.y0, h, r, Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
+                    P, _, _, E = g.run_pass(Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
                                     int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
                                     min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish, guard_finish)
                     # points the grid kept within 2 h of the wall go onto the exact wall
@@ -793,8 +1044,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                             if not over.any():
                                 break
                             Q[over] = P[over]
-                        g.M[:] = M_before
-                        E = _replay(g.M, g.x0, g.y0, h, r, Q, lag, n_samp)
+                        g.restore(M_before)
+                        E = g.replay(Q, lag, n_samp)
                         P = Q
                     for q, e in zip(P[1:], E[1:]):
                         air_step = e < air_rad
@@ -834,9 +1085,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             banned = np.zeros((g.ny // g.k, g.nx // g.k), bool)
             for _ in range(max_passes):
                 D, Ac = g.free_field()
-                border = Ac & (D >= r_free) & (D < r_free + 1.5 * g.hc) & ~banned
-                end = link_to(border, D, Ac, r_free) if border.any() else None
+                end = link_to(r_free, r_free + 1.5 * g.hc, banned)
                 if end is None:
+                    D, Ac = g.free_field()
                     if not (Ac & (D < r) & ~banned).any():
                         break
                     finish_if_done(D, Ac, banned)
@@ -852,7 +1103,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     continue
                 heading = math.atan2(gy, gx) - 0.5 * math.pi
                 M_pre = g.M.copy() if rapid_links else None
-                P, removed, reason, E = _pass(g.M, g.A, g.x0, g.y0, h, r, cur[0], cur[1], heading, target, ds, lag,
+                P, removed, reason, E = g.run_pass(cur[0], cur[1], heading, target, ds, lag,
                                            20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18, cap_pass,
                                            guard_pass)
                 stats["passes"] += 1
@@ -895,7 +1146,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 if took < 0.1 * a_e * feed_mm_min * t_feed or took <= 0.0:
                     for lst in (pts, kinds, tags, feeds, arcs, ctrs):
                         del lst[n0:]
-                    g.M[:] = M0
+                    g.restore(M0)
                     cur = cur0
                     stats.clear(); stats.update(st0)
                     break
