@@ -61,7 +61,9 @@ Design (the ideas and where they come from; the code is cnclab's own)
   further rounds of passes and finishing take material the bans left (only while some lies deeper
   than 2 coarse cells inside the tool's reach).
 * **Lifts** are G0 straight up (as FreeCAD's); links at depth are G0 only where no material pixel
-  lies within r + 1.5 h of the chord (``rapid_links``).
+  lies within r + h/sqrt(2) of the chord (``rapid_links``) on the *rapid stock*: the same discs cut
+  with radius r - h/sqrt(2), so that the tool disc of such a chord is truly swept (sub-pixel cusps
+  between passes, which the planning stock cannot show, never meet a rapid).
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
@@ -520,6 +522,44 @@ def _resample(P, step):
 
 
 @njit(cache=True)
+def _raster_edges(E, x0, y0, h, nx, ny):
+    """Pixel mask (ny, nx) uint8 of the polygon with edges E (m, 4: x1, y1, x2, y2, every ring of
+    every part): pixel centres x0 + (i + 1/2) h, y0 + (j + 1/2) h inside by the even-odd rule (a
+    scanline fill: the same pixels as a point-in-polygon test of the centres, up to centres exactly
+    on an edge)."""
+    out = np.zeros((ny, nx), np.uint8)
+    xs = np.empty(E.shape[0])
+    for j in range(ny):
+        y = y0 + (j + 0.5) * h
+        m = 0
+        for k in range(E.shape[0]):
+            ya = E[k, 1]
+            yb = E[k, 3]
+            if (ya <= y < yb) or (yb <= y < ya):
+                xs[m] = E[k, 0] + (y - ya) * (E[k, 2] - E[k, 0]) / (yb - ya)
+                m += 1
+        if m < 2:
+            continue
+        xx = np.sort(xs[:m])
+        for q in range(0, m - 1, 2):
+            i0 = max(int(math.ceil((xx[q] - x0) / h - 0.5)), 0)
+            i1 = min(int(math.ceil((xx[q + 1] - x0) / h - 0.5)), nx)
+            for i in range(i0, i1):
+                out[j, i] = 1
+    return out
+
+
+def _raster(poly, x0, y0, h, nx, ny):
+    """:func:`_raster_edges` of a shapely Polygon/MultiPolygon."""
+    rings = []
+    for part in shapely.get_parts(poly):
+        rings += [part.exterior, *part.interiors]
+    E = np.concatenate([np.c_[c[:-1], c[1:]] for c in (np.asarray(r.coords)[:, :2] for r in rings)]) if rings \
+        else np.zeros((0, 4))
+    return _raster_edges(np.ascontiguousarray(E, float), float(x0), float(y0), float(h), int(nx), int(ny))
+
+
+@njit(cache=True)
 def _coarse_any(M, k, mat, J0, J1, I0, I1):
     """mat[J, I] = any material pixel in coarse cell (J, I) (k x k pixels), for J0 <= J < J1, I0 <= I < I1."""
     for J in range(J0, J1):
@@ -549,14 +589,20 @@ class _Grid:
         self.x0, self.y0 = x0 - m, y0 - m
         self.nx = int(math.ceil((x1 - x0 + 2 * m) / h))
         self.ny = int(math.ceil((y1 - y0 + 2 * m) / h))
-        xs = self.x0 + (np.arange(self.nx) + 0.5) * h
-        ys = self.y0 + (np.arange(self.ny) + 0.5) * h
-        X, Y = np.meshgrid(xs, ys)
-        self.M = shapely.contains_xy(pocket, X, Y).astype(np.uint8)
-        # tool-centre region, slightly shrunk so a grid-accepted point is inside the true region
-        self.A = shapely.contains_xy(allowed.buffer(-0.5 * h), X, Y).astype(np.uint8)
+        self.M = _raster(pocket, self.x0, self.y0, h, self.nx, self.ny)
+        # tool-centre region, slightly shrunk so a grid-accepted point is inside the true region (a further
+        # 1e-6 h: pixel centres exactly on the shrunk boundary, e.g. of axis-parallel walls, are outside)
+        self.A = _raster(allowed.buffer(-0.5 * h * (1 + 1e-6)), self.x0, self.y0, h, self.nx, self.ny)
+        # the rapid stock: the same discs cut with radius r - h/sqrt(2). A pixel centre it shows as
+        # clear is within r - h/sqrt(2) of a disc centre, so every point within h/sqrt(2) of it (its
+        # pixel) is truly swept: a chord with no material pixel of it within r + h/sqrt(2) is
+        # clear in the exact geometry too, sub-pixel cusps between passes included
+        self.r_rapid = r - h / math.sqrt(2.0)
+        self.r_capsule = r + h / math.sqrt(2.0) * (1 + 1e-9)
+        self.Mr = self.M.copy()
         if hole is not None:
             _cut(self.M, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2])
+            _cut(self.Mr, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2] - h / math.sqrt(2.0))
         # coarse grid for the free-space search
         self.k = max(1, int(round(0.2 / h))) if r >= 2 else 1
         self.hc = self.k * h
@@ -588,6 +634,13 @@ class _Grid:
         self._dirty = (lo[0], lo[1], hi[0], hi[1]) if d is None else \
             (min(d[0], lo[0]), min(d[1], lo[1]), max(d[2], hi[0]), max(d[3], hi[1]))
 
+    def _cut_rapid(self, P):
+        _cut_path(self.Mr, self.x0, self.y0, self.h, np.ascontiguousarray(P, float), self.r_rapid)
+
+    def snapshot(self):
+        """Copies of the stocks, for :meth:`restore`."""
+        return self.M.copy(), self.Mr.copy()
+
     def run_pass(self, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
                  cap, guard):
         """:func:`_pass` on this stock (every argument given: numba's fast dispatch)."""
@@ -597,20 +650,24 @@ class _Grid:
                                       float(max_len), float(cap), float(guard), float(GUARD_LEVEL),
                                       self.free_field()[0], float(self.hc))
         self.touch(P, self.r + self.h)
+        self._cut_rapid(P)
         return P, removed, reason, E
 
     def cut_path(self, P):
         _cut_path(self.M, self.x0, self.y0, self.h, P, self.r)
+        self._cut_rapid(P)
         self.touch(P, self.r + self.h)
 
     def replay(self, P, lag, n_samp):
         E = _replay(self.M, self.x0, self.y0, self.h, self.r, P, lag, n_samp)
+        self._cut_rapid(P)
         self.touch(P, self.r + self.h)
         return E
 
-    def restore(self, M):
-        """Set the stock back to ``M`` (a copy taken before)."""
-        self.M[:] = M
+    def restore(self, snap):
+        """Set the stocks back to a :meth:`snapshot`."""
+        self.M[:] = snap[0]
+        self.Mr[:] = snap[1]
         self._dirty = (-np.inf, -np.inf, np.inf, np.inf)
 
     def free_field(self):
@@ -804,8 +861,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     finish_margin_deg`` (it takes the wedges the passes could not reach at ``theta``); ``source``
     names the job in error messages; ``finish_laps``: at most so many wall-following laps per ring,
     a further lap only while material deeper than max(0.3 mm, a_e/4) is left along the ring;
-    ``rapid_links``: the links at depth between passes (chords proven free of material on the
-    planning stock: no material pixel within r + 1.5 h of the chord) are written as G0 tagged
+    ``rapid_links``: the links at depth between passes (chords proven free of material on the rapid
+    stock: no pixel of it within r + h/sqrt(2) of the chord, see _Grid) are written as G0 tagged
     ``cleared`` (as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
     G0 is a straight line on LinuxCNC (and on any controller with interpolated rapids); on a
     controller whose rapids dog-leg, set it False (job key ``"rapid_links": false``).
@@ -966,9 +1023,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             chords = _shortcut(pts_r, ok)
             for q in chords[1:]:
                 if math.hypot(q[0] - cur[0], q[1] - cur[1]) > 1e-9:
-                    if rapid_links and _capsule_free(g.M, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], r + 1.5 * h):
-                        # G0 at depth: no material pixel within r + 1.5 h of the chord (tag: cleared; the
-                        # margin covers slivers thinner than a pixel the evaluator's dixels still hold)
+                    if rapid_links and _capsule_free(g.Mr, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], g.r_capsule):
+                        # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
+                        # chord's tool disc is truly swept (see _Grid), sub-pixel slivers included
                         add((q[0], q[1], z), "rapid", np.nan, "cleared: link through cleared area")
                     else:
                         add((q[0], q[1], z), "link", link_feed_mm_min)
@@ -1021,7 +1078,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     mat = np.flatnonzero(dml < r + g.hc)
                     L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * r)
                     hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
-                    M_before = g.M.copy()
+                    snap = g.snapshot()
+                    M_before = snap[0]
                     P, _, _, E = g.run_pass(Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
                                     int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
                                     min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish, guard_finish)
@@ -1044,7 +1102,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                             if not over.any():
                                 break
                             Q[over] = P[over]
-                        g.restore(M_before)
+                        g.restore(snap)
                         E = g.replay(Q, lag, n_samp)
                         P = Q
                     for q, e in zip(P[1:], E[1:]):
@@ -1081,7 +1139,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 if not (Ac & (D < r - 2 * g.hc)).any():
                     break
                 todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(allowed.buffer(-1.5 * h))] if finish else []
-                saved = (len(pts), g.M.copy(), cur, dict(stats))
+                saved = (len(pts), g.snapshot(), cur, dict(stats))
             banned = np.zeros((g.ny // g.k, g.nx // g.k), bool)
             for _ in range(max_passes):
                 D, Ac = g.free_field()
@@ -1102,7 +1160,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     banned[j, i] = True
                     continue
                 heading = math.atan2(gy, gx) - 0.5 * math.pi
-                M_pre = g.M.copy() if rapid_links else None
+                M_pre = g.Mr.copy() if rapid_links else None
                 P, removed, reason, E = g.run_pass(cur[0], cur[1], heading, target, ds, lag,
                                            20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18, cap_pass,
                                            guard_pass)
@@ -1114,7 +1172,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 free = np.zeros(len(P), bool)    # ... or a G0 where the chord is clear of the stock the
                 if rapid_links:                  # pass started on (it only loses material as it runs)
                     for k in np.flatnonzero(air[1:]) + 1:
-                        free[k] = _capsule_free(M_pre, g.x0, g.y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], r + 1.5 * h)
+                        free[k] = _capsule_free(M_pre, g.x0, g.y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], g.r_capsule)
                 for k in range(1, len(P)):
                     q = P[k]
                     if free[k]:
@@ -1137,8 +1195,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 # keep the clean-up round only when it pays: the area it removed is at least 10 % of what
                 # the nominal cut (a_e wide at the cutting feed) removes in the feed time the round adds
                 # (its rapids not counted); else roll it back
-                n0, M0, cur0, st0 = saved
-                took = float(M0.sum() - g.M.sum()) * h * h
+                n0, snap0, cur0, st0 = saved
+                took = float(snap0[0].sum() - g.M.sum()) * h * h
                 P3 = np.asarray(pts[n0 - 1:], float)
                 F3 = np.asarray(feeds[n0:], float)
                 L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
@@ -1146,7 +1204,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 if took < 0.1 * a_e * feed_mm_min * t_feed or took <= 0.0:
                     for lst in (pts, kinds, tags, feeds, arcs, ctrs):
                         del lst[n0:]
-                    g.restore(M0)
+                    g.restore(snap0)
                     cur = cur0
                     stats.clear(); stats.update(st0)
                     break
