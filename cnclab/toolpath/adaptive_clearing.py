@@ -212,14 +212,8 @@ def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
     return tot, tot2
 
 
-@njit(cache=True)
-def _eng(M, x0, y0, h, cx, cy, r, psi, n, level=0.5):
-    """Engagement (rad) at one material level (see :func:`_eng2`)."""
-    return _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level)[0]
-
-
 #: heading root finding (_root): stop once the engagement is within this (rad) below its bound
-ROOT_TOL = math.radians(0.2)
+ROOT_TOL = math.radians(0.5)
 
 
 @njit(cache=True)
@@ -227,9 +221,11 @@ def _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g
     """Heading between ``a`` (engagement <= bound: f(a) = fa <= 0, engagements e_a at the 1/2 level
     and g_a at the guard level) and ``b`` (f(b) = fb > 0) of the step of length ``ds`` from (px, py)
     whose engagement -- the 1/2 level (``which`` 0) or the guard level (1) -- is at most ``bound``
-    and within ROOT_TOL of it (Illinois false position: a bracketing method, 3-6 evaluations where
-    bisection needs 16). Returns (heading, engagement at 1/2, at the guard level) of the ``a`` end."""
-    ta = fa          # the true f(a) (fa itself is halved by the Illinois rule)
+    and within ROOT_TOL of it (Illinois false position: a bracketing method, 2-4 evaluations where
+    bisection needs 16). Returns (heading, engagement at 1/2, at the guard level, slope df/dheading
+    of the final bracket) of the ``a`` end."""
+    ta = fa          # the true f(a), f(b) (fa, fb are halved by the Illinois rule)
+    tb = fb
     side = 0
     for _ in range(40):
         if ta >= -ROOT_TOL or abs(b - a) < 1e-6:
@@ -242,6 +238,7 @@ def _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g
         if fm > 0.0:
             b = m
             fb = fm
+            tb = fm
             if side == -1:
                 fa *= 0.5
             side = -1
@@ -254,34 +251,56 @@ def _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g
             if side == 1:
                 fb *= 0.5
             side = 1
-    return a, e_a, g_a
+    return a, e_a, g_a, (tb - ta) / (b - a) if b != a else 0.0
 
 
-#: first bracketing step (rad) of :func:`_heading` from its guess; doubled until the root is bracketed
+#: first bracketing step (rad) of :func:`_heading`; doubled until the root is bracketed
 BRACKET_STEP = math.radians(2.0)
 
 
 @njit(cache=True)
-def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound, which):
+def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound, which, slope):
     """Heading of the step of length ``ds`` from (px, py) whose engagement (1/2 level: ``which`` 0;
     guard level: 1) is at most ``bound`` and within ROOT_TOL of it, searched in [hi, lo] (rad; ``lo``
-    the hard left turn, least engagement) from the guess ``m0``: bracketed by steps from the guess
-    (BRACKET_STEP, doubling), then :func:`_root`. Returns (status, heading, engagement at 1/2, at the
-    guard level): status 0 found (or the hard right ``hi`` already holds: taken), 1 even the hard
-    left exceeds ``bound`` (stuck)."""
+    the hard left turn, least engagement; ``hi`` the hard right turn or the wall) from the guess
+    ``m0``: a Newton step with ``slope`` (d engagement / d heading of the last step, < 0), then
+    bracketing steps (doubling) and :func:`_root`. Returns (status, heading, engagement at 1/2, at
+    the guard level, slope): status 0 found (or the right end ``hi`` already holds: taken), 1 even
+    the hard left exceeds ``bound`` (stuck)."""
     m0 = min(max(m0, hi), lo)
     e0, g0 = _eng2(M, x0, y0, h, px + ds * math.cos(m0), py + ds * math.sin(m0), r, m0, n_samp, 0.5, guard_level)
     f0 = (e0 if which == 0 else g0) - bound
-    st = BRACKET_STEP
-    if f0 <= 0.0:
-        if f0 >= -ROOT_TOL:
-            return 0, m0, e0, g0
-        a, fa, ea, ga = m0, f0, e0, g0
-        if g0 == 0.0:
-            st = a - hi                  # nothing in front of the tool: straight to the hard right turn
-        while True:                      # turn right until the bound is exceeded
+    if -ROOT_TOL <= f0 <= 0.0:
+        return 0, m0, e0, g0, slope
+    if f0 <= 0.0 and (m0 <= hi or g0 == 0.0):
+        m1 = hi                          # holds at the right end, or nothing in front: hard right
+    elif f0 > 0.0 and m0 >= lo:
+        return 1, m0, e0, g0, slope
+    else:
+        stp = -f0 / slope if slope < 0.0 else (BRACKET_STEP if f0 > 0.0 else -BRACKET_STEP)
+        stp = min(max(stp, -4.0 * BRACKET_STEP), 4.0 * BRACKET_STEP)
+        m1 = min(max(m0 + stp, hi), lo)
+    if m1 == m0:
+        m1 = min(max(m0 + (BRACKET_STEP if f0 > 0.0 else -BRACKET_STEP), hi), lo)
+        if m1 == m0:                     # a zero-width search interval
+            return (0 if f0 <= 0.0 else 1), m0, e0, g0, slope
+    e1, g1 = _eng2(M, x0, y0, h, px + ds * math.cos(m1), py + ds * math.sin(m1), r, m1, n_samp, 0.5, guard_level)
+    f1 = (e1 if which == 0 else g1) - bound
+    if (f1 - f0) / (m1 - m0) < 0.0:
+        slope = (f1 - f0) / (m1 - m0)
+    if -ROOT_TOL <= f1 <= 0.0:
+        return 0, m1, e1, g1, slope
+    if (f0 > 0.0) != (f1 > 0.0):
+        if f0 <= 0.0:
+            a, fa, ea, ga, b, fb = m0, f0, e0, g0, m1, f1
+        else:
+            a, fa, ea, ga, b, fb = m1, f1, e1, g1, m0, f0
+    elif f1 <= 0.0:
+        a, fa, ea, ga = m1, f1, e1, g1   # still below: turn further right until the bound is exceeded
+        st = max(abs(m1 - m0), BRACKET_STEP)
+        while True:
             if a <= hi:
-                return 0, a, ea, ga
+                return 0, a, ea, ga, slope
             m = max(a - st, hi)
             e, g = _eng2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
             f = (e if which == 0 else g) - bound
@@ -290,13 +309,14 @@ def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound
                 break
             a, fa, ea, ga = m, f, e, g
             if f >= -ROOT_TOL:
-                return 0, a, ea, ga
+                return 0, a, ea, ga, slope
             st *= 2.0
     else:
-        b, fb = m0, f0
-        while True:                      # turn left until the bound holds
+        b, fb = m1, f1                   # still above: turn further left until the bound holds
+        st = max(abs(m1 - m0), BRACKET_STEP)
+        while True:
             if b >= lo:
-                return 1, b, e0, g0
+                return 1, b, e1, g1, slope
             m = min(b + st, lo)
             e, g = _eng2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
             f = (e if which == 0 else g) - bound
@@ -305,8 +325,10 @@ def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound
                 break
             b, fb = m, f
             st *= 2.0
-    psi, e, g = _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, ea, ga, bound, which)
-    return 0, psi, e, g
+    psi, e, g, sl = _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, ea, ga, bound, which)
+    if sl < 0.0:
+        slope = sl
+    return 0, psi, e, g, slope
 
 
 @njit(cache=True)
@@ -344,6 +366,9 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
     reason = 3
     phi = heading
     dpsi = 0.0       # the last heading change: the guess of the next one
+    slope = -1.0     # d engagement / d heading (rad/rad) of the last root: the Newton step of the next
+    slope_g = -1.0
+    was_air = False  # the last step met no material at all: the next guess is the hard right turn
     # no material pixel centre within r + ds + h of any arc sample point: the coarse cell centre may be
     # hc/sqrt(2) from the point, the material pixel hc/sqrt(2) from its cell's centre
     air_reach = r + ds + h + math.sqrt(2.0) * hc
@@ -364,6 +389,20 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             k_cut += 1
         lo = phi + turn          # hard left: least engagement
         hi = phi - turn_right    # hard right (curvature limited): most engagement
+        # the right end of the search: the hard right turn, or where it would leave the tool-centre
+        # region, the rightmost heading that stays inside (the pass slides along the wall)
+        if not _inside(Amask, x0, y0, h, px + ds * math.cos(hi), py + ds * math.sin(hi)):
+            if not _inside(Amask, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo)):
+                reason = 0
+                break
+            a, b = lo, hi
+            for _ in range(14):
+                m = 0.5 * (a + b)
+                if _inside(Amask, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m)):
+                    a = m
+                else:
+                    b = m
+            hi = a
         jc = int(math.floor((py - y0) / hc))
         ic = int(math.floor((px - x0) / hc))
         if 0 <= jc < D.shape[0] and 0 <= ic < D.shape[1] and D[jc, ic] > air_reach:
@@ -371,31 +410,10 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             e = 0.0
             eg = 0.0
         else:
-            st, psi, e, eg = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, phi + dpsi, target, 0)
+            m0 = hi if was_air else phi + dpsi
+            st, psi, e, eg, slope = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, target, 0,
+                                             slope)
             if st == 1:
-                reason = 1
-                break
-        qx = px + ds * math.cos(psi)
-        qy = py + ds * math.sin(psi)
-        if not _inside(Amask, x0, y0, h, qx, qy):
-            # slide along the wall: the rightmost heading between hard left and psi that stays inside
-            if not _inside(Amask, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo)):
-                reason = 0
-                break
-            a, b = lo, psi
-            for _ in range(14):
-                m = 0.5 * (a + b)
-                if _inside(Amask, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m)):
-                    a = m
-                else:
-                    b = m
-            psi = a
-            qx = px + ds * math.cos(psi)
-            qy = py + ds * math.sin(psi)
-            e, eg = _eng2(M, x0, y0, h, qx, qy, r, psi, n_samp, 0.5, guard_level)
-            if e > cap:
-                # sliding along the wall would take more than the cap (a concave corner of the
-                # tool-centre region): the pass ends here, the corner is left to later passes
                 reason = 1
                 break
         if eg > guard:
@@ -403,15 +421,14 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             # within ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests,
             # crescents between passes) the 1/2 level can miss a few degrees of thin slivers: turn left
             # until it holds
-            st, psi, e, eg = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi, guard, 1)
+            st, psi, e, eg, slope_g = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi, guard, 1,
+                                               slope_g)
             if st == 1:
                 reason = 1
                 break
-            qx = px + ds * math.cos(psi)
-            qy = py + ds * math.sin(psi)
-            if not _inside(Amask, x0, y0, h, qx, qy):
-                reason = 0
-                break
+        qx = px + ds * math.cos(psi)
+        qy = py + ds * math.sin(psi)
+        was_air = eg == 0.0
         if e < 0.3 * target:
             if air == 0.0:
                 n_air_start = n
@@ -438,12 +455,13 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
 
 
 @njit(cache=True)
-def _replay(M, x0, y0, h, r, P, lag, n_samp, level=0.5):
+def _replay(M, x0, y0, h, r, P, lag, n_samp, level2):
     """Cut the fixed points P (n, 2) into M in order, the disks of the last ``lag`` mm held back as
     in :func:`_pass`; the engagement (rad) measured at each point (heading: the chord from the point
-    before; 0 at P[0])."""
+    before; 0 at P[0]) at the 1/2 material level and at ``level2``: two arrays (n,)."""
     n = P.shape[0]
     E = np.zeros(n)
+    G = np.zeros(n)
     s = np.zeros(n)
     k_cut = 0
     pcx = np.nan
@@ -458,13 +476,13 @@ def _replay(M, x0, y0, h, r, P, lag, n_samp, level=0.5):
             pcy = P[k_cut, 1]
             k_cut += 1
         if dx != 0.0 or dy != 0.0:
-            E[i] = _eng(M, x0, y0, h, P[i, 0], P[i, 1], r, math.atan2(dy, dx), n_samp, level)
+            E[i], G[i] = _eng2(M, x0, y0, h, P[i, 0], P[i, 1], r, math.atan2(dy, dx), n_samp, 0.5, level2)
     while k_cut < n:
         _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
         pcx = P[k_cut, 0]
         pcy = P[k_cut, 1]
         k_cut += 1
-    return E
+    return E, G
 
 
 @njit(cache=True)
@@ -575,6 +593,74 @@ def _coarse_any(M, k, mat, J0, J1, I0, I1):
             mat[J, I] = v
 
 
+@njit(cache=True)
+def _dist_window(mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, D):
+    """D[j, i] = min(cap, hc x the Euclidean distance (cells) from cell (j, i) to the nearest True
+    cell of ``mat`` inside the window rows ej0:ej1, columns ei0:ei1), for the cells of the window
+    wj0:wj1, wi0:wi1 (inside the first). Exact: a column scan, then the lower envelope of parabolas
+    along each row (Felzenszwalb & Huttenlocher 2012, "Distance transforms of sampled functions")."""
+    BIG = 1e30
+    nr = wj1 - wj0
+    nc = ei1 - ei0
+    g = np.full((nr, nc), BIG)          # squared vertical distance to material in the column
+    for c in range(nc):
+        i = ei0 + c
+        last = -1
+        for j in range(ej0, ej1):        # downward: nearest material above
+            if mat[j, i]:
+                last = j
+            if wj0 <= j < wj1 and last >= 0:
+                g[j - wj0, c] = float((j - last) * (j - last))
+        last = -1
+        for j in range(ej1 - 1, ej0 - 1, -1):   # upward: nearest material below
+            if mat[j, i]:
+                last = j
+            if wj0 <= j < wj1 and last >= 0:
+                d = float((last - j) * (last - j))
+                if d < g[j - wj0, c]:
+                    g[j - wj0, c] = d
+    v = np.empty(nc, np.int64)
+    z = np.empty(nc + 1)
+    for rr in range(nr):
+        f = g[rr]
+        k = -1
+        for q in range(nc):
+            if f[q] >= BIG:
+                continue
+            if k < 0:
+                k = 0
+                v[0] = q
+                z[0] = -BIG
+                z[1] = BIG
+                continue
+            while True:
+                p = v[k]
+                sx = ((f[q] + q * q) - (f[p] + p * p)) / (2.0 * (q - p))
+                if sx <= z[k]:
+                    k -= 1
+                    if k < 0:
+                        break
+                else:
+                    break
+            k += 1
+            v[k] = q
+            z[k] = -BIG if k == 0 else sx
+            z[k + 1] = BIG
+        j = wj0 + rr
+        if k < 0:
+            for i in range(wi0, wi1):
+                D[j, i] = cap
+            continue
+        kk = 0
+        for i in range(wi0, wi1):
+            p = i - ei0
+            while z[kk + 1] < p:
+                kk += 1
+            q = v[kk]
+            d = math.sqrt((p - q) * (p - q) + f[q]) * hc
+            D[j, i] = d if d < cap else cap
+
+
 class _Grid:
     """The planning stock ``M`` (pixels of ``h`` mm), the tool-centre mask ``A`` and, on a coarse grid
     (cells of ``hc = k h``), the distance from each cell centre to the nearest material, kept up to date
@@ -659,7 +745,7 @@ class _Grid:
         self.touch(P, self.r + self.h)
 
     def replay(self, P, lag, n_samp):
-        E = _replay(self.M, self.x0, self.y0, self.h, self.r, P, lag, n_samp)
+        E = _replay(self.M, self.x0, self.y0, self.h, self.r, P, float(lag), int(n_samp), GUARD_LEVEL)[0]
         self._cut_rapid(P)
         self.touch(P, self.r + self.h)
         return E
@@ -687,12 +773,7 @@ class _Grid:
                 # the cells within cap of the change, from the material within cap of those cells
                 wj0, wj1, wi0, wi1 = max(J0 - c, 0), min(J1 + c, nJ), max(I0 - c, 0), min(I1 + c, nI)
                 ej0, ej1, ei0, ei1 = max(wj0 - c, 0), min(wj1 + c, nJ), max(wi0 - c, 0), min(wi1 + c, nI)
-                sub = self.mat[ej0:ej1, ei0:ei1]
-                if sub.any():
-                    E = ndimage.distance_transform_edt(~sub) * hc
-                    self.D[wj0:wj1, wi0:wi1] = np.minimum(E[wj0 - ej0:wj1 - ej0, wi0 - ei0:wi1 - ei0], cap)
-                else:
-                    self.D[wj0:wj1, wi0:wi1] = cap
+                _dist_window(self.mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, self.D)
             self._dirty = None
         return self.D, self.Ac
 
@@ -710,9 +791,10 @@ class _Grid:
         D, Ac = self.free_field()
         if banned is None:
             banned = np.zeros((1, 1), bool)
-        route = _dijkstra_nb(D, Ac, banned, r_free, band_hi, cell[0], cell[1], cur[0], cur[1], self.x0, self.y0,
-                             self.hc, 2.0 * self.r, self._dist, self._prev, self._hk, self._hv, self._touched)
-        return None if len(route) == 0 else [tuple(x) for x in route]
+        route = _dijkstra_nb(D, Ac, banned, float(r_free), float(band_hi), int(cell[0]), int(cell[1]), float(cur[0]),
+                             float(cur[1]), float(self.x0), float(self.y0), float(self.hc), 2.0 * self.r, self._dist,
+                             self._prev, self._hk, self._hv, self._touched)
+        return None if len(route) == 0 else route
 
 
 @njit(cache=True)
@@ -828,17 +910,42 @@ def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, rea
     return out
 
 
-def _shortcut(pts, ok):
-    """Greedy straight chords along ``pts`` while ``ok(a, b)``."""
-    out = [pts[0]]
+@njit(cache=True)
+def _chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, ax, ay, bx, by):
+    """True when the chord a-b stays in free coarse cells (Ac and D >= r_free, or (gj, gi)): sampled
+    every hc/2, its interior samples in free cells and no sample off the grid."""
+    ny, nx = D.shape
+    n = max(2, int(math.ceil(math.hypot(bx - ax, by - ay) / (0.5 * hc))) + 1)
+    dt = 1.0 / (n - 1)
+    for k in range(n):
+        t = 1.0 if k == n - 1 else k * dt
+        j = int(math.floor((ay + t * (by - ay) - y0) / hc))
+        i = int(math.floor((ax + t * (bx - ax) - x0) / hc))
+        if j < 0 or i < 0 or j >= ny or i >= nx:
+            return False
+        if 0 < k < n - 1 and not ((Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi)):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
+    """Indices of the points of ``pts`` (m, 2) kept by greedy straight chords that stay free
+    (:func:`_chord_free`): from each kept point the farthest reachable one (a binary search while
+    the gap is over 8 points)."""
+    m = pts.shape[0]
+    out = np.empty(m, np.int64)
+    out[0] = 0
+    n = 1
     i = 0
-    while i < len(pts) - 1:
-        j = len(pts) - 1
-        while j > i + 1 and not ok(pts[i], pts[j]):
+    while i < m - 1:
+        j = m - 1
+        while j > i + 1 and not _chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1]):
             j = max(i + 1, (i + j) // 2) if j - i > 8 else j - 1
-        out.append(pts[j])
+        out[n] = j
+        n += 1
         i = j
-    return np.array(out)
+    return out[:n]
 
 
 # ------------------------------------------------------------------------------------------------
@@ -1006,21 +1113,12 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             if route is None:
                 return None
             D, Ac = g.free_field()
-            pts_r = np.array([cur] + [g.centre(a, b) for a, b in route[1:]] if len(route) > 1 else [cur, g.centre(*route[0])])
+            R = np.asarray(route, float)
+            cells = np.c_[g.x0 + (R[:, 1] + 0.5) * g.hc, g.y0 + (R[:, 0] + 0.5) * g.hc]
+            pts_r = np.vstack([np.array([cur], float), cells[1:] if len(R) > 1 else cells[:1]])
 
-            def ok(a, b):
-                n = max(2, int(math.ceil(math.hypot(b[0] - a[0], b[1] - a[1]) / (0.5 * g.hc))) + 1)
-                t = np.linspace(0, 1, n)
-                xs = a[0] + t * (b[0] - a[0]); ys = a[1] + t * (b[1] - a[1])
-                jj = ((ys - g.y0) // g.hc).astype(int); ii = ((xs - g.x0) // g.hc).astype(int)
-                if (jj < 0).any() or (ii < 0).any() or (jj >= D.shape[0]).any() or (ii >= D.shape[1]).any():
-                    return False
-                if n <= 2:
-                    return True
-                jj, ii = jj[1:-1], ii[1:-1]
-                return bool(((Ac[jj, ii] & (D[jj, ii] >= r_free)) | ((jj == cell[0]) & (ii == cell[1]))).all())
-
-            chords = _shortcut(pts_r, ok)
+            chords = pts_r[_shortcut(np.ascontiguousarray(pts_r, float), D, Ac, float(r_free), int(cell[0]), int(cell[1]),
+                                     float(g.x0), float(g.y0), float(g.hc))]
             for q in chords[1:]:
                 if math.hypot(q[0] - cur[0], q[1] - cur[1]) > 1e-9:
                     if rapid_links and _capsule_free(g.Mr, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], g.r_capsule):
@@ -1096,8 +1194,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         # on the stock as it was before this lap, a snapped point whose engagement
                         # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
                         for _ in range(4):       # a reverted point changes the stock the later ones meet
-                            Es = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp)
-                            Eg = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp, GUARD_LEVEL)
+                            Es, Eg = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp, GUARD_LEVEL)
                             over = near & ((Es > cap_finish) | (Eg > guard_finish)) & np.any(Q != P, axis=1)
                             if not over.any():
                                 break
