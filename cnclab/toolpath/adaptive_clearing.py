@@ -1262,6 +1262,15 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                                            20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18, cap_pass,
                                            guard_pass)
                 stats["passes"] += 1
+                if len(P) < 2:
+                    # nothing emitted (the pass ran into air and was dropped: the stock is unchanged). Where
+                    # the material lies behind the start heading -- the face at the end of a band
+                    # narrower than the turning circle -- the hard right turn through air slides away along
+                    # the wall: start the other way round once
+                    P, removed, reason, E = g.run_pass(cur[0], cur[1], heading + math.pi, target, ds, lag,
+                                               20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18,
+                                               cap_pass, guard_pass)
+                    stats["passes"] += 1
                 if removed < 0.2 * r * h or len(P) < 2:
                     rad = int(math.ceil(r / g.hc))
                     banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
