@@ -694,6 +694,9 @@ class _Grid:
         self.hc = self.k * h
         self.Ac = self.coarse(self.A).min(axis=(1, 3)) > 0
         self.dA = ndimage.distance_transform_edt(self.Ac) * self.hc   # cell to the region's boundary (mm)
+        # half-width of the tool-centre region around each cell: the largest dA within r
+        c = int(math.ceil(r / self.hc))
+        self.half_width = ndimage.maximum_filter(self.dA, size=2 * c + 1)
         self.cap = r + 4.0 * self.hc + r / 30.0   # > the air test of _pass at the default step r/30
         self.mat = np.zeros(self.Ac.shape, bool)
         self.D = np.empty(self.Ac.shape)
@@ -1012,6 +1015,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
     n_samp = 90
     turn = math.radians(90.0)
+    turn_radius = 0.25 * r        # the tightest right turn (the curvature limit of the passes), mm
     spindle = np.nan if spindle_rpm is None else float(spindle_rpm)
     zlev = [top_z - min(depth, a_p * (k + 1)) for k in range(int(math.ceil(depth / a_p - 1e-9)))]
 
@@ -1180,7 +1184,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     M_before = snap[0]
                     P, _, _, E = g.run_pass(Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
                                     int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
-                                    min(turn, ds / (0.25 * r)), 1.02 * L_ring + ds, cap_finish, guard_finish)
+                                    min(turn, ds / turn_radius), 1.02 * L_ring + ds, cap_finish, guard_finish)
                     # points the grid kept within 2 h of the wall go onto the exact wall
                     # (the grid mask is shrunk by h/2 for safety: no skin is left on the walls)
                     pp = shapely.points(P)
@@ -1259,16 +1263,16 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 heading = math.atan2(gy, gx) - 0.5 * math.pi
                 M_pre = g.Mr.copy() if rapid_links else None
                 P, removed, reason, E = g.run_pass(cur[0], cur[1], heading, target, ds, lag,
-                                           20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18, cap_pass,
+                                           20000, n_samp, 2.0 * r, turn, min(turn, ds / turn_radius), 1e18, cap_pass,
                                            guard_pass)
                 stats["passes"] += 1
-                if len(P) < 2:
-                    # nothing emitted (the pass ran into air and was dropped: the stock is unchanged). Where
-                    # the material lies behind the start heading -- the face at the end of a band
-                    # narrower than the turning circle -- the hard right turn through air slides away along
-                    # the wall: start the other way round once
+                if len(P) < 2 and g.half_width[j, i] < turn_radius:
+                    # nothing emitted (the pass ran into air and was dropped: the stock is unchanged). In a band
+                    # narrower than the turning circle, where the material lies behind the start heading (the
+                    # face at the end of the band) the hard right turn through air slides away along the
+                    # wall: start the other way round once
                     P, removed, reason, E = g.run_pass(cur[0], cur[1], heading + math.pi, target, ds, lag,
-                                               20000, n_samp, 2.0 * r, turn, min(turn, ds / (0.25 * r)), 1e18,
+                                               20000, n_samp, 2.0 * r, turn, min(turn, ds / turn_radius), 1e18,
                                                cap_pass, guard_pass)
                     stats["passes"] += 1
                 if removed < 0.2 * r * h or len(P) < 2:
