@@ -676,9 +676,10 @@ class _Grid:
         self.nx = int(math.ceil((x1 - x0 + 2 * m) / h))
         self.ny = int(math.ceil((y1 - y0 + 2 * m) / h))
         self.M = _raster(pocket, self.x0, self.y0, h, self.nx, self.ny)
-        # tool-centre region, slightly shrunk so a grid-accepted point is inside the true region (a further
-        # 1e-6 h: pixel centres exactly on the shrunk boundary, e.g. of axis-parallel walls, are outside)
-        self.A = _raster(allowed.buffer(-0.5 * h * (1 + 1e-6)), self.x0, self.y0, h, self.nx, self.ny)
+        # tool-centre region shrunk by h/sqrt(2): every point of a pixel whose centre it holds (what
+        # _inside accepts) is inside the true region (a further 1e-6: centres exactly on the shrunk
+        # boundary, e.g. of axis-parallel walls, are outside)
+        self.A = _raster(allowed.buffer(-h / math.sqrt(2.0) * (1 + 1e-6)), self.x0, self.y0, h, self.nx, self.ny)
         # the rapid stock: the same discs cut with radius r - h/sqrt(2). A pixel centre it shows as
         # clear is within r - h/sqrt(2) of a disc centre, so every point within h/sqrt(2) of it (its
         # pixel) is truly swept: a chord with no material pixel of it within r + h/sqrt(2) is
@@ -1153,7 +1154,13 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     dm = D[jj, ii]
                     if dm.min() > (r + g.hc if lap == 0 else r - max(0.3, 0.25 * a_e)):
                         break                # nothing (more) to take along this ring
-                    k0 = int(np.argmax(dm))
+                    # start where the ring is free of material (the farthest from it, the field being
+                    # capped: any point at the cap), the nearest such point to the tool
+                    free_k = np.flatnonzero(dm >= min(dm.max(), r_free + g.hc))
+                    if cur is not None and len(free_k) > 1:
+                        k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - cur[0], Rs[free_k, 1] - cur[1]))])
+                    else:
+                        k0 = int(free_k[0])
                     Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
                     if cur is not None:
                         e = link_to(r_free, cell=(int(jj[k0]), int(ii[k0])))
@@ -1186,13 +1193,15 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                                     int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
                                     min(turn, ds / turn_radius), 1.02 * L_ring + ds, cap_finish, guard_finish)
                     # points the grid kept within 2 h of the wall go onto the exact wall
-                    # (the grid mask is shrunk by h/2 for safety: no skin is left on the walls)
+                    # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
                     pp = shapely.points(P)
                     near = shapely.distance(wall, pp) < 2.0 * h
                     if near.any():
-                        snapped = shapely.line_interpolate_point(wall, shapely.line_locate_point(wall, pp[near]))
+                        # the nearest wall point (not locate + interpolate along the multi-ring wall: a
+                        # point nearest to a ring's closing vertex would land on the next ring's start)
+                        snapped = shapely.get_coordinates(shapely.shortest_line(pp[near], wall))[1::2]
                         Q = P.copy()
-                        Q[near] = shapely.get_coordinates(snapped)
+                        Q[near] = snapped
                         # the snap moves points up to 2 h outwards: near a concave corner that can
                         # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
                         # on the stock as it was before this lap, a snapped point whose engagement
