@@ -1017,6 +1017,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     n_samp = 90
     turn = math.radians(90.0)
     turn_radius = 0.25 * r        # the tightest right turn (the curvature limit of the passes), mm
+    air_stop = 1.5 * r            # a pass ends after so much air (its air tail is dropped)
     spindle = np.nan if spindle_rpm is None else float(spindle_rpm)
     zlev = [top_z - min(depth, a_p * (k + 1)) for k in range(int(math.ceil(depth / a_p - 1e-9)))]
 
@@ -1272,7 +1273,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 heading = math.atan2(gy, gx) - 0.5 * math.pi
                 M_pre = g.Mr.copy() if rapid_links else None
                 P, removed, reason, E = g.run_pass(cur[0], cur[1], heading, target, ds, lag,
-                                           20000, n_samp, 2.0 * r, turn, min(turn, ds / turn_radius), 1e18, cap_pass,
+                                           20000, n_samp, air_stop, turn, min(turn, ds / turn_radius), 1e18, cap_pass,
                                            guard_pass)
                 stats["passes"] += 1
                 if len(P) < 2 and g.half_width[j, i] < turn_radius:
@@ -1281,7 +1282,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     # face at the end of the band) the hard right turn through air slides away along the
                     # wall: start the other way round once
                     P, removed, reason, E = g.run_pass(cur[0], cur[1], heading + math.pi, target, ds, lag,
-                                               20000, n_samp, 2.0 * r, turn, min(turn, ds / turn_radius), 1e18,
+                                               20000, n_samp, air_stop, turn, min(turn, ds / turn_radius), 1e18,
                                                cap_pass, guard_pass)
                     stats["passes"] += 1
                 if removed < 0.2 * r * h or len(P) < 2:
