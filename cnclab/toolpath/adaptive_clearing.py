@@ -342,19 +342,34 @@ def _inside(Amask, x0, y0, h, x, y):
 
 
 @njit(cache=True)
+def _mark_free(Mr, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule):
+    """F[k] = the chord P[k-1] -> P[k] has no pixel of ``Mr`` within ``r_capsule``, for the air steps
+    (E[k] < air_eng) k0 <= k < k1."""
+    for k in range(max(k0, 1), k1):
+        if E[k] < air_eng:
+            F[k] = _capsule_free(Mr, x0, y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], r_capsule)
+
+
+@njit(cache=True)
 def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
-          cap, guard, guard_level, D, hc):
-    """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end).
+          guard, guard_level, D, hc, Mr, r_rapid, r_capsule, air_eng):
+    """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end) and the
+    rapid stock ``Mr`` (the same discs, radius ``r_rapid``) in step with it.
 
     ``D``: the coarse distance field (cells of ``hc`` mm) of the stock as it was at the start or
     earlier (material only goes: a lower bound of the distance now); where it proves that no
     material lies within reach of any candidate step (r + ds + the cell and pixel margins), the
     step is air without sampling the arc: the hard right turn, engagement 0.
 
-    Returns (points (n, 2), removed area mm^2, reason, engagement (n,) rad of each step): reason 0
-    left the region, 1 stuck (cannot lower the engagement), 2 air, 3 step limit."""
+    Returns (points (n, 2), removed area mm^2, reason, engagement (n,) rad of each step, free (n,)):
+    reason 0 left the region, 1 stuck (cannot lower the engagement), 2 air, 3 step limit; ``free[k]``:
+    step k is an air step (engagement < ``air_eng`` rad) whose chord has no pixel of the rapid stock
+    within ``r_capsule`` (0: not checked): a G0 through cleared area. The steps of an air run are
+    checked when the run ends (dropped runs never): the discs held back since its start are not yet
+    cut, so the rapid stock then holds at least the material each of its steps meets."""
     P = np.empty((max_steps + 1, 2))
     E = np.zeros(max_steps + 1)
+    F = np.zeros(max_steps + 1, np.bool_)
     P[0, 0] = sx
     P[0, 1] = sy
     n = 1
@@ -384,6 +399,7 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         k_hold = n_air_start if air > 0.0 else n
         while k_cut < k_hold and s[n - 1] - s[k_cut] > lag:
             removed += _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
+            _cut(Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r_rapid, pcx, pcy)
             pcx = P[k_cut, 0]
             pcy = P[k_cut, 1]
             k_cut += 1
@@ -438,6 +454,8 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
                 n = n_air_start
                 break
         else:
+            if air > 0.0 and r_capsule > 0.0:
+                _mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
             air = 0.0
         P[n, 0] = qx
         P[n, 1] = qy
@@ -446,12 +464,15 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         n += 1
         dpsi = psi - phi
         phi = psi
+    if air > 0.0 and reason != 2 and r_capsule > 0.0:
+        _mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
     while k_cut < n:
         removed += _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
+        _cut(Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r_rapid, pcx, pcy)
         pcx = P[k_cut, 0]
         pcy = P[k_cut, 1]
         k_cut += 1
-    return P[:n].copy(), removed, reason, E[:n].copy()
+    return P[:n].copy(), removed, reason, E[:n].copy(), F[:n].copy()
 
 
 @njit(cache=True)
@@ -732,16 +753,17 @@ class _Grid:
         return self.M.copy(), self.Mr.copy()
 
     def run_pass(self, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
-                 cap, guard):
-        """:func:`_pass` on this stock (every argument given: numba's fast dispatch)."""
-        P, removed, reason, E = _pass(self.M, self.A, float(self.x0), float(self.y0), float(self.h), float(self.r),
-                                      float(sx), float(sy), float(heading), float(target), float(ds), float(lag),
-                                      int(max_steps), int(n_samp), float(air_stop), float(turn), float(turn_right),
-                                      float(max_len), float(cap), float(guard), float(GUARD_LEVEL),
-                                      self.free_field()[0], float(self.hc))
+                 guard, air_eng=0.0, check_rapids=False):
+        """:func:`_pass` on these stocks (every argument given: numba's fast dispatch); ``check_rapids``:
+        mark the air steps whose chord is clear on the rapid stock."""
+        P, removed, reason, E, F = _pass(self.M, self.A, float(self.x0), float(self.y0), float(self.h), float(self.r),
+                                         float(sx), float(sy), float(heading), float(target), float(ds), float(lag),
+                                         int(max_steps), int(n_samp), float(air_stop), float(turn), float(turn_right),
+                                         float(max_len), float(guard), float(GUARD_LEVEL), self.free_field()[0],
+                                         float(self.hc), self.Mr, float(self.r_rapid),
+                                         float(self.r_capsule) if check_rapids else 0.0, float(air_eng))
         self.touch(P, self.r + self.h)
-        self._cut_rapid(P)
-        return P, removed, reason, E
+        return P, removed, reason, E, F
 
     def cut_path(self, P):
         _cut_path(self.M, self.x0, self.y0, self.h, P, self.r)
@@ -1008,8 +1030,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     air_rad = math.radians(0.5)   # a step whose front half meets less than 0.5 deg of material is air
     a_e = r * (1 - math.cos(target))
     target_finish = math.radians(theta_deg + finish_margin_deg)
-    cap_pass = target + math.radians(1.0)        # a wall slide may exceed the target by 1 deg
-    cap_finish = target_finish
+    cap_finish = target_finish                   # a snapped finish point may not raise the engagement above it
     # the sliver guard (see _pass): theta + guard_deg for the clearing passes, theta + 9.5 deg for the finish
     guard_pass = math.radians(theta_deg + guard_deg)
     guard_finish = math.radians(theta_deg + max(guard_deg, 9.5))
@@ -1190,9 +1211,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
                     snap = g.snapshot()
                     M_before = snap[0]
-                    P, _, _, E = g.run_pass(Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
-                                    int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
-                                    min(turn, ds / turn_radius), 1.02 * L_ring + ds, cap_finish, guard_finish)
+                    P, _, _, E, _ = g.run_pass(Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
+                                               int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
+                                               min(turn, ds / turn_radius), 1.02 * L_ring + ds, guard_finish)
                     # points the grid kept within 2 h of the wall go onto the exact wall
                     # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
                     pp = shapely.points(P)
@@ -1271,28 +1292,24 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     banned[j, i] = True
                     continue
                 heading = math.atan2(gy, gx) - 0.5 * math.pi
-                M_pre = g.Mr.copy() if rapid_links else None
-                P, removed, reason, E = g.run_pass(cur[0], cur[1], heading, target, ds, lag,
-                                           20000, n_samp, air_stop, turn, min(turn, ds / turn_radius), 1e18, cap_pass,
-                                           guard_pass)
+                P, removed, reason, E, free = g.run_pass(cur[0], cur[1], heading, target, ds, lag, 20000, n_samp,
+                                                         air_stop, turn, min(turn, ds / turn_radius), 1e18,
+                                                         guard_pass, air_rad, rapid_links)
                 stats["passes"] += 1
                 if len(P) < 2 and g.half_width[j, i] < turn_radius:
                     # nothing emitted (the pass ran into air and was dropped: the stock is unchanged). In a band
                     # narrower than the turning circle, where the material lies behind the start heading (the
                     # face at the end of the band) the hard right turn through air slides away along the
                     # wall: start the other way round once
-                    P, removed, reason, E = g.run_pass(cur[0], cur[1], heading + math.pi, target, ds, lag,
-                                               20000, n_samp, air_stop, turn, min(turn, ds / turn_radius), 1e18,
-                                               cap_pass, guard_pass)
+                    P, removed, reason, E, free = g.run_pass(cur[0], cur[1], heading + math.pi, target, ds, lag,
+                                                             20000, n_samp, air_stop, turn, min(turn, ds / turn_radius),
+                                                             1e18, guard_pass, air_rad, rapid_links)
                     stats["passes"] += 1
                 if removed < 0.2 * r * h or len(P) < 2:
                     rad = int(math.ceil(r / g.hc))
                     banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
-                air = E < air_rad                # nothing in front of the tool: a link at the link feed
-                free = np.zeros(len(P), bool)    # ... or a G0 where the chord is clear of the stock the
-                if rapid_links:                  # pass started on (it only loses material as it runs)
-                    for k in np.flatnonzero(air[1:]) + 1:
-                        free[k] = _capsule_free(M_pre, g.x0, g.y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], g.r_capsule)
+                air = E < air_rad                # nothing in front of the tool: a link at the link feed, or
+                                                 # a G0 where the chord is proven clear (``free``, see _pass)
                 for k in range(1, len(P)):
                     q = P[k]
                     if free[k]:
