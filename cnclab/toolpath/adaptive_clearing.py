@@ -1048,6 +1048,15 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     def add(p, kind, feed=np.nan, tag="", arc=0, ctr=(np.nan, np.nan)):
         pts.append(p); kinds.append(kind); feeds.append(feed); tags.append(tag); arcs.append(arc); ctrs.append(ctr)
 
+    def add_line_moves(Q, z, kind, feed, tag):
+        """Straight moves at height z to the points Q (m, 2); kind, feed, tag: arrays (m,) or scalars."""
+        m = len(Q)
+        pts.extend(zip(Q[:, 0].tolist(), Q[:, 1].tolist(), [z] * m))
+        for lst, v in ((kinds, kind), (feeds, feed), (tags, tag)):
+            lst.extend(v.tolist() if isinstance(v, np.ndarray) else [v] * m)
+        arcs.extend([0] * m)
+        ctrs.extend([(np.nan, np.nan)] * m)
+
     stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0}
     hole = None if start_hole is None else tuple(float(v) for v in start_hole)
     if hole is not None and not pocket.buffer(1e-9).contains(Point(hole[0], hole[1]).buffer(0.5 * hole[2] - 1e-6)):
@@ -1237,10 +1246,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         g.restore(snap)
                         E = g.replay(Q, lag, n_samp)
                         P = Q
-                    for q, e in zip(P[1:], E[1:]):
-                        air_step = e < air_rad
-                        add((q[0], q[1], z), "link" if air_step else "cut",
-                            link_feed_mm_min if air_step else feed_mm_min, "finish")
+                    ai = E[1:] < air_rad
+                    add_line_moves(P[1:], z, np.where(ai, "link", "cut").astype(object),
+                                   np.where(ai, link_feed_mm_min, feed_mm_min), "finish")
                     cur = (float(P[-1, 0]), float(P[-1, 1]))
 
         todo_parts = [orient(q, 1.0) for q in shapely.get_parts(allowed.buffer(-1.5 * h))] if finish else []
@@ -1310,14 +1318,10 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
                 air = E < air_rad                # nothing in front of the tool: a link at the link feed, or
                                                  # a G0 where the chord is proven clear (``free``, see _pass)
-                for k in range(1, len(P)):
-                    q = P[k]
-                    if free[k]:
-                        add((q[0], q[1], z), "rapid", np.nan, "cleared: air inside cleared area")
-                    elif air[k]:
-                        add((q[0], q[1], z), "link", link_feed_mm_min)
-                    else:
-                        add((q[0], q[1], z), "cut", feed_mm_min)
+                fr, ai = free[1:], air[1:]
+                add_line_moves(P[1:], z, np.where(fr, "rapid", np.where(ai, "link", "cut")).astype(object),
+                               np.where(fr, np.nan, np.where(ai, link_feed_mm_min, feed_mm_min)),
+                               np.where(fr, "cleared: air inside cleared area", "").astype(object))
                 cur = (float(P[-1, 0]), float(P[-1, 1]))
             if finish:
                 # every part of the tool-centre region is finished once, the nearest to the tool first (a part
