@@ -213,7 +213,7 @@ def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
 
 
 #: heading root finding (_root): stop once the engagement is within this (rad) below its bound
-ROOT_TOL = math.radians(0.5)
+ROOT_TOL = math.radians(1.0)
 
 
 @njit(cache=True)
