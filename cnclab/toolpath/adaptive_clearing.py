@@ -173,12 +173,16 @@ def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
     """Engagement (rad) of the front half circle (heading psi) with the material, at two material
     levels from the same arc samples: ``(engagement at level, engagement at level2)``.
 
+    Where the whole arc lies in the grid, the bilinear stencil is read without bounds checks (pixel
+    coordinates, the multiplication by 1/h: equal to :func:`_frac` up to rounding).
+
     The material is the region where the bilinear pixel fraction is >= ``level`` (1/2: its boundary
     passes half-way between a material and an empty pixel centre, on the wall for pixel-aligned
     walls; a lower level also counts slivers thinner than a pixel: the conservative guard);
     the arc is sampled at n + 1 angles (rotated by a fixed step) and the crossings between samples
     are interpolated linearly, so a thin rest along a wall counts with its full arc (an averaged
     fraction would under-count an arc running nearly tangent to it)."""
+    ny, nx = M.shape
     tot = 0.0
     tot2 = 0.0
     da = math.pi / n
@@ -187,26 +191,43 @@ def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
     a = psi - 0.5 * math.pi
     c = math.cos(a)
     s = math.sin(a)
-    f = _frac(M, x0, y0, h, cx + r * c, cy + r * s)
-    fa = f - level
-    ga = f - level2
-    for k in range(1, n + 1):
-        c, s = c * cd - s * sd, s * cd + c * sd
-        f = _frac(M, x0, y0, h, cx + r * c, cy + r * s)
+    # pixel coordinates: the bilinear stencil of a point (u, v) is (floor u, floor v) + {0, 1}^2
+    ih = 1.0 / h
+    u0 = (cx - x0) * ih - 0.5
+    v0 = (cy - y0) * ih - 0.5
+    R = r * ih
+    fast = u0 - R >= 0.0 and u0 + R < nx - 1 and v0 - R >= 0.0 and v0 + R < ny - 1   # whole arc in the grid
+    fa = 0.0
+    ga = 0.0
+    for k in range(n + 1):
+        if k > 0:
+            c, s = c * cd - s * sd, s * cd + c * sd
+        if fast:
+            u = u0 + R * c
+            v = v0 + R * s
+            i = int(u)
+            j = int(v)
+            tx = u - i
+            ty = v - j
+            f = ((M[j, i] * (1.0 - tx) + M[j, i + 1] * tx) * (1.0 - ty)
+                 + (M[j + 1, i] * (1.0 - tx) + M[j + 1, i + 1] * tx) * ty)
+        else:
+            f = _frac(M, x0, y0, h, cx + r * c, cy + r * s)
         fb = f - level
         gb = f - level2
-        if fa >= 0.0 and fb >= 0.0:
-            tot += da
-        elif fa >= 0.0:
-            tot += da * fa / (fa - fb)
-        elif fb >= 0.0:
-            tot += da * fb / (fb - fa)
-        if ga >= 0.0 and gb >= 0.0:
-            tot2 += da
-        elif ga >= 0.0:
-            tot2 += da * ga / (ga - gb)
-        elif gb >= 0.0:
-            tot2 += da * gb / (gb - ga)
+        if k > 0:
+            if fa >= 0.0 and fb >= 0.0:
+                tot += da
+            elif fa >= 0.0:
+                tot += da * fa / (fa - fb)
+            elif fb >= 0.0:
+                tot += da * fb / (fb - fa)
+            if ga >= 0.0 and gb >= 0.0:
+                tot2 += da
+            elif ga >= 0.0:
+                tot2 += da * ga / (ga - gb)
+            elif gb >= 0.0:
+                tot2 += da * gb / (gb - ga)
         fa = fb
         ga = gb
     return tot, tot2
