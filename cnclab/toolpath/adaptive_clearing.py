@@ -53,8 +53,10 @@ Design (the ideas and where they come from; the code is cnclab's own)
   counter-clockwise, islands clockwise: climb milling), started where the ring is already free of
   material, takes the thin rests the passes left against the walls (thinner than ``a_e`` where the
   passes reached the walls); it runs under the same engagement control with the target raised by
-  ``finish_margin_deg`` (8 deg: inside the theta + 10 deg bound) so that the corner wedges are
-  peeled instead of refused. Points planned within 2 h of the wall are snapped onto it (1 um inside
+  ``finish_margin_deg`` (6 deg: the simulator measures up to ~3 deg more than the planning stock on
+  the thin wall rests, and theta + 10 deg is the bound) so that the corner wedges are peeled instead
+  of refused; the lap starts at the free ring point nearest the tool. Points planned within 2 h of
+  the wall are snapped onto the nearest wall point (1 um inside
   the 64-segment tool-centre limit); the lap is replayed on the stock and a snapped point whose
   engagement would exceed the finish target or the guard keeps its planned place. Each part of the
   tool-centre region is finished before the tool leaves it (no extra lift). Up to ``clean_rounds``
@@ -1003,7 +1005,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                       rapid_links: bool = True, guard_deg: float = 5.0, clean_rounds: int = 2,
                       clearance_z: float = 5.0, top_z: float = 0.0, spindle_rpm: float | None = None,
                       tool: Tool | None = None, resolution_mm: float | None = None, step_mm: float | None = None,
-                      helix_angle_deg: float = 5.0, finish: bool = True, finish_margin_deg: float = 8.0, finish_laps: int = 3, source: str = "<pocket>",
+                      helix_angle_deg: float = 5.0, finish: bool = True, finish_margin_deg: float = 6.0, finish_laps: int = 3, source: str = "<pocket>",
                       max_passes: int = 5000) -> ToolPath:
     """Engagement-controlled clearing of ``pocket`` (see the module docstring); a :class:`ToolPath`.
 
