@@ -183,7 +183,16 @@ def job_spec(job) -> dict:
     a_e = job.tool_radius * (1 - math.cos(math.radians(job.theta_deg)))
     return {"rings": rings, "tool_diameter": D, "stepover_pct": 100.0 * a_e / D, "a_p": job.a_p,
             "depth": job.depth, "feed_mm_min": job.feed_mm_min, "spindle_rpm": job.spindle_rpm,
-            "theta_deg": job.theta_deg, "source": job.source}
+            "theta_deg": job.theta_deg, "source": _repo_relative(job.source)}
+
+
+def _repo_relative(source: str) -> str:
+    """A job file's path relative to the repository (as the provenance names it), else as given."""
+    try:
+        return os.path.relpath(os.path.abspath(source), os.path.dirname(os.path.dirname(os.path.abspath(__file__))))\
+            if os.path.exists(source) else str(source)
+    except ValueError:
+        return str(source)
 
 
 def run_freecad(job, out_ngc, timeout_s: float = 600.0) -> dict:

@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import shapely
+from shapely.geometry import box
 
 from ...cutting.feed_control import controlled_feed
 from ...nc.gcode import read_toolpath
@@ -49,11 +50,11 @@ from ...runtime import pick
 from ...toolpath import planners
 from ...toolpath.evaluate import Evaluation, evaluate
 from ...toolpath.job import Job, load_job
-from ...toolpath.path import KINDS, ToolPath
+from ...toolpath.path import KINDS, Tool, ToolPath
 
 __all__ = ["POCKETS", "FIXTURES", "COLUMNS", "PLANNER_ROWS", "FREECAD", "job", "resolution_mm",
            "freecad_path", "freecad_plan_time_s", "plan_timed", "feed_controlled", "wall_gouge_mm", "lifts", "row",
-           "comparison", "ratios"]
+           "comparison", "ratios", "warm_planners", "summary"]
 
 #: the pockets of the comparison: name -> job file (relative to the repository)
 POCKETS = {
@@ -115,6 +116,37 @@ def plan_timed(jb: Job, strategy: str, res_mm: float) -> tuple:
     t0 = time.perf_counter()
     tp = planners.plan(jb, strategy, res_mm)
     return tp, time.perf_counter() - t0
+
+
+def warm_planners(strategies) -> None:
+    """Plan a small pocket once with each strategy (untimed): the compiled kernels are loaded from the
+    numba cache, or compiled, before :func:`plan_timed` measures anything."""
+    # an island and a pre-drilled hole: every entry, link and finishing path is taken once
+    jb = Job(box(0, 0, 30, 20).difference(box(14, 8, 18, 12)), Tool(6.0), 60.0, 1.0, feed_mm_min=255.0,
+             spindle_rpm=6366.0, start_hole=(5.0, 10.0, 4.0))
+    for strategy in strategies:
+        try:
+            planners.plan(jb, strategy, 0.1)
+        except ValueError:
+            pass
+
+
+def summary(tables: dict) -> pd.DataFrame:
+    """One row per pocket: the first planner row against FreeCAD's (plan and program time and their
+    ratios, max engagement, share above theta + 5 deg, uncut area, lifts, plunges and rapids into
+    material)."""
+    out = {}
+    for name, T in tables.items():
+        a, f = T.iloc[0], T.loc[FREECAD]
+        out[name] = {"plan_s": a["plan_time_s"], "plan_s FC": f["plan_time_s"],
+                     "plan ratio": a["plan_time_s"] / f["plan_time_s"],
+                     "program_min": a["program_time_min"], "program_min FC": f["program_time_min"],
+                     "program ratio": a["program_time_min"] / f["program_time_min"],
+                     "max_deg": a["max_deg"], "max_deg FC": f["max_deg"], "share>θ+5": a["share>θ+5_pct"],
+                     "uncut_mm2": a["uncut_beyond_mm2"], "uncut_mm2 FC": f["uncut_beyond_mm2"],
+                     "lifts": a["lifts"], "lifts FC": f["lifts"],
+                     "plunges+rapids into material": a["plunges_into_material"] + a["rapids_into_material"]}
+    return pd.DataFrame(out).T
 
 
 def feed_controlled(path: ToolPath, jb: Job, ev: Evaluation, block_mm: float = 0.5) -> ToolPath:
