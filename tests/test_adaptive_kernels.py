@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from scipy import ndimage
 from shapely.geometry import Point, Polygon, box
 
-from cnclab.toolpath.adaptive_clearing import (_Grid, _capsule_free, _cut, _cut_path, _dist_window, _eng2, _frac, _raster,
+from cnclab.toolpath.adaptive_clearing import (_Grid, _capsule_free, _cut, _cut_path, _dist_window, _eng2, _frac, _max_filter, _raster,
                                                _shortcut, _chord_free)
 
 _SET = dict(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
@@ -185,3 +185,10 @@ def test_engagement_fast_stencil_equals_checked_lookup(seed, cx, cy, psi):
     got = _eng2(M, 0.0, 0.0, 0.05, cx, cy, 1.5, psi, 90, 0.5, 0.1)
     ref = _eng2_reference(M, 0.0, 0.0, 0.05, cx, cy, 1.5, psi, 90, 0.5, 0.1)
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9)
+
+
+@settings(**_SET)
+@given(st.integers(1, 30), st.integers(1, 30), st.integers(0, 6), st.integers(0, 2 ** 31 - 1))
+def test_max_filter_equals_scipy(ny, nx, c, seed):
+    a = np.random.default_rng(seed).random((ny, nx))
+    np.testing.assert_array_equal(_max_filter(a, c), ndimage.maximum_filter(a, size=2 * c + 1))

@@ -75,7 +75,6 @@ from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..fileio import atomic_write
 from ..toolpath.path import Move, Tool, ToolPath, arc_geometry, sample_arc
@@ -683,6 +682,8 @@ def gcode_roundtrip_error(path, job=None, feeds=None, decimals=4):
     text = write_gcode(moves, header="cnclab " + name.replace("(", "").replace(")", ""), decimals=decimals)
     back = parse_gcode(text, source=name)
     P = np.array([m.xyz for m in back])
+    from scipy.spatial import cKDTree      # imported here: the writers and readers do not need scipy
+
     d, _ = cKDTree(path.xyz).query(P)
     dl = abs(path_lengths(back)["feed"] - path_lengths(moves)["feed"])
     return float(d.max()), float(dl), text

@@ -84,7 +84,6 @@ import time
 import numpy as np
 import shapely
 from numba import njit
-from scipy import ndimage
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
@@ -101,10 +100,11 @@ class PlanningError(ValueError):
 # compiled kernels (pixel stock: M[j, i] = 1 material, pixel centre x0 + (i + 0.5) h, y0 + (j + 0.5) h)
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _cut(M, x0, y0, h, cx, cy, r, pcx=np.nan, pcy=np.nan):
+def _cut(M, x0, y0, h, cx, cy, r, pcx, pcy):
     """Clear the pixels whose centre lies within ``r`` of (cx, cy); the area removed (mm^2).
 
-    (pcx, pcy): the centre of the disc cut just before on the same path (NaN: none). Its pixels are
+    (pcx, pcy): the centre of the disc cut just before on the same path (NaN: none; always given: an
+    omitted NaN default never matches numba's cache index, NaN != NaN). Its pixels are
     already clear, so each row only scans the part of its span outside that disc's span (the same
     span arithmetic: exactly the pixels a full scan would clear)."""
     ny, nx = M.shape
@@ -705,6 +705,18 @@ def _dist_window(mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, D):
             D[j, i] = d if d < cap else cap
 
 
+def _max_filter(a, c):
+    """The largest value of ``a`` (2-D) within c cells along each axis (a (2c+1)^2 window clipped at the
+    edges; scipy.ndimage.maximum_filter's result, without importing scipy)."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    w = 2 * c + 1
+    a = np.pad(a, ((c, c), (0, 0)), mode="edge")
+    a = sliding_window_view(a, w, axis=0).max(axis=-1)
+    a = np.pad(a, ((0, 0), (c, c)), mode="edge")
+    return sliding_window_view(a, w, axis=1).max(axis=-1)
+
+
 class _Grid:
     """The planning stock ``M`` (pixels of ``h`` mm), the tool-centre mask ``A`` and, on a coarse grid
     (cells of ``hc = k h``), the distance from each cell centre to the nearest material, kept up to date
@@ -732,16 +744,19 @@ class _Grid:
         self.r_capsule = r + h / math.sqrt(2.0) * (1 + 1e-9)
         self.Mr = self.M.copy()
         if hole is not None:
-            _cut(self.M, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2])
-            _cut(self.Mr, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2] - h / math.sqrt(2.0))
+            _cut(self.M, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2], np.nan, np.nan)
+            _cut(self.Mr, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2] - h / math.sqrt(2.0), np.nan, np.nan)
         # coarse grid for the free-space search
         self.k = max(1, int(round(0.2 / h))) if r >= 2 else 1
         self.hc = self.k * h
         self.Ac = self.coarse(self.A).min(axis=(1, 3)) > 0
-        self.dA = ndimage.distance_transform_edt(self.Ac) * self.hc   # cell to the region's boundary (mm)
+        # each cell's distance to the region's boundary (mm: to the nearest cell outside it)
+        nJ, nI = self.Ac.shape
+        self.dA = np.empty(self.Ac.shape)
+        _dist_window(~self.Ac, 0, nJ, 0, nI, 0, nJ, 0, nI, self.hc, np.inf, self.dA)
         # half-width of the tool-centre region around each cell: the largest dA within r
         c = int(math.ceil(r / self.hc))
-        self.half_width = ndimage.maximum_filter(self.dA, size=2 * c + 1)
+        self.half_width = _max_filter(self.dA, c)
         self.cap = r + 4.0 * self.hc + r / 30.0   # > the air test of _pass at the default step r/30
         self.mat = np.zeros(self.Ac.shape, bool)
         self.D = np.empty(self.Ac.shape)
@@ -1113,7 +1128,6 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 return False
             # the farthest point from the tool-centre region's boundary among those cells
             dA = g.dA
-            lbl, _ = ndimage.label(need)
             j, i = np.unravel_index(np.argmax(np.where(need, dA, -1)), need.shape)
             c = np.array(g.centre(j, i))
             comp = [p for p in shapely.get_parts(allowed) if p.buffer(1e-6).contains(Point(*c))]

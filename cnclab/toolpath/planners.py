@@ -31,7 +31,7 @@ import dataclasses
 
 import numpy as np
 
-from . import adaptive_clearing, ce_clearing, constant_mrr, pocket
+from . import adaptive_clearing   # the default; the other planners' modules are imported when used
 from .job import Job
 from .path import ToolPath
 
@@ -52,31 +52,43 @@ def register(name: str, description: str):
 
 @register("constant-engagement", "Jacsó Thesis III constant-engagement laps from helical entries (ce_clearing)")
 def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
+    from . import ce_clearing
+
     return ce_clearing.clearing_path(job, resolution_mm=resolution_mm, **options)
 
 
 @register("hybrid", "Jacsó §4 hybrid: centre laps around the start hole, CE trochoid arms")
 def _hybrid(job: Job, resolution_mm: float, **options) -> ToolPath:
+    from . import pocket
+
     return pocket.hybrid_path(job, resolution_mm, **options)
 
 
 @register("contour-parallel", "contour-parallel offsets at a_e, inside-out")
 def _contour_parallel(job: Job, resolution_mm: float, **options) -> ToolPath:
+    from . import pocket
+
     return pocket.contour_parallel_path(job, resolution_mm=resolution_mm, **options)
 
 
 @register("zig-zag", "zig-zag raster at a_e and a finishing lap")
 def _zigzag(job: Job, resolution_mm: float, **options) -> ToolPath:
+    from . import pocket
+
     return pocket.zigzag_path(job, resolution_mm=resolution_mm, **options)
 
 
 @register("kim-yang-original", "Kim & Yang 2006 contour-parallel path (offsets at a_e, spiral entries)")
 def _kim_yang_original(job: Job, resolution_mm: float, **options) -> ToolPath:
+    from . import constant_mrr
+
     return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, **options), job, entry="helix")
 
 
 @register("kim-yang-modified", "Kim & Yang 2006 constant-MRR modified contour-parallel path")
 def _kim_yang_modified(job: Job, resolution_mm: float, **options) -> ToolPath:
+    from . import constant_mrr
+
     return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, modified=True, **options), job, entry="helix")
 
 
