@@ -45,6 +45,8 @@ LOCAL_IMPORT_ALLOWED = {
     ("cnclab.simulation.dixel", "cnclab.simulation"): "numba laziness (_kernels)",
     ("cnclab.simulation.pixel", "cnclab.simulation"): "numba laziness (_kernels)",
     ("cnclab.nc.gcode", "cnclab.nc.numfmt"): "numba laziness (compiled number formatter)",
+    # plan-CLI start-up: the registry imports a non-default planner's module only when it is chosen
+    ("cnclab.toolpath.planners", "cnclab.toolpath"): "planner registry: import the chosen strategy's module only",
     # matplotlib laziness: runtime is imported by every module; the plot style loads only in notebooks
     ("cnclab.runtime", "cnclab.plotting"): "matplotlib laziness (notebook_setup only)",
 }
