@@ -12,13 +12,18 @@ Design (the ideas and where they come from; the code is cnclab's own)
   (``h = r/60``, the tool-radius resolution of the evaluator) that the planner cuts as it goes.
 * **Step control by the engagement angle** (Thesis III's constant engagement, Adaptive2d's per-step
   direction search): from the current point the next point is ``ds`` (default r/30) away; its
-  heading is found by bisection between a hard left turn (away from the material, material on the
-  right: climb milling with an M3 spindle) and a hard right turn so that the engagement measured
+  heading is searched between a hard left turn (away from the material, material on the right:
+  climb milling with an M3 spindle) and a hard right turn (or, where that would leave the
+  tool-centre region, the rightmost heading that stays in it: the pass slides along the wall) so
+  that the engagement measured
   on the stock -- the material fraction of the front half of the tool circle, the quantity the
   evaluator scores, on the 1/2 contour of the bilinear pixel stock with the crossings between the
   arc samples interpolated -- equals ``theta``. Libarea's ``Adaptive2d`` does the same with the *area cut
   per unit length* (its ``stepOverFactor``); at a constant step the two are equivalent to first
-  order, and the angle is what is promised, so the angle is controlled directly. Disks are cut
+  order, and the angle is what is promised, so the angle is controlled directly. The search starts
+  from the last step's turn rate, takes a Newton step with the last step's slope d(engagement)/
+  d(heading) and closes the bracket by false position (Illinois), stopping within ROOT_TOL (1 deg)
+  below the target: 2-3 arc evaluations a step. Air steps turn hard right at once. Disks are cut
   into the planning stock with the evaluator's lag (the last ``2 sqrt(2 r h) + 2 h`` mm not yet
   cut) so the planner measures what the evaluator will measure.
 * **Sliver guard**: where the tool circle runs nearly tangent to a cut boundary -- re-entering a
@@ -32,14 +37,17 @@ Design (the ideas and where they come from; the code is cnclab's own)
   ``benchmarks/bench_vs_freecad.py``).
 * **A pass ends** when the next point would leave the tool-centre region (pocket shrunk by r), when
   even the hardest left turn cannot bring the engagement down to the target, or when the tool has
-  run ``2 r`` through air. Kim & Yang's insertion idea -- insert a path only where the regular
+  run ``1.5 r`` through air (that air tail is dropped). Kim & Yang's insertion idea -- insert a path only where the regular
   pass would leave material -- becomes the start rule: every pass starts at the cleared-region
   point *nearest through cleared area* to where the tool is whose disk just touches material
   (distance to the nearest material = r), heading along the material boundary; the controller
   then turns into the material and settles at ``theta`` (no perpendicular approach: no slotting).
+  Where the tool-centre region is narrower than the turning circle and a pass runs straight into
+  air, it is started once the other way round (the face at the end of a band lies behind it).
 * **Links** (Adaptive2d's ``keepToolDown`` linking through cleared area): the start of the next
   pass is found by a Dijkstra search over the cells whose tool disk is free of material (distance
-  transform of the stock, coarse grid) inside the tool-centre region, starting where the tool is;
+  field of the stock on a coarse grid, capped just above r and recomputed only in the window the
+  last change of the stock can reach) inside the tool-centre region, starting where the tool is;
   the cell route is shortened to straight chords that stay in that free set and written as rapids
   at depth tagged ``cleared`` (FreeCAD writes its keep-tool-down links as G0 too; the evaluator
   counts any rapid that removes material) or, with ``rapid_links=False``, as feed moves (``link``,
@@ -57,8 +65,9 @@ Design (the ideas and where they come from; the code is cnclab's own)
   the thin wall rests, and theta + 10 deg is the bound) so that the corner wedges are peeled instead
   of refused; the lap starts at the free ring point nearest the tool. Points planned within 2 h of
   the wall are snapped onto the nearest wall point (1 um inside
-  the 64-segment tool-centre limit); the lap is replayed on the stock and a snapped point whose
-  engagement would exceed the finish target or the guard keeps its planned place. Each part of the
+  the 64-segment tool-centre limit); the lap is replayed on the stock (chords the snap made longer
+  than 1.5 ds sampled along their length) and a snapped point whose engagement would exceed theta +
+  2 deg, or the finish guard theta + 7 deg, keeps its planned place. Each part of the
   tool-centre region is finished before the tool leaves it (no extra lift). Up to ``clean_rounds``
   further rounds of passes and finishing take material the bans left (only while some lies deeper
   than 2 coarse cells inside the tool's reach).
@@ -277,6 +286,9 @@ def _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g
     return a, e_a, g_a, (tb - ta) / (b - a) if b != a else 0.0
 
 
+#: a slide along the wall (see _pass) may exceed the target engagement by this much (rad)
+SLIDE_MARGIN = math.radians(1.0)
+
 #: first bracketing step (rad) of :func:`_heading`; doubled until the root is bracketed
 BRACKET_STEP = math.radians(2.0)
 
@@ -467,6 +479,35 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
                 break
         qx = px + ds * math.cos(psi)
         qy = py + ds * math.sin(psi)
+        if not _inside(Amask, x0, y0, h, qx, qy):
+            # the headings that stay inside need not be contiguous (a corner of the region between the
+            # wall-limited right end and the hard left): slide to the inside boundary between the hard
+            # left and psi, where the engagement may exceed the target by at most 1 deg, else stop
+            if not _inside(Amask, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo)):
+                reason = 0
+                break
+            a, b = lo, psi
+            for _ in range(14):
+                m = 0.5 * (a + b)
+                if _inside(Amask, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m)):
+                    a = m
+                else:
+                    b = m
+            psi = a
+            qx = px + ds * math.cos(psi)
+            qy = py + ds * math.sin(psi)
+            e, eg = _eng2(M, x0, y0, h, qx, qy, r, psi, n_samp, 0.5, guard_level)
+            if e > target + SLIDE_MARGIN:
+                reason = 1
+                break
+            if eg > guard:
+                st, psi, e, eg, slope_g = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi,
+                                                   guard, 1, slope_g)
+                qx = px + ds * math.cos(psi)
+                qy = py + ds * math.sin(psi)
+                if st == 1 or not _inside(Amask, x0, y0, h, qx, qy):
+                    reason = 1
+                    break
         was_air = eg == 0.0
         if e < 0.3 * target:
             if air == 0.0:
@@ -717,6 +758,17 @@ def _max_filter(a, c):
     return sliding_window_view(a, w, axis=1).max(axis=-1)
 
 
+def _densify(Q, step):
+    """The polyline Q (n, 2) with points inserted so that no chord is longer than ``step`` mm, and for
+    each of its points the index k of the chord Q[k-1] -> Q[k] it ends on (0 for Q[0])."""
+    L = np.hypot(*np.diff(Q, axis=0).T)
+    m = np.maximum(1, np.ceil(L / step).astype(int))
+    seg = np.r_[0, np.repeat(np.arange(1, len(Q)), m)]
+    t = np.concatenate([np.arange(1, k + 1) / k for k in m]) if len(m) else np.zeros(0)
+    a = Q[seg[1:] - 1]
+    return np.ascontiguousarray(np.vstack([Q[:1], a + t[:, None] * (Q[seg[1:]] - a)])), seg
+
+
 class _Grid:
     """The planning stock ``M`` (pixels of ``h`` mm), the tool-centre mask ``A`` and, on a coarse grid
     (cells of ``hc = k h``), the distance from each cell centre to the nearest material, kept up to date
@@ -857,15 +909,36 @@ class _Grid:
             banned = np.zeros((1, 1), bool)
         route = _dijkstra_nb(D, Ac, banned, float(r_free), float(band_hi), int(cell[0]), int(cell[1]), float(cur[0]),
                              float(cur[1]), float(self.x0), float(self.y0), float(self.hc), 2.0 * self.r, self._dist,
-                             self._prev, self._hk, self._hv, self._touched)
+                             self._prev, self._hk, self._hv, self._touched, self.A, float(self.h))
+        if len(route) == 1 and route[0, 0] < 0:
+            return "off"        # no free cell within 2 r that a straight chord inside the region reaches
         return None if len(route) == 0 else route
 
 
 @njit(cache=True)
-def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, dist, prev, hk, hv, touched):
+def _segment_inside(A, x0, y0, h, ax, ay, bx, by):
+    """True when every point of the segment a-b sampled every h/2 lies in a pixel of the mask ``A``,
+    but for the first 2 h: the start may lie on the true wall (a finishing lap ends there), outside the
+    mask, which is the region shrunk by h/sqrt(2)."""
+    L = math.hypot(bx - ax, by - ay)
+    n = max(2, int(math.ceil(L / (0.5 * h))) + 1)
+    for k in range(n):
+        t = k / (n - 1)
+        if t * L < 2.0 * h:
+            continue
+        if not _inside(A, x0, y0, h, ax + t * (bx - ax), ay + t * (by - ay)):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, dist, prev, hk, hv, touched,
+                 A, h):
     """8-neighbour Dijkstra (binary heap, lazy deletion) over the free cells (Ac and D >= r_free, or
     (gj, gi)) from the cell of (cx, cy) (off the free set: from the nearest free cell centre within
-    ``reach`` mm) to the nearest goal cell (free, and D < band_hi and not banned, or (gj, gi));
+    ``reach`` mm that a straight chord from (cx, cy) inside the fine tool-centre mask ``A`` (pixels of
+    ``h``, origin x0, y0) reaches; none: [[-1, -1]]) to the nearest goal cell (free, and D < band_hi and
+    not banned, or (gj, gi));
     the route as (n, 2) cell indices (empty when none). ``dist``/``prev`` are all inf/-1 on entry
     and are left so (the cells touched are reset)."""
     ny, nx = D.shape
@@ -874,9 +947,8 @@ def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, rea
     i0 = min(max(int((cx - x0) // hc), 0), nx - 1)
     if not ((Ac[j0, i0] and D[j0, i0] >= r_free) or (j0 == gj and i0 == gi)):
         # step off the material: the nearest free cell (first in row order among equals) within reach
-        best = np.inf
-        bj = -1
-        bi = -1
+        # whose centre a straight chord inside the tool-centre mask reaches
+        m = 0
         for j in range(ny):
             ycc = y0 + (j + 0.5) * hc
             if abs(ycc - cy) > reach + hc:
@@ -885,12 +957,36 @@ def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, rea
                 if (Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi):
                     xcc = x0 + (i + 0.5) * hc
                     d2 = (xcc - cx) ** 2 + (ycc - cy) ** 2
-                    if d2 < best:
-                        best = d2
-                        bj = j
-                        bi = i
-        if bj < 0 or best > reach * reach:
-            return np.empty((0, 2), np.int64)
+                    if d2 <= reach * reach:
+                        m += 1
+        cand = np.empty(m)
+        cj = np.empty(m, np.int64)
+        ci = np.empty(m, np.int64)
+        m = 0
+        for j in range(ny):
+            ycc = y0 + (j + 0.5) * hc
+            if abs(ycc - cy) > reach + hc:
+                continue
+            for i in range(nx):
+                if (Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi):
+                    xcc = x0 + (i + 0.5) * hc
+                    d2 = (xcc - cx) ** 2 + (ycc - cy) ** 2
+                    if d2 <= reach * reach:
+                        cand[m] = d2
+                        cj[m] = j
+                        ci[m] = i
+                        m += 1
+        bj = -1
+        bi = -1
+        for q in np.argsort(cand, kind="mergesort"):
+            xcc = x0 + (ci[q] + 0.5) * hc
+            ycc = y0 + (cj[q] + 0.5) * hc
+            if _segment_inside(A, x0, y0, h, cx, cy, xcc, ycc):
+                bj = cj[q]
+                bi = ci[q]
+                break
+        if bj < 0:
+            return np.full((1, 2), -1, np.int64)     # no free cell reachable by a straight chord
         j0 = bj
         i0 = bi
     s0 = j0 * nx + i0
@@ -1068,10 +1164,13 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     air_rad = math.radians(0.5)   # a step whose front half meets less than 0.5 deg of material is air
     a_e = r * (1 - math.cos(target))
     target_finish = math.radians(theta_deg + finish_margin_deg)
-    cap_finish = target_finish                   # a snapped finish point may not raise the engagement above it
-    # the sliver guard (see _pass): theta + guard_deg for the clearing passes, theta + 9.5 deg for the finish
+    # a point of a finishing lap snapped onto the wall keeps the snap only while the engagement there stays
+    # within theta + 2 deg (the simulator measures up to ~13 deg more than the planning stock where a snap
+    # pushes the tool into a corner rest at the end of a lap)
+    cap_finish = math.radians(theta_deg + 2.0)
+    # the sliver guard (see _pass): theta + guard_deg for the clearing passes, theta + 7 deg for the finish
     guard_pass = math.radians(theta_deg + guard_deg)
-    guard_finish = math.radians(theta_deg + max(guard_deg, 9.5))
+    guard_finish = math.radians(theta_deg + max(guard_deg, 7.0))
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
     n_samp = 90
     turn = math.radians(90.0)
@@ -1178,17 +1277,39 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             cur = (c[0] + rho, c[1])
             return True
 
-        def link_to(r_free, band_hi=-np.inf, banned=None, cell=(-1, -1)):
+        def link_to(r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None):
             """Link at depth through free cells to the nearest goal cell (:meth:`_Grid.route`); its
-            cell or None."""
+            cell or None. ``end_xy``: the exact end point (in ``cell``, which need not lie inside the
+            tool-centre region: its centre is never a point of the link)."""
             nonlocal cur
             route = g.route(cur, r_free, band_hi, banned, cell)
+            if isinstance(route, str):
+                # no straight chord from here reaches a free cell inside the region (an island corner in
+                # the way): retrace the tool's own path at this depth (inside the region, its material
+                # removed) to the last point from which one does, as feed links
+                n_back = 0
+                while n_back < len(pts) - 1 and pts[-2 - n_back][2] == z and kinds[-1 - n_back] != "plunge" \
+                        and n_back < 200:
+                    n_back += 1
+                for k in range(5, n_back + 1, 5):
+                    p = pts[-1 - k]
+                    route = g.route((p[0], p[1]), r_free, band_hi, banned, cell)
+                    if not isinstance(route, str):
+                        back = [pts[-1 - q] for q in range(1, k + 1)]
+                        break
+                if isinstance(route, str) or route is None:
+                    return None
+                for p in back:
+                    add((p[0], p[1], z), "link", link_feed_mm_min)
+                cur = (float(back[-1][0]), float(back[-1][1]))
             if route is None:
                 return None
             D, Ac = g.free_field()
             R = np.asarray(route, float)
             cells = np.c_[g.x0 + (R[:, 1] + 0.5) * g.hc, g.y0 + (R[:, 0] + 0.5) * g.hc]
             pts_r = np.vstack([np.array([cur], float), cells[1:] if len(R) > 1 else cells[:1]])
+            if end_xy is not None:
+                pts_r[-1] = end_xy
 
             chords = pts_r[_shortcut(np.ascontiguousarray(pts_r, float), D, Ac, float(r_free), int(cell[0]), int(cell[1]),
                                      float(g.x0), float(g.y0), float(g.hc))]
@@ -1231,7 +1352,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         k0 = int(free_k[0])
                     Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
                     if cur is not None:
-                        e = link_to(r_free, cell=(int(jj[k0]), int(ii[k0])))
+                        e = link_to(r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
                     else:
                         e = None
                     if e is None:
@@ -1246,8 +1367,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                                 f"radius {ins.length:.2f} mm near ({ins.coords[0][0]:.2f}, {ins.coords[0][1]:.2f})) "
                                 "is too narrow to be cleared under engagement control: no cleared place to start "
                                 "its finishing pass (the pocket is too narrow for the tool)")
-                    else:
+                    elif math.hypot(Rl[0, 0] - cur[0], Rl[0, 1] - cur[1]) > 1e-9:
                         add((Rl[0, 0], Rl[0, 1], z), "link", link_feed_mm_min)
+                        cur = (float(Rl[0, 0]), float(Rl[0, 1]))
                     # the wall-following pass: the same engagement control, sliding along the wall;
                     # it ends 2 r past the last ring point that still has material within reach
                     sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
@@ -1274,9 +1396,15 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                         # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
                         # on the stock as it was before this lap, a snapped point whose engagement
                         # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
-                        for _ in range(4):       # a reverted point changes the stock the later ones meet
-                            Es, Eg = _replay(M_before.copy(), g.x0, g.y0, h, r, Q, lag, n_samp, GUARD_LEVEL)
-                            over = near & ((Es > cap_finish) | (Eg > guard_finish)) & np.any(Q != P, axis=1)
+                        # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
+                        # into a corner)
+                        for _ in range(6):       # a reverted point changes the stock the later ones meet
+                            Qd, seg = _densify(Q, 1.5 * ds)
+                            Es, Eg = _replay(M_before.copy(), g.x0, g.y0, h, r, Qd, lag, n_samp, GUARD_LEVEL)
+                            bad = np.zeros(len(Q), bool)
+                            bad[seg[(Es > cap_finish) | (Eg > guard_finish)]] = True
+                            bad[:-1] |= bad[1:]          # a chord over the bound: both its ends
+                            over = near & bad & np.any(Q != P, axis=1)
                             if not over.any():
                                 break
                             Q[over] = P[over]
