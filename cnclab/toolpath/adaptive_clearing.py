@@ -1205,6 +1205,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             raise PlanningError(f"{source}: the tool-centre region is thinner than the planning resolution "
                                 f"{h:g} mm: the pocket is too narrow for the tool")
         cur = None   # current xy at depth (None: at clearance)
+        entered = set()   # coarse cells of the entries at this level
 
         def retract():
             nonlocal cur
@@ -1234,7 +1235,11 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             if comp:
                 rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
             rho = max(min(0.5 * r, 0.9 * rho_max - h), 0.0)
-            if rho < 0.02 and banned is not None and not (hole is not None and lev == 0 and stats["entries"] == 0):
+            # a place entered before (its passes made no room) or too narrow for a helix is banned: no
+            # endless re-entry at one spot
+            again = (int(j), int(i)) in entered
+            entered.add((int(j), int(i)))
+            if (rho < 0.02 or again) and banned is not None and not (hole is not None and lev == 0 and stats["entries"] == 0):
                 rad = int(math.ceil(2 * r / g.hc))
                 banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
                 return None
