@@ -948,25 +948,15 @@ def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, rea
     if not ((Ac[j0, i0] and D[j0, i0] >= r_free) or (j0 == gj and i0 == gi)):
         # step off the material: the nearest free cell (first in row order among equals) within reach
         # whose centre a straight chord inside the tool-centre mask reaches
+        jlo = max(int(math.floor((cy - reach - y0) / hc)) - 1, 0)
+        jhi = min(int(math.ceil((cy + reach - y0) / hc)) + 1, ny - 1)
+        size = max(jhi - jlo + 1, 0) * nx
+        cand = np.empty(size)
+        cj = np.empty(size, np.int64)
+        ci = np.empty(size, np.int64)
         m = 0
-        for j in range(ny):
+        for j in range(jlo, jhi + 1):
             ycc = y0 + (j + 0.5) * hc
-            if abs(ycc - cy) > reach + hc:
-                continue
-            for i in range(nx):
-                if (Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi):
-                    xcc = x0 + (i + 0.5) * hc
-                    d2 = (xcc - cx) ** 2 + (ycc - cy) ** 2
-                    if d2 <= reach * reach:
-                        m += 1
-        cand = np.empty(m)
-        cj = np.empty(m, np.int64)
-        ci = np.empty(m, np.int64)
-        m = 0
-        for j in range(ny):
-            ycc = y0 + (j + 0.5) * hc
-            if abs(ycc - cy) > reach + hc:
-                continue
             for i in range(nx):
                 if (Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi):
                     xcc = x0 + (i + 0.5) * hc
@@ -976,6 +966,7 @@ def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, rea
                         cj[m] = j
                         ci[m] = i
                         m += 1
+        cand = cand[:m]
         bj = -1
         bi = -1
         for q in np.argsort(cand, kind="mergesort"):
