@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from scipy import ndimage
 from shapely.geometry import Point, Polygon, box
 
-from cnclab.toolpath.adaptive_clearing import (_Grid, _capsule_free, _cut, _cut_path, _dist_window, _eng2, _frac, _max_filter, _raster,
+from cnclab.toolpath.adaptive_clearing import (_Grid, _capsule_free, _cut, _cut_both, _cut_path, _dist_window, _eng2, _frac, _max_filter, _raster,
                                                _shortcut, _chord_free)
 
 _SET = dict(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
@@ -192,3 +192,22 @@ def test_engagement_fast_stencil_equals_checked_lookup(seed, cx, cy, psi):
 def test_max_filter_equals_scipy(ny, nx, c, seed):
     a = np.random.default_rng(seed).random((ny, nx))
     np.testing.assert_array_equal(_max_filter(a, c), ndimage.maximum_filter(a, size=2 * c + 1))
+
+
+@settings(**_SET)
+@given(st.integers(0, 2 ** 31 - 1), st.sampled_from([1.5, 3.0, 5.0]), st.sampled_from([0.05, 0.3, 2.0]))
+def test_cut_both_equals_two_full_cuts(seed, r, step):
+    """Cutting a path into the planning and the rapid stock together, each row skipping the previous
+    disc's spans, clears exactly what full scans of each disc clear, and reports the same area."""
+    rng = np.random.default_rng(seed)
+    h, rr = 0.05, r - 0.05 / math.sqrt(2.0)
+    M1 = (rng.random((300, 300)) < 0.9).astype(np.uint8)
+    R1 = M1.copy()
+    M2, R2 = M1.copy(), M1.copy()
+    P = np.cumsum(rng.normal(0, step, (40, 2)), axis=0) + 7.5
+    a1 = sum(_cut(M1, 0.0, 0.0, h, x, y, r, np.nan, np.nan) for x, y in P)
+    for x, y in P:
+        _cut(R1, 0.0, 0.0, h, x, y, rr, np.nan, np.nan)
+    span, rows = np.empty((300, 4), np.int64), np.array([1, 0], np.int64)
+    a2 = sum(_cut_both(M2, R2, 0.0, 0.0, h, x, y, r, rr, span, rows) for x, y in P)
+    assert np.array_equal(M1, M2) and np.array_equal(R1, R2) and a1 == a2
