@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from scipy import ndimage
 from shapely.geometry import Point, Polygon, box
 
-from cnclab.toolpath.adaptive_clearing import (_Grid, _capsule_free, _cut, _cut_both, _cut_path, _dist_window, _eng2, _frac, _max_filter, _raster,
+from cnclab.toolpath.adaptive_clearing import (_Grid, _capsule_free, _cut, _cut_both, _cut_path, _label8, _dist_window, _eng2, _frac, _max_filter, _raster,
                                                _shortcut, _chord_free)
 
 _SET = dict(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
@@ -211,3 +211,12 @@ def test_cut_both_equals_two_full_cuts(seed, r, step):
     span, rows = np.empty((300, 4), np.int64), np.array([1, 0], np.int64)
     a2 = sum(_cut_both(M2, R2, 0.0, 0.0, h, x, y, r, rr, span, rows) for x, y in P)
     assert np.array_equal(M1, M2) and np.array_equal(R1, R2) and a1 == a2
+
+
+@settings(**_SET)
+@given(st.integers(1, 40), st.integers(1, 40), st.sampled_from([0.2, 0.4, 0.6]), st.integers(0, 2 ** 31 - 1))
+def test_label8_equals_scipy(ny, nx, p, seed):
+    M = (np.random.default_rng(seed).random((ny, nx)) < p).astype(np.uint8)
+    got, n = _label8(M)
+    ref, m = ndimage.label(M, structure=np.ones((3, 3)))
+    assert n == m and np.array_equal(got, ref)     # both number components in row order of their first pixel

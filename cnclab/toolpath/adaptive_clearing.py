@@ -797,6 +797,69 @@ def _dist_window(mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, D):
             D[j, i] = d if d < cap else cap
 
 
+@njit(cache=True)
+def _label8(M):
+    """Connected components of the nonzero pixels of M (8-neighbourhood): (labels (ny, nx) int32, 0 for
+    empty pixels and 1..n for the components in row order of their first pixel, n)."""
+    ny, nx = M.shape
+    lab = np.zeros((ny, nx), np.int32)
+    stack = np.empty(ny * nx, np.int64)
+    n = 0
+    for j0 in range(ny):
+        for i0 in range(nx):
+            if M[j0, i0] == 0 or lab[j0, i0] != 0:
+                continue
+            n += 1
+            lab[j0, i0] = n
+            top = 0
+            stack[0] = j0 * nx + i0
+            top = 1
+            while top > 0:
+                top -= 1
+                v = stack[top]
+                j = v // nx
+                i = v % nx
+                for dj in range(-1, 2):
+                    for di in range(-1, 2):
+                        jj = j + dj
+                        ii = i + di
+                        if 0 <= jj < ny and 0 <= ii < nx and M[jj, ii] != 0 and lab[jj, ii] == 0:
+                            lab[jj, ii] = n
+                            stack[top] = jj * nx + ii
+                            top += 1
+    return lab, n
+
+
+@njit(cache=True)
+def _component_discs(lab, n, x0, y0, h):
+    """For components 1..n of a label image (pixels of h mm, origin x0, y0): the centroid of their pixel
+    centres and the largest distance of a pixel centre from it (mm); arrays (n + 1,), index 0 unused
+    (radius inf)."""
+    ny, nx = lab.shape
+    sx = np.zeros(n + 1)
+    sy = np.zeros(n + 1)
+    cnt = np.zeros(n + 1)
+    for j in range(ny):
+        for i in range(nx):
+            k = lab[j, i]
+            if k:
+                sx[k] += x0 + (i + 0.5) * h
+                sy[k] += y0 + (j + 0.5) * h
+                cnt[k] += 1.0
+    cx = sx / np.maximum(cnt, 1.0)
+    cy = sy / np.maximum(cnt, 1.0)
+    rad = np.zeros(n + 1)
+    rad[0] = np.inf
+    for j in range(ny):
+        for i in range(nx):
+            k = lab[j, i]
+            if k:
+                d = math.hypot(x0 + (i + 0.5) * h - cx[k], y0 + (j + 0.5) * h - cy[k])
+                if d > rad[k]:
+                    rad[k] = d
+    return cx, cy, rad
+
+
 def _max_filter(a, c):
     """The largest value of ``a`` (2-D) within c cells along each axis (a (2c+1)^2 window clipped at the
     edges; scipy.ndimage.maximum_filter's result, without importing scipy)."""
@@ -1236,7 +1299,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
         arcs.extend([0] * m)
         ctrs.extend([(np.nan, np.nan)] * m)
 
-    stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0}
+    stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0}
     hole = None if start_hole is None else tuple(float(v) for v in start_hole)
     if hole is not None and not pocket.buffer(1e-9).contains(Point(hole[0], hole[1]).buffer(0.5 * hole[2] - 1e-6)):
         raise PlanningError(f"{source}: the start hole is not inside the pocket")
@@ -1465,6 +1528,50 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
 
         todo_parts = [orient(q, 1.0) for q in shapely.get_parts(allowed.buffer(-1.5 * h))] if finish else []
 
+        def sweep_remnant():
+            """A free-standing remnant of material (a pillar the passes around it could not take: every
+            border cell around it banned) small enough that a straight cut through its centre meets it
+            over at most theta -- within radius r sin(theta/2) of its centre -- is cut by one straight
+            sweep between two free points, reached through cleared area; True if one was swept."""
+            nonlocal cur
+            if cur is None:
+                return False
+            lbl, nlab = _label8(g.M)
+            if nlab == 0:
+                return False
+            rho_max = r * math.sin(0.5 * target)
+            CX, CY, RAD = _component_discs(lbl, nlab, g.x0, g.y0, h)
+            for lab in np.flatnonzero(RAD + h / math.sqrt(2.0) <= rho_max):
+                c = np.array([CX[lab], CY[lab]])
+                rho_b = float(RAD[lab]) + h / math.sqrt(2.0)
+                others = None
+                D, Ac = g.free_field()
+                L = r + rho_b + g.hc
+                for ang in np.arange(8) * (math.pi / 4):
+                    u = np.array([math.cos(ang), math.sin(ang)])
+                    S, E = c - L * u, c + L * u
+                    jS, iS = g.cell(*S)
+                    jE, iE = g.cell(*E)
+                    if not all(0 <= a < D.shape[0] and 0 <= b < D.shape[1] for a, b in ((jS, iS), (jE, iE))):
+                        continue
+                    if not (Ac[jS, iS] and D[jS, iS] >= r_free and Ac[jE, iE] and D[jE, iE] >= r_free):
+                        continue
+                    if not _segment_inside(g.A, g.x0, g.y0, h, S[0], S[1], E[0], E[1]):
+                        continue
+                    if others is None:
+                        others = np.where(lbl == lab, 0, g.M).astype(np.uint8)
+                    if not _capsule_free(others, g.x0, g.y0, h, S[0], S[1], E[0], E[1], r + h):
+                        continue                       # the sweep would meet other material too
+                    if link_to(r_free, cell=(jS, iS), end_xy=(S[0], S[1])) is None:
+                        continue
+                    Q = _resample(np.vstack([S, E]), ds)
+                    add_line_moves(Q[1:], z, "cut", feed_mm_min, "remnant sweep")
+                    g.cut_path(np.ascontiguousarray(Q))
+                    cur = (float(E[0]), float(E[1]))
+                    stats["remnant_sweeps"] += 1
+                    return True
+            return False
+
         def finish_if_done(D, Ac, banned):
             """Before the tool leaves its part of the tool-centre region (a retract and a new entry),
             finish that part if its clearing is done (no material within reach of its free cells)."""
@@ -1500,6 +1607,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     D, Ac = g.free_field()
                     if not (Ac & (D < r) & ~banned).any():
                         break
+                    if sweep_remnant():
+                        continue
                     finish_if_done(D, Ac, banned)
                     if enter(banned) is False:
                         break
