@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from concurrent.futures import ThreadPoolExecutor
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -445,18 +445,31 @@ def read_inputs(stl_path, apt_path):
     (the STL in a second thread; its compiled kernels and numpy release the GIL). Returns
     (mesh, program, cl). Errors as when read one after the other: the STL's first, then the APT's.
     """
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        fut = pool.submit(read_stl, stl_path)
+    # a daemon thread, not a pool: a SIGTERM turned into SystemExit in the main thread (cli_spindle)
+    # must not wait at exit for the reader (a pool's worker is joined at interpreter exit; a CI run
+    # once saw the CLI hang there for over 60 s after SIGTERM)
+    out = {}
+
+    def _read():
         try:
-            prog = read_apt(apt_path)
-            cl = prog.cl_points()
-            err = None
-        except Exception as exc:                 # reported after the STL's own error, if any
-            err = exc
-        mesh = fut.result()
+            out["mesh"] = read_stl(stl_path)
+        except BaseException as exc:             # noqa: BLE001 -- re-raised in the caller's thread
+            out["exc"] = exc
+
+    reader = threading.Thread(target=_read, name="cnclab-read-stl", daemon=True)
+    reader.start()
+    try:
+        prog = read_apt(apt_path)
+        cl = prog.cl_points()
+        err = None
+    except Exception as exc:                     # reported after the STL's own error, if any
+        err = exc
+    reader.join()
+    if "exc" in out:
+        raise out["exc"]
     if err is not None:
         raise err
-    return mesh, prog, cl
+    return out["mesh"], prog, cl
 
 
 def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, teeth: int, a_p: float,
