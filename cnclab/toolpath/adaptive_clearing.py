@@ -1530,9 +1530,10 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
 
         def sweep_remnant():
             """A free-standing remnant of material (a pillar the passes around it could not take: every
-            border cell around it banned) small enough that a straight cut through its centre meets it
+            border cell around it banned) small enough that a straight cut towards its centre meets it
             over at most theta -- within radius r sin(theta/2) of its centre -- is cut by one straight
-            sweep between two free points, reached through cleared area; True if one was swept."""
+            feed move from a free point, reached through cleared area, to where the tool disc holds all
+            of it; True if one was cut."""
             nonlocal cur
             if cur is None:
                 return False
@@ -1546,15 +1547,12 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 rho_b = float(RAD[lab]) + h / math.sqrt(2.0)
                 others = None
                 D, Ac = g.free_field()
-                L = r + rho_b + g.hc
                 for ang in np.arange(8) * (math.pi / 4):
                     u = np.array([math.cos(ang), math.sin(ang)])
-                    S, E = c - L * u, c + L * u
+                    # from a free point before the remnant to where the tool disc holds all of it
+                    S, E = c - (r + rho_b + g.hc) * u, c - (r - rho_b - h) * u
                     jS, iS = g.cell(*S)
-                    jE, iE = g.cell(*E)
-                    if not all(0 <= a < D.shape[0] and 0 <= b < D.shape[1] for a, b in ((jS, iS), (jE, iE))):
-                        continue
-                    if not (Ac[jS, iS] and D[jS, iS] >= r_free and Ac[jE, iE] and D[jE, iE] >= r_free):
+                    if not (0 <= jS < D.shape[0] and 0 <= iS < D.shape[1] and Ac[jS, iS] and D[jS, iS] >= r_free):
                         continue
                     if not _segment_inside(g.A, g.x0, g.y0, h, S[0], S[1], E[0], E[1]):
                         continue
