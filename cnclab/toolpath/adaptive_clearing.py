@@ -53,6 +53,11 @@ Design (the ideas and where they come from; the code is cnclab's own)
   counts any rapid that removes material) or, with ``rapid_links=False``, as feed moves (``link``,
   link feed). Only when no free route exists (a disjoint region, material
   closing the way) does the tool retract, rapid at clearance and enter again.
+* **Remnants**: where no border cell can be reached through cleared area but a free-standing remnant
+  of material is left (a pillar the passes around it could not take), one straight feed move from a
+  free point to where the tool disc holds the whole remnant takes it, if the remnant lies within
+  r sin(theta/2) of its centre (the move then meets it over at most theta) and the move meets no
+  other material; otherwise the tool enters there by helix. A place entered before is banned.
 * **Entries**: a pre-drilled start hole is used as it is (plunge into the hole, air); otherwise a
   helix (G3 turns, 5 deg ramp like FreeCAD's default) at the point of the tool-centre region
   farthest from its boundary (the centre of the largest inscribed circle), radius
