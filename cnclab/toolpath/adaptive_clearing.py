@@ -242,6 +242,19 @@ GUARD_LEVEL = 0.1
 
 
 @njit(cache=True)
+def _arc_inside(fa, fb, da):
+    """The part of an arc step of ``da`` rad whose (linearly interpolated) level function f - level
+    is >= 0, from its values fa, fb at the two ends."""
+    if fa >= 0.0 and fb >= 0.0:
+        return da
+    if fa >= 0.0:
+        return da * fa / (fa - fb)
+    if fb >= 0.0:
+        return da * fb / (fb - fa)
+    return 0.0
+
+
+@njit(cache=True)
 def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
     """Engagement (rad) of the front half circle (heading psi) with the material, at two material
     levels from the same arc samples: ``(engagement at level, engagement at level2)``.
@@ -289,18 +302,8 @@ def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
         fb = f - level
         gb = f - level2
         if k > 0:
-            if fa >= 0.0 and fb >= 0.0:
-                tot += da
-            elif fa >= 0.0:
-                tot += da * fa / (fa - fb)
-            elif fb >= 0.0:
-                tot += da * fb / (fb - fa)
-            if ga >= 0.0 and gb >= 0.0:
-                tot2 += da
-            elif ga >= 0.0:
-                tot2 += da * ga / (ga - gb)
-            elif gb >= 0.0:
-                tot2 += da * gb / (gb - ga)
+            tot += _arc_inside(fa, fb, da)
+            tot2 += _arc_inside(ga, gb, da)
         fa = fb
         ga = gb
     return tot, tot2
@@ -439,6 +442,23 @@ def _inside(Amask, x0, y0, h, x, y):
 
 
 @njit(cache=True)
+def _wall_heading(Amask, x0, y0, h, px, py, ds, lo, b):
+    """The rightmost heading between ``lo`` (hard left; must stay in the mask) and ``b`` (leaves it)
+    whose step of ``ds`` from (px, py) stays in the tool-centre mask (14 bisections: the pass slides
+    along the wall); NaN when even ``lo`` leaves it."""
+    if not _inside(Amask, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo)):
+        return np.nan
+    a = lo
+    for _ in range(14):
+        m = 0.5 * (a + b)
+        if _inside(Amask, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m)):
+            a = m
+        else:
+            b = m
+    return a
+
+
+@njit(cache=True)
 def _mark_free(Mr, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule):
     """F[k] = the chord P[k-1] -> P[k] has no pixel of ``Mr`` within ``r_capsule``, for the air steps
     (E[k] < air_eng) k0 <= k < k1."""
@@ -502,17 +522,10 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         # the right end of the search: the hard right turn, or where it would leave the tool-centre
         # region, the rightmost heading that stays inside (the pass slides along the wall)
         if not _inside(Amask, x0, y0, h, px + ds * math.cos(hi), py + ds * math.sin(hi)):
-            if not _inside(Amask, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo)):
+            hi = _wall_heading(Amask, x0, y0, h, px, py, ds, lo, hi)
+            if hi != hi:
                 reason = 0
                 break
-            a, b = lo, hi
-            for _ in range(14):
-                m = 0.5 * (a + b)
-                if _inside(Amask, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m)):
-                    a = m
-                else:
-                    b = m
-            hi = a
         jc = int(math.floor((py - y0) / hc))
         ic = int(math.floor((px - x0) / hc))
         if 0 <= jc < D.shape[0] and 0 <= ic < D.shape[1] and D[jc, ic] > air_reach:
@@ -542,17 +555,10 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             # the headings that stay inside need not be contiguous (a corner of the region between the
             # wall-limited right end and the hard left): slide to the inside boundary between the hard
             # left and psi, where the engagement may exceed the target by at most 1 deg, else stop
-            if not _inside(Amask, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo)):
+            psi = _wall_heading(Amask, x0, y0, h, px, py, ds, lo, psi)
+            if psi != psi:
                 reason = 0
                 break
-            a, b = lo, psi
-            for _ in range(14):
-                m = 0.5 * (a + b)
-                if _inside(Amask, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m)):
-                    a = m
-                else:
-                    b = m
-            psi = a
             qx = px + ds * math.cos(psi)
             qy = py + ds * math.sin(psi)
             e, eg = _eng2(M, x0, y0, h, qx, qy, r, psi, n_samp, 0.5, guard_level)
