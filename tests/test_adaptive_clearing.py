@@ -193,13 +193,14 @@ def test_capsule_free_hand_case():
 
 def test_rapid_links_switch():
     # the default writes the links at depth (and air steps whose chord is clear of the stock the pass
-    # started on) as G0 tagged cleared, rapid_links=False as G1 at the link feed;
-    # the same geometry either way, and no rapid removes material (evaluator)
+    # started on) as G0 tagged cleared, rapid_links=False as G1 at the link feed. The geometry differs
+    # only where a G0 needs a detour to be proven (an air run along a wall moved 2 h off it, a feed leg
+    # off a wall at a link's ends): the same number of passes, and no rapid removes material (evaluator)
     poly = box(0, 0, 16, 11)
     a = adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05)
     b = adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05,
                           rapid_links=False)
-    np.testing.assert_array_equal(a.xyz, b.xyz)
+    assert a.info["passes"] == b.info["passes"] and a.info["entries"] == b.info["entries"]
     low_a = a.is_kind("rapid") & (a.xyz[:, 2] < 0)
     assert low_a.any() and set(a.tag[low_a]) <= {"cleared: link through cleared area", "cleared: air inside cleared area"}
     assert not (b.is_kind("rapid") & (b.xyz[:, 2] < 0)).any()

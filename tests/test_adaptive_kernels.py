@@ -14,7 +14,7 @@ from scipy import ndimage
 from shapely.geometry import Point, Polygon, box
 
 from cnclab.toolpath.adaptive_clearing import (_Grid, _capsule_free, _cut, _cut_both, _cut_path, _label8, _dist_window, _eng2, _frac, _max_filter, _raster,
-                                               _shortcut, _chord_free)
+                                               _shortcut, _chord_free, _bow_runs, _rapid_legs)
 
 _SET = dict(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
 
@@ -113,6 +113,45 @@ def test_rapid_stock_chords_are_truly_swept(seed):
     ys = np.unique(np.round(P[::60, 1]))
     y = float(np.median(P[:, 1]))
     assert _capsule_free(g.Mr, g.x0, g.y0, h, 6.0, y, 14.0, y, g.r_capsule) or len(ys) < 3
+
+
+@settings(**_SET)
+@given(st.floats(0.0, 0.02), st.floats(0.0, 0.3), st.sampled_from([0.03, 0.05]))
+def test_air_run_along_a_wall_moved_off_it_is_truly_swept(gap, wobble, h):
+    """An air run along the line of the wall-following pass that left the wall skin is never proven
+    there (the skin is tangent to its discs); :func:`_bow_runs` moves it 2 h to its left and marks its
+    inner steps G0 only when that is proven, and :func:`_rapid_legs` proves a link leaving the wall
+    after a feed leg. Every accepted G0 has its tool disc inside the exact swept area or outside the
+    pocket (shapely, 256 segments a circle; tolerance as in the test above)."""
+    r = 3.0
+    pocket = box(0, 0, 20, 20)
+    g = _Grid(pocket, pocket.buffer(-r), r, h, None)
+    y0 = r + h / math.sqrt(2.0) + 1e-3 + gap          # the wall-following pass, just inside the mask
+    xs = np.arange(3.5, 16.5, 0.1)
+    passes = [np.c_[xs, np.full(len(xs), y0)], np.c_[xs, np.full(len(xs), y0 + 1.5 + wobble)],
+              np.c_[xs, np.full(len(xs), y0 + 3.0)]]
+    for P in passes:
+        g.cut_path(np.ascontiguousarray(P))
+    swept = shapely.union_all(shapely.buffer(shapely.points(np.vstack(passes)), r, quad_segs=64))
+    tol = 2 * math.pi * r * r * (1 - math.cos(math.pi / 256)) * 4
+
+    def truly_swept(a, b):
+        cap = shapely.LineString([a, b]).buffer(r, quad_segs=64).intersection(pocket)
+        return cap.difference(swept).area <= tol
+
+    run = np.ascontiguousarray(np.c_[np.arange(6.0, 12.0, 0.1), np.full(60, y0)])
+    assert not _capsule_free(g.Mr, g.x0, g.y0, h, 6.0, y0, 11.9, y0, g.r_capsule)   # on the line: never
+    E, F = np.zeros(len(run)), np.zeros(len(run), np.bool_)
+    P = run.copy()
+    _bow_runs(g.Mr, g.A, g.x0, g.y0, h, P, E, F, 1, len(P), 1e-3, g.r_capsule, 2 * h, 4)
+    assert F[2:-1].all() and not F[1] and not F[-1]          # not vacuous: the inner steps are G0
+    np.testing.assert_array_equal(P[[0, -1]], run[[0, -1]])
+    np.testing.assert_allclose(P[1:-1, 1], y0 + 2 * h)       # moved left of the heading (+x): +y
+    for k in np.flatnonzero(F):
+        assert truly_swept(P[k - 1], P[k])
+    legs = _rapid_legs(g, (9.0, y0), (9.0, y0 + 2.5))         # a link leaving the wall
+    assert legs is not None and legs[0] is not None
+    assert truly_swept(legs[0], legs[1])
 
 
 def test_incremental_free_field_equals_full_recompute():

@@ -61,7 +61,10 @@ Design (the ideas and where they come from; the code is cnclab's own)
 * **Entries**: a pre-drilled start hole is used as it is (plunge into the hole, air); otherwise a
   helix (G3 turns, 5 deg ramp like FreeCAD's default) at the point of the tool-centre region
   farthest from its boundary (the centre of the largest inscribed circle), radius
-  ``min(r/2, 0.9 x inscribed radius)``; each entry's engagement is reported apart by the evaluator.
+  ``min(0.75 r, 0.9 x inscribed radius - h)`` (FreeCAD's is 0.75 r too), then a floor circle;
+  each entry's engagement is reported apart by the evaluator. A place that allows less than
+  ``0.1 r`` (a helix of a few hundredths of a mm is a plunge) is banned unless its part of the
+  tool-centre region is that narrow everywhere.
 * **Finish**: one contour pass along every ring of the tool-centre region (outer rings
   counter-clockwise, islands clockwise: climb milling), started where the ring is already free of
   material, takes the thin rests the passes left against the walls (thinner than ``a_e`` where the
@@ -72,14 +75,18 @@ Design (the ideas and where they come from; the code is cnclab's own)
   the wall are snapped onto the nearest wall point (1 um inside
   the 64-segment tool-centre limit); the lap is replayed on the stock (chords the snap made longer
   than 1.5 ds sampled along their length) and a snapped point whose engagement would exceed theta +
-  2 deg, or the finish guard theta + 7 deg, keeps its planned place. Each part of the
+  2 deg, at the 1/2 level or with slivers counted, keeps its planned place. Each part of the
   tool-centre region is finished before the tool leaves it (no extra lift). Up to ``clean_rounds``
   further rounds of passes and finishing take material the bans left (only while some lies deeper
   than 2 coarse cells inside the tool's reach).
 * **Lifts** are G0 straight up (as FreeCAD's); links at depth are G0 only where no material pixel
   lies within r + h/sqrt(2) of the chord (``rapid_links``) on the *rapid stock*: the same discs cut
   with radius r - h/sqrt(2), so that the tool disc of such a chord is truly swept (sub-pixel cusps
-  between passes, which the planning stock cannot show, never meet a rapid).
+  between passes, which the planning stock cannot show, never meet a rapid). A chord on the line of
+  the wall-following pass that left the wall skin is tangent to it and never proven: an air run
+  along it is moved 2 h to its left (away from the material on the pass's right) with feed legs
+  off and back on the line, and a link from or to a wall point gets a feed leg of 2 h or 4 h, where
+  that makes the rest provable (:func:`_bow_runs`, :func:`_rapid_legs`).
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
@@ -239,6 +246,12 @@ def _frac(M, x0, y0, h, x, y):
 #: material level of the sliver guard (see _pass): a bilinear fraction of 0.1 counts crescents
 #: down to ~ h/20 thick (the evaluator's dixel rows resolve them along the arc)
 GUARD_LEVEL = 0.1
+
+#: entry helix radius (fraction of the tool radius r; FreeCAD Adaptive's helix is 0.75 r too), and the
+#: smallest accepted where the part of the tool-centre region is wider: a helix of a few hundredths of
+#: a mm is a plunge (a place that narrow is banned; the passes reach it from elsewhere)
+HELIX_RADIUS_FRAC = 0.75
+HELIX_MIN_FRAC = 0.1
 
 
 @njit(cache=True)
@@ -468,6 +481,72 @@ def _mark_free(Mr, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule):
 
 
 @njit(cache=True)
+def _chain_clear(Mr, Amask, x0, y0, h, Q, r_capsule):
+    """Every chord of the polyline Q (m, 2) has no pixel of ``Mr`` within ``r_capsule`` and every
+    point of it, sampled every h/2, lies in the tool-centre mask."""
+    for k in range(1, Q.shape[0]):
+        ax = Q[k - 1, 0]
+        ay = Q[k - 1, 1]
+        bx = Q[k, 0]
+        by = Q[k, 1]
+        L = math.hypot(bx - ax, by - ay)
+        m = max(2, int(math.ceil(L / (0.5 * h))) + 1)
+        for q in range(m):
+            t = q / (m - 1)
+            if not _inside(Amask, x0, y0, h, ax + t * (bx - ax), ay + t * (by - ay)):
+                return False
+        if not _capsule_free(Mr, x0, y0, h, ax, ay, bx, by, r_capsule):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, min_steps):
+    """For the air steps k0 <= k < k1 (engagement < ``air_eng``) not proven free one by one: a run of
+    at least ``min_steps`` of them (steps a..b, from P[a-1] to P[b]) that slides along the last
+    cut boundary (a wall-following pass left its skin there: the rapid stock keeps a band of it
+    within r + h/sqrt(2) of the same line, so no chord on that line is ever proven) is moved
+    ``delta`` mm to its left, away from the material on the pass's right: P[a..b-1] shifted. When
+    every chord of the shifted points and the end points is proven as in :func:`_mark_free` and
+    inside the mask, its inner steps become G0 (``F``) and the first and last steps stay feed links
+    (the legs of ``delta`` off the line and back). Called before the run's discs are cut: the rapid
+    stock holds what each step meets; the shifted discs remove nothing (proven), the discs at the
+    shifted points that the pass cuts later remove nothing either."""
+    k = max(k0, 1)
+    while k < k1:
+        if not (E[k] < air_eng) or F[k]:
+            k += 1
+            continue
+        a = k
+        while k < k1 and E[k] < air_eng and not F[k]:
+            k += 1
+        b = k - 1
+        if b - a + 1 < min_steps:
+            continue
+        m = b - a                      # points P[a..b-1] shifted
+        Q = np.empty((m + 2, 2))
+        Q[0, 0] = P[a - 1, 0]
+        Q[0, 1] = P[a - 1, 1]
+        Q[m + 1, 0] = P[b, 0]
+        Q[m + 1, 1] = P[b, 1]
+        for q in range(m):
+            i = a + q
+            tx = P[i + 1, 0] - P[i - 1, 0]
+            ty = P[i + 1, 1] - P[i - 1, 1]
+            L = math.hypot(tx, ty)
+            if L == 0.0:
+                return
+            Q[q + 1, 0] = P[i, 0] - delta * ty / L
+            Q[q + 1, 1] = P[i, 1] + delta * tx / L
+        if _chain_clear(Mr, Amask, x0, y0, h, Q[1:m + 1], r_capsule):
+            for q in range(m):
+                P[a + q, 0] = Q[q + 1, 0]
+                P[a + q, 1] = Q[q + 1, 1]
+            for q in range(a + 1, b):
+                F[q] = True
+
+
+@njit(cache=True)
 def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
           guard, guard_level, D, hc, Mr, r_rapid, r_capsule, air_eng):
     """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end) and the
@@ -585,6 +664,7 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         else:
             if air > 0.0 and r_capsule > 0.0:
                 _mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
+                _bow_runs(Mr, Amask, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
             air = 0.0
         P[n, 0] = qx
         P[n, 1] = qy
@@ -595,6 +675,7 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         phi = psi
     if air > 0.0 and reason != 2 and r_capsule > 0.0:
         _mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
+        _bow_runs(Mr, Amask, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
     while k_cut < n:
         removed += _cut_both(M, Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, r_rapid, span, rows)
         k_cut += 1
@@ -892,6 +973,27 @@ def _densify(Q, step):
     t = np.concatenate([np.arange(1, k + 1) / k for k in m]) if len(m) else np.zeros(0)
     a = Q[seg[1:] - 1]
     return np.ascontiguousarray(np.vstack([Q[:1], a + t[:, None] * (Q[seg[1:]] - a)])), seg
+
+
+def _rapid_legs(g, p, q):
+    """A G0 for the chord p -> q at depth: ``(None, q)`` when the chord is proven clear on the rapid
+    stock (:func:`_capsule_free`); else ``(p', q')`` with feed legs p -> p' and q' -> q of 2 h or 4 h
+    along the chord at either end or both (``p'`` None: no leg at the start) when the shortened chord
+    is proven; None when no G0 is proven."""
+    h = g.h
+    if _capsule_free(g.Mr, g.x0, g.y0, h, p[0], p[1], q[0], q[1], g.r_capsule):
+        return None, q
+    L = math.hypot(q[0] - p[0], q[1] - p[1])
+    ux, uy = (q[0] - p[0]) / L, (q[1] - p[1]) / L
+    for leg in (2.0 * h, 4.0 * h):
+        if L < 4.0 * leg:
+            break
+        a = (p[0] + leg * ux, p[1] + leg * uy)
+        b = (q[0] - leg * ux, q[1] - leg * uy)
+        for s, e in ((a, q), (p, b), (a, b)):
+            if _capsule_free(g.Mr, g.x0, g.y0, h, s[0], s[1], e[0], e[1], g.r_capsule):
+                return (None if s is p else s), e
+    return None
 
 
 class _Grid:
@@ -1281,8 +1383,10 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     a_e = r * (1 - math.cos(target))
     target_finish = math.radians(theta_deg + finish_margin_deg)
     # a point of a finishing lap snapped onto the wall keeps the snap only while the engagement there stays
-    # within theta + 2 deg (the simulator measures up to ~13 deg more than the planning stock where a snap
-    # pushes the tool into a corner rest at the end of a lap)
+    # within theta + 2 deg, slivers counted (level GUARD_LEVEL) as well as at level 1/2: the simulator
+    # measures up to ~14 deg more than the planning stock where a snap pushes the tool into a corner
+    # rest or into the crescent an earlier pass left beside it (measured on random pockets at theta =
+    # 40 deg, r = 2 mm: 52.2 deg with the sliver level held to theta + 7, 46.8 with theta + 2)
     cap_finish = math.radians(theta_deg + 2.0)
     # the sliver guard (see _pass): theta + guard_deg for the clearing passes, theta + 7 deg for the finish
     guard_pass = math.radians(theta_deg + guard_deg)
@@ -1350,12 +1454,19 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             rho_max = comp[0].exterior.distance(Point(*c)) if comp else dA[j, i]
             if comp:
                 rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
-            rho = max(min(0.5 * r, 0.9 * rho_max - h), 0.0)
+            rho = max(min(HELIX_RADIUS_FRAC * r, 0.9 * rho_max - h), 0.0)
+            # the smallest helix accepted here: HELIX_MIN_FRAC r, or half what the widest place of this
+            # part of the tool-centre region allows (a part narrow everywhere is entered by a small
+            # helix; the entry point is a coarse cell centre, up to hc/sqrt(2) off the widest place)
+            rho_min = 0.02
+            if comp and banned is not None:
+                wide = shapely.maximum_inscribed_circle(comp[0], 0.1 * h).length
+                rho_min = max(0.02, min(HELIX_MIN_FRAC * r, 0.5 * (0.9 * wide - h)))
             # a place entered before (its passes made no room) or too narrow for a helix is banned: no
             # endless re-entry at one spot
             again = (int(j), int(i)) in entered
             entered.add((int(j), int(i)))
-            if (rho < 0.02 or again) and banned is not None and not (hole is not None and lev == 0 and stats["entries"] == 0):
+            if (rho < rho_min or again) and banned is not None and not (hole is not None and lev == 0 and stats["entries"] == 0):
                 rad = int(math.ceil(2 * r / g.hc))
                 banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
                 return None
@@ -1365,7 +1476,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                 rho = 0.0
                 add((c[0], c[1], clearance_z), "rapid")
                 add((c[0], c[1], z), "plunge", feed_mm_min, "cleared: pre-drilled start hole")
-            elif rho < 0.02:
+            elif rho < rho_min:
                 raise PlanningError(f"{source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
                                     "the region is too narrow for the tool")
             else:
@@ -1436,12 +1547,20 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                                      float(g.x0), float(g.y0), float(g.hc))]
             for q in chords[1:]:
                 if math.hypot(q[0] - cur[0], q[1] - cur[1]) > 1e-9:
-                    if rapid_links and _capsule_free(g.Mr, g.x0, g.y0, h, cur[0], cur[1], q[0], q[1], g.r_capsule):
-                        # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
-                        # chord's tool disc is truly swept (see _Grid), sub-pixel slivers included
-                        add((q[0], q[1], z), "rapid", np.nan, "cleared: link through cleared area")
-                    else:
+                    legs = _rapid_legs(g, cur, q) if rapid_links else None
+                    if legs is None:
                         add((q[0], q[1], z), "link", link_feed_mm_min)
+                    else:
+                        # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
+                        # chord's tool disc is truly swept (see _Grid), sub-pixel slivers included; a
+                        # chord starting or ending on a cut boundary (a pass ends at the wall: its skin
+                        # is tangent there) gets a short feed leg off it
+                        a, b = legs
+                        if a is not None:
+                            add((a[0], a[1], z), "link", link_feed_mm_min)
+                        add((b[0], b[1], z), "rapid", np.nan, "cleared: link through cleared area")
+                        if b[0] != q[0] or b[1] != q[1]:
+                            add((q[0], q[1], z), "link", link_feed_mm_min)
                     cur = (float(q[0]), float(q[1]))
             stats["links"] += 1
             return route[-1]
@@ -1523,7 +1642,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                             Qd, seg = _densify(Q, 1.5 * ds)
                             Es, Eg = _replay(M_before.copy(), g.x0, g.y0, h, r, Qd, lag, n_samp, GUARD_LEVEL)
                             bad = np.zeros(len(Q), bool)
-                            bad[seg[(Es > cap_finish) | (Eg > guard_finish)]] = True
+                            bad[seg[(Es > cap_finish) | (Eg > cap_finish)]] = True
                             bad[:-1] |= bad[1:]          # a chord over the bound: both its ends
                             over = near & bad & np.any(Q != P, axis=1)
                             if not over.any():
