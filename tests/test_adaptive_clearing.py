@@ -232,3 +232,27 @@ def test_coarse_planning_stock_refused():
     with pytest.raises(PlanningError, match="coarse-test: resolution_mm must be in"):
         adaptive_clearing(box(0, 0, 16, 11), R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=R / 20,
                           source="coarse-test")
+
+
+def test_neck_between_islands_is_taken_from_its_ends_not_by_helix_after_helix():
+    # two 14 x 20 mm islands 7.8 mm apart (1.3 D for D = 6 mm): the tool-centre band in the neck is
+    # 1.8 mm wide, narrower than the tool. A pass that meets no material within 1.5 r of air there is
+    # tried once more with 3.5 r (the way round to the face is a loop mostly through air); without it
+    # the neck was taken by four helix entries one after another (5 entries in all, FreeCAD 4 or 5).
+    # Also: no entry helix is smaller than 0.1 r where its part of the region is wider.
+    islands = [box(14, 10, 28, 30), box(35.8, 10, 49.8, 30)]
+    poly = box(0, 0, 63.8, 40).difference(unary_union(islands))
+    tp = adaptive_clearing(poly, 3.0, 60.0, 1.0, 255.0, source="neck")
+    assert tp.info["entries"] <= 3
+    ev = evaluate(tp, _job_r(poly, 60.0, 3.0), 0.1)
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    assert ev.engagement_max_deg <= 70.0
+    Q = tp.xyz
+    hel = tp.is_kind("helix")
+    ctr = np.asarray(tp.arc_center, float)[hel]
+    rad = np.hypot(Q[hel, 0] - ctr[:, 0], Q[hel, 1] - ctr[:, 1])
+    assert rad.min() >= 0.1 * 3.0 - 1e-6
+
+
+def _job_r(poly, theta, r):
+    return Job(poly, Tool(2 * r), theta, 1.0, feed_mm_min=255.0, spindle_rpm=6000.0, rapid_mm_min=10000.0)

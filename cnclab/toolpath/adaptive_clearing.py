@@ -37,7 +37,9 @@ Design (the ideas and where they come from; the code is cnclab's own)
   ``benchmarks/bench_vs_freecad.py``).
 * **A pass ends** when the next point would leave the tool-centre region (pocket shrunk by r), when
   even the hardest left turn cannot bring the engagement down to the target, or when the tool has
-  run ``1.5 r`` through air (that air tail is dropped). Kim & Yang's insertion idea -- insert a path only where the regular
+  run ``1.5 r`` through air (that air tail is dropped; a pass that met no material at all in a band
+  narrower than the tool is tried once more with ``3.5 r``, kept if it removes 0.2 a_e per mm: the
+  way to the face of a neck is a loop mostly through air). Kim & Yang's insertion idea -- insert a path only where the regular
   pass would leave material -- becomes the start rule: every pass starts at the cleared-region
   point *nearest through cleared area* to where the tool is whose disk just touches material
   (distance to the nearest material = r), heading along the material boundary; the controller
@@ -252,6 +254,12 @@ GUARD_LEVEL = 0.1
 #: a mm is a plunge (a place that narrow is banned; the passes reach it from elsewhere)
 HELIX_RADIUS_FRAC = 0.75
 HELIX_MIN_FRAC = 0.1
+
+#: air allowance (in r) of the second try of a pass that met no material in a band narrower than r, and
+#: the area it must remove per mm of its length (in a_e) to be kept (else the place is banned as before;
+#: random pockets: 9 % fewer entries for 1 % more program time)
+NARROW_AIR_STOP = 3.5
+NARROW_MIN_YIELD = 0.2
 
 
 @njit(cache=True)
@@ -1762,6 +1770,21 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                                                              20000, n_samp, air_stop, turn, min(turn, ds / turn_radius),
                                                              1e18, guard_pass, air_rad, rapid_links)
                     stats["passes"] += 1
+                if len(P) < 2 and reason == 2 and g.half_width[j, i] < r:
+                    # nothing emitted (the stock is unchanged): the pass ran its whole air allowance
+                    # without meeting material. In a band narrower than the tool (a neck between
+                    # islands) the way to the face is a loop mostly through air (the turning circle is
+                    # 1.57 r round): once more with 3.5 r of air before the place is banned -- else
+                    # the face is taken by one helix entry after another (two_islands_neck: 5 lifts -> 2).
+                    # Kept only where it removes NARROW_MIN_YIELD a_e per mm of its length
+                    snap_try = g.snapshot()
+                    P, removed, reason, E, free = g.run_pass(cur[0], cur[1], heading, target, ds, lag, 20000, n_samp,
+                                                             NARROW_AIR_STOP * r, turn, min(turn, ds / turn_radius),
+                                                             1e18, guard_pass, air_rad, rapid_links)
+                    stats["passes"] += 1
+                    if len(P) >= 2 and removed < NARROW_MIN_YIELD * a_e * ds * (len(P) - 1):
+                        g.restore(snap_try)        # not worth its air: the place is banned after all
+                        P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
                 if removed < 0.2 * r * h or len(P) < 2:
                     rad = int(math.ceil(r / g.hc))
                     banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True

@@ -1,0 +1,133 @@
+"""Issue 16 on pockets that are not in the repository: the default planner
+(:func:`cnclab.toolpath.adaptive_clearing.adaptive_clearing`) on random pockets, scored by the
+package's one evaluator (dixel 0.05 mm; 0.1 mm above 2500 mm^2), one row per pocket and a summary.
+
+The pockets (seeded, reproducible): a random star (5-11 vertices, radii 12-30 mm), the largest part
+of a union of three random boxes (15-35 mm) or a smooth blob (radius 20 mm with harmonics 2-5 of
+up to 3 mm); with probability 0.6 one or two islands (discs of radius 2-5 mm or 6 x 4 mm boxes)
+near an interior point. Tool radius r in {2, 3, 5} mm, theta in {40, 60, 75} deg, a_p 1 mm, feed
+300 mm/min. Columns: engagement p95 / max over theta, share above theta + 5 deg (%), entries, plunges
+and rapids into material, uncut area beyond the unreachable corners (mm^2), wall gouge (how far the
+tool disc reaches past a wall or island, exact geometry along every move at depth, mm), program
+time (s, as written at 10 m/min rapids) and plan time (s). A pocket the planner refuses is listed
+with its reason (a refusal is a clear error, never an unsafe program).
+
+    .venv/bin/python benchmarks/bench_random_pockets.py [--seed S] [--n N]
+
+Targets of issue 16 checked per pocket: max <= theta + 10, share above theta + 5 <= 0.5 %, zero
+plunges and rapids into material, no wall gouge (<= 1e-3 mm, the finishing snap's tolerance).
+Times are wall clock on a shared CPU: noisy.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import shapely
+from shapely.geometry import Point, Polygon, box
+from shapely.ops import unary_union
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from cnclab.toolpath.adaptive_clearing import PlanningError, adaptive_clearing  # noqa: E402
+from cnclab.toolpath.evaluate import evaluate  # noqa: E402
+from cnclab.toolpath.job import Job  # noqa: E402
+from cnclab.toolpath.path import Tool  # noqa: E402
+
+
+def random_pocket(rng):
+    """One random pocket (shapely Polygon, mm), see the module docstring."""
+    k = rng.integers(0, 3)
+    if k == 0:
+        n = rng.integers(5, 12)
+        ang = np.sort(rng.uniform(0, 2 * np.pi, n))
+        rad = rng.uniform(12, 30, n)
+        P = Polygon(np.c_[np.cos(ang) * rad, np.sin(ang) * rad]).buffer(0)
+    elif k == 1:
+        bs = [box(x, y, x + w, y + hh) for x, y, w, hh in zip(rng.integers(0, 25, 3), rng.integers(0, 25, 3),
+                                                               rng.integers(15, 35, 3), rng.integers(15, 35, 3))]
+        u = unary_union(bs)
+        P = max(getattr(u, "geoms", [u]), key=lambda g: g.area)
+    else:
+        t = np.linspace(0, 2 * np.pi, 120, endpoint=False)
+        rr = 20 + sum(rng.uniform(-3, 3) * np.cos(m * t + rng.uniform(0, 6)) for m in range(2, 6))
+        P = Polygon(np.c_[np.cos(t) * rr, np.sin(t) * rr])
+    if rng.random() < 0.6:
+        for _ in range(rng.integers(1, 3)):
+            inner = P.buffer(-10)
+            if inner.is_empty:
+                break
+            c = inner.representative_point()
+            c = Point(c.x + rng.uniform(-5, 5), c.y + rng.uniform(-5, 5))
+            isl = c.buffer(rng.uniform(2, 5), quad_segs=4) if rng.random() < 0.5 else box(c.x - 3, c.y - 2, c.x + 3, c.y + 2)
+            if P.buffer(-1).contains(isl):
+                P = P.difference(isl)
+    return P
+
+
+def wall_gouge_mm(tp, poly, r, step=0.1):
+    """The largest r - (signed distance of the tool centre to the pocket boundary) over every move at
+    depth, sampled every ``step`` mm (>0: the tool disc reaches past a wall or island)."""
+    Q = tp.xyz
+    low = Q[:, 2] < 0
+    worst = 0.0
+    for k in np.flatnonzero(low[1:] & low[:-1]) + 1:
+        a, b = Q[k - 1, :2], Q[k, :2]
+        t = np.linspace(0, 1, max(2, int(np.hypot(*(b - a)) / step) + 2))
+        q = a + t[:, None] * (b - a)
+        d = shapely.distance(poly.boundary, shapely.points(q))
+        d = np.where(shapely.contains_xy(poly, q[:, 0], q[:, 1]), d, -d)
+        worst = max(worst, r - float(d.min()))
+    return worst
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seed", type=int, default=11)
+    ap.add_argument("--n", type=int, default=40)
+    a = ap.parse_args(argv)
+    rng = np.random.default_rng(a.seed)
+    rows = []
+    for it in range(a.n):
+        P = random_pocket(rng)
+        r = float(rng.choice([2.0, 3.0, 5.0]))
+        th = float(rng.choice([40.0, 60.0, 75.0]))
+        if not P.is_valid or P.buffer(-r).is_empty:
+            continue
+        row = {"pocket": f"{a.seed}:{it}", "r_mm": r, "theta_deg": th, "area_mm2": round(P.area)}
+        t0 = time.perf_counter()
+        try:
+            tp = adaptive_clearing(P, r, th, 1.0, 300.0, source=f"random {a.seed}:{it}")
+        except PlanningError as e:
+            row["refused"] = str(e)
+            rows.append(row)
+            print(row["pocket"], "refused:", e, flush=True)
+            continue
+        row["plan_s"] = time.perf_counter() - t0
+        job = Job(P, Tool(2 * r), th, 1.0, feed_mm_min=300.0, spindle_rpm=6000.0, rapid_mm_min=10000.0)
+        ev = evaluate(tp, job, 0.05 if P.area < 2500 else 0.1)
+        row.update({"p95-theta": ev.engagement_p95_deg - th, "max-theta": ev.engagement_max_deg - th,
+                    "share>θ+5_pct": ev.share_above_5_pct, "entries": tp.info["entries"],
+                    "plunges": ev.plunges_into_material, "rapids_into": ev.rapids_into_material,
+                    "uncut_mm2": ev.uncut_beyond_unreachable_mm2, "gouge_mm": wall_gouge_mm(tp, P, r),
+                    "program_s": tp.time_s(10000.0)["total_s"]})
+        row["ok"] = bool(row["max-theta"] <= 10 and row["share>θ+5_pct"] <= 0.5 and row["plunges"] == 0
+                         and row["rapids_into"] == 0 and row["gouge_mm"] <= 1e-3)
+        rows.append(row)
+        print(" ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()), flush=True)
+    df = pd.DataFrame(rows).set_index("pocket")
+    planned = df[df.get("refused").isna()] if "refused" in df else df
+    print()
+    print(df.drop(columns=[c for c in ("refused",) if c in df]).round(3).to_string())
+    print(f"\n== summary (seed {a.seed}): {len(planned)} planned, {len(df) - len(planned)} refused; "
+          f"targets met on {int(planned['ok'].sum())}/{len(planned)}; max over theta {planned['max-theta'].max():.1f} deg, "
+          f"max share above theta+5 {planned['share>θ+5_pct'].max():.2f} %, plunges {int(planned['plunges'].sum())}, "
+          f"rapids into material {int(planned['rapids_into'].sum())}, max gouge {planned['gouge_mm'].max():.4f} mm, "
+          f"max plan {planned['plan_s'].max():.2f} s")
+
+
+if __name__ == "__main__":
+    main()
