@@ -30,8 +30,8 @@ R = 1.5
 H = 0.05
 
 
-def _job(poly, theta):
-    return Job(poly, Tool(2 * R), theta, 1.0, feed_mm_min=255.0, spindle_rpm=6366.0, rapid_mm_min=10000.0)
+def _job(poly, theta, r=R):
+    return Job(poly, Tool(2 * r), theta, 1.0, feed_mm_min=255.0, spindle_rpm=6366.0, rapid_mm_min=10000.0)
 
 
 def _plan(poly, theta):
@@ -244,7 +244,7 @@ def test_neck_between_islands_is_taken_from_its_ends_not_by_helix_after_helix():
     poly = box(0, 0, 63.8, 40).difference(unary_union(islands))
     tp = adaptive_clearing(poly, 3.0, 60.0, 1.0, 255.0, source="neck")
     assert tp.info["entries"] <= 3
-    ev = evaluate(tp, _job_r(poly, 60.0, 3.0), 0.1)
+    ev = evaluate(tp, _job(poly, 60.0, 3.0), 0.1)
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
     assert ev.engagement_max_deg <= 70.0
     Q = tp.xyz
@@ -252,7 +252,3 @@ def test_neck_between_islands_is_taken_from_its_ends_not_by_helix_after_helix():
     ctr = np.asarray(tp.arc_center, float)[hel]
     rad = np.hypot(Q[hel, 0] - ctr[:, 0], Q[hel, 1] - ctr[:, 1])
     assert rad.min() >= 0.1 * 3.0 - 1e-6
-
-
-def _job_r(poly, theta, r):
-    return Job(poly, Tool(2 * r), theta, 1.0, feed_mm_min=255.0, spindle_rpm=6000.0, rapid_mm_min=10000.0)

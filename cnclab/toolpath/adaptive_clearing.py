@@ -491,18 +491,14 @@ def _mark_free(Mr, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule):
 @njit(cache=True)
 def _chain_clear(Mr, Amask, x0, y0, h, Q, r_capsule):
     """Every chord of the polyline Q (m, 2) has no pixel of ``Mr`` within ``r_capsule`` and every
-    point of it, sampled every h/2, lies in the tool-centre mask."""
+    point of it, sampled every h/2, lies in the tool-centre mask (:func:`_segment_inside`)."""
     for k in range(1, Q.shape[0]):
         ax = Q[k - 1, 0]
         ay = Q[k - 1, 1]
         bx = Q[k, 0]
         by = Q[k, 1]
-        L = math.hypot(bx - ax, by - ay)
-        m = max(2, int(math.ceil(L / (0.5 * h))) + 1)
-        for q in range(m):
-            t = q / (m - 1)
-            if not _inside(Amask, x0, y0, h, ax + t * (bx - ax), ay + t * (by - ay)):
-                return False
+        if not _segment_inside(Amask, x0, y0, h, ax, ay, bx, by, 0.0):
+            return False
         if not _capsule_free(Mr, x0, y0, h, ax, ay, bx, by, r_capsule):
             return False
     return True
@@ -1151,15 +1147,15 @@ class _Grid:
 
 
 @njit(cache=True)
-def _segment_inside(A, x0, y0, h, ax, ay, bx, by):
+def _segment_inside(A, x0, y0, h, ax, ay, bx, by, skip):
     """True when every point of the segment a-b sampled every h/2 lies in a pixel of the mask ``A``,
-    but for the first 2 h: the start may lie on the true wall (a finishing lap ends there), outside the
-    mask, which is the region shrunk by h/sqrt(2)."""
+    but for the first ``skip`` mm (2 h where the start may lie on the true wall -- a finishing lap ends
+    there -- outside the mask, which is the region shrunk by h/sqrt(2))."""
     L = math.hypot(bx - ax, by - ay)
     n = max(2, int(math.ceil(L / (0.5 * h))) + 1)
     for k in range(n):
         t = k / (n - 1)
-        if t * L < 2.0 * h:
+        if t * L < skip:
             continue
         if not _inside(A, x0, y0, h, ax + t * (bx - ax), ay + t * (by - ay)):
             return False
@@ -1207,7 +1203,7 @@ def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, rea
         for q in np.argsort(cand, kind="mergesort"):
             xcc = x0 + (ci[q] + 0.5) * hc
             ycc = y0 + (cj[q] + 0.5) * hc
-            if _segment_inside(A, x0, y0, h, cx, cy, xcc, ycc):
+            if _segment_inside(A, x0, y0, h, cx, cy, xcc, ycc, 2.0 * h):
                 bj = cj[q]
                 bi = ci[q]
                 break
@@ -1423,6 +1419,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
         ctrs.extend([(np.nan, np.nan)] * m)
 
     stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0}
+    allowed_parts = list(shapely.get_parts(allowed))
+    part_wide = {}        # part index -> inscribed radius of that part of the tool-centre region (mm)
     hole = None if start_hole is None else tuple(float(v) for v in start_hole)
     if hole is not None and not pocket.buffer(1e-9).contains(Point(hole[0], hole[1]).buffer(0.5 * hole[2] - 1e-6)):
         raise PlanningError(f"{source}: the start hole is not inside the pocket")
@@ -1458,7 +1456,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             dA = g.dA
             j, i = np.unravel_index(np.argmax(np.where(need, dA, -1)), need.shape)
             c = np.array(g.centre(j, i))
-            comp = [p for p in shapely.get_parts(allowed) if p.buffer(1e-6).contains(Point(*c))]
+            k_part = next((k for k, p in enumerate(allowed_parts) if p.buffer(1e-6).contains(Point(*c))), None)
+            comp = [] if k_part is None else [allowed_parts[k_part]]
             rho_max = comp[0].exterior.distance(Point(*c)) if comp else dA[j, i]
             if comp:
                 rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
@@ -1468,7 +1467,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             # helix; the entry point is a coarse cell centre, up to hc/sqrt(2) off the widest place)
             rho_min = 0.02
             if comp and banned is not None:
-                wide = shapely.maximum_inscribed_circle(comp[0], 0.1 * h).length
+                if k_part not in part_wide:
+                    part_wide[k_part] = shapely.maximum_inscribed_circle(comp[0], 0.1 * h).length
+                wide = part_wide[k_part]
                 rho_min = max(0.02, min(HELIX_MIN_FRAC * r, 0.5 * (0.9 * wide - h)))
             # a place entered before (its passes made no room) or too narrow for a helix is banned: no
             # endless re-entry at one spot
@@ -1516,6 +1517,11 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             stats["entries"] += 1
             cur = (c[0] + rho, c[1])
             return True
+
+        def clearing_pass(heading, a_stop):
+            """A clearing pass from the tool's point (:meth:`_Grid.run_pass`) with ``a_stop`` mm of air."""
+            return g.run_pass(cur[0], cur[1], heading, target, ds, lag, 20000, n_samp, a_stop, turn,
+                              min(turn, ds / turn_radius), 1e18, guard_pass, air_rad, rapid_links)
 
         def link_to(r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None):
             """Link at depth through free cells to the nearest goal cell (:meth:`_Grid.route`); its
@@ -1692,7 +1698,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     jS, iS = g.cell(*S)
                     if not (0 <= jS < D.shape[0] and 0 <= iS < D.shape[1] and Ac[jS, iS] and D[jS, iS] >= r_free):
                         continue
-                    if not _segment_inside(g.A, g.x0, g.y0, h, S[0], S[1], E[0], E[1]):
+                    if not _segment_inside(g.A, g.x0, g.y0, h, S[0], S[1], E[0], E[1], 2.0 * h):
                         continue
                     if others is None:
                         others = np.where(lbl == lab, 0, g.M).astype(np.uint8)
@@ -1757,18 +1763,14 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     banned[j, i] = True
                     continue
                 heading = math.atan2(gy, gx) - 0.5 * math.pi
-                P, removed, reason, E, free = g.run_pass(cur[0], cur[1], heading, target, ds, lag, 20000, n_samp,
-                                                         air_stop, turn, min(turn, ds / turn_radius), 1e18,
-                                                         guard_pass, air_rad, rapid_links)
+                P, removed, reason, E, free = clearing_pass(heading, air_stop)
                 stats["passes"] += 1
                 if len(P) < 2 and g.half_width[j, i] < turn_radius:
                     # nothing emitted (the pass ran into air and was dropped: the stock is unchanged). In a band
                     # narrower than the turning circle, where the material lies behind the start heading (the
                     # face at the end of the band) the hard right turn through air slides away along the
                     # wall: start the other way round once
-                    P, removed, reason, E, free = g.run_pass(cur[0], cur[1], heading + math.pi, target, ds, lag,
-                                                             20000, n_samp, air_stop, turn, min(turn, ds / turn_radius),
-                                                             1e18, guard_pass, air_rad, rapid_links)
+                    P, removed, reason, E, free = clearing_pass(heading + math.pi, air_stop)
                     stats["passes"] += 1
                 if len(P) < 2 and reason == 2 and g.half_width[j, i] < r:
                     # nothing emitted (the stock is unchanged): the pass ran its whole air allowance
@@ -1778,9 +1780,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
                     # the face is taken by one helix entry after another (two_islands_neck: 5 lifts -> 2).
                     # Kept only where it removes NARROW_MIN_YIELD a_e per mm of its length
                     snap_try = g.snapshot()
-                    P, removed, reason, E, free = g.run_pass(cur[0], cur[1], heading, target, ds, lag, 20000, n_samp,
-                                                             NARROW_AIR_STOP * r, turn, min(turn, ds / turn_radius),
-                                                             1e18, guard_pass, air_rad, rapid_links)
+                    P, removed, reason, E, free = clearing_pass(heading, NARROW_AIR_STOP * r)
                     stats["passes"] += 1
                     if len(P) >= 2 and removed < NARROW_MIN_YIELD * a_e * ds * (len(P) - 1):
                         g.restore(snap_try)        # not worth its air: the place is banned after all
