@@ -183,6 +183,12 @@ def _stl_cases():
         "binary degenerate": (_binary(np.concatenate([T, [[[0, 0, 0], [0, 0, 0], [1, 0, 0]]]])), "error", r"\(facet \d+\): facet \d+ has zero area"),
         "binary duplicated facet": (_binary(np.concatenate([T, T[2:3]])), "error", r"\(facet \d+\): facet \d+ repeats facet 2"),
         "ascii duplicated facet reversed": (_ascii(np.concatenate([T, T[2:3, ::-1]])), "error", r":\d+: facet \d+ repeats facet 2"),
+        "ascii vertex at 1e200": (_ascii(np.where(np.arange(T.size).reshape(T.shape) == 9, 1e200, T)), "error",
+                                  r":\d+: facet 1 has a vertex coordinate 1e\+200 mm, beyond"),
+        "ascii vertex at -1e10": (_ascii(np.where(np.arange(T.size).reshape(T.shape) == 30, -1e10, T)), "error",
+                                  r":\d+: facet 3 has a vertex coordinate 1e\+10 mm, beyond"),
+        "binary vertex at 1e30": (_binary(np.where(np.arange(T.size).reshape(T.shape) == 40, 1e30, T)), "error",
+                                  r"\(facet 4\): facet 4 has a vertex coordinate 1e\+30 mm, beyond"),
         "empty file": (b"", "error", "empty STL"),
         "whitespace only": (b"  \n\n", "error", "empty STL"),
         "solid without facets": (b"solid x\nendsolid x\n", "error", "no facets"),
@@ -234,6 +240,19 @@ def test_stl_hostile_table(tmp_path, name):
         OUTCOMES[("stl", "error")] += 1
     else:
         assert _check_stl(p, raw, "stl") == "correct"
+
+
+@pytest.mark.parametrize("binary", [True, False])
+def test_stl_drop_removes_duplicates_and_degenerates(tmp_path, binary):
+    """degenerate='drop' on repeated (and zero-area) facets: the original facets, each once, counted."""
+    T = GRID.triangles
+    bad = np.concatenate([T, T[2:3], T[5:6, ::-1], [[[0, 0, 0], [1, 1, 1], [2, 2, 2]]]])
+    p = tmp_path / "dup.stl"
+    p.write_bytes(_binary(bad) if binary else _ascii(bad).encode("ascii"))
+    m = read_stl(p, degenerate="drop", orient="keep")
+    assert m.info["dropped_duplicate"] == 2 and m.info["dropped_degenerate"] == 1
+    np.testing.assert_allclose(m.triangles, T.astype(np.float32) if binary else T, rtol=0, atol=1e-12)
+    OUTCOMES[("stl", "correct")] += 1
 
 
 def test_stl_winding_is_reconciled_and_reported(tmp_path):

@@ -40,6 +40,11 @@ __all__ = ["TriMesh", "read_stl", "write_stl", "facet_normals", "facet_centroids
            "inclination_angles", "orient_facets", "STLError", "STLWarning"]
 
 
+#: Largest accepted |coordinate| (mm): 1000 km, far beyond any machinable part; larger values are a unit
+#: or export error, and near 1e154 the facet areas (squares of coordinates) overflow to inf.
+_COORD_LIMIT_MM = 1e9
+
+
 class STLError(ValueError):
     """A malformed STL file; the message names the file (and the line for ASCII files)."""
 
@@ -69,6 +74,11 @@ class TriMesh:
         bad = ~np.isfinite(tri).all(axis=(1, 2))
         if bad.any():
             raise STLError(f"{source}: facet {int(np.argmax(bad))} has a non-finite coordinate")
+        huge = (np.abs(tri) > _COORD_LIMIT_MM).any(axis=(1, 2))
+        if huge.any():                 # squares / cross products would overflow to inf (not "zero area")
+            k = int(np.argmax(huge))
+            raise STLError(f"{source}: facet {k} has a vertex coordinate {float(np.abs(tri[k]).max()):.6g} mm, "
+                           f"beyond the +/-{_COORD_LIMIT_MM:.0e} mm range (its area would overflow)")
         cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         ln = np.linalg.norm(cross, axis=1)
         areas = 0.5 * ln                       # = facet_areas(tri), facet_normals(tri) below
@@ -76,8 +86,10 @@ class TriMesh:
         zero = areas <= 1e-12 * scale * scale
         if zero.any():
             if degenerate == "error":
-                raise STLError(f"{source}: facet {int(np.argmax(zero))} has zero area "
-                               f"({int(zero.sum())} degenerate facet(s); pass degenerate='drop' to skip them)")
+                k = int(np.argmax(zero))
+                raise STLError(f"{source}: facet {k} has zero area ({areas[k]:.3g} mm^2 <= 1e-12 x the part size "
+                               f"{scale:.6g} mm squared; {int(zero.sum())} degenerate facet(s); "
+                               "pass degenerate='drop' to skip them)")
             if degenerate != "drop":
                 raise ValueError(f"degenerate must be 'error' or 'drop', got {degenerate!r}")
             tri, cross, ln = tri[~zero], cross[~zero], ln[~zero]
@@ -748,7 +760,7 @@ def read_stl(path, degenerate: str = "error", orient: str = "auto", orient_up: b
         raise STLError(f"{where(k)}: facet {k} repeats facet {j} (same three corners; {dup.size} duplicate "
                        "facet(s); pass degenerate='drop' to skip them)")
     if dup.size:
-        keep = np.ones(len(key), bool)
+        keep = np.ones(len(first), bool)
         keep[dup] = False
         mesh.triangles, mesh.normals, stored = mesh.triangles[keep], mesh.normals[keep], stored[keep]
         vid = vid[keep]
