@@ -6,11 +6,12 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.cnclab-installed
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: reproduce test venv claims bench strip clean help browser-test site gcode-check
+.PHONY: reproduce test lab venv claims bench strip clean help browser-test site gcode-check
 
 help:
 	@echo "make reproduce   execute every notebook, write build/ (figures, HTML, claims report)"
 	@echo "make test        unit + claims tests and every notebook in fast mode (CNCLAB_FAST=1)"
+	@echo "make lab         open the collection in JupyterLab at notebooks/00_index.ipynb"
 	@echo "make bench       run benchmarks/ and print their tables"
 	@echo "make claims      print the claims ledger with freshly computed values"
 	@echo "make site        build the offline site build/site/index.html from what build/ holds"
@@ -35,6 +36,10 @@ reproduce: $(STAMP)
 test: $(STAMP)
 	$(PY) -m cnclab warm
 	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --durations=15 tests
+
+# JupyterLab on the collection, opened at the index notebook (Ctrl-C twice to stop)
+lab: $(STAMP)
+	$(VENV)/bin/jupyter lab notebooks/00_index.ipynb
 
 site: $(STAMP)
 	$(PY) -m cnclab site

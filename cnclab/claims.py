@@ -62,6 +62,7 @@ import time
 from pathlib import Path
 from typing import Any, Iterable
 
+from . import clihelp
 from .fileio import atomic_write
 from .paths import CLAIMS_CSV, WORK_IDS, build_dir
 from .runtime import fast_mode
@@ -414,7 +415,7 @@ def evaluate_all(claims: Iterable[Claim], skip_slow: bool = False, progress: boo
     if progress:
         from tqdm.auto import tqdm
 
-        it = tqdm(claims, desc="claims", unit="claim")
+        it = tqdm(claims, desc="claims", unit="claim", disable=None)   # a bar only on a terminal
     return [evaluate(c, skip_slow=skip_slow) for c in it]
 
 
@@ -565,16 +566,20 @@ def write_report(results: list[Result], outdir: Path) -> tuple[Path, Path]:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m cnclab claims [--work W] [--json] [--report DIR] [--skip-slow]``."""
-    import argparse
-
-    ap = argparse.ArgumentParser(prog="python -m cnclab claims",
-                                 description="Compute every ledger row and say whether its status holds.")
-    ap.add_argument("--work", choices=WORK_IDS)
-    ap.add_argument("--prefix", help="only claims whose id starts with this")
-    ap.add_argument("--json", action="store_true", help="print a JSON list of result objects")
-    ap.add_argument("--report", metavar="DIR", help="also write DIR/claims.csv and DIR/claims.md")
+    ap = clihelp.parser(
+        "python -m cnclab claims",
+        "Compute every row of the claims ledger (every number the four works print, with the value\n"
+        "the code computes now) and say whether its status (MATCH, DIFFERS, ...) still holds. Prints\n"
+        "one line per row and a headline per work; exits with 1 if a row no longer holds.",
+        examples=["python -m cnclab claims --work hoang2024",
+                  "python -m cnclab claims --skip-slow --report build"],
+        writes=["nothing, unless --report DIR: DIR/claims.csv and DIR/claims.md"])
+    ap.add_argument("--work", choices=WORK_IDS, help="only this work (default: all four)")
+    ap.add_argument("--prefix", help="only claims whose id starts with this (default: all)")
+    ap.add_argument("--json", action="store_true", help="print a JSON list of result objects instead of tables")
+    ap.add_argument("--report", metavar="DIR", help="also write DIR/claims.csv and DIR/claims.md (default: none)")
     ap.add_argument("--skip-slow", action="store_true", help="do not compute rows marked slow")
-    ap.add_argument("--ledger", default=str(CLAIMS_CSV), help="ledger CSV (default data/claims.csv)")
+    ap.add_argument("--ledger", default=str(CLAIMS_CSV), help="ledger CSV (default: data/claims.csv)")
     args = ap.parse_args(argv)
     try:
         claims = select(load(args.ledger), work=args.work, prefix=args.prefix)

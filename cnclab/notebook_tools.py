@@ -12,6 +12,7 @@ import json
 import re
 from pathlib import Path
 
+from . import clihelp
 from .fileio import atomic_write
 from .paths import NOTEBOOKS_DIR
 from .works import WORKS
@@ -106,15 +107,23 @@ def index_markdown() -> str:
 
 
 def main(argv=None) -> int:
-    import argparse
-
-    ap = argparse.ArgumentParser(prog="python -m cnclab nb")
-    sub = ap.add_subparsers(dest="cmd", required=True)
-    f = sub.add_parser("from-py", help="percent-format script -> stripped .ipynb")
-    f.add_argument("src")
-    f.add_argument("dst")
-    sub.add_parser("strip", help="strip outputs of every notebook in notebooks/")
-    sub.add_parser("list", help="list notebooks in execution order")
+    ap = clihelp.parser(
+        "python -m cnclab nb",
+        "Notebook housekeeping: convert a percent-format script to a notebook, strip the outputs of\n"
+        "every notebook (they are committed without outputs), list the notebooks in execution order.",
+        examples=["python -m cnclab nb strip", "python -m cnclab nb from-py draft.py notebooks/hoang2024/new.ipynb"],
+        writes=["from-py: DST; strip: the notebooks in notebooks/ that had outputs; list: nothing"])
+    sub = ap.add_subparsers(dest="cmd", required=True, metavar="{from-py,strip,list}")
+    f = sub.add_parser("from-py", help="percent-format script -> stripped .ipynb", formatter_class=clihelp.HelpFormatter,
+                       description="Convert a percent-format (# %%) script into a notebook without outputs.",
+                       epilog="Example:\n  python -m cnclab nb from-py draft.py notebooks/hoang2024/new.ipynb")
+    f.add_argument("src", help="percent-format Python script")
+    f.add_argument("dst", help="notebook to write (.ipynb)")
+    sub.add_parser("strip", help="strip outputs of every notebook in notebooks/", formatter_class=clihelp.HelpFormatter,
+                   description="Strip outputs and execution counts of every notebook in notebooks/.",
+                   epilog="Example:\n  python -m cnclab nb strip")
+    sub.add_parser("list", help="list notebooks in execution order", formatter_class=clihelp.HelpFormatter,
+                   description="List the notebooks in execution order.", epilog="Example:\n  python -m cnclab nb list")
     a = ap.parse_args(argv)
     if a.cmd == "from-py":
         print(f"wrote {from_py(Path(a.src), Path(a.dst))}")

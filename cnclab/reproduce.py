@@ -26,7 +26,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from . import claims, site
+from . import claims, clihelp, site
 from .cache import module_closure
 from .fileio import atomic_write
 from .notebook_tools import INDEX_NOTEBOOK, list_notebooks
@@ -385,10 +385,18 @@ def run_all(only: str | None = None, jobs: int | None = None, force: bool = Fals
 
 
 def main(argv=None) -> int:
-    import argparse
-
-    ap = argparse.ArgumentParser(prog="python -m cnclab reproduce")
-    ap.add_argument("--only", help="run only notebooks whose path contains this text")
+    ap = clihelp.parser(
+        "python -m cnclab reproduce",
+        "Execute every notebook headless (in parallel), export HTML and figures, write every NC program\n"
+        "and the claims report, then build the offline site. What did not change is reused from the\n"
+        "previous run. Exits non-zero if a notebook fails or a claim no longer holds (make reproduce).",
+        examples=["python -m cnclab reproduce --jobs 2", "python -m cnclab reproduce --only mgherony2024/ch3"],
+        writes=["build/notebooks/<work>/<name>.ipynb, .html   the executed notebooks",
+                "build/figures/<work>/<figure>.pdf, .svg, .png every figure",
+                "build/gcode/<work>/*.ngc, manifest.json       every NC program",
+                "build/claims.csv, build/claims.md             the claims report",
+                "build/site/index.html                         the offline site"])
+    ap.add_argument("--only", help="run only notebooks whose path contains this text (default: all)")
     ap.add_argument("--jobs", type=int, default=None, help="notebooks run at once (default: one per core)")
     ap.add_argument("--force", action="store_true", help="re-run everything: ignore executed copies and caches")
     a = ap.parse_args(argv)

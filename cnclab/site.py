@@ -20,6 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from . import clihelp
 from .fileio import atomic_write
 from .paths import WORK_IDS, build_dir
 
@@ -304,9 +305,12 @@ def reading_order_markdown() -> str:
 
 
 def main(argv=None) -> int:
-    import argparse
-
-    ap = argparse.ArgumentParser(prog="python -m cnclab site", description="build build/site/index.html offline")
+    ap = clihelp.parser(
+        "python -m cnclab site",
+        "Build the offline site (one HTML page linking the executed notebooks, a figure gallery and the\n"
+        "claims table) from what the build folder holds; no notebook is executed.",
+        examples=["python -m cnclab site"],
+        writes=["BUILD/site/index.html and the pages it links"])
     ap.add_argument("--build", type=Path, default=None, help="build folder (default: build/ or $CNCLAB_BUILD_DIR)")
     a = ap.parse_args(argv)
     build_site(a.build)

@@ -15,6 +15,7 @@ import time
 import numpy as np
 from shapely.geometry import box
 
+from . import clihelp
 from .simulation import pixel
 from .toolpath.adaptive_clearing import adaptive_clearing
 from .toolpath.evaluate import evaluate
@@ -39,6 +40,11 @@ def warm() -> float:
 
 
 def main(argv=None) -> int:
+    clihelp.parser("python -m cnclab warm",
+                   "Compile the shared numba kernels once into their on-disk cache (make test and make\n"
+                   "reproduce run it first, so that parallel workers do not compile them each).",
+                   examples=["python -m cnclab warm"], writes=["the numba cache (__pycache__ next to the kernels)"]
+                   ).parse_args(argv)
     print(f"numba kernels compiled and cached in {warm():.1f} s", flush=True)
     return 0
 

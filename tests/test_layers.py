@@ -27,7 +27,7 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "cnclab"
 
 LAYERS = {
-    "": 0, "fileio": 0, "paths": 0, "runtime": 0, "cache": 0, "sweep": 0, "plotting": 0, "claims": 0,
+    "": 0, "clihelp": 0, "fileio": 0, "paths": 0, "runtime": 0, "cache": 0, "sweep": 0, "plotting": 0, "claims": 0,
     "geometry": 1,
     "simulation": 2, "cutting": 2, "analysis": 2,
     "toolpath": 3,

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import clihelp
 from ..fileio import atomic_write
 from ..paths import build_dir
 from .gcode import GcodeError, read_toolpath
@@ -132,11 +133,23 @@ def analyze(program, job_file, resolution_mm: float = 0.05, outdir=None, quiet: 
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m cnclab analyze", description=__doc__.split("\n\n")[1])
-    ap.add_argument("program", help="RS274/NGC program (.ngc/.nc/.tap)")
-    ap.add_argument("--job", required=True, help="pocket job JSON (data/jacso2021/*.json format)")
-    ap.add_argument("--resolution", type=float, default=0.05, help="dixel resolution [mm] (default 0.05)")
-    ap.add_argument("-o", "--outdir", default=None, help="output folder (default build/analyze/<program>)")
+    ap = clihelp.parser(
+        "python -m cnclab analyze",
+        "Score any RS274/NGC program (cnclab's own or another CAM's: FreeCAD, hand-written) on a pocket\n"
+        "job with the collection's dixel simulator: engagement angle, MRR, feed, time, uncut area,\n"
+        "plunges and rapids into material. A program the reader refuses exits with code 2 naming the\n"
+        "file, line and word; inputs are never overwritten; all outputs are written together or none.",
+        examples=["python -m cnclab analyze star.ngc --job data/jacso2021/star_pocket.json",
+                  "python -m cnclab analyze tests/fixtures/freecad/two_regions.ngc --job data/pockets/two_regions.json "
+                  "--resolution 0.25 -o build/freecad_two_regions"],
+        writes=["OUTDIR/summary.csv        one row per metric (metric, value, unit), also printed",
+                "OUTDIR/trace.csv          the trace along the path (s, x, y, engagement, MRR, feed, kind)",
+                "OUTDIR/trace.png, .pdf    engagement, MRR and feed against path length",
+                "OUTDIR/engagement_map.png the engagement angle coloured over the pocket"])
+    ap.add_argument("program", help="RS274/NGC program (.ngc/.nc/.tap, mm)")
+    ap.add_argument("--job", required=True, help="pocket job file (JSON, mm; keys in docs/job-format.md)")
+    ap.add_argument("--resolution", type=float, default=0.05, help="dixel size of the simulation (mm)")
+    ap.add_argument("-o", "--outdir", default=None, help="output folder (default: build/analyze/<program name>)")
     args = ap.parse_args(argv)
     try:
         analyze(args.program, args.job, args.resolution, args.outdir)

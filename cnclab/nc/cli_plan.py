@@ -14,6 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from .. import clihelp
 from ..fileio import atomic_write
 from .program import check_program, write_program
 
@@ -58,10 +59,20 @@ def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m cnclab plan", description=__doc__.split("\n\n")[1])
-    ap.add_argument("job", help="pocket job JSON (data/jacso2021/*.json format)")
-    ap.add_argument("-o", "--output", required=True, help="program to write (.ngc)")
-    ap.add_argument("--strategy", default=None, help=f"planner name, one of {', '.join(sorted(STRATEGIES))} (default: {DEFAULT_STRATEGY})")
+    ap = clihelp.parser(
+        "python -m cnclab plan",
+        "Plan a 2.5D pocket job (JSON, mm) and write a machine-safe RS274/NGC program: start block,\n"
+        "tool change, spindle on before cutting, entries by helix/ramp or into cleared area, rapids only\n"
+        "at the clearance plane or through cleared area, M5 M30. The program is checked before it is\n"
+        "written; the job file is never overwritten; errors exit with code 2 naming the file and key.\n"
+        "Job keys: docs/job-format.md.",
+        examples=["python -m cnclab plan data/jacso2021/star_pocket.json -o star.ngc",
+                  "python -m cnclab plan my_pocket.json -o my_pocket.ngc --strategy zig-zag"],
+        writes=["OUTPUT: the program (only this file, atomically)"])
+    ap.add_argument("job", help="pocket job file (JSON, mm; keys in docs/job-format.md)")
+    ap.add_argument("-o", "--output", required=True, help="program to write (.ngc, must differ from the job file)")
+    ap.add_argument("--strategy", default=None, metavar="NAME",
+                    help=f"planner: {', '.join(sorted(STRATEGIES))} (default: {DEFAULT_STRATEGY})")
     args = ap.parse_args(argv)
     try:
         plan_program(args.job, args.output, args.strategy)

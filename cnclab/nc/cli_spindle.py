@@ -15,6 +15,7 @@ import sys
 import warnings
 
 from ..cutting.spindle_model import POINT_RULES
+from .. import clihelp
 from ..fileio import cleanup_on_signals
 from .apt import NUMBER_RE
 from .spindle_control import postprocess_files
@@ -44,36 +45,50 @@ from .spindle_control import postprocess_files
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m cnclab spindle", description=__doc__.split("\n\n")[1])
-    ap.add_argument("stl", help="surface STL (ASCII or binary, mm)")
-    ap.add_argument("apt", help="APT CL file (UNITS/MM)")
+    ap = clihelp.parser(
+        "python -m cnclab spindle",
+        "Constant-cutting-speed control of a ball-end finishing path (Mgherony 2024, Sec. 7.2.3): for\n"
+        "every CL point of an APT file the working diameter on the STL part gives the spindle speed\n"
+        "that holds v_c, and the feed that holds f_z; SPINDL/FEDRAT records are inserted where they\n"
+        "change by more than the thresholds. Inputs are never overwritten; outputs must differ from\n"
+        "the inputs and from each other and are written together at the end or not at all (also on\n"
+        "Ctrl-C). Every numeric option must be finite and in its range. Errors: exit code 2 with a\n"
+        "message naming the option, or the file and line.",
+        examples=["python -m cnclab spindle data/mgherony2024/sample_ch8_part.stl "
+                  "data/mgherony2024/sample_ch8_zigzag_Af0.apt -o out.apt --vc 63 --fz 0.125 --teeth 2 --ap 0.3",
+                  "python -m cnclab spindle part.stl path.apt -o out.apt --gcode out.ngc --vc 63 --fz 0.125 "
+                  "--teeth 2 --ap 0.3 --nmax 6000 --vfmax 1200"],
+        writes=["OUT: the APT file with SPINDL/FEDRAT records",
+                "GCODE: the same program as RS274/NGC G-code (only with --gcode)"])
+    ap.add_argument("stl", help="part surface STL (ASCII or binary, mm)")
+    ap.add_argument("apt", help="APT CL file of a ball-end path (UNITS/MM)")
     ap.add_argument("-o", "--out", required=True, help="output APT file (must differ from the inputs)")
-    ap.add_argument("--vc", type=_number("--vc", 0), required=True, help="nominal cutting speed v_c (m/min)")
+    ap.add_argument("--vc", type=_number("--vc", 0), required=True, help="cutting speed v_c to hold (m/min)")
     ap.add_argument("--fz", type=_number("--fz", 0), required=True, help="feed per tooth f_z (mm)")
     ap.add_argument("--teeth", type=_number("--teeth", 1, lo_open=False, kind=int), required=True,
                     help="number of teeth z (integer >= 1)")
     ap.add_argument("--ap", type=_number("--ap", 0), required=True, help="depth of cut a_p (mm, <= D/2)")
-    ap.add_argument("--ae", type=_number("--ae", 0), default=None, help="width of cut a_e (mm; reported only)")
+    ap.add_argument("--ae", type=_number("--ae", 0), default=None, help="width of cut a_e (mm; reported only; default: not reported)")
     ap.add_argument("--tool-diameter", type=_number("--tool-diameter", 0), default=None,
-                    help="D (mm); default from CUTTER in the APT")
+                    help="ball diameter D (mm; default: from the CUTTER record of the APT)")
     ap.add_argument("--feed-direction", type=_number("--feed-direction"), default=None,
-                    help="constant A_f (deg); default eq 7-3")
-    ap.add_argument("--point", choices=POINT_RULES, default="max", help="tangent point rule (default max)")
+                    help="constant feed direction A_f (deg; default: from the path, eq. 7-3)")
+    ap.add_argument("--point", choices=POINT_RULES, default="max", help="contact point rule")
     ap.add_argument("--facet", choices=("centroid", "nearest"), default="centroid",
-                    help="facet assignment: nearest centroid (thesis) or true nearest facet")
-    ap.add_argument("--nmax", type=_number("--nmax", 0), default=None, help="spindle limit (rpm)")
-    ap.add_argument("--vfmax", type=_number("--vfmax", 0), default=None, help="feed limit (mm/min)")
-    ap.add_argument("--accel", type=_number("--accel", 0), default=None, help="spindle acceleration limit (rpm/s)")
+                    help="facet of a CL point: nearest centroid (the thesis) or the true nearest facet")
+    ap.add_argument("--nmax", type=_number("--nmax", 0), default=None, help="spindle speed limit (rpm; default: no limit)")
+    ap.add_argument("--vfmax", type=_number("--vfmax", 0), default=None, help="feed limit (mm/min; default: no limit)")
+    ap.add_argument("--accel", type=_number("--accel", 0), default=None, help="spindle acceleration limit (rpm/s; default: no limit)")
     ap.add_argument("--rpm-threshold", type=_number("--rpm-threshold", 0, lo_open=False), default=50.0,
-                    help="insert SPINDL when n changes more (rpm, >= 0)")
+                    help="insert SPINDL when the speed changes by more than this (rpm, >= 0)")
     ap.add_argument("--vf-threshold", type=_number("--vf-threshold", 0, lo_open=False), default=10.0,
-                    help="insert FEDRAT when v_f changes more (mm/min, >= 0)")
-    ap.add_argument("--gcode", default=None, help="also write RS274/NGC G-code here (differs from -o and inputs)")
+                    help="insert FEDRAT when the feed changes by more than this (mm/min, >= 0)")
+    ap.add_argument("--gcode", default=None, help="also write RS274/NGC G-code to this file (differs from -o and the inputs; default: none)")
     ap.add_argument("--mismatch-tol", type=_number("--mismatch-tol", 0), default=1.0,
                     help="part/path check: a feed CL point is off the part if its ball is farther than this "
-                         "from the surface (mm, default 1)")
+                         "from the surface (mm)")
     ap.add_argument("--max-off-share", type=_number("--max-off-share", 0, lo_open=False, hi=1), default=0.2,
-                    help="part/path check: largest accepted share of off-part feed points (default 0.2)")
+                    help="part/path check: largest accepted share of off-part feed points (0..1)")
     ap.add_argument("--allow-mismatch", action="store_true",
                     help="process even when the part/path check fails (the share is still reported)")
     args = ap.parse_args(argv)
@@ -106,7 +121,8 @@ def main(argv=None) -> int:
     print(f"n   {s['n_min']:.0f} .. {s['n_max']:.0f} rpm   v_f {s['vf_min']:.0f} .. {s['vf_max']:.0f} mm/min   "
           f"D_eff {s['d_eff_min']:.3f} .. {s['d_eff_max']:.3f} mm")
     print(f"limited points: {s['limited_points']}   v_c within ±5 %: {100 * s['vc_within_5pct_share']:.1f} % of path")
-    print(f"inserted SPINDL {s['spindl_inserted']}, FEDRAT {s['fedrat_inserted']}   -> {s['out']}   "
+    wrote = f"{s['out']}" + (f" and {args.gcode}" if args.gcode else "")
+    print(f"inserted SPINDL {s['spindl_inserted']}, FEDRAT {s['fedrat_inserted']}; wrote {wrote} "
           f"({s['seconds']:.2f} s)")
     return 0
 

@@ -507,7 +507,7 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
     if progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=len(steps), desc="spindle", unit="step")
+        bar = tqdm(total=len(steps), desc="spindle", unit="step", disable=None)   # a bar only on a terminal
 
     def tick(msg):
         if bar is not None:

@@ -24,7 +24,6 @@ command exits with 1. Fast mode (``CNCLAB_FAST=1``) uses the coarse settings of 
 """
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -32,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import clihelp
 from ..fileio import atomic_write
 from ..nc.apt import read_apt
 from ..nc.cli_plan import planned_program
@@ -199,9 +199,18 @@ def write_programs(outdir=None, works=None, quiet=False) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m cnclab programs", description=__doc__.split("\n\n")[0])
-    ap.add_argument("-o", "--outdir", default=None, help="output folder (default build/gcode)")
-    ap.add_argument("--work", action="append", default=None, help="only this work (repeatable)")
+    ap = clihelp.parser(
+        "python -m cnclab programs",
+        "Write every NC program the collection produces (every work and strategy, and the default\n"
+        "planner's program of every pocket job file in data/) through the one safe program writer.\n"
+        "A program the writer refuses is not written; its error goes into the manifest and the\n"
+        "command exits with 1. CNCLAB_FAST=1 uses the coarse settings of the notebooks.",
+        examples=["python -m cnclab programs", "python -m cnclab programs --work jacso2021 -o build/gcode"],
+        writes=["OUTDIR/<work>/<name>.ngc  one RS274/NGC program each",
+                "OUTDIR/manifest.json      per program: clearance plane, stock top, rapid rate, path time"])
+    ap.add_argument("-o", "--outdir", default=None, help="output folder (default: build/gcode)")
+    ap.add_argument("--work", action="append", default=None,
+                    help="only this work, repeatable (default: every work)")
     args = ap.parse_args(argv)
     man = write_programs(args.outdir, args.work)
     bad = [k for k, v in man["programs"].items() if "error" in v]
