@@ -16,6 +16,7 @@ COMMANDS = {
     "site": ("cnclab.site", "build the offline site build/site/index.html from what build/ holds"),
     "analyze": ("cnclab.nc.cli_analyze", "score any G-code program on a pocket job (summary, traces, engagement map)"),
     "plan": ("cnclab.nc.cli_plan", "plan a pocket job and write a machine-safe program"),
+    "job": ("cnclab.toolpath.job_format", "the job file format: reference (--schema), JSON schema, check a file"),
     "programs": ("cnclab.works.programs", "write every program the collection produces to build/gcode/<work>/"),
     "warm": ("cnclab.warm", "compile the shared numba kernels once into their cache (make test/reproduce run it first)"),
 }
