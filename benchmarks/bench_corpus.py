@@ -1,0 +1,103 @@
+"""Issue 29 on the pocket corpus (``data/pockets/corpus``, 71 jobs the planner was not developed on):
+the default planner against FreeCAD Path Adaptive (same tool, stepover, feed), one row per job, the
+per-family distribution table and the issue-29 targets, all computed by
+:mod:`cnclab.works.jacso2021.corpus_comparison` and run through :func:`cnclab.sweep.sweep` (serial,
+``CNCLAB_SWEEP_JOBS=N`` local processes, or a Dask cluster with ``CNCLAB_DASK_SCHEDULER=tcp://host:port``).
+
+FreeCAD's programs are the committed fixtures ``tests/fixtures/freecad/corpus/<job>.ngc`` (their plan
+time in ``<job>.json``); ``--update-fixtures`` regenerates them live with FreeCAD's own Python
+(``benchmarks/freecad_adaptive.py``; needs ``apt-get install freecad``) before scoring, so the
+plan-time ratio is then measured on the same machine in the same session.
+
+    .venv/bin/python benchmarks/bench_corpus.py [JOB ...] [--fast] [--update-fixtures] [--out DIR]
+
+Writes ``DIR/corpus_rows.csv`` (one row per job), ``DIR/corpus_families.csv`` (per family) and
+``DIR/corpus_targets.csv`` (the targets, met or not) and ``DIR/corpus_run.json`` (commit, date,
+mode) -- DIR defaults to ``benchmarks/results`` (the committed run the notebook
+``notebooks/jacso2021/adaptive_vs_freecad.ipynb`` draws) -- and prints them. Times are wall clock on a shared CPU: noisy.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from freecad_adaptive import freecad_available, run_freecad  # noqa: E402
+
+from cnclab.fileio import atomic_write  # noqa: E402
+from cnclab.sweep import sweep  # noqa: E402
+from cnclab.works.jacso2021 import corpus_comparison as cc  # noqa: E402
+
+
+def update_fixtures(names) -> None:
+    """Run FreeCAD Adaptive on every job and write ``<job>.ngc`` + provenance ``<job>.json``."""
+    cc.FIXTURES.mkdir(parents=True, exist_ok=True)
+    for name in names:
+        job = cc.job(name)
+        out = cc.FIXTURES / f"{name}.ngc"
+        t0 = time.perf_counter()
+        try:
+            res = run_freecad(job, out)
+        except Exception as exc:       # noqa: BLE001 -- FreeCAD's failure is recorded, not fatal
+            prov = {"job": f"data/pockets/corpus/{name}.json", "error": str(exc)[-500:]}
+            atomic_write(cc.FIXTURES / f"{name}.json", json.dumps(prov, indent=1) + "\n")
+            print(f"{name}: FreeCAD failed: {str(exc)[-200:]}", flush=True)
+            continue
+        prov = {"job": f"data/pockets/corpus/{name}.json", "freecad_version": res["freecad_version"],
+                "settings": res["settings"], "command": res["command"], "plan_time_s": res["plan_time_s"],
+                "note": "libarea Adaptive2d + PathScripts.PathAdaptive.GenerateGCode + linuxcnc_post, "
+                        "run headless by benchmarks/freecad_adaptive.py (bench_corpus.py --update-fixtures)"}
+        atomic_write(cc.FIXTURES / f"{name}.json", json.dumps(prov, indent=1) + "\n")
+        print(f"{name}: FreeCAD {res['plan_time_s']:.2f} s plan, {time.perf_counter() - t0:.1f} s wall", flush=True)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("jobs", nargs="*", help="job names (default: the whole corpus)")
+    ap.add_argument("--fast", action="store_true", help="evaluation and planning dixel doubled")
+    ap.add_argument("--update-fixtures", action="store_true", help="regenerate FreeCAD's programs first")
+    ap.add_argument("--fixtures-only", action="store_true", help="only regenerate FreeCAD's programs")
+    ap.add_argument("--out", default="benchmarks/results", help="output folder of the CSV tables")
+    a = ap.parse_args(argv)
+    names = a.jobs or cc.job_names()
+    unknown = sorted(set(names) - set(cc.job_names()))
+    if unknown:
+        raise SystemExit(f"unknown job(s) {unknown}")
+    if a.update_fixtures or a.fixtures_only:
+        if not freecad_available():
+            raise SystemExit("--update-fixtures needs FreeCAD (apt-get install -y --no-install-recommends freecad)")
+        update_fixtures(names)
+        if a.fixtures_only:
+            return None
+    t_start = time.perf_counter()
+    cc.warm()
+    rows = sweep(cc.score_job, [(n, a.fast) for n in names])
+    df = pd.DataFrame(rows).set_index("job")
+    fam, tg = cc.family_table(df), cc.targets(df)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for fname, T in (("corpus_rows.csv", df), ("corpus_families.csv", fam), ("corpus_targets.csv", tg)):
+        atomic_write(out / fname, T.to_csv())
+    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    run = {"commit": commit, "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "fast": bool(a.fast),
+           "jobs": len(names), "freecad": "live-regenerated fixtures" if a.update_fixtures else "committed fixtures",
+           "wall_s": round(time.perf_counter() - t_start, 1)}
+    atomic_write(out / "corpus_run.json", json.dumps(run, indent=1) + "\n")
+    with pd.option_context("display.width", 250, "display.max_columns", 40, "display.precision", 3):
+        print(df[cc.ROW_COLUMNS].to_string())
+        print("\n== per family (worst over the family's jobs; ratios adaptive / FreeCAD)")
+        print(fam.to_string())
+        print("\n== issue-29 targets")
+        print(tg.to_string())
+    return df
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,221 @@
+"""The default planner against FreeCAD Path Adaptive on the issue-29 pocket corpus (``data/pockets/corpus``).
+
+The corpus (71 jobs, 12 families incl. ``drawing``: outlines from public drawings) was generated once
+by ``data/pockets/corpus/make_corpus.py`` and is frozen. For every job the default planner
+(:func:`cnclab.toolpath.planners.plan`, strategy ``adaptive``) and FreeCAD Adaptive's committed program
+(``tests/fixtures/freecad/corpus/<job>.ngc``, same tool, stepover a_e = r (1 - cos theta) and feed;
+plan time from ``<job>.json``) are scored by the package's one evaluator on the job
+(:func:`cnclab.toolpath.evaluate.evaluate`) with the columns of
+:mod:`cnclab.works.jacso2021.freecad_comparison` (:func:`~.freecad_comparison.row`).
+
+Evaluation dixel: h = r / 30 clipped to [0.05, 0.2] mm (the same relative resolution for every
+tool; doubled in fast mode); the planner plans at the same h.
+
+:func:`score_job` gives one row (planner columns, FreeCAD's with the suffix ``_fc``, the per-job
+target flags); :func:`family_table` the per-family distribution (jobs, planned, worst value per axis);
+:func:`targets` the issue-29 targets over the corpus (met or not, with the measured value).
+Units: mm, mm^2, deg, min (program time), s (plan time).
+
+>>> len(job_names()) >= 60 and family("gear10_island")
+'gear'
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+import pandas as pd
+
+from ...paths import REPO_ROOT
+from ...runtime import pick
+from ...toolpath import planners
+from ...toolpath.evaluate import evaluate
+from ...toolpath.job import Job, load_job
+from . import freecad_comparison as fx
+
+__all__ = ["CORPUS", "FIXTURES", "RESULTS", "ROW_COLUMNS", "job_names", "job", "family", "resolution_mm",
+           "score_job", "family_table", "targets", "warm", "load_rows", "ratio_columns", "distribution_figure",
+           "worst_cases"]
+
+CORPUS = REPO_ROOT / "data" / "pockets" / "corpus"
+FIXTURES = REPO_ROOT / "tests" / "fixtures" / "freecad" / "corpus"
+#: the committed rows of the last full run of benchmarks/bench_corpus.py (with its run notes in the .json)
+RESULTS = REPO_ROOT / "benchmarks" / "results" / "corpus_rows.csv"
+#: the axes of the comparison: planner column -> FreeCAD column is the same name + "_fc"
+AXES = ["p95_deg", "max_deg", "share>θ+5_pct", "plunges_into_material", "rapids_into_material", "wall_gouge_mm",
+        "lifts", "uncut_beyond_mm2", "program_time_min", "plan_time_s"]
+ROW_COLUMNS = ["family", "D_mm", "theta_deg", "levels"] + AXES + [a + "_fc" for a in AXES] + ["ok_safe", "ok_engagement",
+                                                                                           "note"]
+
+
+def job_names() -> list:
+    """Names of the corpus jobs (file stems), sorted."""
+    return sorted(p.stem for p in CORPUS.glob("*.json"))
+
+
+def job(name: str) -> Job:
+    """The corpus job ``name``, read by the package's one loader."""
+    if name not in job_names():
+        raise ValueError(f"{name!r} is not a job of {CORPUS}")
+    return load_job(CORPUS / f"{name}.json")
+
+
+def family(name: str) -> str:
+    """The family the generator gave job ``name`` (its ``_family`` key)."""
+    return json.loads((CORPUS / f"{name}.json").read_text(encoding="utf-8"))["_family"]
+
+
+def resolution_mm(jb: Job, fast: bool | None = None) -> float:
+    """Evaluation and planning dixel (mm): r / 30 clipped to [0.05, 0.2]; fast mode doubles it."""
+    h = float(np.clip(jb.tool_radius / 30.0, 0.05, 0.2))
+    return h * (pick(1.0, 2.0) if fast is None else (2.0 if fast else 1.0))
+
+
+def _freecad(name: str, jb: Job, h: float) -> dict:
+    prov_file = FIXTURES / f"{name}.json"
+    if not prov_file.exists():
+        return {a + "_fc": math.nan for a in AXES} | {"note_fc": "no FreeCAD fixture"}
+    prov = json.loads(prov_file.read_text(encoding="utf-8"))
+    if "error" in prov:
+        return {a + "_fc": math.nan for a in AXES} | {"note_fc": f"FreeCAD failed: {prov['error'][-120:]}"}
+    try:
+        fp = fx.freecad_path(name, jb.tool, FIXTURES)
+    except ValueError as exc:
+        return {a + "_fc": math.nan for a in AXES} | {"plan_time_s_fc": prov["plan_time_s"], "note_fc": str(exc)}
+    r = fx.row(evaluate(fp, jb, h), float(prov["plan_time_s"]), jb=jb)
+    return {a + "_fc": r[a] for a in AXES} | {"note_fc": ""}
+
+
+def score_job(name: str, fast: bool | None = None) -> dict:
+    """One row of the corpus table for job ``name`` (see the module docstring); a job the planner
+    refuses or fails on gets NaN planner columns and the reason in ``note``."""
+    jb = job(name)
+    h = resolution_mm(jb, fast)
+    out = {"job": name, "family": family(name), "D_mm": jb.tool_diameter, "theta_deg": jb.theta_deg,
+           "levels": len(jb.levels()), "resolution_mm": h}
+    t0 = time.perf_counter()
+    try:
+        tp = planners.plan(jb, "adaptive", h)
+        t_plan = time.perf_counter() - t0
+        r = fx.row(evaluate(tp, jb, h), t_plan, jb=jb)
+        out.update({a: r[a] for a in AXES}, note="")
+    except Exception as exc:       # noqa: BLE001 -- a refusal or a crash is a result of this benchmark
+        out.update({a: math.nan for a in AXES}, note=f"{type(exc).__name__}: {str(exc)[:200]}")
+    out.update(_freecad(name, jb, h))
+    th = jb.theta_deg
+    out["ok_safe"] = bool(out["plunges_into_material"] == 0 and out["rapids_into_material"] == 0
+                          and out["wall_gouge_mm"] <= 1e-3)
+    out["ok_engagement"] = bool(out["p95_deg"] <= th + 2 and out["max_deg"] <= th + 10 and out["share>θ+5_pct"] <= 0.5)
+    return out
+
+
+def _ratio(df, a):
+    return df[a] / df[a + "_fc"].replace(0.0, np.nan)
+
+
+def family_table(df: pd.DataFrame) -> pd.DataFrame:
+    """Per family: jobs, planned, unsafe jobs, worst (max) engagement excess over theta (p95, max),
+    worst share above theta + 5, worst program-time and plan-time ratio to FreeCAD, worst lifts and
+    uncut excess over FreeCAD's (lifts - lifts_fc, uncut - uncut_fc in mm^2)."""
+    d = df.copy()
+    d["p95-θ"] = d["p95_deg"] - d["theta_deg"]
+    d["max-θ"] = d["max_deg"] - d["theta_deg"]
+    d["program ratio"] = _ratio(d, "program_time_min")
+    d["plan ratio"] = _ratio(d, "plan_time_s")
+    d["lifts - FC"] = d["lifts"] - d["lifts_fc"]
+    d["uncut - FC"] = d["uncut_beyond_mm2"] - d["uncut_beyond_mm2_fc"]
+    g = d.groupby("family")
+    T = pd.DataFrame({"jobs": g.size(), "planned": g["max_deg"].count(), "unsafe": g["ok_safe"].apply(lambda s: int((~s).sum())),
+                      "worst p95-θ": g["p95-θ"].max(), "worst max-θ": g["max-θ"].max(),
+                      "worst share>θ+5 %": g["share>θ+5_pct"].max(), "worst program ratio": g["program ratio"].max(),
+                      "median program ratio": g["program ratio"].median(), "worst plan ratio": g["plan ratio"].max(),
+                      "worst lifts - FC": g["lifts - FC"].max(), "worst uncut - FC mm2": g["uncut - FC"].max()})
+    return T
+
+
+def targets(df: pd.DataFrame) -> pd.DataFrame:
+    """The issue-29 targets over the corpus: ``target``, ``measured``, ``met`` (a job the planner did
+    not plan counts against every target)."""
+    n = len(df)
+    planned = df["max_deg"].notna()
+    prog = _ratio(df, "program_time_min")
+    rows = [
+        ("every job planned", f"{int(planned.sum())}/{n}", bool(planned.all())),
+        ("0 plunges, 0 rapids into material, 0 wall/island gouge on every job",
+         f"{int(df['ok_safe'].sum())}/{n} jobs safe", bool(df["ok_safe"].all())),
+        ("p95 <= θ+2, max <= θ+10, share>θ+5 <= 0.5 % on every job",
+         f"{int(df['ok_engagement'].sum())}/{n}; worst max-θ {float((df['max_deg'] - df['theta_deg']).max()):.1f} deg",
+         bool(df["ok_engagement"].all())),
+        ("program time <= FreeCAD's on >= 95 % of jobs", f"{float((prog <= 1.0).mean() * 100):.1f} %",
+         bool((prog <= 1.0).mean() >= 0.95)),
+        ("program time <= 1.05 x FreeCAD's on all jobs", f"worst {float(prog.max()):.3f}", bool((prog <= 1.05).all())),
+        ("lifts <= FreeCAD's on >= 95 %", f"{float((df['lifts'] <= df['lifts_fc']).mean() * 100):.1f} %",
+         bool((df["lifts"] <= df["lifts_fc"]).mean() >= 0.95)),
+        ("uncut <= FreeCAD's + 0.5 mm^2 on >= 95 %",
+         f"{float((df['uncut_beyond_mm2'] <= df['uncut_beyond_mm2_fc'] + 0.5).mean() * 100):.1f} %",
+         bool((df["uncut_beyond_mm2"] <= df["uncut_beyond_mm2_fc"] + 0.5).mean() >= 0.95)),
+        ("plan time <= FreeCAD's on the median job", f"median ratio {float(_ratio(df, 'plan_time_s').median()):.2f}",
+         bool(_ratio(df, "plan_time_s").median() <= 1.0)),
+    ]
+    ch = df[df["family"] == "channel_15d"]
+    rows.append(("1.5 D channels: lifts <= FreeCAD's + 1, program time <= FreeCAD's",
+                 f"{int(((ch['lifts'] <= ch['lifts_fc'] + 1) & (_ratio(ch, 'program_time_min') <= 1.0)).sum())}/{len(ch)}",
+                 bool(((ch["lifts"] <= ch["lifts_fc"] + 1) & (_ratio(ch, "program_time_min") <= 1.0)).all())))
+    return pd.DataFrame(rows, columns=["target", "measured", "met"]).set_index("target")
+
+
+def warm() -> None:
+    """Load (or compile) the planner's and evaluator's kernels once before anything is timed."""
+    fx.warm_planners(["adaptive"])
+
+
+def load_rows(path=RESULTS) -> pd.DataFrame:
+    """The per-job rows written by ``benchmarks/bench_corpus.py`` (``corpus_rows.csv``), indexed by job."""
+    return pd.read_csv(path, index_col="job")
+
+
+def ratio_columns(df: pd.DataFrame) -> pd.DataFrame:
+    """Per job: program-time and plan-time ratios to FreeCAD, lifts and uncut area minus FreeCAD's,
+    engagement max and p95 minus theta (ours and FreeCAD's), family."""
+    return pd.DataFrame({"family": df["family"], "program time / FC": _ratio(df, "program_time_min"),
+                         "plan time / FC": _ratio(df, "plan_time_s"), "lifts - FC": df["lifts"] - df["lifts_fc"],
+                         "uncut - FC (mm²)": df["uncut_beyond_mm2"] - df["uncut_beyond_mm2_fc"],
+                         "max - θ (deg)": df["max_deg"] - df["theta_deg"],
+                         "max - θ FC (deg)": df["max_deg_fc"] - df["theta_deg"],
+                         "p95 - θ (deg)": df["p95_deg"] - df["theta_deg"]})
+
+
+#: the panels of :func:`distribution_figure`: column of :func:`ratio_columns`, target line, log scale
+PANELS = [("program time / FC", 1.0, True), ("lifts - FC", 0.0, False), ("uncut - FC (mm²)", 0.5, False),
+          ("max - θ (deg)", 10.0, False), ("p95 - θ (deg)", 2.0, False), ("plan time / FC", 1.0, True)]
+
+
+def distribution_figure(df: pd.DataFrame):
+    """One panel per axis (:data:`PANELS`): every job as a dot in its family's column, the issue-29
+    target as a dashed line; jobs FreeCAD did not plan have no ratio and are left out of those panels."""
+    import matplotlib.pyplot as plt
+
+    R = ratio_columns(df)
+    fams = sorted(R["family"].unique())
+    fig, axs = plt.subplots(2, 3, figsize=(15, 7.5))
+    for ax, (col, target, log) in zip(axs.flat, PANELS):
+        for i, f in enumerate(fams):
+            v = R.loc[R["family"] == f, col].dropna()
+            ax.plot(i + np.linspace(-0.2, 0.2, len(v)) if len(v) > 1 else [i] * len(v), v, "o", ms=4, alpha=0.8)
+        ax.axhline(target, ls="--", color="k", lw=0.8)
+        ax.set_xticks(range(len(fams)), fams, rotation=60, ha="right", fontsize=8)
+        ax.set_title(col, fontsize=10)
+        if log:
+            ax.set_yscale("log")
+    fig.tight_layout()
+    return fig
+
+
+def worst_cases(df: pd.DataFrame, k: int = 3) -> pd.DataFrame:
+    """The ``k`` worst jobs on each axis of :data:`PANELS` (largest value): axis, job, family, value."""
+    R = ratio_columns(df)
+    rows = [(col, j, R.at[j, "family"], float(R.at[j, col])) for col, _, _ in PANELS
+            for j in R[col].dropna().sort_values(ascending=False).index[:k]]
+    return pd.DataFrame(rows, columns=["axis", "job", "family", "value"])
