@@ -11,6 +11,7 @@ import sys
 COMMANDS = {
     "claims": ("cnclab.claims", "compute every ledger row; --work W, --json, --report DIR"),
     "reproduce": ("cnclab.reproduce", "execute every notebook, export HTML/figures, write the claims report"),
+    "finish-path": ("cnclab.nc.cli_finish_path", "drop-cutter zig-zag finishing path (APT) over an STL part, the input of spindle"),
     "spindle": ("cnclab.nc.cli_spindle", "constant-v_c spindle/feed post-processing of an APT file against an STL"),
     "nb": ("cnclab.notebook_tools", "notebook housekeeping: from-py, strip, list"),
     "site": ("cnclab.site", "build the offline site build/site/index.html from what build/ holds"),

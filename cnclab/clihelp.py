@@ -19,12 +19,15 @@ without them.
 from __future__ import annotations
 
 import argparse
+import math
 import re
 
-__all__ = ["HelpFormatter", "parser", "plain"]
+__all__ = ["HelpFormatter", "number", "parser", "plain"]
 
 _ROLE_RE = re.compile(r":(?:py:)?[a-z]+:`~?([^`]+)`")
 _LITERAL_RE = re.compile(r"``([^`]*)``")
+#: a decimal number as a machine operator types it (the APT reader's grammar): no '1_0', hex, 'nan'
+_NUMBER_RE = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?", re.ASCII)
 
 
 def plain(text: str) -> str:
@@ -69,3 +72,36 @@ def parser(prog: str, description: str, examples=(), writes=(), **kwargs) -> arg
         epilog.append("Writes:\n" + "\n".join(f"  {w}" for w in writes))
     return argparse.ArgumentParser(prog=prog, description=plain(description).strip(),
                                    epilog="\n\n".join(epilog) or None, formatter_class=HelpFormatter, **kwargs)
+
+
+def number(name: str, lo=None, lo_open: bool = True, hi=None, kind=float):
+    """An argparse ``type``: a finite decimal number in the range ``(lo, hi]`` (``[lo, hi]`` with
+    ``lo_open=False``; None: unbounded); the error message names the option ``name``.
+
+    >>> conv = number("--stepover", 0)
+    >>> conv("0.25")
+    0.25
+    >>> conv("-1")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: --stepover must be finite and in (0, inf), got '-1'
+    >>> number("--teeth", 1, lo_open=False, kind=int)("2.7")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: --teeth must be an integer, got '2.7'
+    """
+    def conv(text):
+        try:
+            if not _NUMBER_RE.fullmatch(text.strip()):
+                raise ValueError(text)
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be {'an integer' if kind is int else 'a number'}, "
+                                             f"got {text!r}") from None
+        if not (math.isfinite(v) and (lo is None or (v > lo if lo_open else v >= lo)) and (hi is None or v <= hi)):
+            rng = ("(" if lo_open else "[") + (f"{lo:g}" if lo is not None else "-inf") + ", " + \
+                  (f"{hi:g}]" if hi is not None else "inf)")
+            raise argparse.ArgumentTypeError(f"{name} must be finite and in {rng}, got {text!r}")
+        return v
+    conv.__name__ = name
+    return conv
