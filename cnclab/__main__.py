@@ -28,7 +28,7 @@ def main(argv=None) -> int:
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
         print("usage: python -m cnclab <command> [options]\n\ncommands:")
         for name, (_, hlp) in COMMANDS.items():
-            print(f"  {name:<10} {hlp}")
+            print(f"  {name:<12} {hlp}")
         if argv and argv[0] not in ("-h", "--help"):
             print(f"\nerror: unknown command {argv[0]!r}")
             return 2
