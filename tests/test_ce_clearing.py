@@ -154,7 +154,7 @@ def test_reentry_plunges_are_tagged_cleared_and_the_program_counts_none(name):
     job, path, ev = _run(name)
     down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
     pl = path.is_kind("plunge") & down & (path.xyz[:, 2] < job.top_z - 1e-9)
-    assert pl.sum() >= 1 and all("cleared" in str(t) for t in path.tag[pl])
+    assert pl.sum() >= 1 and path.cleared[pl].all()
     text = write_program(path, job)
     chk = check_program(text, clearance_z=job.clearance_z, top_z=job.top_z)
     assert chk.plunges_into_material == 0 and chk.entries["plunge"] >= pl.sum()
@@ -163,12 +163,13 @@ def test_reentry_plunges_are_tagged_cleared_and_the_program_counts_none(name):
 
 
 def test_untagged_plunge_is_counted_by_the_checker():
-    """The tag is what the checker reads: the same program with the tags removed counts each plunge."""
+    """The flag is what the writer reads: the same path with the flags removed (tags kept) counts each
+    plunge."""
     from cnclab.nc.program import check_program, write_program
 
     job, path, _ = _run("island")
-    bare = ToolPath.build(path.xyz, kind=path.kinds(), tag=[str(t).replace("cleared", "").strip() for t in path.tag],
-                          feed=path.feed, spindle=path.spindle, tool=path.tool)
+    bare = ToolPath.build(path.xyz, kind=path.kinds(), tag=path.tag, feed=path.feed, spindle=path.spindle,
+                          tool=path.tool, cleared=False)
     down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
     n = int((path.is_kind("plunge") & down & (path.xyz[:, 2] < job.top_z - 1e-9)).sum())
     chk = check_program(write_program(bare, job), clearance_z=job.clearance_z, top_z=job.top_z)

@@ -14,13 +14,15 @@ FREECAD = Path(__file__).parent / "fixtures" / "freecad"
 
 
 def _pocket_path(tag_rapid=""):
-    """Helix entry at (0,0), a cut, a rapid at depth (tagged or not), a cut, retract."""
+    """Helix entry at (0,0), a cut, a rapid at depth (flagged cleared when ``tag_rapid`` is
+    ``"cleared"``, the tag text as given), a cut, retract."""
     pts = [[3, 0, 1], [3, 0, -0.75], [3, 0, -1.5], [13, 0, -1.5], [13, 5, -1.5], [20, 5, -1.5], [20, 5, 2]]
     kind = ["rapid", "helix", "helix", "cut", "rapid", "cut", "retract"]
     arc = [0, 3, 3, 0, 0, 0, 0]
     ctr = [[np.nan] * 2, [0, 0], [0, 0], [np.nan] * 2, [np.nan] * 2, [np.nan] * 2, [np.nan] * 2]
     tag = ["", "", "", "", tag_rapid, "", ""]
-    return ToolPath.build(pts, kind=kind, tag=tag, feed=400, arc=arc, arc_center=ctr, tool=Tool(6, number=3))
+    return ToolPath.build(pts, kind=kind, tag=tag, feed=400, arc=arc, arc_center=ctr, tool=Tool(6, number=3),
+                          cleared=[t == "cleared" for t in tag])
 
 
 def test_start_block_tool_spindle_and_end():
@@ -38,7 +40,7 @@ def test_start_block_tool_spindle_and_end():
     assert chk.entries == {"helix": 2, "ramp": 0, "plunge": 1} and chk.plunges_into_material == 0
 
 
-def test_rapid_below_clearance_needs_the_cleared_tag():
+def test_rapid_below_clearance_needs_the_cleared_flag():
     with pytest.raises(ValueError, match="move 4: rapid from z -1.5 to z -1.5 mm below the clearance plane"):
         write_program(_pocket_path(""), clearance_z=5, spindle_rpm=6000)
     text = write_program(_pocket_path("cleared"), clearance_z=5, spindle_rpm=6000)
@@ -131,9 +133,9 @@ def test_bad_parameters():
         write_program(_pocket_path("cleared"), clearance_z=-1, spindle_rpm=100)
 
 
-def test_plunge_tagged_cleared_is_written_as_such():
+def test_plunge_flagged_cleared_is_written_as_such():
     pts = [[0, 0, 5], [0, 0, -2], [10, 0, -2], [10, 0, 5]]
-    p = ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], tag=["", "cleared", "", ""], feed=300)
+    p = ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], cleared=[0, 1, 0, 0], feed=300)
     text = write_program(p, clearance_z=5, spindle_rpm=5000)
     assert "G1 Z-2.0000 F300.0 (cleared)" in text
     assert check_program(text, clearance_z=5).ok
@@ -170,6 +172,6 @@ def test_drop_cut_descent_tagged_cleared_only_when_vertical():
     p = ToolPath.build([[0, 0, 30], [0, 0, 2], [1, 0, 2], [2, 0, 1.5], [2, 0, 1.0]],
                        kind=["rapid", "plunge", "cut", "cut", "plunge"], feed=500)
     _tag_drop_cut_descents(p)
-    assert ["cleared" in str(t) for t in p.tag] == [False, True, False, False, True]
+    assert p.cleared.tolist() == [False, True, False, False, True]
     chk = check_program(write_program(p, clearance_z=30, spindle_rpm=2000, top_z=10), clearance_z=30, top_z=10)
     assert chk.plunges_into_material == 0 and chk.entries == {"helix": 0, "ramp": 1, "plunge": 2}

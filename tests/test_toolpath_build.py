@@ -2,8 +2,10 @@
 reordered_path, zigzag_path — kinds, z levels, lengths and times by hand."""
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
-from cnclab.toolpath.path import ToolPath, subdivide
+from cnclab.nc.program import check_program, write_program
+from cnclab.toolpath.path import ToolPath, ToolPathBuilder, helix_ring, resample_polyline, subdivide
 from cnclab.toolpath.reorder import ReorderResult, reordered_path
 from cnclab.toolpath.zigzag import zigzag_path
 
@@ -69,3 +71,79 @@ def test_ramp_reentry_descends_at_the_ramp_angle_and_returns():
     back = ramp[-1] + 1 + np.flatnonzero(p.tag[ramp[-1] + 1:] == "ramp-return")
     assert p.xyz[back[-1]].tolist() == [0.0, 5.0, -3.0]
     assert not np.any(p.is_kind("plunge") & (p.xyz[:, 2] < 0) & (np.arange(len(p)) > 2))
+
+
+# --- ToolPathBuilder, the one helix/ramp generator, the one resampler, the cleared flag -----------
+def test_builder_mark_rollback_restores_the_same_path():
+    """A tentative stretch rolled back leaves exactly the path built without it (any mark inside a
+    chunk, too); set_cleared/set_tag edit only the given moves."""
+    def head(b):
+        b.rapid([[0, 0]], z=5); b.plunge([0, 0], -1, 300); b.cut([[1, 0], [2, 0], [3, 0]], 300, z=-1)
+
+    ref = ToolPathBuilder(); head(ref); ref.retract(5, 600)
+    for m in range(2, 6):
+        b = ToolPathBuilder(); head(b)
+        b.link([[3, 3], [0, 3]], 1500, z=-1); b.rollback(m); b.rollback(b.mark())
+        if m < 5:                                    # rolled back into the cut chunk: redo its end
+            b.cut(np.c_[np.arange(m - 1, 4), np.zeros(5 - m)], 300, z=-1)
+        b.retract(5, 600)
+        p, q = b.build(), ref.build()
+        assert np.array_equal(p.xyz, q.xyz) and np.array_equal(p.kind, q.kind), m
+    b = ToolPathBuilder(); head(b); b.set_cleared(1, 2); b.set_tag(2, 4, "x")
+    p = b.build()
+    assert p.cleared.tolist() == [False, True, False, False, False]
+    assert p.tag.tolist() == ["", "", "x", "x", ""]
+    with pytest.raises(ValueError, match="mark"):
+        b.rollback(99)
+
+
+def test_builder_helix_descends_linearly_in_length_along_the_ring():
+    """helix_ring is closed and regular; the helix loses z in proportion to the xy length travelled
+    (hand value: a 4-segment ring of radius 2, depth 2 mm -> 0.5 mm a quarter turn)."""
+    ring = helix_ring((1, 1), 2.0, 4)
+    assert np.array_equal(ring[0], ring[-1]) and np.allclose(np.hypot(*(ring - 1).T), 2.0)
+    b = ToolPathBuilder(); b.rapid(ring[:1], z=0.0); b.helix(ring, 0.0, -2.0, 200)
+    p = b.build()
+    assert p.kinds().tolist() == ["rapid"] + ["helix"] * 4
+    assert np.allclose(p.xyz[1:, 2], [-0.5, -1.0, -1.5, -2.0])
+    with pytest.raises(ValueError, match="n_segments"):
+        helix_ring((0, 0), 1.0, 2)
+
+
+@given(st.lists(st.tuples(st.floats(-50, 50), st.floats(-50, 50)), min_size=1, max_size=12),
+       st.floats(0.05, 20))
+@settings(max_examples=60, deadline=None)
+def test_resample_polyline_properties(pts, step):
+    """Subdivision keeps every vertex exactly, in order, with steps <= step (+1e-9 mm: the ceil
+    tolerance of the piece count) and the same length; the uniform mode keeps both ends and the
+    length (to 1e-9 relative) with equal steps; indices name the segment each point ends on."""
+    P = np.array(pts, float)
+    Q, idx = resample_polyline(P, step, return_index=True)
+    L = np.hypot(*np.diff(P, axis=0).T).sum() if len(P) > 1 else 0.0
+    d = np.hypot(*np.diff(Q, axis=0).T)
+    assert np.all(d <= step * (1 + 1e-9) + 1e-12) and d.sum() == pytest.approx(L, rel=1e-9, abs=1e-9)
+    assert np.all(np.diff(idx) >= 0) and idx[0] == 0 and idx[-1] == len(P) - 1
+    last_of = {k: j for j, k in enumerate(idx)}            # the last point on each segment
+    assert all(np.array_equal(Q[last_of[k]], P[k]) for k in range(len(P)))
+    U = resample_polyline(P, step, uniform=True)
+    assert np.array_equal(U[0], P[0])
+    if L > 0:
+        du = np.hypot(*np.diff(U, axis=0).T)
+        assert np.allclose(U[-1], P[-1], atol=1e-9) and du.max() <= step * (1 + 1e-9)
+
+
+def test_writer_reads_the_cleared_flag_not_the_tag():
+    """A rapid at depth is written only when the move is flagged cleared; a tag saying 'cleared'
+    on an unflagged move decides nothing (the flag given explicitly)."""
+    pts = [[0, 0, 5], [0, 0, -1], [10, 0, -1], [10, 5, -1], [20, 5, -1], [20, 5, 5]]
+    kind = ["rapid", "plunge", "cut", "rapid", "cut", "retract"]
+    ok = ToolPath.build(pts, kind=kind, feed=300, cleared=[0, 1, 0, 1, 0, 0])
+    text = write_program(ok, clearance_z=5, spindle_rpm=6000)
+    assert text.count("(cleared)") == 2 and check_program(text, clearance_z=5).ok
+    lying = ToolPath.build(pts, kind=kind, feed=300, tag=["", "cleared", "", "cleared", "", ""], cleared=False)
+    with pytest.raises(ValueError, match="move 3: rapid"):
+        write_program(lying, clearance_z=5, spindle_rpm=6000)
+    # the flag survives resampling and concatenation
+    r = ok.resample(1.0)
+    assert r.cleared[r.is_kind("rapid") & (r.xyz[:, 2] < 0)].all()
+    assert ToolPath.concat([ok, ok]).cleared.sum() == 4

@@ -9,9 +9,10 @@
 * every path move written as it is (G0 for rapids, G1/G2/G3 at its feed), so the program's time is
   the path's :meth:`~cnclab.toolpath.path.ToolPath.time_s`;
 * rapids only at or above ``clearance_z``, or straight up (a retract), or where the path marks the
-  move as inside cleared area (tag containing ``"cleared"``, written as a ``(cleared)`` comment on the
-  block, as on any other move the path tags ``cleared`` (e.g. a plunge into cleared area) — the
-  evaluator proves it); any other rapid below the clearance plane is refused
+  move as inside cleared area (its ``cleared`` flag, the planner's proof; written as a ``(cleared)``
+  comment on the block, as on any other move the path flags ``cleared``, e.g. a plunge into cleared
+  area — the evaluator proves it; tags are free text and decide nothing); any other rapid below the
+  clearance plane is refused
   (``ValueError`` naming the move index). The first point is reached from the clearance plane by
   a feed move when it lies below it (never a rapid onto the part);
 * the end: a rapid straight up to ``clearance_z``, ``M5``, ``M30``.
@@ -61,10 +62,6 @@ CLEARED = "cleared"
 _TOL = 1e-6
 
 
-def _is_cleared(tag) -> bool:
-    return CLEARED in str(tag or "")
-
-
 def _param(job, name, value):
     if value is not None:
         return value
@@ -109,9 +106,9 @@ def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None,
         a, b = xyz[k - 1], xyz[k]
         above = min(a[2], b[2]) >= clearance_z - _TOL
         straight_up = b[2] >= a[2] and math.hypot(*(b[:2] - a[:2])) <= _TOL
-        if not (above or straight_up or _is_cleared(path.tag[k])):
+        if not (above or straight_up or path.cleared[k]):
             raise ValueError(f"move {k}: rapid from z {a[2]:g} to z {b[2]:g} mm below the clearance plane "
-                             f"z {clearance_z:g} mm, not marked as inside cleared area (tag 'cleared')")
+                             f"z {clearance_z:g} mm, not marked as inside cleared area (ToolPath.cleared)")
     # the moves the writer adds go to the clearance plane rounded *up* to the written precision
     cz = math.ceil(clearance_z * 10 ** decimals - 1e-6) / 10 ** decimals
     x0, y0, z0 = xyz[0]
@@ -119,7 +116,7 @@ def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None,
     comments = [""]
     first_feed = next((float(f) for f in path.feed if np.isfinite(f)), None)
     if z0 < clearance_z - _TOL:
-        if path.kind[0] == 0 and _is_cleared(path.tag[0]):
+        if path.kind[0] == 0 and path.cleared[0]:
             moves.append(Move("G0", x0, y0, z0, spindle=spindle_rpm)); comments.append(CLEARED)
         else:
             if first_feed is None:
@@ -131,7 +128,7 @@ def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None,
         if k == 0:
             continue
         moves.append(dataclasses.replace(mv, spindle=spindle_rpm))
-        comments.append(CLEARED if _is_cleared(path.tag[k]) else "")
+        comments.append(CLEARED if path.cleared[k] else "")
     xe, ye, ze = xyz[-1]
     if ze < clearance_z:
         moves.append(Move("G0", xe, ye, cz, spindle=spindle_rpm)); comments.append("")

@@ -75,18 +75,14 @@ from ..simulation.common import simulate
 from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
                                   resample_path, thesis3_path)
 from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
-from .path import ToolPath
+from .path import ToolPath, helix_ring, resample_polyline
 
 __all__ = ["PLAN_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "helical_entry",
            "ce_clearing", "clearing_path"]
 
 #: Planning labels of the clearing's points (written as ToolPath kinds/tags, see the module docstring).
 PLAN_KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
-#: tag of a move into area the planner cleared (the NC writer writes it as a ``(cleared)`` comment)
-CLEARED = "cleared"
-#: planning label of a jump's last point when it lies in the cleared region (the descent meets air)
-CLEARED_LANDING = "rapid-cleared"
-#: tag of a move into area the planner cleared (the NC writer writes it as a ``(cleared)`` comment)
+#: tag (for people) of a move into area the planner cleared; the proof is the path's ``cleared`` flag
 CLEARED = "cleared"
 #: planning label of a jump's last point when it lies in the cleared region (the descent meets air)
 CLEARED_LANDING = "rapid-cleared"
@@ -141,10 +137,7 @@ def _true_runs(mask):
 
 def _resample(P, step):
     """Polyline samples every <= ``step`` mm (a zero-length path stays one point)."""
-    P = np.asarray(P, float)
-    if not np.any(np.diff(P, axis=0)):
-        return P[:1].copy()
-    return resample_path(P, step, spline=False)
+    return resample_polyline(P, step, uniform=True)
 
 
 def helical_entry(seed_xy, entry_radius_mm: float, tool_radius: float, step_mm: float = 0.2):
@@ -154,12 +147,7 @@ def helical_entry(seed_xy, entry_radius_mm: float, tool_radius: float, step_mm: 
     e = float(entry_radius_mm) - float(tool_radius)
     if not e > 0:
         raise ValueError(f"entry_radius_mm must exceed tool_radius={tool_radius} mm, got {entry_radius_mm!r}")
-    n = max(int(math.ceil(2 * math.pi * e / step_mm)), 16)
-    a = np.linspace(0.0, 2 * math.pi, n + 1)
-    c = np.asarray(seed_xy, float)
-    pts = c + e * np.c_[np.cos(a), np.sin(a)]
-    pts[-1] = pts[0]
-    return pts
+    return helix_ring(seed_xy, e, max(int(math.ceil(2 * math.pi * e / step_mm)), 16))
 
 
 def _touch_start(contour, E, r):
@@ -561,7 +549,7 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
 
 
 def _tag_cleared_plunges(path: ToolPath, segments, top_z: float) -> ToolPath:
-    """Tag ``cleared`` the vertical plunges below ``top_z`` that follow a jump landing in the cleared
+    """Flag (and tag) ``cleared`` the vertical plunges below ``top_z`` that follow a jump landing in the cleared
     region (a jump segment tagged ``cleared`` by :func:`_segments`): the written program marks them
     ``(cleared)`` and the static checker does not count them as plunges into material (the dixel
     evaluator proves them: ``plunges_into_material``). ``path`` is changed in place and returned."""
@@ -575,6 +563,7 @@ def _tag_cleared_plunges(path: ToolPath, segments, top_z: float) -> ToolPath:
     for k, ok in zip(plunges[first:], landings):
         if ok:
             path.tag[k] = CLEARED if not path.tag[k] else f"{path.tag[k]} {CLEARED}"
+            path.cleared[k] = True
     return path
 
 

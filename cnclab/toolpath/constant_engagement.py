@@ -32,6 +32,7 @@ from ..geometry.contours import SplineContour
 from ..geometry.engagement import stepover_thesis1
 from ..simulation import dixel, pixel
 from ..simulation.common import simulate
+from .path import resample_polyline
 
 
 def rot(v, angle_rad):
@@ -254,9 +255,7 @@ def resample_path(P, step_mm, spline: bool = True):
     if spline and len(P) >= 4:
         sp, L = spline_path(P)
         return sp(np.linspace(0, L, max(int(math.ceil(L / step_mm)), 1) + 1))
-    d = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
-    u = np.linspace(0, d[-1], max(int(math.ceil(d[-1] / step_mm)), 1) + 1)
-    return np.c_[np.interp(u, d, P[:, 0]), np.interp(u, d, P[:, 1])]
+    return resample_polyline(P, step_mm, uniform=True)
 
 
 def engagement_along_path(stock_polygon, centres, tool_radius, resolution_mm, a_p=1.0,

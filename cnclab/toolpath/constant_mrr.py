@@ -42,7 +42,7 @@ from shapely.geometry import LinearRing
 from ..simulation import pixel
 from .job import Job
 from .offsets import allowed_region, link_loops, offset_levels
-from .path import ToolPath, subdivide
+from .path import ToolPath, ToolPathBuilder, helix_ring, subdivide
 
 __all__ = ["DEFAULT_TEETH", "ASSUMED_CURRENT_MODEL", "feed_per_tooth", "reference_pixel_count",
            "linear_motion", "cut_linear", "modify_path", "ModifiedPath", "spiral_entry", "fit_arcs",
@@ -347,32 +347,22 @@ def passes_path(passes, job: Job, arcs: bool = True, entry: str = "plunge", **fi
         raise ValueError(f"entry must be 'plunge' or 'helix', got {entry!r}")
     z, zc = job.top_z - job.a_p, job.clearance_z
     f, lf = job.feed_mm_min, job.link_feed_mm_min
-    pts, kind, feed, arc, ctr = [], [], [], [], []
-
-    def add(xy, zz, k, fd, a=0, c=(np.nan, np.nan)):
-        pts.append((xy[0], xy[1], zz)); kind.append(k); feed.append(fd); arc.append(a); ctr.append(c)
-
+    b = ToolPathBuilder(tool=job.tool, spindle=job.spindle_rpm, info={"name": "Kim & Yang contour-parallel"})
     e = 0.25 * job.tool_radius
-    ang = np.linspace(0.0, 2 * math.pi, 33)[1:]
     for pas in passes:
         p = np.asarray(pas, float)
         if entry == "helix":
-            ring = p[0] + e * np.c_[np.cos(ang), np.sin(ang)]
-            ring[-1] = p[0] + [e, 0.0]
-            add(p[0] + [e, 0.0], zc, "rapid", np.nan)
-            add(p[0] + [e, 0.0], job.top_z, "plunge", f)
-            for q, zz in zip(ring, job.top_z + (z - job.top_z) * np.arange(1, 33) / 32):
-                add(q, zz, "helix", f)
-            for q in ring:
-                add(q, z, "cut", f)
-            add(p[0], z, "cut", f)
+            ring = helix_ring(p[0], e, 32)
+            b.rapid(ring[:1], z=zc)
+            b.plunge(ring[0], job.top_z, f)
+            b.helix(ring, job.top_z, z, f)
+            b.cut(ring[1:], f, z=z)
+            b.cut(p[:1], f, z=z)
         else:
-            add(p[0], zc, "rapid", np.nan)
-            add(p[0], z, "plunge", f)
+            b.rapid(p[:1], z=zc)
+            b.plunge(p[0], z, f)
         items = _pass_segments(p, fit_kw) if arcs else [(q, 0, (np.nan, np.nan)) for q in p[1:]]
         for end, a, c in items:
-            add(end, z, "cut", f, a, c)
-        add(pts[-1][:2], zc, "retract", lf)
-    return ToolPath.build(np.array(pts), kind=kind, feed=np.array(feed), arc=np.array(arc),
-                          arc_center=np.array(ctr, float), spindle=job.spindle_rpm, tool=job.tool,
-                          info={"name": "Kim & Yang contour-parallel"})
+            b.add(np.asarray(end, float)[None, :2], "cut", f, z=z, arc=a, center=np.asarray(c, float)[None])
+        b.retract(zc, lf)
+    return b.build()

@@ -30,7 +30,8 @@ import math
 
 import numpy as np
 
-__all__ = ["MOTIONS", "Move", "KINDS", "ENTRY_KINDS", "Tool", "ToolPath", "arc_geometry", "sample_arc", "subdivide"]
+__all__ = ["MOTIONS", "Move", "KINDS", "ENTRY_KINDS", "Tool", "ToolPath", "ToolPathBuilder", "arc_geometry",
+           "helix_ring", "sample_arc", "subdivide", "resample_polyline"]
 
 MOTIONS = ("G0", "G1", "G2", "G3")
 
@@ -173,7 +174,11 @@ class ToolPath:
     ``xyz`` (N, 3) end points (mm); ``kind`` (N,) indices into :data:`KINDS`; ``tag`` (N,) strings;
     ``feed`` (N,) mm/min (NaN for rapids); ``spindle`` (N,) rpm in force (NaN: not set);
     ``arc`` (N,) 0 line / 2 G2 / 3 G3; ``arc_center`` (N, 2) absolute xy centre (NaN for lines);
-    ``tool`` a :class:`Tool` (or None); ``info`` free metadata (planner, parameters, timings).
+    ``tool`` a :class:`Tool` (or None); ``info`` free metadata (planner, parameters, timings);
+    ``cleared`` (N,) bool: the planner's proof (from its stock simulation, a start hole, a drop-cut
+    contact point) that the move runs only through air or cleared area. It is the one safety datum
+    the program writer and the checks read (a rapid below the clearance plane or a plunge below the
+    stock top is allowed only on a ``cleared`` move); tags are free text for people.
 
     Build with :meth:`build`:
 
@@ -191,10 +196,12 @@ class ToolPath:
     arc_center: np.ndarray
     tool: Tool | None = None
     info: dict = dataclasses.field(default_factory=dict)
+    cleared: np.ndarray | None = None
 
     def __post_init__(self):
         self.xyz = np.asarray(self.xyz, float).reshape(-1, 3)
         n = len(self.xyz)
+        self.cleared = _col(self.cleared, n, False, bool, "cleared")
         self.kind = _col(self.kind, n, _KIND_INDEX["cut"], np.int8, "kind")
         self.tag = _col(self.tag, n, "", object, "tag")
         self.feed = _col(self.feed, n, np.nan, float, "feed")
@@ -224,9 +231,12 @@ class ToolPath:
     # -- construction ------------------------------------------------------------------------
     @classmethod
     def build(cls, points, kind="cut", tag="", feed=None, spindle=None, arc=None, arc_center=None,
-              tool: Tool | None = None, info: dict | None = None) -> "ToolPath":
+              tool: Tool | None = None, info: dict | None = None, cleared=None) -> "ToolPath":
         """A path from points (N, 3) or (N, 2) (z = 0) and per-point or scalar attributes; ``kind``
-        is a name of :data:`KINDS` or a sequence of names. Rapids get NaN feed."""
+        is a name of :data:`KINDS` or a sequence of names. Rapids get NaN feed. ``cleared`` (bool,
+        scalar or per point): the planner's proof of air (see the class docstring); None (legacy,
+        until every planner passes it): True where the tag starts a word ``cleared`` — the one
+        place a tag is read, kept for planners that still state the proof in the tag only."""
         P = np.asarray(points, float)
         if P.ndim != 2 or P.shape[1] not in (2, 3):
             raise ValueError(f"points must be (N, 2) or (N, 3) mm, got shape {P.shape}")
@@ -242,7 +252,9 @@ class ToolPath:
             raise ValueError(f"kind must be one of {KINDS}, got {exc.args[0]!r}") from None
         f = _col(feed, n, np.nan, float, "feed")
         f[k == _KIND_INDEX["rapid"]] = np.nan
-        return cls(P, k, tag, f, spindle, arc, arc_center, tool, dict(info or {}))
+        if cleared is None:
+            cleared = _legacy_cleared(_col(tag, n, "", object, "tag"))
+        return cls(P, k, tag, f, spindle, arc, arc_center, tool, dict(info or {}), cleared)
 
     @classmethod
     def concat(cls, paths, tool: Tool | None = None, info: dict | None = None) -> "ToolPath":
@@ -255,7 +267,7 @@ class ToolPath:
                    np.concatenate([p.tag for p in paths]), np.concatenate([p.feed for p in paths]),
                    np.concatenate([p.spindle for p in paths]), np.concatenate([p.arc for p in paths]),
                    np.vstack([p.arc_center for p in paths]), tool,
-                   dict(info if info is not None else paths[0].info))
+                   dict(info if info is not None else paths[0].info), np.concatenate([p.cleared for p in paths]))
 
     @classmethod
     def from_segments(cls, segments, z_cut: float, feed: float, clearance_z: float = 5.0, top_z: float = 0.0,
@@ -282,70 +294,31 @@ class ToolPath:
         """
         if not clearance_z > top_z >= z_cut:
             raise ValueError(f"need clearance_z > top_z >= z_cut (mm), got {clearance_z}, {top_z}, {z_cut}")
+        if reentry not in ("plunge", "ramp"):
+            raise ValueError(f"reentry must be 'plunge' or 'ramp', got {reentry!r}")
         lf = float(feed if link_feed is None else link_feed)
-        pts, kind, tag, fd = [], [], [], []
-
-        def add(P, z, k, t, f):
-            P = np.asarray(P, float).reshape(-1, 2)
-            zz = np.broadcast_to(np.asarray(z, float), (len(P),))
-            kk = [k] * len(P) if isinstance(k, str) else list(k)
-            tt = [t] * len(P) if isinstance(t, str) else list(t)
-            ff = np.broadcast_to(np.asarray(f, float), (len(P),))
-            pts.extend(np.column_stack([P, zz])); kind.extend(kk); tag.extend(tt); fd.extend(ff)
+        b = ToolPathBuilder(tool=tool, spindle=spindle, info=info)
 
         def descend(P, k):
             """Tool above P[0] at clearance: come down (helix along P, or plunge at P[0])."""
             if k == "helix":
-                add(P[:1], top_z, "plunge", "approach", feed)
-                s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
-                add(P[1:], top_z + (z_cut - top_z) * s[1:] / s[-1], "helix", "", feed)
-                add(P[1:], z_cut, "cut", "entry-floor", feed)
+                b.add(P[:1], "plunge", feed, "approach", z=top_z)
+                b.helix(P, top_z, z_cut, feed)
+                b.add(P[1:], "cut", feed, "entry-floor", z=z_cut)
             else:
-                add(P[:1], z_cut, "plunge", "", feed)
-
-        if reentry not in ("plunge", "ramp"):
-            raise ValueError(f"reentry must be 'plunge' or 'ramp', got {reentry!r}")
-
-        def ramp_into(Q):
-            """Ramp down along the polyline Q (from Q[0]) and come back to Q[0] at depth."""
-            Q = np.asarray(Q, float).reshape(-1, 2)
-            s_q = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Q, axis=0).T))] if len(Q) > 1 else np.zeros(1)
-            L = min(float(s_q[-1]), float(ramp_max_mm))
-            H = (top_z - z_cut) / math.tan(math.radians(ramp_deg))
-            if L < 1e-3 or not H > 0:
-                add(Q[:1], z_cut, "plunge", "", feed)
-                return
-            add(Q[:1], top_z, "plunge", "approach", feed)
-
-            def at(u):
-                return np.column_stack([np.interp(u, s_q, Q[:, 0]), np.interp(u, s_q, Q[:, 1])])
-
-            inner = s_q[(s_q > 0) & (s_q < L)]
-            travelled, pos, fwd = 0.0, 0.0, True
-            while travelled < H - 1e-12:
-                end = L if fwd else 0.0
-                leg = min(abs(end - pos), H - travelled)
-                tgt = pos + leg if fwd else pos - leg
-                mid = inner[(inner > min(pos, tgt)) & (inner < max(pos, tgt))]
-                u = np.r_[np.sort(mid) if fwd else np.sort(mid)[::-1], tgt]
-                dist = travelled + np.abs(u - pos)
-                add(at(u), top_z + (z_cut - top_z) * np.minimum(dist / H, 1.0), "ramp", "", feed)
-                travelled, pos, fwd = travelled + leg, tgt, not fwd
-            if pos > 1e-9:                                       # back to the segment start at depth
-                mid = inner[inner < pos][::-1]
-                add(at(np.r_[mid, 0.0]), z_cut, "cut", "ramp-return", feed)
+                b.add(P[:1], "plunge", feed, z=z_cut)
 
         segs = [(np.asarray(P, float).reshape(-1, 2), k, t) for P, k, t in segments if len(P)]
         if not segs:
             raise ValueError("segments: no points")
         first = segs[0]
-        add(first[0][:1], clearance_z, "rapid", "", np.nan)
+        b.rapid(first[0][:1], z=clearance_z)
         descend(first[0], first[1] if isinstance(first[1], str) else "cut")
         prev_kind = "helix" if isinstance(first[1], str) and first[1] == "helix" else None
         for i, (P, k, t) in enumerate(segs):
             if isinstance(k, str) and k == "jump":
-                add(P[:1], clearance_z, "retract", "", lf)
-                add(P[-1:], clearance_z, "rapid", "", np.nan)
+                b.add(P[:1], "retract", lf, z=clearance_z)
+                b.rapid(P[-1:], z=clearance_z)
                 nxt = segs[i + 1] if i + 1 < len(segs) else None
                 if nxt is not None and isinstance(nxt[1], str) and nxt[1] == "helix":
                     prev_kind = "pending-helix"
@@ -360,32 +333,33 @@ class ToolPath:
                         if np.hypot(*np.diff(Q, axis=0).T).sum() >= ramp_max_mm:
                             break
                     Q = np.vstack(ahead)
-                    ramp_into(Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]])
+                    b.ramp(Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]], top_z, z_cut, feed,
+                           ramp_deg=ramp_deg, max_mm=ramp_max_mm)
                 else:
                     descend(P[-1:], "plunge")
                 continue
             if isinstance(k, str) and k == "helix":
                 if i > 0:
                     if prev_kind == "pending-helix":               # above the jump's end at clearance
-                        if np.hypot(*(P[0] - pts[-1][:2])) > 1e-9:
-                            add(P[:1], clearance_z, "rapid", "", np.nan)
+                        if np.hypot(*(P[0] - b.position[:2])) > 1e-9:
+                            b.rapid(P[:1], z=clearance_z)
                         descend(P, "helix")
                     else:                                  # a helix from depth: retract first
-                        add(pts[-1][None, :2], clearance_z, "retract", "", lf)
-                        add(P[:1], clearance_z, "rapid", "", np.nan)
+                        b.retract(clearance_z, lf)
+                        b.rapid(P[:1], z=clearance_z)
                         descend(P, "helix")
                 prev_kind = "helix"
                 continue
             kk = np.broadcast_to(np.asarray(k, dtype=object), (len(P),))
             if np.any(~np.isin(kk, ("cut", "link"))):
                 raise ValueError(f"segment kinds must be cut/link (or a whole jump/helix segment), got {set(kk)}")
-            skip = 1 if pts and np.hypot(*(P[0] - pts[-1][:2])) < 1e-9 and abs(pts[-1][2] - z_cut) < 1e-9 else 0
+            last = b.position
+            skip = 1 if last is not None and np.hypot(*(P[0] - last[:2])) < 1e-9 and abs(last[2] - z_cut) < 1e-9 else 0
             tt = np.broadcast_to(np.asarray(t, dtype=object), (len(P),))
-            add(P[skip:], z_cut, kk[skip:], tt[skip:], np.where(kk[skip:] == "link", lf, float(feed)))
+            b.add(P[skip:], kk[skip:], np.where(kk[skip:] == "link", lf, float(feed)), tt[skip:], z=z_cut)
             prev_kind = None
-        add(np.asarray(pts[-1][:2])[None], clearance_z, "retract", "", lf)
-        return cls.build(np.array(pts), kind=kind, tag=np.array(tag, dtype=object), feed=np.array(fd, float),
-                         spindle=spindle, tool=tool, info=info)
+        b.retract(clearance_z, lf)
+        return b.build()
 
     def __len__(self) -> int:
         return len(self.xyz)
@@ -460,14 +434,10 @@ class ToolPath:
         if not (math.isfinite(max_step) and max_step > 0):
             raise ValueError(f"max_step must be a finite number > 0 mm, got {max_step!r}")
         P, src = self.polyline(max_step)
-        out_p, out_i = [P[:1]], [src[:1]]
-        for j in range(1, len(P)):
-            n = max(1, int(math.ceil(np.linalg.norm(P[j] - P[j - 1]) / max_step - 1e-9)))
-            t = np.arange(1, n + 1)[:, None] / n
-            out_p.append(P[j - 1] + t * (P[j] - P[j - 1])); out_i.append(np.full(n, src[j]))
-        Q, I = np.vstack(out_p), np.concatenate(out_i)
+        Q, seg = resample_polyline(P, max_step, return_index=True)
+        I = src[seg]
         out = ToolPath(Q, self.kind[I], self.tag[I], self.feed[I], self.spindle[I], None, None,
-                       self.tool, dict(self.info))
+                       self.tool, dict(self.info), self.cleared[I])
         return (out, I) if return_index else out
 
     # -- program moves -----------------------------------------------------------------------
@@ -526,12 +496,217 @@ class ToolPath:
         if not pts:
             return cls(np.zeros((0, 3)), None, None, None, None, None, None, tool, dict(info or {}))
         return cls.build(np.array(pts), kind=kind, feed=np.array(feed, float), spindle=np.array(spin, float),
-                         arc=np.array(arc), arc_center=np.array(ctr, float), tool=tool, info=info)
+                         arc=np.array(arc), arc_center=np.array(ctr, float), tool=tool, info=info, cleared=False)
+
+
+def _legacy_cleared(tags) -> np.ndarray:
+    """Legacy default of ``ToolPath.build(cleared=None)``: the proof stated in the tag text only."""
+    return np.array(["cleared" in str(t) for t in tags], bool)
+
+
+def helix_ring(center_xy, radius: float, n_segments: int) -> np.ndarray:
+    """The xy trace (n_segments + 1, 2) mm of one counter-clockwise turn of radius ``radius`` mm about
+    ``center_xy``, from angle 0 back to it (last point = first point exactly): the ring a helical
+    entry descends along (:meth:`ToolPathBuilder.helix`).
+
+    >>> helix_ring((0, 0), 2.0, 4).round(12).tolist()
+    [[2.0, 0.0], [0.0, 2.0], [-2.0, 0.0], [-0.0, -2.0], [2.0, 0.0]]
+    """
+    if not (math.isfinite(radius) and radius > 0):
+        raise ValueError(f"radius must be a finite number > 0 mm, got {radius!r}")
+    if int(n_segments) != n_segments or n_segments < 3:
+        raise ValueError(f"n_segments must be an integer >= 3, got {n_segments!r}")
+    a = np.linspace(0.0, 2 * math.pi, int(n_segments) + 1)
+    pts = np.asarray(center_xy, float) + radius * np.c_[np.cos(a), np.sin(a)]
+    pts[-1] = pts[0]
+    return pts
+
+
+class ToolPathBuilder:
+    """Moves appended one block at a time, then :meth:`build` one :class:`ToolPath`: the one way a
+    planner assembles a path (no parallel lists of x, y, z, kind, feed, tag).
+
+    Every method appends moves *to* points (mm; (m, 2) points take ``z``), with a kind of
+    :data:`KINDS`, a feed [mm/min] (NaN for rapids), a free ``tag`` and the ``cleared`` flag (the
+    planner's proof that the move runs through air or cleared area). :meth:`mark` /
+    :meth:`rollback` undo a tentative stretch (an entry attempt that failed).
+
+    >>> b = ToolPathBuilder(spindle=6000)
+    >>> b.rapid([[0, 0]], z=5); b.plunge([0, 0], -1, 300, cleared=True); b.cut([[10, 0]], 300, z=-1)
+    >>> m = b.mark(); b.cut([[10, 10]], 300, z=-1); b.rollback(m); b.retract(5, 300)
+    >>> p = b.build(); p.kinds().tolist(), p.cleared.tolist()
+    (['rapid', 'plunge', 'cut', 'retract'], [False, True, False, False])
+    """
+
+    def __init__(self, *, tool: Tool | None = None, spindle=None, info: dict | None = None):
+        self.tool, self.spindle, self.info = tool, spindle, dict(info or {})
+        self._chunks = []            # (xyz (m, 3), kind (m,), feed, tag, arc, center (m, 2), cleared)
+        self._n = 0
+
+    def __len__(self) -> int:
+        return self._n
+
+    @property
+    def position(self) -> np.ndarray | None:
+        """The end point (3,) mm of the last move (None before the first)."""
+        return self._chunks[-1][0][-1] if self._chunks else None
+
+    def add(self, points, kind, feed=np.nan, tag="", *, z=None, cleared=False, arc=0, center=None) -> None:
+        """Moves to ``points`` ((m, 3), or (m, 2) at height ``z`` mm, scalar or (m,)); ``kind``,
+        ``feed`` [mm/min], ``tag``, ``cleared``, ``arc`` (0/2/3) scalars or per point; ``center``
+        (m, 2) absolute arc centres [mm]."""
+        P = np.asarray(points, float)
+        if P.ndim == 1:
+            P = P[None]
+        m = len(P)
+        if m == 0:
+            return
+        if P.shape[1] == 2:
+            if z is None:
+                raise ValueError("z (mm) is required for (m, 2) points")
+            P = np.column_stack([P, np.broadcast_to(np.asarray(z, float), (m,))])
+        elif P.shape[1] != 3:
+            raise ValueError(f"points must be (m, 2) or (m, 3) mm, got shape {P.shape}")
+        names = np.broadcast_to(np.asarray(kind, dtype=object), (m,))
+        try:
+            k = np.array([_KIND_INDEX[x] for x in names], np.int8)
+        except KeyError as exc:
+            raise ValueError(f"kind must be one of {KINDS}, got {exc.args[0]!r}") from None
+        ctr = np.full((m, 2), np.nan) if center is None else np.broadcast_to(np.asarray(center, float), (m, 2))
+        self._chunks.append((P, k, np.broadcast_to(np.asarray(feed, float), (m,)),
+                             np.broadcast_to(np.asarray(tag, dtype=object), (m,)),
+                             np.broadcast_to(np.asarray(arc, np.int8), (m,)), ctr,
+                             np.broadcast_to(np.asarray(cleared, bool), (m,))))
+        self._n += m
+
+    def rapid(self, points, *, z=None, tag="", cleared=False) -> None:
+        """G0 moves (below the clearance plane only with ``cleared``: the writer refuses others)."""
+        self.add(points, "rapid", np.nan, tag, z=z, cleared=cleared)
+
+    def cut(self, points, feed, *, z=None, tag="", cleared=False) -> None:
+        """Cutting feed moves at ``feed`` mm/min."""
+        self.add(points, "cut", feed, tag, z=z, cleared=cleared)
+
+    def link(self, points, feed, *, z=None, tag="", cleared=False) -> None:
+        """Feed moves at depth through cleared area (no material expected)."""
+        self.add(points, "link", feed, tag, z=z, cleared=cleared)
+
+    def plunge(self, xy, z, feed, *, tag="", cleared=False) -> None:
+        """A straight-down feed move to (xy, ``z``) — into air or cleared area only (``cleared``)."""
+        self.add(np.asarray(xy, float).reshape(1, -1)[:, :2], "plunge", feed, tag, z=z, cleared=cleared)
+
+    def retract(self, z, feed, *, tag="") -> None:
+        """Straight up from the current position to ``z`` mm at ``feed`` mm/min."""
+        if self.position is None:
+            raise ValueError("retract: no position yet")
+        self.add(self.position[None, :2], "retract", feed, tag, z=z)
+
+    def arc(self, end, center_xy, ccw: bool, feed, *, kind="cut", tag="", cleared=False) -> None:
+        """One circular (or, with a z change, helical) move to ``end`` (3,) mm about ``center_xy``
+        (absolute, mm): G3 when ``ccw``, else G2."""
+        self.add(np.asarray(end, float)[None], kind, feed, tag, cleared=cleared, arc=3 if ccw else 2,
+                 center=np.asarray(center_xy, float)[None])
+
+    def helix(self, ring_xy, z_from: float, z_to: float, feed, *, tag="", cleared=False) -> None:
+        """The one helical-entry generator: descend from ``z_from`` (at ``ring_xy[0]``, where the tool
+        is) to ``z_to`` mm along the polyline ``ring_xy`` (e.g. :func:`helix_ring`), z linear in the
+        xy length travelled; ``helix`` moves to ``ring_xy[1:]``."""
+        P = np.asarray(ring_xy, float).reshape(-1, 2)
+        s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+        if len(P) < 2 or not s[-1] > 0:
+            raise ValueError("helix: ring_xy must be a polyline of positive length (mm)")
+        self.add(P[1:], "helix", feed, tag, z=z_from + (z_to - z_from) * s[1:] / s[-1], cleared=cleared)
+
+    def ramp(self, path_xy, z_from: float, z_to: float, feed, *, ramp_deg: float = 3.0,
+             max_mm: float = 10.0) -> None:
+        """The one ramp-entry generator: from above ``path_xy[0]`` (the tool at or above ``z_from``)
+        down at ``ramp_deg`` degrees from ``z_from`` to ``z_to`` mm, back and forth along the first
+        ``max_mm`` mm of the polyline ``path_xy``, then back to its start at depth (a ``cut`` tagged
+        ``ramp-return``). A path shorter than 1e-3 mm gets a vertical plunge instead."""
+        Q = np.asarray(path_xy, float).reshape(-1, 2)
+        s_q = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Q, axis=0).T))] if len(Q) > 1 else np.zeros(1)
+        L = min(float(s_q[-1]), float(max_mm))
+        H = (z_from - z_to) / math.tan(math.radians(ramp_deg))
+        if L < 1e-3 or not H > 0:
+            self.add(Q[:1], "plunge", feed, z=z_to)
+            return
+        self.add(Q[:1], "plunge", feed, "approach", z=z_from)
+
+        def at(u):
+            return np.column_stack([np.interp(u, s_q, Q[:, 0]), np.interp(u, s_q, Q[:, 1])])
+
+        inner = s_q[(s_q > 0) & (s_q < L)]
+        travelled, pos, fwd = 0.0, 0.0, True
+        while travelled < H - 1e-12:
+            end = L if fwd else 0.0
+            leg = min(abs(end - pos), H - travelled)
+            tgt = pos + leg if fwd else pos - leg
+            mid = inner[(inner > min(pos, tgt)) & (inner < max(pos, tgt))]
+            u = np.r_[np.sort(mid) if fwd else np.sort(mid)[::-1], tgt]
+            dist = travelled + np.abs(u - pos)
+            self.add(at(u), "ramp", feed, z=z_from + (z_to - z_from) * np.minimum(dist / H, 1.0))
+            travelled, pos, fwd = travelled + leg, tgt, not fwd
+        if pos > 1e-9:                                       # back to the segment start at depth
+            mid = inner[inner < pos][::-1]
+            self.add(at(np.r_[mid, 0.0]), "cut", feed, "ramp-return", z=z_to)
+
+    def mark(self) -> int:
+        """The number of moves so far (a point to :meth:`rollback` to)."""
+        return self._n
+
+    def rollback(self, mark: int) -> None:
+        """Drop every move appended after :meth:`mark` returned ``mark``."""
+        if not 0 <= mark <= self._n:
+            raise ValueError(f"mark must be in [0, {self._n}], got {mark!r}")
+        while self._n > mark:
+            chunk = self._chunks[-1]
+            m = len(chunk[0])
+            if self._n - m >= mark:
+                self._chunks.pop()
+                self._n -= m
+            else:
+                keep = mark - (self._n - m)
+                self._chunks[-1] = tuple(c[:keep] for c in chunk)
+                self._n = mark
+
+    def set_tag(self, start: int, stop: int, tag) -> None:
+        """Replace the tags of moves ``start:stop`` (indices as :meth:`mark` counts them)."""
+        self._edit(start, stop, 3, tag)
+
+    def set_cleared(self, start: int, stop: int, cleared=True) -> None:
+        """Set the ``cleared`` flag of moves ``start:stop``."""
+        self._edit(start, stop, 6, cleared)
+
+    def _edit(self, start, stop, col, value):
+        i = 0
+        for c, chunk in enumerate(self._chunks):
+            m = len(chunk[0])
+            a, b = max(start - i, 0), min(stop - i, m)
+            if a < b:
+                arr = np.array(chunk[col])
+                arr[a:b] = value
+                self._chunks[c] = chunk[:col] + (arr,) + chunk[col + 1:]
+            i += m
+
+    def build(self, drop_repeats: bool = False, **info) -> ToolPath:
+        """The :class:`ToolPath` of the moves (``info`` keys added to the builder's); with
+        ``drop_repeats`` a move to the point the tool is already at is left out (the first kept)."""
+        if not self._chunks:
+            raise ValueError("ToolPathBuilder: no moves")
+        col = [np.concatenate([c[j] for c in self._chunks]) for j in range(7)]
+        col[5] = np.vstack([c[5] for c in self._chunks])
+        if drop_repeats:
+            keep = np.r_[True, np.any(np.diff(col[0], axis=0) != 0, axis=1)]
+            col = [c[keep] for c in col]
+        f = col[2].copy()
+        f[col[1] == _KIND_INDEX["rapid"]] = np.nan
+        return ToolPath(col[0], col[1], col[3].astype(object), f, self.spindle, col[4], col[5], self.tool,
+                        {**self.info, **info}, col[6])
 
 
 def subdivide(points, max_step: float) -> np.ndarray:
     """A polyline (N, 2) or (N, 3) mm with every segment split into equal pieces at most ``max_step``
-    mm long (the vertices kept, repeated points dropped): :meth:`ToolPath.resample` on the points.
+    mm long (the vertices kept, repeated points dropped): :func:`resample_polyline`.
 
     >>> subdivide([[0, 0], [1, 0]], 0.4).tolist()
     [[0.0, 0.0], [0.3333333333333333, 0.0], [0.6666666666666666, 0.0], [1.0, 0.0]]
@@ -539,5 +714,46 @@ def subdivide(points, max_step: float) -> np.ndarray:
     P = np.asarray(points, float)
     if P.ndim != 2 or P.shape[1] not in (2, 3) or len(P) < 1:
         raise ValueError(f"points must be (N, 2) or (N, 3) mm with N >= 1, got shape {P.shape}")
-    Q = ToolPath.build(P, kind="cut", feed=1.0).resample(max_step).xyz[:, :P.shape[1]]
+    Q = resample_polyline(P, max_step)
     return Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]]          # zero-length segments dropped
+
+
+def resample_polyline(points, step_mm: float, *, uniform: bool = False, return_index: bool = False):
+    """The one polyline resampler: points (N, d) mm -> points at most ``step_mm`` mm apart.
+
+    ``uniform=False``: every segment split into ``ceil(L / step_mm)`` equal pieces, the vertices kept
+    exactly (a zero-length segment gives its end point once more); ``uniform=True``: ``ceil(L_total /
+    step_mm)`` equal pieces along the whole length (linear interpolation in the length travelled; the
+    inner vertices are not kept; a zero-length polyline gives its first point). With ``return_index``
+    also, per output point, the index k of the input segment ``P[k-1] -> P[k]`` it ends on (0 for
+    the first point): ``(points, index)``.
+
+    >>> resample_polyline([[0, 0], [1, 0], [1, 0.5]], 0.4).round(4).tolist()
+    [[0.0, 0.0], [0.3333, 0.0], [0.6667, 0.0], [1.0, 0.0], [1.0, 0.25], [1.0, 0.5]]
+    >>> resample_polyline([[0, 0], [1, 0], [1, 0.5]], 0.4, uniform=True)[:, 0].round(4).tolist()
+    [0.0, 0.375, 0.75, 1.0, 1.0]
+    """
+    P = np.asarray(points, float)
+    if P.ndim != 2 or len(P) < 1:
+        raise ValueError(f"points must be (N, d) mm with N >= 1, got shape {P.shape}")
+    if not (math.isfinite(step_mm) and step_mm > 0):
+        raise ValueError(f"step_mm must be a finite number > 0 mm, got {step_mm!r}")
+    D = np.diff(P, axis=0)
+    L = np.hypot(D[:, 0], D[:, 1]) if P.shape[1] == 2 else np.linalg.norm(D, axis=1)
+    if uniform:
+        s = np.r_[0.0, np.cumsum(L)]
+        if len(P) < 2 or s[-1] == 0:
+            Q, idx = P[:1].copy(), np.zeros(1, int)
+        else:
+            u = np.linspace(0, s[-1], max(int(math.ceil(s[-1] / step_mm)), 1) + 1)
+            Q = np.column_stack([np.interp(u, s, P[:, j]) for j in range(P.shape[1])])
+            idx = np.r_[0, np.minimum(np.searchsorted(s, u[1:], side="left"), len(P) - 1)]
+        return (Q, idx) if return_index else Q
+    m = np.maximum(1, np.ceil(L / step_mm - 1e-9)).astype(np.int64)
+    seg = np.repeat(np.arange(1, len(P)), m)                # segment (end index) of every new point
+    t = (np.arange(seg.size) - np.repeat(np.cumsum(m) - m, m) + 1) / m[seg - 1]
+    a = P[seg - 1]
+    Q = np.vstack([P[:1], a + t[:, None] * (P[seg] - a)])
+    Q[np.cumsum(m)] = P[1:]                                 # the vertices exactly
+    idx = np.r_[0, seg]
+    return (Q, idx) if return_index else Q

@@ -90,7 +90,7 @@ def _to_toolpath(segs, job: Job, name: str, info: dict, resolution_mm: float = 0
 
 
 def _tag_hole_plunges(path: ToolPath, job: Job) -> ToolPath:
-    """Tag ``cleared`` every vertical plunge below the stock top whose tool disc lies inside the
+    """Flag (and tag) ``cleared`` every vertical plunge below the stock top whose tool disc lies inside the
     pre-drilled start hole (air: the program marks it ``(cleared)``); in place, returned."""
     if job.start_hole is None:
         return path
@@ -100,6 +100,7 @@ def _tag_hole_plunges(path: ToolPath, job: Job) -> ToolPath:
     inside = np.hypot(path.xyz[:, 0] - cx, path.xyz[:, 1] - cy) <= 0.5 * d - job.tool_radius + 1e-9
     for k in np.flatnonzero(pl & inside):
         path.tag[k] = "cleared" if not path.tag[k] else f"{path.tag[k]} cleared"
+        path.cleared[k] = True
     return path
 
 

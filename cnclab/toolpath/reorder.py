@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 
 from ..cutting.spindle_model import working_diameters
 from ..cutting.speeds import spindle_speed
-from .path import Tool, ToolPath
+from .path import Tool, ToolPath, ToolPathBuilder, resample_polyline
 
 __all__ = ["densify", "neighbour_sets", "ReorderResult", "reorder_path", "reordered_path", "path_metrics"]
 
@@ -52,14 +52,10 @@ def densify(points, d_lim: float) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"points must have shape (N, 3), got {P.shape}")
     if not (np.isfinite(d_lim) and d_lim > 0):
         raise ValueError(f"d_lim must be > 0 mm, got {d_lim}")
-    d = np.linalg.norm(np.diff(P, axis=0), axis=1)                  # eq 9-1
-    I = np.maximum(1, np.ceil(d / d_lim - 1e-12)).astype(np.int64)  # eq 9-2
-    seg = np.repeat(np.arange(len(d)), I)
-    j = np.arange(seg.size) - np.repeat(np.cumsum(I) - I, I)
-    frac = j / I[seg]
-    dense = P[seg] + frac[:, None] * (P[seg + 1] - P[seg])          # eq 9-3
-    return np.vstack([dense, P[-1:]]), np.append(seg, len(P) - 1)
-
+    # eqs 9-1 ... 9-3: every segment in ceil(d / d_lim) equal pieces (the one resampler)
+    dense, end = resample_polyline(P, d_lim, return_index=True)
+    vertex = np.r_[True, end[1:] != np.r_[end[2:], -1]]               # the pieces ending on a vertex
+    return dense, np.where(vertex, end, end - 1)
 
 def neighbour_sets(points, k: int, rule: str = "knn", radius_step: float | None = None, tree=None):
     """Static neighbour sets (self excluded) as CSR arrays ``(indptr, indices)``.
@@ -268,13 +264,10 @@ def reordered_path(points, result: ReorderResult, *, feed_mm_min: float, clearan
     if P.ndim != 2 or P.shape[1] != 3 or len(order) != len(P):
         raise ValueError(f"points must be (N, 3) with N = len(result.order), got {P.shape}, {len(order)}")
     cuts = np.flatnonzero(np.asarray(result.jump, bool))
-    pts, kind = [], []
+    b = ToolPathBuilder(tool=tool, spindle=spindle_rpm, info={"name": "reordered", "n_jumps": result.n_jumps})
     for seg in np.split(P[order], cuts[cuts > 0]):
-        pts += [[seg[0, 0], seg[0, 1], clearance_z], seg[0]]
-        kind += ["rapid", "plunge"]
-        pts += list(seg[1:])
-        kind += ["cut"] * (len(seg) - 1)
-        pts.append([seg[-1, 0], seg[-1, 1], clearance_z])
-        kind.append("retract")
-    return ToolPath.build(np.array(pts, float), kind=kind, feed=feed_mm_min, spindle=spindle_rpm, tool=tool,
-                          info={"name": "reordered", "n_jumps": result.n_jumps})
+        b.rapid(seg[:1, :2], z=clearance_z)
+        b.plunge(seg[0, :2], seg[0, 2], feed_mm_min)
+        b.cut(seg[1:], feed_mm_min)
+        b.retract(clearance_z, feed_mm_min)
+    return b.build()

@@ -22,7 +22,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString
 
-from .path import ToolPath
+from .path import ToolPath, ToolPathBuilder
 
 __all__ = ["hoang_table1_points", "zigzag_points", "zigzag_path", "n_passes_covering", "raster_lines",
            "raster_passes"]
@@ -104,19 +104,15 @@ def zigzag_path(points, z_cut: float, z_clear: float, feed: float, spindle: floa
         raise ValueError(f"points must have shape (k >= 2, 2), got {p.shape}")
     if not z_clear > z_cut:
         raise ValueError(f"z_clear must be above z_cut (mm), got z_clear={z_clear}, z_cut={z_cut}")
-    pf = feed if plunge_feed is None else plunge_feed
-    xy = np.vstack([p[:1], p[:1], p, p[-1:]] + ([p[:1]] if return_home else []))
-    z = np.r_[z_clear, z_cut, np.full(len(p), z_cut), z_clear] + 0.0
-    kinds = ["rapid", "plunge"] + ["cut"] * len(p) + ["retract"]
-    feeds = [np.nan, pf] + [feed] * len(p) + [feed]
+    b = ToolPathBuilder(tool=tool, spindle=spindle, info={"name": "zig-zag"})
+    z_clear, z_cut = float(z_clear) + 0.0, float(z_cut) + 0.0               # no -0.0 in the program
+    b.rapid(p[:1], z=z_clear)
+    b.plunge(p[0], z_cut, feed if plunge_feed is None else plunge_feed)
+    b.cut(p, feed, z=z_cut)
+    b.retract(z_clear, feed)
     if return_home:
-        z = np.r_[z, z_clear]
-        kinds.append("rapid")
-        feeds.append(np.nan)
-    P = np.column_stack([xy, z])
-    keep = np.r_[True, np.any(np.diff(P, axis=0) != 0, axis=1)]      # the plunge lands on points[0]
-    return ToolPath.build(P[keep], kind=list(np.array(kinds, dtype=object)[keep]), feed=np.array(feeds)[keep],
-                          spindle=spindle, tool=tool, info={"name": "zig-zag"})
+        b.rapid(p[:1], z=z_clear)
+    return b.build(drop_repeats=True)                       # the plunge lands on points[0]
 
 
 def raster_lines(region, stepover: float, min_length: float = 1e-6) -> list[np.ndarray]:

@@ -115,7 +115,7 @@ def _is_job_file(p) -> bool:
 
 
 def _tag_drop_cut_descents(path: ToolPath) -> ToolPath:
-    """Tag ``cleared`` the vertical feed moves that come down onto a drop-cut CL point of a finishing
+    """Flag (and tag) ``cleared`` the vertical feed moves that come down onto a drop-cut CL point of a finishing
     path (the ch. 8 approach from the clearance plane). The point's z is the ball's first contact
     height over the part mesh (:func:`cnclab.toolpath.dropcutter.drop_cutter_z`, the maximum over
     every facet in reach), so the ball above it touches no facet: the descent meets no part
@@ -124,6 +124,7 @@ def _tag_drop_cut_descents(path: ToolPath) -> ToolPath:
     xy_same = np.r_[False, np.all(np.abs(np.diff(path.xyz[:, :2], axis=0)) <= 1e-9, axis=1)]
     for k in np.flatnonzero(path.is_kind("plunge") & down & xy_same):
         path.tag[k] = "cleared (drop-cut contact point)" if not path.tag[k] else f"{path.tag[k]} cleared"
+        path.cleared[k] = True
     return path
 
 
