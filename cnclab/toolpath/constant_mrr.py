@@ -355,7 +355,7 @@ def passes_path(passes, job: Job, arcs: bool = True, entry: str = "plunge", **fi
             ring = helix_ring(p[0], e, 32)
             b.rapid(ring[:1], z=zc)
             b.plunge(ring[0], job.top_z, f)
-            b.helix(ring, job.top_z, z, f)
+            b.helix(ring, job.top_z, z, f, equal_steps=True)
             b.cut(ring[1:], f, z=z)
             b.cut(p[:1], f, z=z)
         else:

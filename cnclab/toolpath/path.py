@@ -607,15 +607,19 @@ class ToolPathBuilder:
         self.add(np.asarray(end, float)[None], kind, feed, tag, cleared=cleared, arc=3 if ccw else 2,
                  center=np.asarray(center_xy, float)[None])
 
-    def helix(self, ring_xy, z_from: float, z_to: float, feed, *, tag="", cleared=False) -> None:
+    def helix(self, ring_xy, z_from: float, z_to: float, feed, *, tag="", cleared=False,
+              equal_steps: bool = False) -> None:
         """The one helical-entry generator: descend from ``z_from`` (at ``ring_xy[0]``, where the tool
         is) to ``z_to`` mm along the polyline ``ring_xy`` (e.g. :func:`helix_ring`), z linear in the
-        xy length travelled; ``helix`` moves to ``ring_xy[1:]``."""
+        xy length travelled; ``helix`` moves to ``ring_xy[1:]``. ``equal_steps``: the ring's chords
+        are equal (a :func:`helix_ring`), so move k of n ends at exactly k/n of the depth (no
+        rounding of the lengths' ratio)."""
         P = np.asarray(ring_xy, float).reshape(-1, 2)
         s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
         if len(P) < 2 or not s[-1] > 0:
             raise ValueError("helix: ring_xy must be a polyline of positive length (mm)")
-        self.add(P[1:], "helix", feed, tag, z=z_from + (z_to - z_from) * s[1:] / s[-1], cleared=cleared)
+        t = np.arange(1, len(P)) / (len(P) - 1) if equal_steps else s[1:] / s[-1]
+        self.add(P[1:], "helix", feed, tag, z=z_from + (z_to - z_from) * t, cleared=cleared)
 
     def ramp(self, path_xy, z_from: float, z_to: float, feed, *, ramp_deg: float = 3.0,
              max_mm: float = 10.0) -> None:
