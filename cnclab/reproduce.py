@@ -277,7 +277,7 @@ def _previous_seconds(rel: str) -> float:
 #: notebooks that use none of the kernels ``cnclab warm`` compiles (they start while it runs)
 _NO_SHARED_KERNELS = ("mgherony2024/ch6_neural_networks.ipynb",)
 _KNOWN_LONG = ("kim_yang2006/ce_vs_constant_mrr.ipynb", "mgherony2024/ch6_neural_networks.ipynb",
-               "jacso2021/ce_clearing_vs_adaptive.ipynb", "jacso2021/s4_star_pocket_hybrid_path.ipynb",
+               "jacso2021/adaptive_vs_freecad.ipynb", "jacso2021/s4_star_pocket_hybrid_path.ipynb",
                "jacso2021/thesis4_trochoidal_slots.ipynb", "mgherony2024/ch7_spindle_speed_control.ipynb",
                "mgherony2024/ch9_toolpath_reordering.ipynb")
 

@@ -55,7 +55,7 @@ READING_ORDER = [
     ("jacso2021/thesis2_3_constant_engagement_paths.ipynb", "paths that hold the engagement constant (Theses II–III)"),
     ("jacso2021/thesis4_trochoidal_slots.ipynb", "trochoidal slots: circle, cycloid, constant engagement (Thesis IV)"),
     ("jacso2021/s4_star_pocket_hybrid_path.ipynb", "a whole pocket: the star-pocket hybrid path"),
-    ("jacso2021/ce_clearing_vs_adaptive.ipynb", "constant-engagement clearing vs FreeCAD Adaptive on eight pockets"),
+    ("jacso2021/adaptive_vs_freecad.ipynb", "the adaptive planner vs FreeCAD Adaptive: eight pockets and a 71-job corpus"),
     ("kim_yang2006/constant_mrr_contour_parallel.ipynb", "constant MRR by inserting path segments (Kim & Yang)"),
     ("kim_yang2006/ce_vs_constant_mrr.ipynb", "constant MRR vs constant engagement on one pocket"),
     ("hoang2024/eqs_and_table2_constant_volume.ipynb", "ball-end scallops and the constant-volume step (Hoang)"),
