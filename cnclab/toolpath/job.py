@@ -10,6 +10,8 @@ The JSON job format (``data/jacso2021/*.json``, ``data/kim_yang2006/pocket_120x8
 
     {"polygon": [[x, y], ...]            (or "star": {star_polygon keywords}),
      "islands": [[[x, y], ...], ...],    optional
+     (every ring, outline or island, may also be {"circle": {"center": [x, y], "radius": r}}: flattened
+      to an inscribed polygon of chord error "tolerance", default 0.005 mm, see ring_points)
      "start_hole": {"center": [x, y], "diameter": d},   optional (else the planner makes its entry)
      "tool_diameter": 6, "teeth": 1, "corner_radius": 0,
      "theta_deg": 60, "a_p": 3, "depth": 3,              depth optional (default a_p)
@@ -34,6 +36,7 @@ ValueError: <dict>: $.polygon: the tool (diameter 6 mm) cannot enter the pocket:
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import json
 import math
 import sys
@@ -44,17 +47,28 @@ import shapely
 from shapely.geometry import MultiPolygon, Point, Polygon
 
 from ..cutting.speeds import cutting_speed, feed_speed, spindle_speed
+from ..geometry.drawing import CHORD_TOL_MM, circle_points
 from ..geometry.engagement import stepover_straight
 from .path import Tool
 
-__all__ = ["JOB_SCHEMA", "MAX_LAPS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "Job", "load_job", "star_polygon",
-           "theta_min_deg"]
+__all__ = ["CUTTING_LENGTH_PER_D", "JOB_SCHEMA", "MAX_LAPS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "SPINDLE_RPM_MAX",
+           "Job", "load_job", "plausibility", "read_job_json", "ring_points", "star_polygon", "theta_min_deg"]
 
 #: Linking feed (mm/min): Jacsó (2021) §4, "on the straight sections of the connecting movements, an
 #: equally increased feed rate (v_f = 1500 mm/min) was used" (text under Table 4.1).
 LINK_FEED_MM_MIN = 1500.0
 #: Rapid traverse (mm/min): an ASSUMED machine value (no seed gives one).
 RAPID_MM_MIN = 10000.0
+#: Default top spindle speed (rpm) when a job states none (``spindle_rpm_max``): an ASSUMED machine value,
+#: the top speed of the common 24 000 rpm spindles of small VMCs and routers.
+SPINDLE_RPM_MAX = 24000.0
+#: Default cutting (flute) length of the tool as a multiple of its diameter (``cutting_length`` not given):
+#: flute lengths of 4-12 mm end mills are up to about 3 D (long-flute types 3-5 D), so an ``a_p`` above
+#: 3 D needs a stated ``cutting_length``.
+CUTTING_LENGTH_PER_D = 3.0
+#: A job whose tool is under 1 mm and whose pocket fits in 50 mm looks typed in inches (0.25 for a
+#: 6.35 mm tool): warned, not refused (micro-milling exists).
+INCH_LOOK_TOOL_MM, INCH_LOOK_EXTENT_MM = 1.0, 50.0
 #: Cap on the number of clearing laps of a planner (ce_clearing's ``max_laps``): a theta so small
 #: that the pocket needs more laps than this is refused by :func:`theta_min_deg`.
 MAX_LAPS = 200
@@ -63,8 +77,18 @@ MAX_LAPS = 200
 _COORD = {"type": "number", "minimum": -1e6, "maximum": 1e6}
 _POINT = {"type": "array", "items": _COORD, "minItems": 2, "maxItems": 2,
           "description": "an [x, y] point in mm (|x|, |y| <= 1e6)"}
-_RING = {"type": "array", "items": _POINT, "minItems": 3, "description": "a list of >= 3 [x, y] points in mm"}
 _POS = {"type": "number", "exclusiveMinimum": 0, "maximum": 1e9}
+_POINTS = {"type": "array", "items": _POINT, "minItems": 3, "description": "a list of >= 3 [x, y] points in mm"}
+_CIRCLE = {"type": "object", "required": ["circle"], "additionalProperties": False,
+           "properties": {"circle": {
+               "type": "object", "required": ["center", "radius"], "additionalProperties": False,
+               "description": "a circle {center: [x, y], radius: r, tolerance: chord error} (mm)",
+               "properties": {"center": _POINT, "radius": dict(_POS, description="circle radius, mm"),
+                              "tolerance": dict(_POS, maximum=1, description="chord error of the circle's "
+                                                f"flattening, mm (default {CHORD_TOL_MM})")}}}}
+#: a ring: a list of >= 3 [x, y] points, or {"circle": {"center": [x, y], "radius": r}} (mm)
+_RING = {"if": {"type": "object"}, "then": _CIRCLE, "else": _POINTS,
+         "description": "a list of >= 3 [x, y] points or {circle: {center: [x, y], radius: r}} (mm)"}
 
 
 def _pos(desc):
@@ -77,7 +101,8 @@ JOB_SCHEMA = {
     "title": "cnclab 2.5D pocket job",
     "type": "object",
     "properties": {
-        "polygon": dict(_RING, description="the pocket outline: a list of >= 3 [x, y] points in mm"),
+        "polygon": dict(_RING, description="the pocket outline: a list of >= 3 [x, y] points or a "
+                        "{circle: {center: [x, y], radius: r}} (mm)"),
         "star": {"type": "object", "description": "keywords of cnclab.toolpath.job.star_polygon",
                  "properties": {"n_arms": {"type": "integer", "minimum": 3},
                                 "outer_radius": _pos("mm"), "inner_ratio": {"type": "number", "exclusiveMinimum": 0,
@@ -111,6 +136,9 @@ JOB_SCHEMA = {
         "v_fmax": _pos("maximum feed of the feed control, mm/min"),
         "roll_radius": _pos("roll-in/roll-out radius, mm"),
         "rapid_mm_min": _pos("rapid traverse rate, mm/min"),
+        "cutting_length": _pos(f"cutting (flute) length of the tool, mm (default {CUTTING_LENGTH_PER_D:g} x tool_diameter)"),
+        "spindle_rpm_max": _pos(f"top spindle speed of the machine, rpm (default {SPINDLE_RPM_MAX:g})"),
+        "feed_max_mm_min": _pos("top feed of the machine, mm/min (default rapid_mm_min)"),
         "clearance_z": {"type": "number", "description": "clearance plane z, mm"},
         "top_z": {"type": "number", "description": "stock top z, mm"},
         "description": {"type": "string"}, "source": {"type": "string"}, "units": {"const": "mm"},
@@ -201,6 +229,45 @@ def _reject_constant(s: str):
     raise ValueError(f"{s} is not a number (JSON has no NaN/Infinity)")
 
 
+def ring_points(ring) -> np.ndarray:
+    """A job ring as an (N, 2) array (mm): a list of [x, y] points as given, a ``{"circle": {"center":
+    [x, y], "radius": r, "tolerance": t}}`` flattened by :func:`cnclab.geometry.drawing.circle_points`
+    (inscribed polygon, chord error <= t, default :data:`~cnclab.geometry.drawing.CHORD_TOL_MM` mm).
+
+    >>> len(ring_points({"circle": {"center": [0, 0], "radius": 5}}))      # 2 arccos(1 - 0.005/5) per chord
+    71
+    """
+    if isinstance(ring, dict):
+        c = ring["circle"]
+        return circle_points(c["center"], float(c["radius"]), float(c.get("tolerance", CHORD_TOL_MM)))
+    return np.asarray(ring, float)
+
+
+def _unknown_keys_message(obj: dict, schema: dict) -> str:
+    """The unknown keys of ``obj`` (a JSON object of ``schema``), each with the key it probably meant
+    (difflib) when that one is not given, and the required keys that are missing."""
+    known = set(schema.get("properties", {}))
+    bad = sorted(k for k in obj if k not in known and not str(k).startswith("_"))
+    absent = sorted(known - set(obj))
+    missing = [k for k in schema.get("required", []) if k not in obj]
+    alts = [" or ".join(sorted(a.get("required", []))) for a in schema.get("oneOf", [])]
+    if alts and not any(k in obj for a in schema.get("oneOf", []) for k in a.get("required", [])):
+        missing.append(" / ".join(alts))
+    hints = []
+    for k in bad:
+        close = difflib.get_close_matches(str(k), sorted(known), n=1, cutoff=0.6)
+        if not close and len(str(k)) >= 3:         # an abbreviation: 'tool_dia' for 'tool_diameter'
+            close = [a for a in absent if a.startswith(str(k))][:1]
+        if close:
+            state = "it is not given" if close[0] in absent else "it is given too"
+            hints.append(f"{k!r}: did you mean {close[0]!r}? ({state})")
+    msg = f"unknown key(s) {bad}" + (f" ({'; '.join(hints)})" if hints else "")
+    if missing:
+        msg += f"; missing required key(s): {', '.join(missing)}"
+    msg += f"; allowed are {sorted(known)} and comments '_...'"
+    return msg
+
+
 def _ring_problem(P: np.ndarray):
     """Reason why the ring P is not a simple polygon (None if it is)."""
     if not np.all(np.isfinite(P)):
@@ -222,7 +289,9 @@ class Job:
     ``feed_mm_min`` (nominal cutting feed), ``spindle_rpm``, ``link_feed_mm_min``, ``rapid_mm_min``,
     ``clearance_z``, ``top_z``, ``v_fmax`` (feed-control cap), ``roll_radius`` (roll-in radius of the
     hybrid path), ``rapid_links`` (links at depth through cleared area written as G0; False: G1 at
-    ``link_feed_mm_min``), ``source`` (file name for messages), ``description``.
+    ``link_feed_mm_min``), ``source`` (file name for messages), ``description``, the machine and tool
+    limits ``cutting_length`` (None: 3 D), ``spindle_rpm_max`` (rpm) and ``feed_max_mm_min`` (None: the
+    rapid rate) that :meth:`from_dict` checks (:func:`plausibility`), and the ``warnings`` it gave.
     Build with :meth:`from_dict` / :func:`load_job` (validated).
     """
 
@@ -245,6 +314,10 @@ class Job:
     rapid_links: bool = True
     source: str = "<dict>"
     description: str = ""
+    cutting_length: float | None = None
+    spindle_rpm_max: float = SPINDLE_RPM_MAX
+    feed_max_mm_min: float | None = None
+    warnings: tuple = ()
 
     def __post_init__(self):
         d = self.tool.diameter
@@ -331,12 +404,12 @@ class Job:
         errors = sorted(_validator().iter_errors(d), key=lambda e: (len(list(e.absolute_path)), e.json_path))
         if errors:
             e = errors[0]
+            same = [x for x in errors if x.json_path == e.json_path]
+            e = next((x for x in same if x.validator == "additionalProperties"), e)
             desc = e.schema.get("description") if isinstance(e.schema, dict) else None
             extra = f" (expected {desc})" if desc else ""
             if e.validator == "additionalProperties":
-                known = set(e.schema.get("properties", {}))
-                bad = sorted(k for k in e.instance if k not in known and not str(k).startswith("_"))
-                msg = f"unknown key(s) {bad}: allowed are {sorted(known)} and comments '_...'"
+                msg = _unknown_keys_message(e.instance, e.schema)
             elif e.validator == "oneOf" and not e.absolute_path:
                 msg = ("give exactly one of 'polygon' (a list of [x, y] points), 'star' (star_polygon keywords) "
                        "or 'regions' (a list of {polygon, islands})")
@@ -350,7 +423,7 @@ class Job:
         def region(shell_pts, rings, at):
             islands = []
             for k, ring in enumerate(rings):
-                P = np.asarray(ring, float)
+                P = ring_points(ring)
                 why = _ring_problem(P)
                 if why:
                     raise err(f"{at}islands[{k}]", why)
@@ -380,7 +453,7 @@ class Job:
                 raise err("$.islands", "with 'regions', give the islands inside each region")
             parts = []
             for k, g in enumerate(d["regions"]):
-                P = np.asarray(g["polygon"], float)
+                P = ring_points(g["polygon"])
                 why = _ring_problem(P)
                 if why:
                     raise err(f"$.regions[{k}].polygon", why)
@@ -390,7 +463,7 @@ class Job:
                         raise err(f"$.regions[{k}]", f"the region overlaps or touches region {j}")
             poly = MultiPolygon(parts) if len(parts) > 1 else parts[0]
         else:
-            shell_pts = np.asarray(d["polygon"], float)
+            shell_pts = ring_points(d["polygon"])
             why = _ring_problem(shell_pts)
             if why:
                 raise err("$.polygon", why)
@@ -423,17 +496,20 @@ class Job:
                       f"radius of this pocket needs more than {MAX_LAPS} laps (the planners' cap)")
         a_p = float(d["a_p"])
         kw = {k: float(d[k]) for k in ("v_c", "f_z", "feed_mm_min", "spindle_rpm", "rapid_mm_min", "clearance_z",
-                                        "top_z", "v_fmax", "roll_radius", "depth") if k in d}
+                                        "top_z", "v_fmax", "roll_radius", "depth", "cutting_length",
+                                        "spindle_rpm_max", "feed_max_mm_min") if k in d}
         if "link_feed" in d:
             kw["link_feed_mm_min"] = float(d["link_feed"])
         if "rapid_links" in d:
             kw["rapid_links"] = bool(d["rapid_links"])
         try:
-            return cls(poly, tool, theta, a_p, start_hole=hole, source=str(source),
-                       description=str(d.get("description", "")), **kw)
+            job = cls(poly, tool, theta, a_p, start_hole=hole, source=str(source),
+                      description=str(d.get("description", "")), **kw)
         except ValueError as exc:
             msg = str(exc)
             raise (exc if msg.startswith(str(source)) else err("$", msg)) from None
+        warns = plausibility(job, given=set(d))
+        return dataclasses.replace(job, warnings=tuple(warns)) if warns else job
 
     def to_dict(self) -> dict:
         """The JSON mapping of this job (``Job.from_dict(job.to_dict())`` gives an equal job)."""
@@ -447,7 +523,11 @@ class Job:
              "f_z": self.f_z, "feed_mm_min": self.feed_mm_min, "spindle_rpm": self.spindle_rpm,
              "link_feed": self.link_feed_mm_min, "rapid_mm_min": self.rapid_mm_min,
              "clearance_z": self.clearance_z, "top_z": self.top_z, "v_fmax": self.v_fmax,
-             "roll_radius": self.roll_radius, "rapid_links": self.rapid_links}
+             "roll_radius": self.roll_radius, "rapid_links": self.rapid_links,
+             "spindle_rpm_max": self.spindle_rpm_max}
+        for key in ("cutting_length", "feed_max_mm_min"):
+            if getattr(self, key) is not None:
+                d[key] = getattr(self, key)
         if p.interiors:
             d["islands"] = [ring(i) for i in p.interiors]
         if len(polys) > 1:
@@ -460,12 +540,71 @@ class Job:
         return d
 
 
-def load_job(path) -> Job:
-    """Read and validate a job JSON file (read-only; see the module docstring for the format).
+def _looks_like_inches(job: Job) -> str:
+    """Why ``job``'s lengths look typed in inches ('' if they do not)."""
+    x0, y0, x1, y1 = job.polygon.bounds
+    extent = max(x1 - x0, y1 - y0)
+    if job.tool_diameter < INCH_LOOK_TOOL_MM and extent < INCH_LOOK_EXTENT_MM:
+        return (f"the lengths look like inches (tool_diameter {job.tool_diameter:g}, pocket {extent:g} across: "
+                f"{25.4 * job.tool_diameter:g} and {25.4 * extent:g} mm if they were inches); job lengths are mm")
+    return ""
 
-    Errors (``ValueError``) name the file and the JSON path, or the line and column of a JSON
-    syntax error, or the byte offset of a non-UTF-8 byte; a missing file raises ``OSError``.
+
+def plausibility(job: Job, given=None) -> list:
+    """Check that ``job``'s numbers are ones a machine can run; returns the warnings (str), raises
+    ``ValueError`` naming the job key (``$.a_p``) for what cannot be run.
+
+    Errors: the spindle speed (``spindle_rpm``, or from ``v_c``) above ``spindle_rpm_max`` (default
+    :data:`SPINDLE_RPM_MAX`); the cutting feed (``feed_mm_min`` or from ``f_z``), or a given
+    ``link_feed`` / ``v_fmax``, above ``feed_max_mm_min`` (default the rapid rate ``rapid_mm_min``);
+    ``a_p`` above the tool's ``cutting_length`` (default :data:`CUTTING_LENGTH_PER_D` x diameter).
+    Warnings: lengths that look typed in inches (tool under 1 mm, pocket within 50 mm); a pocket
+    ``depth`` beyond the cutting length (the shank enters the cut). ``given``: keys of the job file
+    (the default-valued keys are not checked against the limits).
+
+    >>> job = Job(Polygon([(0, 0), (40, 0), (40, 30), (0, 30)]), Tool(8), 60, 30, v_c=120, f_z=0.04)
+    >>> plausibility(job)
+    Traceback (most recent call last):
+    ...
+    ValueError: <dict>: $.a_p: a_p = 30 mm is beyond the tool's cutting length 24 mm (3 x tool_diameter 8 mm; give 'cutting_length' for a longer flute)
     """
+    given = set(given) if given is not None else {"link_feed", "v_fmax"}
+    src, warns = job.source, []
+    inch = _looks_like_inches(job)
+    hint = f" ({inch})" if inch else ""
+    flute = job.cutting_length if job.cutting_length is not None else CUTTING_LENGTH_PER_D * job.tool_diameter
+    flute_txt = (f"{flute:g} mm" if job.cutting_length is not None else
+                 f"{flute:g} mm ({CUTTING_LENGTH_PER_D:g} x tool_diameter {job.tool_diameter:g} mm; give "
+                 "'cutting_length' for a longer flute)")
+    if job.a_p > flute * (1 + 1e-9):
+        raise ValueError(f"{src}: $.a_p: a_p = {job.a_p:g} mm is beyond the tool's cutting length {flute_txt}{hint}")
+    if job.spindle_rpm > job.spindle_rpm_max * (1 + 1e-9):
+        key = "spindle_rpm" if "spindle_rpm" in given or "v_c" not in given else "v_c"
+        how = (f"v_c = {job.v_c:g} m/min on a {job.tool_diameter:g} mm tool needs {job.spindle_rpm:.0f} rpm"
+               if key == "v_c" else f"spindle_rpm = {job.spindle_rpm:g}")
+        raise ValueError(f"{src}: $.{key}: {how}, above the machine's spindle_rpm_max {job.spindle_rpm_max:g} rpm{hint}")
+    fmax = job.feed_max_mm_min if job.feed_max_mm_min is not None else job.rapid_mm_min
+    what = "feed_max_mm_min" if job.feed_max_mm_min is not None else "rapid rate rapid_mm_min"
+    key = "feed_mm_min" if "feed_mm_min" in given or "f_z" not in given else "f_z"
+    feeds = [(key, job.feed_mm_min)] + [(k, v) for k, v in (("link_feed", job.link_feed_mm_min),
+                                                              ("v_fmax", job.v_fmax)) if k in given]
+    for k, v in feeds:
+        if v > fmax * (1 + 1e-9):
+            how = (f"f_z = {job.f_z:g} mm/tooth x {job.teeth} teeth x {job.spindle_rpm:.0f} rpm = {v:.0f} mm/min"
+                   if k == "f_z" else f"{k} = {v:g} mm/min")
+            raise ValueError(f"{src}: $.{k}: {how} is above the machine's {what} {fmax:g} mm/min{hint}")
+    if inch:
+        warns.append(f"{src}: $.tool_diameter: {inch}")
+    if job.depth > flute * (1 + 1e-9):
+        warns.append(f"{src}: $.depth: depth {job.depth:g} mm is beyond the tool's cutting length {flute_txt}: "
+                     "the shank would rub the pocket wall")
+    return warns
+
+
+def read_job_json(path) -> dict:
+    """The JSON object of a job (or cutting-data) file, read strictly: UTF-8, no NaN/Infinity, finite
+    numbers, bounded integers. ``ValueError`` names the file and the line and column of a syntax
+    error or the byte offset of a non-UTF-8 byte; a missing file raises ``OSError``."""
     p = Path(path)
     raw = p.read_bytes()
     try:
@@ -473,9 +612,17 @@ def load_job(path) -> Job:
     except UnicodeDecodeError as e:
         raise ValueError(f"{p}: not UTF-8 text: byte 0x{raw[e.start]:02x} at offset {e.start}") from None
     try:
-        d = json.loads(text, parse_float=_finite_float, parse_int=_bounded_int, parse_constant=_reject_constant)
+        return json.loads(text, parse_float=_finite_float, parse_int=_bounded_int, parse_constant=_reject_constant)
     except json.JSONDecodeError as e:
         raise ValueError(f"{p}:{e.lineno}:{e.colno}: invalid JSON ({e.msg})") from None
     except (ValueError, RecursionError) as e:
         raise ValueError(f"{p}: invalid JSON ({e})") from None
-    return Job.from_dict(d, source=str(p))
+
+
+def load_job(path) -> Job:
+    """Read and validate a job JSON file (read-only; see the module docstring for the format).
+
+    Errors (``ValueError``) name the file and the JSON path, or the line and column of a JSON
+    syntax error, or the byte offset of a non-UTF-8 byte; a missing file raises ``OSError``.
+    """
+    return Job.from_dict(read_job_json(path), source=str(Path(path)))
