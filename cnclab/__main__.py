@@ -18,6 +18,7 @@ COMMANDS = {
     "analyze": ("cnclab.nc.cli_analyze", "score any G-code program on a pocket job (summary, traces, engagement map)"),
     "plan": ("cnclab.nc.cli_plan", "plan a pocket job and write a machine-safe program"),
     "job": ("cnclab.toolpath.job_format", "the job file format: reference (--schema), JSON schema, check a file"),
+    "job-from-drawing": ("cnclab.nc.cli_drawing", "write a pocket job from a DXF/SVG drawing and cutting data"),
     "programs": ("cnclab.works.programs", "write every program the collection produces to build/gcode/<work>/"),
     "warm": ("cnclab.warm", "compile the shared numba kernels once into their cache (make test/reproduce run it first)"),
 }

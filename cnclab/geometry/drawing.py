@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -400,11 +401,11 @@ def read_dxf(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
     from ezdxf import units as dxfunits
 
     src = str(path)
+    if not Path(src).is_file():
+        raise FileNotFoundError(f"{src}: no such drawing file")
     try:
         doc = ezdxf.readfile(src)
-    except IOError as exc:
-        raise OSError(f"{src}: cannot read ({exc})") from None
-    except ezdxf.DXFError as exc:
+    except Exception as exc:       # ezdxf: DXFError, IOError 'not a DXF file', UnicodeDecodeError, ...
         raise ValueError(f"{src}: not a readable DXF file ({type(exc).__name__}: {exc})") from None
     notes = []
     code = int(doc.header.get("$INSUNITS", 0) or 0)
@@ -507,6 +508,23 @@ def _svg_subpaths(shape, tol_px: float):
     return out
 
 
+#: mm per unit of an SVG length (CSS: 96 px = 1 in = 72 pt = 6 pc)
+_SVG_LENGTH_MM = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "pc": 25.4 / 6, "px": 25.4 / 96, "": 25.4 / 96}
+
+
+def _svg_mm_per_px(svg) -> float:
+    """mm per px of the parsed document, exact from its ``width`` attribute (svgelements rounds mm to
+    3.7795296 px); 25.4/96 without a physical width."""
+    m = re.fullmatch(r"\s*([0-9.eE+-]+)\s*(mm|cm|in|pt|pc|px|)\s*", str(svg.values.get("width") or ""))
+    try:
+        w_mm = float(m.group(1)) * _SVG_LENGTH_MM[m.group(2)] if m else None
+    except ValueError:
+        w_mm = None
+    if w_mm and svg.width and math.isfinite(w_mm) and w_mm > 0:
+        return w_mm / float(svg.width)
+    return 25.4 / SVG_PX_PER_INCH
+
+
 def read_svg(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
              join_tol: float = JOIN_TOL_MM) -> Drawing:
     """Read the pocket outline(s) of an SVG file; see the module docstring. Lengths in mm.
@@ -515,10 +533,10 @@ def read_svg(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
     import svgelements as se
 
     src = str(path)
+    if not Path(src).is_file():
+        raise FileNotFoundError(f"{src}: no such drawing file")
     try:
         svg = se.SVG.parse(src, reify=True, ppi=SVG_PX_PER_INCH)
-    except OSError as exc:
-        raise OSError(f"{src}: cannot read ({exc})") from None
     except Exception as exc:           # xml.etree.ElementTree.ParseError and svgelements' own errors
         raise ValueError(f"{src}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
     notes = []
@@ -530,7 +548,7 @@ def read_svg(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
         scale *= k
         unit = f"{units} per user unit"
     else:
-        scale, unit = 25.4 / SVG_PX_PER_INCH, "px (96 per inch) after the document's size and viewBox"
+        scale, unit = _svg_mm_per_px(svg), "px (96 per inch) after the document's size and viewBox"
     notes.append(f"SVG lengths: {unit}; y flipped (SVG's y points down)")
     tol_px = tolerance / scale
     height = float(svg.height) if getattr(svg, "height", None) else 0.0

@@ -1,4 +1,4 @@
-"""``python -m cnclab plan JOB.json -o PROGRAM.ngc [--strategy NAME]``
+"""``python -m cnclab plan JOB.json|DRAWING.dxf|DRAWING.svg [--cutting CUTTING.json] [--layer NAME] -o PROGRAM.ngc [--strategy NAME]``
 
 Plan a pocket job with one of the collection's 2.5D strategies
 (:func:`cnclab.toolpath.planners.plan`; default the engagement-controlled clearing ``adaptive``,
@@ -7,6 +7,10 @@ program (:func:`cnclab.nc.program.write_program`: start block, ``T.. M6``, ``S..
 rapids only at the clearance plane or in cleared area, ``M5 M30``). The program is checked
 (:func:`cnclab.nc.program.check_program`) before it is written; the job file is never overwritten;
 the output is written atomically. Errors exit with code 2 and a message naming the file.
+
+A drawing (.dxf/.svg) gives the pocket (:func:`cnclab.geometry.drawing.read_drawing`: closed outlines
+of ``--layer`` or of every layer, islands by containment) and ``--cutting CUTTING.json`` every other
+job key (:mod:`cnclab.toolpath.from_drawing`).
 """
 from __future__ import annotations
 
@@ -15,25 +19,30 @@ import sys
 from pathlib import Path
 
 from .. import clihelp
-from ..fileio import atomic_write
+from ..fileio import atomic_write, check_outputs
 from .program import check_program, write_program
 
+from ..geometry.drawing import CHORD_TOL_MM
+from ..toolpath.from_drawing import load_job_input
 from ..toolpath.job import load_job
 from ..toolpath.planners import DEFAULT_STRATEGY, STRATEGIES, plan
 
 __all__ = ["main", "plan_program", "planned_program"]
 
 
-def planned_program(job_file, strategy: str | None = None, source: str | None = None):
+def planned_program(job_file, strategy: str | None = None, source: str | None = None, *, cutting=None,
+                    layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None):
     """Plan ``job_file`` with ``strategy`` (None: the planner's default) and write its program text:
     ``(text, job, path, check)`` — what ``python -m cnclab plan`` writes (also used by
     ``python -m cnclab programs``). Raises ``ValueError`` when the program fails the static safety
-    check; ``source`` names the program in the messages."""
+    check; ``source`` names the program in the messages. ``job_file`` may be a drawing (.dxf/.svg):
+    then ``cutting`` (CUTTING.json) gives every other job key, ``layer``/``tolerance`` (mm)/``units``
+    how the drawing is read (:func:`cnclab.toolpath.from_drawing.load_job_input`)."""
     if load_job is None or plan is None:
         raise RuntimeError("cnclab plan needs cnclab.toolpath.job and cnclab.toolpath.planners "
                            f"(issue 12, toolpath-core), not available: {_MISSING}")
     job_file = Path(job_file)
-    job = load_job(job_file)
+    job = load_job_input(job_file, cutting=cutting, layer=layer, tolerance=tolerance, units=units)
     path = plan(job) if strategy is None else plan(job, strategy)
     name = strategy or path.info.get("strategy", "default")
     text = write_program(path, job, header=[f"cnclab plan {job_file.name} strategy {name}"])
@@ -44,15 +53,22 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
     return text, job, path, chk
 
 
-def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False) -> Path:
-    """Plan ``job_file`` with ``strategy`` (None: the planner's default) and write the program to
-    ``out``; returns the output path. Raises ``ValueError`` when the written program fails the
-    static safety check (nothing is written then)."""
+def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False, *, cutting=None,
+                 layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None) -> Path:
+    """Plan ``job_file`` (a job file, or a drawing with ``cutting`` data, see :func:`planned_program`)
+    with ``strategy`` (None: the planner's default) and write the program to ``out``; returns the
+    output path. Raises ``ValueError`` when the written program fails the static safety check
+    (nothing is written then). The job's plausibility warnings go to stderr unless ``quiet``."""
     job_file, out = Path(job_file), Path(out)
-    text, job, path, chk = planned_program(job_file, strategy, source=str(out))
+    inputs = [job_file] + ([Path(cutting)] if cutting is not None else [])
+    check_outputs([out], inputs)
+    text, job, path, chk = planned_program(job_file, strategy, source=str(out), cutting=cutting, layer=layer,
+                                           tolerance=tolerance, units=units)
     name = strategy or path.info.get("strategy", "default")
-    atomic_write(out, text, inputs=[job_file])
+    atomic_write(out, text, inputs=inputs)
     if not quiet:
+        for w in getattr(job, "warnings", ()):
+            print(f"warning: {w}", file=sys.stderr)
         print(f"wrote {out}: {len(path)} moves, strategy {name}, entries {chk.entries}, "
               f"plunges below the stock top marked cleared or none: {chk.plunges_into_material == 0}")
     return out
@@ -65,17 +81,29 @@ def main(argv=None) -> int:
         "tool change, spindle on before cutting, entries by helix/ramp or into cleared area, rapids only\n"
         "at the clearance plane or through cleared area, M5 M30. The program is checked before it is\n"
         "written; the job file is never overwritten; errors exit with code 2 naming the file and key.\n"
-        "Job keys: docs/job-format.md.",
+        "The job may be a drawing (.dxf/.svg: its closed outlines, islands by containment) with\n"
+        "--cutting CUTTING.json holding every other job key. Job keys: docs/job-format.md.",
         examples=["python -m cnclab plan data/jacso2021/star_pocket.json -o star.ngc",
-                  "python -m cnclab plan my_pocket.json -o my_pocket.ngc --strategy zig-zag"],
+                  "python -m cnclab plan my_pocket.json -o my_pocket.ngc --strategy zig-zag",
+                  "python -m cnclab plan part.dxf --layer POCKET --cutting cutting.json -o part.ngc"],
         writes=["OUTPUT: the program (only this file, atomically)"])
-    ap.add_argument("job", help="pocket job file (JSON, mm; keys in docs/job-format.md)")
-    ap.add_argument("-o", "--output", required=True, help="program to write (.ngc, must differ from the job file)")
+    ap.add_argument("job", help="pocket job file (JSON, mm; keys in docs/job-format.md), or a drawing "
+                    "(.dxf/.svg) with --cutting")
+    ap.add_argument("-o", "--output", required=True, help="program to write (.ngc, must differ from the inputs)")
     ap.add_argument("--strategy", default=None, metavar="NAME",
                     help=f"planner: {', '.join(sorted(STRATEGIES))} (default: {DEFAULT_STRATEGY})")
+    ap.add_argument("--cutting", default=None, metavar="CUTTING.json",
+                    help="with a drawing: every job key except the geometry (JSON)")
+    ap.add_argument("--layer", default=None, metavar="NAME", help="with a drawing: read the outlines of this "
+                    "layer only (DXF layer, SVG group id or inkscape:label; default: every layer)")
+    ap.add_argument("--tolerance", type=float, default=CHORD_TOL_MM, metavar="MM",
+                    help=f"with a drawing: chord error of the flattening of curves, mm (default {CHORD_TOL_MM})")
+    ap.add_argument("--units", default=None, help="with a drawing: its unit (mm, inch, cm, m), overriding "
+                    "$INSUNITS / the SVG size (default: from the drawing; a unitless DXF is read as mm)")
     args = ap.parse_args(argv)
     try:
-        plan_program(args.job, args.output, args.strategy)
+        plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
+                     tolerance=args.tolerance, units=args.units)
     except (ValueError, OSError, RuntimeError, KeyError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

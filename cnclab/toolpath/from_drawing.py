@@ -106,8 +106,13 @@ def job_from_drawing(drawing_path, cutting, layer: str | None = None, tolerance:
     cut = load_cutting(cutting) if not isinstance(cutting, dict) else dict(cutting)
     name = cutting if not isinstance(cutting, dict) else "<cutting>"
     d = job_dict_from_drawing(drawing, cut)
-    job = Job.from_dict(d, source=f"{name} (geometry from {drawing_path})")
     warns = _drawing_warnings(drawing)
+    try:
+        job = Job.from_dict(d, source=f"{name} (geometry from {drawing_path})")
+    except ValueError as exc:
+        if not warns:
+            raise
+        raise ValueError(f"{exc} (note: {warns[0]})") from None
     if warns:
         job = dataclasses.replace(job, warnings=tuple(warns) + tuple(job.warnings))
     return job, d

@@ -1,0 +1,231 @@
+"""Jobs from drawings and the job format's circle rings and plausibility checks: cnclab.toolpath.job
+(circle rings, misspelt keys, a_p / spindle / feed limits, inch-looking numbers),
+cnclab.toolpath.from_drawing and the CLIs ``job-from-drawing`` and ``plan DRAWING``."""
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cnclab.nc import cli_drawing, cli_plan
+from cnclab.nc.gcode import read_gcode
+from cnclab.nc.program import check_program
+from cnclab.paths import data_path
+from cnclab.toolpath.from_drawing import job_from_drawing, load_cutting, load_job_input
+from cnclab.toolpath.job import SPINDLE_RPM_MAX, Job, load_job, ring_points
+
+FIX = Path(__file__).parent / "fixtures" / "drawings"
+CUT = FIX / "cutting.json"
+BASE = {"tool_diameter": 8.0, "teeth": 2, "theta_deg": 60.0, "a_p": 3.0, "v_c": 120.0, "f_z": 0.04}
+SQUARE = [[0, 0], [60, 0], [60, 40], [0, 40]]
+
+
+def _job(**kw):
+    d = dict(BASE, polygon=SQUARE)
+    for k, v in kw.items():
+        if v is None:
+            d.pop(k, None)
+        else:
+            d[k] = v
+    return Job.from_dict(d, source="j.json")
+
+
+# -- circle rings ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("tol", [None, 0.001, 0.05])
+def test_circle_ring_flattened_within_its_tolerance(tol):
+    c = {"center": [10, -4], "radius": 25}
+    if tol is not None:
+        c["tolerance"] = tol
+    t = 0.005 if tol is None else tol
+    P = ring_points({"circle": c})
+    job = _job(polygon={"circle": c})
+    assert 0 < math.pi * 625 - job.polygon.area <= 2 * math.pi * 25 * t
+    mids = 0.5 * (P + np.roll(P, -1, axis=0))                    # chord middles: sagitta <= tolerance
+    sag = 25 - np.hypot(mids[:, 0] - 10, mids[:, 1] + 4)
+    assert sag.max() <= t * (1 + 1e-9)
+
+
+def test_circle_rings_wherever_a_ring_is_allowed():
+    isl = {"circle": {"center": [20, 20], "radius": 5}}
+    j = _job(islands=[isl, [[40, 10], [50, 10], [50, 20]]])
+    assert len(j.polygon.interiors) == 2
+    assert j.polygon.area == pytest.approx(2400 - math.pi * 25 - 50, abs=2 * math.pi * 5 * 0.005)
+    d = dict(BASE, regions=[{"polygon": {"circle": {"center": [0, 0], "radius": 20}}, "islands": [isl]},
+                            {"polygon": [[100, 0], [140, 0], [140, 30], [100, 30]]}])
+    with pytest.raises(ValueError, match=r"\$\.regions\[0\]\.islands\[0\]: the island is not inside"):
+        Job.from_dict(d, "r.json")
+    d["regions"][0]["islands"] = [{"circle": {"center": [0, 0], "radius": 5}}]
+    j = Job.from_dict(d, "r.json")
+    assert j.polygon.geom_type == "MultiPolygon"
+    assert j.polygon.area == pytest.approx(math.pi * 375 + 1200, abs=2 * math.pi * 25 * 0.005)
+    back = Job.from_dict(j.to_dict(), "back")                  # written back as points: the same pocket
+    assert back.polygon.symmetric_difference(j.polygon).area < 1e-9
+
+
+@pytest.mark.parametrize("ring,msg", [
+    ({"circle": {"center": [0, 0]}}, "$.polygon.circle: 'radius' is a required property"),
+    ({"circle": {"center": [0, 0], "radius": -1}}, "$.polygon.circle.radius: -1 is less than or equal to the minimum"),
+    ({"circle": {"center": [0, 0], "radius": 30, "tol": 1}}, "$.polygon.circle: unknown key(s) ['tol'] ('tol': did you "
+                                                            "mean 'tolerance'? (it is not given))"),
+    ({"circ": {}}, "$.polygon: unknown key(s) ['circ'] ('circ': did you mean 'circle'? (it is not given)); missing "
+                   "required key(s): circle"),
+    ({"circle": {"center": [0, 0], "radius": 2}}, "$.polygon: the tool (diameter 8 mm) cannot enter the pocket"),
+    ("abc", "$.polygon: 'abc' is not of type 'array'"),
+])
+def test_bad_circle_rings_named(ring, msg):
+    with pytest.raises(ValueError) as exc:
+        _job(polygon=ring)
+    assert str(exc.value).startswith("j.json: ") and msg in str(exc.value), str(exc.value)
+
+
+# -- plausibility ----------------------------------------------------------------------------------
+def test_misspelt_key_reported_with_the_missing_one():
+    with pytest.raises(ValueError) as exc:
+        _job(tool_diameter=None, tool_dia=8)
+    msg = str(exc.value)
+    assert ("$: unknown key(s) ['tool_dia'] ('tool_dia': did you mean 'tool_diameter'? (it is not given)); "
+            "missing required key(s): tool_diameter") in msg
+    with pytest.raises(ValueError, match=r"'vc': did you mean 'v_c'\? \(it is not given\)"):
+        _job(v_c=None, vc=120)
+    with pytest.raises(ValueError, match=r"'polygn': did you mean 'polygon'\?.*missing required key\(s\): "
+                                         r"polygon / star / regions"):
+        _job(polygon=None, polygn=SQUARE)
+
+
+def test_a_p_beyond_the_cutting_length():
+    with pytest.raises(ValueError, match=r"^j.json: \$\.a_p: a_p = 30 mm is beyond the tool's cutting length 24 mm "
+                                         r"\(3 x tool_diameter 8 mm; give 'cutting_length'"):
+        _job(a_p=30)
+    assert _job(a_p=30, cutting_length=35).a_p == 30
+    with pytest.raises(ValueError, match=r"\$\.a_p: a_p = 30 mm is beyond the tool's cutting length 20 mm"):
+        _job(a_p=30, cutting_length=20)
+    j = _job(depth=40)                                           # deep pocket: levels fine, shank warned
+    assert any("$.depth: depth 40 mm is beyond the tool's cutting length" in w for w in j.warnings)
+
+
+def test_inch_numbers_in_a_mm_job():
+    """The issue's case: a pocket typed in inches (tool 0.25, pocket 2 x 1.5) with v_c in m/min."""
+    inch = {"polygon": [[0, 0], [2, 0], [2, 1.5], [0, 1.5]], "tool_diameter": 0.25, "a_p": 0.1}
+    with pytest.raises(ValueError) as exc:
+        _job(**inch)
+    msg = str(exc.value)
+    assert msg.startswith("j.json: $.v_c: v_c = 120 m/min on a 0.25 mm tool needs 152789 rpm, above the machine's "
+                          f"spindle_rpm_max {SPINDLE_RPM_MAX:g} rpm")
+    assert "the lengths look like inches (tool_diameter 0.25, pocket 2 across: 6.35 and 50.8 mm" in msg
+    j = _job(**inch, v_c=None, spindle_rpm=12000, f_z=None, feed_mm_min=20)   # speeds fine: a warning
+    assert j.warnings and j.warnings[0].startswith("j.json: $.tool_diameter: the lengths look like inches")
+    assert not _job().warnings                                   # a mm job: nothing
+
+
+def test_spindle_and_feed_beyond_machine_limits():
+    with pytest.raises(ValueError, match=r"\$\.spindle_rpm: spindle_rpm = 30000, above the machine's "
+                                         r"spindle_rpm_max 24000 rpm"):
+        _job(v_c=None, spindle_rpm=30000)
+    assert _job(v_c=None, spindle_rpm=30000, spindle_rpm_max=40000).spindle_rpm == 30000
+    with pytest.raises(ValueError, match=r"\$\.f_z: f_z = 2 mm/tooth x 2 teeth x 4775 rpm = 19099 mm/min is above "
+                                         r"the machine's rapid rate rapid_mm_min 10000 mm/min"):
+        _job(f_z=2)
+    with pytest.raises(ValueError, match=r"\$\.feed_mm_min: feed_mm_min = 3000 mm/min is above the machine's "
+                                         r"feed_max_mm_min 2000 mm/min"):
+        _job(feed_mm_min=3000, feed_max_mm_min=2000)
+    with pytest.raises(ValueError, match=r"\$\.link_feed: link_feed = 20000 mm/min"):
+        _job(link_feed=20000)
+
+
+@pytest.mark.parametrize("f", sorted(str(p) for p in Path(data_path()).rglob("*.json")
+                                     if '"tool_diameter"' in p.read_text(encoding="utf-8")))
+def test_every_data_job_is_plausible(f):
+    """Every job the collection ships passes the plausibility checks (a check that refused them would
+    be wrong) — with no warning."""
+    job = load_job(f)
+    assert job.warnings == ()
+
+
+# -- jobs from drawings ----------------------------------------------------------------------------
+def test_job_from_the_done_when_drawing():
+    job, d = job_from_drawing(FIX / "done_when.dxf", CUT, layer="POCKET")
+    assert d["_drawing"]["layer"] == "POCKET" and d["_drawing"]["tolerance_mm"] == 0.005
+    assert {"circle": {"center": [25.0, 30.0], "radius": 8.0}} in d["islands"]
+    assert len(job.polygon.interiors) == 2 and job.tool_diameter == 6.0
+    assert not job.warnings
+
+
+def test_cutting_file_must_not_hold_geometry(tmp_path):
+    c = tmp_path / "c.json"
+    c.write_text(json.dumps(dict(BASE, polygon=SQUARE)))
+    with pytest.raises(ValueError, match=r"c.json: \$\.polygon: cutting data must not hold geometry"):
+        load_cutting(c)
+    c.write_text("[1, 2]")
+    with pytest.raises(ValueError, match=r"c.json: \$: cutting data must be a JSON object"):
+        load_cutting(c)
+
+
+def test_cutting_key_errors_name_both_files(tmp_path):
+    c = tmp_path / "c.json"
+    c.write_text(json.dumps(dict(BASE, a_p=40)))
+    with pytest.raises(ValueError, match=r"c.json \(geometry from .*done_when.dxf\): \$\.a_p: a_p = 40 mm"):
+        job_from_drawing(FIX / "done_when.dxf", c, layer="POCKET")
+
+
+def test_inch_drawing_with_mm_numbers_warned(tmp_path):
+    import ezdxf
+
+    def save(w, h):
+        doc = ezdxf.new(units=1)
+        doc.modelspace().add_lwpolyline([(0, 0), (w, 0), (w, h), (0, h)], close=True)
+        p = tmp_path / f"mm_as_inch_{w}.dxf"
+        doc.saveas(p)
+        return p
+
+    slot = save(60, 10)                                  # a 60 x 10 mm plate drawn with $INSUNITS inch
+    job, _ = job_from_drawing(slot, CUT)
+    assert any("the drawing is in in (x 25.4) but its pocket is 1524 mm across (60 in)" in w for w in job.warnings)
+    job, _ = job_from_drawing(slot, CUT, units="mm")
+    assert not job.warnings and job.polygon.area == pytest.approx(600)
+    with pytest.raises(ValueError, match=r"\$\.theta_deg: .* \(note: .*numbers that look like mm"):
+        job_from_drawing(save(120, 80), CUT)             # the job fails (too many laps): the note says why
+
+
+def test_load_job_input_dispatch(tmp_path):
+    with pytest.raises(ValueError, match=r"done_when.dxf: a drawing gives only the geometry: give the cutting data"):
+        load_job_input(FIX / "done_when.dxf")
+    with pytest.raises(ValueError, match=r"--cutting, --layer and --units apply to a drawing"):
+        load_job_input(data_path("jacso2021", "rectangle_pocket.json"), layer="POCKET")
+
+
+def test_cli_job_from_drawing_round_trip_and_safety(tmp_path, capsys):
+    out = tmp_path / "job.json"
+    rc = cli_drawing.main([str(FIX / "done_when.svg"), "--layer", "POCKET", "--cutting", str(CUT), "-o", str(out)])
+    assert rc == 0 and "1 region(s), 2 island(s)" in capsys.readouterr().out
+    job = load_job(out)
+    ref = load_job_input(FIX / "done_when.svg", cutting=CUT, layer="POCKET")
+    assert job.polygon.symmetric_difference(ref.polygon).area < 1e-3       # coordinates rounded to 1e-6 mm
+    before = CUT.read_bytes()
+    assert cli_drawing.main([str(FIX / "done_when.svg"), "--cutting", str(CUT), "-o", str(CUT)]) == 2
+    assert "refusing to overwrite the input file" in capsys.readouterr().err and CUT.read_bytes() == before
+    bad = tmp_path / "bad.json"
+    assert cli_drawing.main([str(FIX / "gap.dxf"), "--cutting", str(CUT), "-o", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "gap.dxf: open outline: LINE #" in err and "0.05 mm away" in err and not bad.exists()
+
+
+def test_cli_registered():
+    from cnclab.__main__ import COMMANDS
+
+    assert COMMANDS["job-from-drawing"][0] == "cnclab.nc.cli_drawing"
+
+
+def test_plan_from_the_done_when_dxf_writes_a_safe_program(tmp_path, capsys):
+    """Issue 24's done-when drawing: bulged outline, CIRCLE island, LINE/ARC island, on layer POCKET
+    among annotation layers -> `plan` writes a program that passes the static safety check."""
+    out = tmp_path / "dw.ngc"
+    rc = cli_plan.main([str(FIX / "done_when.dxf"), "--layer", "POCKET", "--cutting", str(CUT), "-o", str(out)])
+    assert rc == 0, capsys.readouterr().err
+    text = out.read_text()
+    chk = check_program(text, clearance_z=5.0)
+    assert chk.ok and chk.plunges_into_material == 0, chk.errors[:3]
+    prog = read_gcode(text)
+    assert prog.tool_number == 1
+    assert cli_plan.main([str(FIX / "done_when.dxf"), "-o", str(tmp_path / "x.ngc")]) == 2
+    assert "give the cutting data" in capsys.readouterr().err
