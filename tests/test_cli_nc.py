@@ -32,7 +32,7 @@ def test_analyze_writes_every_output(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "cut_length" in out and "engagement_p95" in out
     names = sorted(p.name for p in (tmp_path / "out").iterdir())
-    assert names == ["engagement_map.png", "summary.csv", "trace.csv", "trace.pdf", "trace.png"]
+    assert names == ["engagement_map.png", "events.csv", "summary.csv", "trace.csv", "trace.pdf", "trace.png"]
     tr = pd.read_csv(tmp_path / "out" / "trace.csv")
     assert list(tr.columns[:3]) == ["s_mm", "x", "y"] and tr["s_mm"].is_monotonic_increasing
     assert (tmp_path / "out" / "trace.pdf").read_bytes()[:4] == b"%PDF"

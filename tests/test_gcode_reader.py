@@ -166,7 +166,7 @@ def test_lines_after_program_end_are_not_executed():
     ("G0 X0 Y0 Z5\nG4 P1\n", "p.ngc:2: word G4: dwell"),
     ("G0 X0 Y0 Z5\nG93 G1 X1 F2\n", "p.ngc:2: word G93"),
     ("G0 X0 Y0 Z5\n#1 = 2\n", "p.ngc:2: cannot read"),
-    ("O100 sub\n", "p.ngc:1: cannot read"),
+    ("O100 sub\n", "p.ngc:1: O-word 'sub': subroutines and control flow are not supported"),
     ("G0 X0 Y0 Z5 (open comment\n", "p.ngc:1: comment '\\(' is not closed"),
     ("G0 X0 Y0 Z5\nG1 X1 F0\n", "p.ngc:2: word F0"),
     ("G0 X0 Y0 Z5\nG2 X1 Y0 I0.5 R0.5 F100\n", "p.ngc:2: word R: give either R or I/J"),

@@ -36,8 +36,8 @@ def test_start_block_tool_spindle_and_end():
     assert lines[-3:] == ["M5", "M30", "%"]
     chk = check_program(text, clearance_z=5)
     assert chk.ok, chk.errors
-    # the feed down to the first point (z 5 -> 1) is a plunge in air; the helix turns are the entry
-    assert chk.entries == {"helix": 2, "ramp": 0, "plunge": 1} and chk.plunges_into_material == 0
+    # the feed down to the first point (z 5 -> 1) is a plunge in air; the two helix turns are one entry
+    assert chk.entries == {"helix": 1, "ramp": 0, "plunge": 1} and chk.plunges_into_material == 0
 
 
 def test_rapid_below_clearance_needs_the_cleared_flag():
@@ -94,7 +94,7 @@ def test_freecad_adaptive_rapids_at_depth_are_reported():
     assert chk.spindle_on_before_cut and chk.end_word == "M2"
     assert chk.rapids_below_clearance > 0
     assert all("word G0: rapid below the clearance plane Z3 (z -3 -> -3 mm)" in e for e in chk.errors)
-    assert chk.entries["helix"] == 5 and chk.plunges_into_material == 0
+    assert chk.entries["helix"] == 1 and chk.plunges_into_material == 0       # one helix of 5 turns
 
 
 @given(st.lists(st.tuples(st.floats(-40, 40), st.floats(-40, 40)), min_size=1, max_size=12),

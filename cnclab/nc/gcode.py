@@ -80,7 +80,7 @@ from ..fileio import atomic_write
 from ..toolpath.path import Move, Tool, ToolPath, arc_geometry, sample_arc
 
 __all__ = ["Move", "GcodeError", "GcodeProgram", "write_gcode", "write_gcode_linear", "save_gcode", "read_gcode", "parse_gcode",
-           "load_gcode", "read_toolpath", "program_time", "sample_move", "to_polyline", "path_lengths",
+           "load_gcode", "read_program_text", "read_toolpath", "program_time", "sample_move", "to_polyline", "path_lengths",
            "linear_moves", "gcode_roundtrip_error", "MM_PER_INCH"]
 
 class GcodeError(ValueError):
@@ -275,7 +275,9 @@ class GcodeProgram:
     ``M6`` (None if no tool change); ``tool_diameter`` [mm] from a comment such as ``(T1 D=6.0)`` or
     ``(tool diameter 6 mm)`` when one is present; ``spindle_on_line`` line of the first M3/M4;
     ``spindle_stop_line`` line of the last M5; ``end_word`` ``"M30"``/``"M2"`` or None; ``end_line``;
-    ``source`` the name used in messages.
+    ``source`` the name used in messages; ``tool_diameter_line`` the line of the diameter comment;
+    ``first_line`` the first non-blank line; ``opening_percent`` / ``closing_percent_line`` the ``%``
+    demarcation; ``program_number`` of a bare O-word line (``O1001``).
     """
 
     moves: list
@@ -290,6 +292,11 @@ class GcodeProgram:
     spindle_stop_line: int | None = None
     end_word: str | None = None
     end_line: int | None = None
+    tool_diameter_line: int | None = None
+    first_line: int | None = None
+    opening_percent: bool = False
+    closing_percent_line: int | None = None
+    program_number: str | None = None
 
 
 def _split_comments(line: str, where: str):
@@ -347,27 +354,17 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
     scale, absolute, arc_absolute = 1.0, True, False
     selected_tool = None
     skipped_partial = 0
-    for ln, raw in enumerate(text.splitlines(), start=1):
-        if prog.end_word is not None:
-            break  # M2/M30 ends the program; later lines are not executed (as in LinuxCNC)
+    raw_lines = _LINE_END.split(text)
+    for ln, raw in enumerate(raw_lines, start=1):
+        if prog.end_word is not None or prog.closing_percent_line is not None:
+            break  # M2/M30 or the closing % ends the program; later lines are not executed (as in LinuxCNC)
         where = f"{source}:{ln}"
-        body, cmts = _split_comments(raw, where)
-        for c in cmts:
-            m = _TOOL_DIA.search(c)
-            if m and prog.tool_diameter is None and ("tool" in c.lower() or re.match(r"\s*T\d", c, re.I)
-                                                     or "diam" in c.lower()):
-                unit = (m.group(2) or "").lower()
-                inch = unit.startswith("in") or unit == '"' or (not unit and scale != 1.0)
-                prog.tool_diameter = float(m.group(1)) * (MM_PER_INCH if inch else 1.0)
-        body = body.strip()
-        if not body or body == "%":
+        body, cmts = _block_body(raw, where, ln, prog, scale)
+        if body is None:
             continue
-        if body.startswith("/"):
-            raise GcodeError(f"{where}: block delete '/' is not supported")
-        rest = _WORD.sub(" ", body).strip()
-        if rest:
-            raise GcodeError(f"{where}: cannot read {rest!r} in {raw.strip()!r} "
-                             "(parameters #, expressions [ ] and O-words are not supported)")
+        if prog.moves and _M6.search(body.upper().replace(" ", "")):
+            prog.warnings.append(f"{where}: tool change {body.strip()!r} after the program has moved: "
+                                 "the moves after it are taken with the same tool as before")
         words = [(m.group(1).upper(), m.group(2).replace(" ", "")) for m in _WORD.finditer(body)]
         coords: dict[str, float] = {}
         new_motion = None
@@ -514,7 +511,92 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
     if skipped_partial:
         prog.warnings.append(f"{source}: {skipped_partial} rapid(s) before X, Y and Z were all known "
                              "(start position unknown) were not turned into moves")
+    _check_end(prog, raw_lines, text)
     return prog
+
+
+_LINE_END = re.compile(r"\r\n|\n|\r")
+_M6 = re.compile(r"M0*6(?![0-9.])")
+_O_LINE = re.compile(r"^(?:N\s*\d+\s*)?O\s*(\d+(?:\.\d*)?|<[^>]*>)\s*(.*)$", re.I)
+_O_KEYWORDS = ("sub", "endsub", "call", "do", "while", "endwhile", "if", "elseif", "else", "endif", "repeat",
+               "endrepeat", "return", "break", "continue")
+
+
+def _block_body(raw: str, where: str, ln: int, prog, scale: float):
+    """``(words, comments)`` of one line (tool diameter comments recorded); words None for a
+    line with nothing to execute: blank, comment, the opening ``%``, a bare O-word (program number).
+    The closing ``%`` sets ``prog.closing_percent_line``. Refuses what LinuxCNC refuses (a ``%``
+    that is not the first non-blank line, an O-word with other words or with a non-integer number)
+    and what is not read here (block delete, parameters, expressions, subroutines, control flow)."""
+    body, cmts = _split_comments(raw, where)
+    for c in cmts:
+        m = _TOOL_DIA.search(c)
+        if m and prog.tool_diameter is None and ("tool" in c.lower() or re.match(r"\s*T\d", c, re.I)
+                                                 or "diam" in c.lower()):
+            unit = (m.group(2) or "").lower()
+            inch = unit.startswith("in") or unit == '"' or (not unit and scale != 1.0)
+            prog.tool_diameter = float(m.group(1)) * (MM_PER_INCH if inch else 1.0)
+            prog.tool_diameter_line = ln
+    body = body.strip()
+    blank = not body and not cmts
+    if prog.first_line is None and not blank:
+        prog.first_line = ln
+        if body == "%":
+            prog.opening_percent = True
+            return None, cmts
+    if "%" in body:
+        if body == "%" and prog.opening_percent:
+            prog.closing_percent_line = ln
+            return None, cmts
+        raise GcodeError(f"{where}: '%' here: a '%' line may only open the program (first non-blank line) "
+                         "and close it (LinuxCNC: \"Bad character '%' used\")")
+    if not body:
+        return None, cmts
+    if body.startswith("/"):
+        raise GcodeError(f"{where}: block delete '/' is not supported")
+    m = _O_LINE.match(body)
+    if m:
+        number, rest = m.group(1), m.group(2).strip()
+        key = rest.split()[0].lower() if rest else ""
+        if key in _O_KEYWORDS:
+            raise GcodeError(f"{where}: O-word '{key}': subroutines and control flow are not supported")
+        if rest:
+            raise GcodeError(f"{where}: cannot read {rest!r} after the O-word O{number}: an O-word line holds "
+                             "nothing else (LinuxCNC: \"Unknown control command in o word\")")
+        if "." in number:
+            raise GcodeError(f"{where}: O-word O{number}: the program number must be an integer")
+        prog.program_number = number
+        return None, cmts
+    rest = _WORD.sub(" ", body).strip()
+    if rest:
+        raise GcodeError(f"{where}: cannot read {rest!r} in {raw.strip()!r} "
+                         "(parameters #, expressions [ ] and O-words inside blocks are not supported)")
+    return body, cmts
+
+
+def _check_end(prog, raw_lines, text: str) -> None:
+    """Warnings (LinuxCNC runs such files but ends them with an error, or they look cut off): no
+    M2/M30 and no closing ``%``, a last block without its line end, blocks after the end.
+    A file opened by ``%`` that ends without M2/M30 or the closing ``%`` is refused, as LinuxCNC does."""
+    src = prog.source
+    last = next((k for k in range(len(raw_lines), 0, -1) if raw_lines[k - 1].strip()), 0)
+    stop = prog.end_line or prog.closing_percent_line
+    if stop is None:
+        if prog.opening_percent:
+            raise GcodeError(f"{src}:{last}: the file opens with '%' (line {prog.first_line}) but ends without "
+                             "the closing '%' or M2/M30: truncated? (LinuxCNC: \"File ended with no percent sign\")")
+        prog.warnings.append(f"{src}: no program end (M2/M30) and no closing '%': LinuxCNC runs the moves and "
+                             "then stops with \"File ended with no percent sign or program end\"; truncated?")
+        if text and not text.endswith(("\n", "\r")):
+            prog.warnings.append(f"{src}:{last}: the last block has no line end: the file may be cut off "
+                                 "in the middle of a block")
+    else:
+        after = sum(1 for k in range(stop, len(raw_lines)) if raw_lines[k].strip()
+                    and not (prog.end_line and prog.opening_percent and raw_lines[k].strip() == "%"))
+        if after:
+            what = f"{prog.end_word} (line {stop})" if prog.end_line else f"the closing '%' (line {stop})"
+            prog.warnings.append(f"{src}:{stop + 1}: {after} non-blank line(s) after {what} not executed "
+                                 "(as in LinuxCNC)")
 
 
 def _center_from_radius(s, e, R, ccw, where):
@@ -547,16 +629,46 @@ def _read_text(path_or_text):
     if isinstance(path_or_text, Path) or (isinstance(path_or_text, str) and "\n" not in path_or_text
                                           and len(path_or_text) < 4096 and Path(path_or_text).is_file()):
         p = Path(path_or_text)
-        return p.read_text(encoding="utf-8"), str(p)
+        return read_program_text(p), str(p)
     if isinstance(path_or_text, str) and "\n" not in path_or_text:
         raise OSError(f"{path_or_text}: no such G-code file")
     return str(path_or_text), "<string>"
 
 
+def read_program_text(path) -> str:
+    """The text of a program file, refused with a :class:`GcodeError` naming the file and line when
+    it is not text: a NUL byte (a binary file) or bytes that are not UTF-8 (e.g. a Latin-1 ``é`` in a
+    comment; RS274 programs are ASCII, UTF-8 comments are accepted).
+
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "l1.ngc"
+    >>> _ = p.write_bytes(b"G21\\n(caf\\xe9)\\nM2\\n")
+    >>> read_program_text(p)
+    Traceback (most recent call last):
+    ...
+    cnclab.nc.gcode.GcodeError: ...l1.ngc:2: byte 0xe9 at column 5 is not UTF-8 text (a Latin-1 or binary file?); G-code programs are ASCII text
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise IsADirectoryError(f"{p}: is a directory, not a G-code program")
+    raw = p.read_bytes()
+    nul = raw.find(b"\0")
+    if nul >= 0:
+        line, col = raw.count(b"\n", 0, nul) + 1, nul - raw.rfind(b"\n", 0, nul)
+        raise GcodeError(f"{p}:{line}: NUL byte at column {col}: a binary file, not a G-code program")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        col = exc.start - raw.rfind(b"\n", 0, exc.start)
+        raise GcodeError(f"{p}:{line}: byte 0x{raw[exc.start]:02x} at column {col} is not UTF-8 text (a Latin-1 "
+                         "or binary file?); G-code programs are ASCII text") from None
+
+
 def load_gcode(path) -> list[Move]:
     """Parse a G-code file (read-only); errors name the file, line and word."""
     p = Path(path)
-    return parse_gcode(p.read_text(encoding="utf-8"), source=str(p))
+    return parse_gcode(read_program_text(p), source=str(p))
 
 
 def read_toolpath(path_or_text, tool: Tool | None = None, start=None, arc_tolerance: float = 0.002) -> ToolPath:
@@ -571,6 +683,10 @@ def read_toolpath(path_or_text, tool: Tool | None = None, start=None, arc_tolera
     prog = read_gcode(text, source=source, arc_tolerance=arc_tolerance, start=start)
     if tool is None and prog.tool_diameter is not None:
         tool = Tool(prog.tool_diameter, number=prog.tool_number or 1)
+    elif tool is not None and prog.tool_diameter is not None and abs(prog.tool_diameter - tool.diameter) > 1e-3:
+        prog.warnings.append(f"{source}:{prog.tool_diameter_line}: the program's tool comment says D "
+                             f"{prog.tool_diameter:g} mm, the given tool is D {tool.diameter:g} mm: "
+                             "analyzed with the given tool")
     info = {"source": source, "converted_from_inch": prog.converted_from_inch,
             "warnings": list(prog.warnings), "tool_number": prog.tool_number, "end_word": prog.end_word,
             "spindle_on_line": prog.spindle_on_line}

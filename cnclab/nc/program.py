@@ -53,7 +53,7 @@ import numpy as np
 
 from ..fileio import atomic_write
 from ..toolpath.path import Move, Tool, ToolPath
-from .gcode import GcodeProgram, read_gcode, write_gcode
+from .gcode import GcodeProgram, read_gcode, read_program_text, write_gcode
 
 __all__ = ["write_program", "save_program", "check_program", "ProgramCheck", "START_BLOCK"]
 
@@ -149,7 +149,8 @@ def save_program(path: ToolPath, out, job=None, inputs=(), **kw) -> Path:
 @dataclasses.dataclass
 class ProgramCheck:
     """Result of :func:`check_program`: ``errors`` (each naming ``source:line`` and the word),
-    ``entries`` (counts of Z-descending feed moves by kind: helix, ramp, plunge), ``plunges_into_material``,
+    ``entries`` (counts of entries by kind: helix, ramp, plunge -- an entry is a run of consecutive
+    Z-descending feed blocks of one kind, as :class:`~cnclab.toolpath.evaluate.Evaluation` counts them), ``plunges_into_material``,
     ``rapids_below_clearance`` (unsafe G0 count), ``spindle_on_before_cut``, ``end_word``."""
 
     errors: list
@@ -172,7 +173,7 @@ def check_program(program, clearance_z: float, top_z: float = 0.0, source: str |
     else:
         if isinstance(program, Path) or (isinstance(program, str) and "\n" not in program):
             p = Path(program)
-            prog = read_gcode(p.read_text(encoding="utf-8"), source=source or str(p))
+            prog = read_gcode(read_program_text(p), source=source or str(p))
         else:
             prog = read_gcode(program, source=source or "<string>")
     src = prog.source
@@ -181,6 +182,7 @@ def check_program(program, clearance_z: float, top_z: float = 0.0, source: str |
     plunges = rapids_bad = 0
     spindle_ok = True
     seen_feed = False
+    prev_entry = None
     moves, lines, cmts = prog.moves, prog.lines, prog.comments
     if moves and moves[0].z < clearance_z - _TOL:
         errors.append(f"{src}:{lines[0]}: word {moves[0].motion}: the first move ends below the clearance "
@@ -198,6 +200,7 @@ def check_program(program, clearance_z: float, top_z: float = 0.0, source: str |
         a = moves[k - 1].xyz
         b = mv.xyz
         if mv.motion == "G0":
+            prev_entry = None
             above = min(a[2], b[2]) >= clearance_z - _TOL
             straight_up = b[2] >= a[2] and math.hypot(*(b[:2] - a[:2])) <= _TOL
             if not (above or straight_up or cleared):
@@ -206,16 +209,17 @@ def check_program(program, clearance_z: float, top_z: float = 0.0, source: str |
                               f"(z {a[2]:g} -> {b[2]:g} mm) not marked cleared")
             continue
         if b[2] < a[2] - _TOL:
-            if mv.motion in ("G2", "G3"):
-                entries["helix"] += 1
-            elif math.hypot(*(b[:2] - a[:2])) <= _TOL:
-                entries["plunge"] += 1
-                if b[2] < top_z - _TOL and not cleared:
-                    plunges += 1
-                    errors.append(f"{where}: word {mv.motion}: plunge into material below the stock top "
-                                  f"Z{top_z:g} (not marked cleared)")
-            else:
-                entries["ramp"] += 1
+            kind = "helix" if mv.motion in ("G2", "G3") else (
+                "plunge" if math.hypot(*(b[:2] - a[:2])) <= _TOL else "ramp")
+            if kind != prev_entry:          # an entry is a run of descending blocks (a helix of n arcs: 1)
+                entries[kind] += 1
+            if kind == "plunge" and b[2] < top_z - _TOL and not cleared:
+                plunges += 1
+                errors.append(f"{where}: word {mv.motion}: plunge into material below the stock top "
+                              f"Z{top_z:g} (not marked cleared)")
+            prev_entry = kind
+            continue
+        prev_entry = None
     if prog.end_word is None:
         errors.append(f"{src}: no program end (M30 or M2)")
     if prog.spindle_stop_line is None or (lines and prog.spindle_stop_line < lines[-1]):

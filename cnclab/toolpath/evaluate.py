@@ -23,7 +23,12 @@ Model (units: mm, deg, mm/min, s):
   link or rapid losing z) and whose tool disc removes material where it enters a slab; the swept
   area is the material area under the disc. **Rapids into material**: rapid moves that remove
   material, or run below ``top_z`` with the tool centre outside the allowed region (into a wall or
-  island).
+  island) by more than :data:`POSITION_TOL_MM`. Both are counted as runs of consecutive moves (one
+  plunge written as n blocks counts once); :attr:`Evaluation.events` lists every block.
+* **Wall gouge** (:func:`wall_gouge`): how far the tool disc reaches past the walls and islands below
+  the stock top (``wall_gouge_max_mm``), the plan-view wall area it sweeps (``wall_gouge_area_mm2``)
+  and the number of gouging stretches (``gouges``: runs of samples gouging more than
+  :data:`POSITION_TOL_MM`).
 * **Uncut area**: material left, summed over the levels; *beyond unreachable*: the part outside the
   region no tool disc can reach (the pocket minus the morphological opening: the union of the tool
   discs over the allowed tool-centre region).
@@ -67,7 +72,7 @@ from .job import Job
 from .path import KINDS, ToolPath
 
 __all__ = ["Evaluation", "evaluate", "UNITS", "weighted_percentile", "unreachable_region", "planar_view",
-           "entry_hole", "SEGMENT_KINDS"]
+           "entry_hole", "SEGMENT_KINDS", "POSITION_TOL_MM", "EVENT_COLUMNS", "resample_by_length", "wall_gouge"]
 
 #: segment kinds of the cutting level (from the move kind and the tag's ``phase:kind``)
 SEGMENT_KINDS = ("cut", "roll-in", "roll-out", "link")
@@ -76,6 +81,20 @@ _K = {k: i for i, k in enumerate(KINDS)}
 
 #: unit of every scalar field of :class:`Evaluation` (for :meth:`Evaluation.summary_table`)
 UNITS = {"deg": "deg", "pct": "%", "mm2": "mm^2", "mm": "mm", "_s": "s", "nominal": "-"}
+
+#: position tolerance (mm) of the safety checks (rapids outside the tool-centre region, wall gouge
+#: events): the reading tolerance of programs written with 3 decimals (0.0005 mm per coordinate, up to
+#: 2 sqrt(2) x that on an arc's radius) and larger than the rounding of an inch program written with 4
+#: or more decimals (0.00127 mm); a G20 copy of a mm program then reports the same events.
+POSITION_TOL_MM = 0.002
+
+#: columns of :attr:`Evaluation.events` (one row per event; ``move`` indexes the path's points,
+#: ``line`` the program line when the path came from a program (``path.info["line"]``), else -1)
+EVENT_COLUMNS = ("event", "move", "line", "x", "y", "z", "value", "unit")
+
+
+def _events_frame(rows) -> pd.DataFrame:
+    return pd.DataFrame(rows, columns=list(EVENT_COLUMNS))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -115,11 +134,15 @@ class Evaluation:
     time_feed_controlled_s: float = float("nan")
     mrr_error_cut_pct: float = float("nan")
     mrr_error_cut_p95_pct: float = float("nan")
+    wall_gouge_max_mm: float = float("nan")
+    wall_gouge_area_mm2: float = float("nan")
+    gouges: int = -1
     trace: dict = dataclasses.field(repr=False, compare=False, default_factory=dict)
+    events: pd.DataFrame = dataclasses.field(repr=False, compare=False, default_factory=lambda: _events_frame([]))
 
     def to_dict(self) -> dict:
-        """The scalar fields (``trace`` left out)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "trace"}
+        """The scalar fields (``trace`` and ``events`` left out)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in ("trace", "events")}
 
     def summary_table(self) -> pd.DataFrame:
         """Scalars as a table: columns ``metric``, ``value``, ``unit``."""
@@ -162,6 +185,12 @@ def _runs(mask):
     """(start, stop) pairs of the maximal runs of True."""
     e = np.flatnonzero(np.diff(np.r_[0, np.asarray(mask, int), 0]))
     return list(zip(e[0::2], e[1::2]))
+
+
+def _move_runs(moves) -> int:
+    """Number of runs of consecutive move indices (a plunge or rapid written as n blocks counts once)."""
+    m = np.unique(moves)
+    return int(m.size and 1 + np.count_nonzero(np.diff(m) > 1))
 
 
 def _count_runs(kind, k):
@@ -267,7 +296,8 @@ def _cutting_level(path: ToolPath, job: Job, resolution_mm, feed_control, block_
 
 def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2: float | None = None,
              mrr_window_mm: float = 1.0, feed_control: bool | None = None, block_mm: float = 0.5,
-             margin_deg: float = 5.0, link_tol_mm2: float = 1e-3, level_only: bool = False) -> Evaluation:
+             margin_deg: float = 5.0, link_tol_mm2: float = 1e-3, level_only: bool = False,
+             sampling: str = "vertices") -> Evaluation:
     """Cut ``path`` through a fresh stock of ``job`` (level by level) and measure it.
 
     Parameters
@@ -287,8 +317,16 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     level_only : with ``feed_control`` set, skip the level-by-level slab simulation (its float
         fields are NaN and its counts of plunges/rapids into material -1, "not simulated"; lengths,
         times and the cutting-level figures are filled): for planners that only need the latter.
+    sampling : 'vertices' (default: every move end is a sample, moves split into steps <= h,
+        :meth:`ToolPath.resample`) or 'arc_length' (:func:`resample_by_length`: equal steps of at
+        most h between corners, whatever the block length -- what ``cnclab analyze`` uses for
+        programs of unknown block length).
 
-    Returns an :class:`Evaluation`.
+    Returns an :class:`Evaluation`; besides the metrics it holds the wall gouge
+    (:func:`wall_gouge`: ``wall_gouge_max_mm``, ``wall_gouge_area_mm2``, ``gouges`` = gouging
+    moves) and :attr:`Evaluation.events` (rapids and plunges into material, wall gouges: one row per
+    move with its program line when ``path.info["line"]`` is set). ``trace`` holds per sample
+    ``move`` (the path point index), ``line`` (with ``path.info["line"]``) and ``gouge_mm``.
     """
     if not isinstance(path, ToolPath):
         raise TypeError(f"path must be a ToolPath, got {type(path).__name__}")
@@ -308,7 +346,12 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         return _level_evaluation(path, job, h, level)
     air = 0.5 * h * h if air_tol_mm2 is None else float(air_tol_mm2)
     r = job.tool_radius
-    rp, src = path.resample(h, return_index=True)
+    if sampling == "arc_length":
+        rp, src = resample_by_length(path, h)
+    elif sampling == "vertices":
+        rp, src = path.resample(h, return_index=True)
+    else:
+        raise ValueError(f"sampling must be 'vertices' or 'arc_length', got {sampling!r}")
     P, K = rp.xyz, rp.kind
     n = len(P)
     L3 = rp.segment_lengths()
@@ -318,7 +361,82 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     dz_move = np.r_[0.0, np.diff(path.xyz[:, 2])]
     plunge_like_move = (dz_move < -1e-9) & ~path.is_kind("helix", "ramp")
     plunge_like = plunge_like_move[src]
+    eng, removed, vol, stocks = _simulate_slabs(P, dxy, job, h)
 
+    cutting = np.isin(K, [_K["cut"], _K["link"]]) & (removed > air) & (dxy > 0)
+    entry = np.isin(K, [_K["helix"], _K["ramp"], _K["plunge"]])
+    Lc = float(dxy[cutting].sum())
+    e_c = eng[cutting]
+    lim5, lim15 = job.theta_deg + 5.0, job.theta_deg + 15.0
+    share5 = 100.0 * float(dxy[cutting & (eng > lim5)].sum()) / Lc if Lc > 0 else float("nan")
+    share15 = 100.0 * float(dxy[cutting & (eng > lim15)].sum()) / Lc if Lc > 0 else float("nan")
+    # windowed MRR over the cutting samples: volume / time in windows of mrr_window_mm
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dt_min = np.where(cutting, dxy / feed, 0.0)
+    s_cut = np.cumsum(np.where(cutting, dxy, 0.0))
+    win = np.floor(s_cut / mrr_window_mm).astype(int)
+    V = np.bincount(win[cutting], weights=vol[cutting])
+    T = np.bincount(win[cutting], weights=dt_min[cutting])
+    Lw = np.bincount(win[cutting], weights=dxy[cutting])
+    full = (Lw >= 0.5 * mrr_window_mm) & (T > 0)
+    mrr_max = float((V[full] / T[full]).max() / job.mrr_nominal()) if full.any() else float("nan")
+
+    # plunges / rapids into material, per original move
+    pl = plunge_like & (K != _K["rapid"]) & (removed > air)
+    rapid = K == _K["rapid"]
+    guard = job.allowed().buffer(POSITION_TOL_MM)
+    low = rapid & (P[:, 2] < job.top_z - 1e-9)
+    outside = np.zeros(n, bool)
+    if low.any():
+        outside[low] = ~shapely.contains_xy(guard, P[low, 0], P[low, 1])
+    rp_bad = rapid & ((removed > air) | outside)
+    gouge, g_area, g_mask = wall_gouge(P, job, rapid=rapid)
+    lines = np.asarray(path.info["line"], int) if len(path.info.get("line", ())) == len(path) else None
+    events = _events(P, src, lines, [("rapid into material", rp_bad, removed, "mm^2"),
+                                     ("plunge into material", pl, removed, "mm^2"),
+                                     ("wall gouge", g_mask, gouge, "mm")])
+
+    air_cut = (K == _K["cut"]) & (removed <= air)
+    lengths = path.lengths()
+    times = path.time_s(job.rapid_mm_min)
+    unreach = unreachable_region(job.polygon, r)
+    uncut = float(sum(st.area() for st in stocks))
+    beyond = float(sum(st.to_polygon().difference(unreach).area for st in stocks)) if uncut > 0 else 0.0
+    e_entry = eng[entry]
+    trace = {"s_mm": np.cumsum(L3), "x": P[:, 0].copy(), "y": P[:, 1].copy(), "z": P[:, 2].copy(),
+             "engagement_deg": eng, "removed_mm2": removed,
+             "mrr_mm3_min": np.where((dxy > 0) & ~rapid, vol / np.where(dxy > 0, dxy, 1.0) * np.nan_to_num(feed), np.nan),
+             "feed_mm_min": feed.copy(), "kind": rp.kinds(), "tag": rp.tag.copy(), "ds_mm": dxy, "cutting": cutting,
+             "gouge_mm": gouge, "move": src.copy()}
+    if lines is not None:
+        trace["line"] = lines[src]
+    return Evaluation(
+        engagement_p50_deg=weighted_percentile(e_c, dxy[cutting], 50),
+        engagement_p95_deg=weighted_percentile(e_c, dxy[cutting], 95),
+        engagement_max_deg=float(np.nanmax(e_c)) if np.isfinite(e_c).any() else float("nan"),
+        share_above_5_pct=share5, share_above_15_pct=share15,
+        entry_engagement_max_deg=float(np.nanmax(e_entry)) if np.isfinite(e_entry).any() else float("nan"),
+        mrr_max_over_nominal=mrr_max,
+        entries_helix=_count_runs(path.kind, "helix"), entries_ramp=_count_runs(path.kind, "ramp"),
+        entries_plunge=_count_runs(path.kind, "plunge"),
+        plunges_into_material=_move_runs(src[pl]), plunge_swept_area_mm2=float(removed[pl].sum()),
+        rapids_into_material=_move_runs(src[rp_bad]), retracts=_count_runs(path.kind, "retract"),
+        cut_length_mm=lengths["cut_mm"], link_length_mm=lengths["link_mm"], rapid_length_mm=lengths["rapid_mm"],
+        entry_length_mm=lengths["helix_mm"] + lengths["ramp_mm"] + lengths["plunge_mm"],
+        retract_length_mm=lengths["retract_mm"], air_cut_length_mm=float(L3[air_cut].sum()),
+        uncut_area_mm2=uncut, uncut_beyond_unreachable_mm2=beyond,
+        time_cut_s=times["cut_s"], time_link_s=times["link_s"], time_rapid_s=times["rapid_s"],
+        time_entry_s=times["helix_s"] + times["ramp_s"] + times["plunge_s"], time_retract_s=times["retract_s"],
+        time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h,
+        wall_gouge_max_mm=float(gouge.max(initial=0.0)), wall_gouge_area_mm2=g_area,
+        gouges=len(_runs(g_mask)), events=events,
+        **_level_fields(times, level, trace))
+
+
+def _simulate_slabs(P, dxy, job: Job, h: float):
+    """Cut the samples ``P`` (n, 3) through the job's slabs (module docstring): per sample the
+    engagement (deg, max over slabs), removed area (mm^2, summed) and volume (mm^3), and the stocks."""
+    n, r = len(P), job.tool_radius
     levels = job.levels()
     tops = [job.top_z] + levels[:-1]
     material = job.polygon.difference(job.start_hole_polygon())
@@ -350,66 +468,136 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
                 vol[idx] += rem * thick[idx]
                 eng[idx] = np.fmax(eng[idx], np.where(rem > 0, e, np.nan))
         stocks.append(stock)
+    return eng, removed, vol, stocks
 
-    cutting = np.isin(K, [_K["cut"], _K["link"]]) & (removed > air) & (dxy > 0)
-    entry = np.isin(K, [_K["helix"], _K["ramp"], _K["plunge"]])
-    Lc = float(dxy[cutting].sum())
-    e_c = eng[cutting]
-    lim5, lim15 = job.theta_deg + 5.0, job.theta_deg + 15.0
-    share5 = 100.0 * float(dxy[cutting & (eng > lim5)].sum()) / Lc if Lc > 0 else float("nan")
-    share15 = 100.0 * float(dxy[cutting & (eng > lim15)].sum()) / Lc if Lc > 0 else float("nan")
-    # windowed MRR over the cutting samples: volume / time in windows of mrr_window_mm
-    with np.errstate(invalid="ignore", divide="ignore"):
-        dt_min = np.where(cutting, dxy / feed, 0.0)
-    s_cut = np.cumsum(np.where(cutting, dxy, 0.0))
-    win = np.floor(s_cut / mrr_window_mm).astype(int)
-    V = np.bincount(win[cutting], weights=vol[cutting])
-    T = np.bincount(win[cutting], weights=dt_min[cutting])
-    Lw = np.bincount(win[cutting], weights=dxy[cutting])
-    full = (Lw >= 0.5 * mrr_window_mm) & (T > 0)
-    mrr_max = float((V[full] / T[full]).max() / job.mrr_nominal()) if full.any() else float("nan")
 
-    # plunges / rapids into material, per original move
-    pl = plunge_like & (K != _K["rapid"]) & (removed > air)
-    pl_moves = np.unique(src[pl])
-    rapid = K == _K["rapid"]
-    guard = job.allowed().buffer(1e-6)
-    low = rapid & (P[:, 2] < job.top_z - 1e-9)
-    outside = np.zeros(n, bool)
-    if low.any():
-        outside[low] = ~shapely.contains_xy(guard, P[low, 0], P[low, 1])
-    rp_moves = np.unique(src[rapid & ((removed > air) | outside)])
+def wall_gouge(P, job: Job, rapid=None, tol_mm: float = POSITION_TOL_MM):
+    """How far the tool disc reaches into the walls and islands (outside ``job.polygon``).
 
-    air_cut = (K == _K["cut"]) & (removed <= air)
-    lengths = path.lengths()
-    times = path.time_s(job.rapid_mm_min)
-    unreach = unreachable_region(job.polygon, r)
-    uncut = float(sum(st.area() for st in stocks))
-    beyond = float(sum(st.to_polygon().difference(unreach).area for st in stocks)) if uncut > 0 else 0.0
-    e_entry = eng[entry]
-    trace = {"s_mm": np.cumsum(L3), "x": P[:, 0].copy(), "y": P[:, 1].copy(), "z": P[:, 2].copy(),
-             "engagement_deg": eng, "removed_mm2": removed,
-             "mrr_mm3_min": np.where((dxy > 0) & ~rapid, vol / np.where(dxy > 0, dxy, 1.0) * np.nan_to_num(feed), np.nan),
-             "feed_mm_min": feed.copy(), "kind": rp.kinds(), "tag": rp.tag.copy(), "ds_mm": dxy, "cutting": cutting}
-    return Evaluation(
-        engagement_p50_deg=weighted_percentile(e_c, dxy[cutting], 50),
-        engagement_p95_deg=weighted_percentile(e_c, dxy[cutting], 95),
-        engagement_max_deg=float(np.nanmax(e_c)) if np.isfinite(e_c).any() else float("nan"),
-        share_above_5_pct=share5, share_above_15_pct=share15,
-        entry_engagement_max_deg=float(np.nanmax(e_entry)) if np.isfinite(e_entry).any() else float("nan"),
-        mrr_max_over_nominal=mrr_max,
-        entries_helix=_count_runs(path.kind, "helix"), entries_ramp=_count_runs(path.kind, "ramp"),
-        entries_plunge=_count_runs(path.kind, "plunge"),
-        plunges_into_material=int(len(pl_moves)), plunge_swept_area_mm2=float(removed[pl].sum()),
-        rapids_into_material=int(len(rp_moves)), retracts=_count_runs(path.kind, "retract"),
-        cut_length_mm=lengths["cut_mm"], link_length_mm=lengths["link_mm"], rapid_length_mm=lengths["rapid_mm"],
-        entry_length_mm=lengths["helix_mm"] + lengths["ramp_mm"] + lengths["plunge_mm"],
-        retract_length_mm=lengths["retract_mm"], air_cut_length_mm=float(L3[air_cut].sum()),
-        uncut_area_mm2=uncut, uncut_beyond_unreachable_mm2=beyond,
-        time_cut_s=times["cut_s"], time_link_s=times["link_s"], time_rapid_s=times["rapid_s"],
-        time_entry_s=times["helix_s"] + times["ramp_s"] + times["plunge_s"], time_retract_s=times["retract_s"],
-        time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h,
-        **_level_fields(times, level, trace))
+    ``P`` (n, 3) mm: tool-tip centre samples (e.g. the evaluator's, every ``resolution_mm``); only
+    samples below the stock top ``job.top_z`` count. Returns ``(gouge (n,) mm, area mm^2, mask (n,))``:
+    ``gouge = max(0, r - d)`` with ``d`` the signed distance of the centre to the pocket boundary
+    (negative outside); ``area`` the plan-view wall/island area swept by the tool disc along the runs
+    of samples gouging more than ``tol_mm`` (union over levels; the tool disc as a 64-segment
+    quarter-circle polygon); ``mask`` those samples. ``rapid`` (n,) bool: samples of rapid moves,
+    counted as "rapid into material" instead (their gouge is still reported). Samples inside the
+    tool-centre region :meth:`Job.allowed` gouge 0 (up to its 64-segment approximation, < 1e-3 mm
+    for r <= 10 mm) and skip the distance computation.
+
+    >>> from shapely.geometry import box
+    >>> from cnclab.toolpath.path import Tool
+    >>> jb = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.0, feed_mm_min=300, spindle_rpm=5000)
+    >>> g, area, m = wall_gouge(np.array([[20, 10, -1.0], [38, 10, -1], [38, 10, 5]]), jb)
+    >>> g.tolist(), round(area, 2)     # centre 2 mm from the x = 40 wall, r = 3: 1 mm deep; above: 0
+    ([0.0, 1.0, 0.0], 3.1)
+
+    (the area: the circular segment of depth 1 of the r = 3 disc, 9 acos(2/3) - 2 sqrt(5) = 3.098 mm^2)
+    """
+    P = np.asarray(P, float)
+    n, r = len(P), job.tool_radius
+    gouge = np.zeros(n)
+    low = P[:, 2] < job.top_z - 1e-9
+    cand = np.flatnonzero(low)
+    if cand.size:
+        cand = cand[~shapely.contains_xy(job.allowed(), P[cand, 0], P[cand, 1])]
+    if cand.size:
+        x, y = P[cand, 0], P[cand, 1]
+        d = shapely.distance(job.polygon.boundary, shapely.points(x, y))
+        d = np.where(shapely.contains_xy(job.polygon, x, y), d, -d)
+        gouge[cand] = np.maximum(0.0, r - d)
+    mask = gouge > tol_mm
+    if rapid is not None:
+        mask &= ~np.asarray(rapid, bool)
+    area = 0.0
+    if mask.any():
+        discs = [shapely.LineString(P[a:b, :2]).buffer(r, 64) if b - a > 1 else shapely.Point(P[a, :2]).buffer(r, 64)
+                 for a, b in _runs(mask)]
+        area = float(shapely.union_all(discs).difference(job.polygon).area)
+    return gouge, area, mask
+
+
+def _events(P, src, lines, kinds) -> pd.DataFrame:
+    """One row per (event kind, run of consecutive samples of one move): the sample with the largest
+    value (area mm^2 or depth mm), its move and program line."""
+    rows = []
+    for name, mask, value, unit in kinds:
+        for a, b in _runs(mask):
+            for m in np.unique(src[a:b]):
+                seg = a + np.flatnonzero(src[a:b] == m)
+                k = seg[np.argmax(value[seg])]
+                rows.append((name, int(m), int(lines[m]) if lines is not None else -1, float(P[k, 0]),
+                             float(P[k, 1]), float(P[k, 2]), float(value[k]), unit))
+    rows.sort(key=lambda row: (row[1], row[0]))
+    return _events_frame(rows)
+
+
+def resample_by_length(path: ToolPath, step_mm: float, corner_tol: float | None = None):
+    """The path sampled by arc length: ``(path, index)`` like :meth:`ToolPath.resample` with
+    ``return_index``, but independent of how the program splits it into blocks.
+
+    The path is cut into runs of one move kind; each run is split at its corners and sampled with
+    equal steps of at most ``step_mm`` mm between them. A corner is a vertex farther than
+    ``corner_tol`` (default ``step_mm / 10``) from the chord between the path points ``step_mm / 2``
+    before and after it (arc length), so a line written as 1 or as 100 collinear blocks, or an arc as
+    one G2 or as many chords, gives the same samples (up to the chords' sagitta) — while
+    :meth:`ToolPath.resample` keeps every block end, so blocks shorter than the step would give
+    steps shorter than the dixel resolution. Arcs are first tessellated with chords <= ``step_mm``.
+    ``index`` is the move of each sample (the move whose span holds its arc length).
+
+    >>> p = ToolPath.build([[0, 0, 0], [0.3, 0, 0], [0.31, 0, 0], [1, 0, 0]], feed=100)
+    >>> q, i = resample_by_length(p, 0.25)
+    >>> q.xyz[:, 0].round(3).tolist(), i.tolist()
+    ([0.0, 0.25, 0.5, 0.75, 1.0], [0, 1, 3, 3, 3])
+    """
+    h = float(step_mm)
+    if not (math.isfinite(h) and h > 0):
+        raise ValueError(f"step_mm must be a finite number > 0 mm, got {step_mm!r}")
+    tol = 0.1 * h if corner_tol is None else float(corner_tol)
+    Q, qsrc = path.polyline(h)
+    keep = np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]
+    kind = path.kind[qsrc]
+    keep |= np.r_[True, kind[1:] != kind[:-1]]          # a kind change is kept even without length
+    Q, qsrc, kind = Q[keep], qsrc[keep], kind[keep]
+    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(Q, axis=0), axis=1))]
+    # runs of one kind: vertex j starts a new run when the segment ending at j has another kind than
+    # the one before; run boundaries and corners are breakpoints
+    seg_kind = kind[1:]
+    brk = np.zeros(len(Q), bool)
+    brk[0] = brk[-1] = True
+    brk[1:-1] = seg_kind[1:] != seg_kind[:-1]
+    bidx = np.flatnonzero(brk)
+    lo_s = s[bidx[np.searchsorted(bidx, np.arange(len(Q)), side="right") - 1]]
+    hi_s = s[bidx[np.minimum(np.searchsorted(bidx, np.arange(len(Q)), side="left"), len(bidx) - 1)]]
+    inner = ~brk
+    if inner.any():
+        a_s = np.maximum(s - 0.5 * h, lo_s)[inner]
+        b_s = np.minimum(s + 0.5 * h, hi_s)[inner]
+        A = np.column_stack([np.interp(a_s, s, Q[:, c]) for c in range(3)])
+        B = np.column_stack([np.interp(b_s, s, Q[:, c]) for c in range(3)])
+        V = Q[inner]
+        AB = B - A
+        L2 = np.einsum("ij,ij->i", AB, AB)
+        t = np.clip(np.einsum("ij,ij->i", V - A, AB) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+        dev = np.linalg.norm(A + t[:, None] * AB - V, axis=1)
+        brk[np.flatnonzero(inner)[dev > tol]] = True
+    bidx = np.flatnonzero(brk)
+    out_s, out_src = [s[:1]], [qsrc[:1]]
+    for a, b in zip(bidx[:-1], bidx[1:]):
+        L = s[b] - s[a]
+        if L <= 0:
+            if qsrc[b] != qsrc[a]:              # zero-length kind change: keep the vertex
+                out_s.append(s[b:b + 1]); out_src.append(qsrc[b:b + 1])
+            continue
+        m = max(1, int(math.ceil(L / h - 1e-9)))
+        ss = s[a] + L * np.arange(1, m + 1) / m
+        ss[-1] = s[b]
+        j = np.clip(np.searchsorted(s, ss, side="left"), a + 1, b)
+        out_s.append(ss); out_src.append(qsrc[j])
+    S, I = np.concatenate(out_s), np.concatenate(out_src)
+    X = np.column_stack([np.interp(S, s, Q[:, c]) for c in range(3)])
+    out = ToolPath(X, path.kind[I], path.tag[I], path.feed[I], path.spindle[I], None, None, path.tool,
+                   dict(path.info))
+    return out, I
 
 
 def _level_fields(times, level, trace) -> dict:
