@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import shapely
 from shapely.geometry import Point, Polygon, box
 from shapely.ops import unary_union
 
@@ -68,22 +67,6 @@ def random_pocket(rng):
     return P
 
 
-def wall_gouge_mm(tp, poly, r, step=0.1):
-    """The largest r - (signed distance of the tool centre to the pocket boundary) over every move at
-    depth, sampled every ``step`` mm (>0: the tool disc reaches past a wall or island)."""
-    Q = tp.xyz
-    low = Q[:, 2] < 0
-    worst = 0.0
-    for k in np.flatnonzero(low[1:] & low[:-1]) + 1:
-        a, b = Q[k - 1, :2], Q[k, :2]
-        t = np.linspace(0, 1, max(2, int(np.hypot(*(b - a)) / step) + 2))
-        q = a + t[:, None] * (b - a)
-        d = shapely.distance(poly.boundary, shapely.points(q))
-        d = np.where(shapely.contains_xy(poly, q[:, 0], q[:, 1]), d, -d)
-        worst = max(worst, r - float(d.min()))
-    return worst
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seed", type=int, default=11)
@@ -112,7 +95,7 @@ def main(argv=None):
         row.update({"p95-theta": ev.engagement_p95_deg - th, "max-theta": ev.engagement_max_deg - th,
                     "share>θ+5_pct": ev.share_above_5_pct, "entries": tp.info["entries"],
                     "plunges": ev.plunges_into_material, "rapids_into": ev.rapids_into_material,
-                    "uncut_mm2": ev.uncut_beyond_unreachable_mm2, "gouge_mm": wall_gouge_mm(tp, P, r),
+                    "uncut_mm2": ev.uncut_beyond_unreachable_mm2, "gouge_mm": ev.wall_gouge_max_mm,
                     "program_s": tp.time_s(10000.0)["total_s"]})
         row["ok"] = bool(row["max-theta"] <= 10 and row["share>θ+5_pct"] <= 0.5 and row["plunges"] == 0
                          and row["rapids_into"] == 0 and row["gouge_mm"] <= 1e-3)

@@ -40,7 +40,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import shapely
 from shapely.geometry import box
 
 from ...cutting.feed_control import controlled_feed
@@ -48,7 +47,7 @@ from ...nc.gcode import read_toolpath
 from ...paths import REPO_ROOT
 from ...runtime import pick
 from ...toolpath import planners
-from ...toolpath.evaluate import Evaluation, evaluate
+from ...toolpath.evaluate import Evaluation, evaluate, wall_gouge
 from ...toolpath.job import Job, load_job
 from ...toolpath.path import KINDS, Tool, ToolPath
 
@@ -177,9 +176,10 @@ def feed_controlled(path: ToolPath, jb: Job, ev: Evaluation, block_mm: float = 0
 
 def wall_gouge_mm(ev: Evaluation, jb: Job) -> float:
     """Deepest reach (mm) of the tool disc into the walls or islands (outside ``jb.polygon``) over the
-    evaluated samples below the stock top: max(0, r - d), d the signed distance (mm) of the tool centre
-    to the pocket boundary (negative outside). 0 for a path that keeps the centre in ``jb.allowed()``
-    (up to its polygon approximation, quad_segs 64: < 1e-3 mm for r <= 10 mm).
+    evaluated samples below the stock top: the evaluator's ``wall_gouge_max_mm``
+    (:func:`cnclab.toolpath.evaluate.wall_gouge`: max(0, r - d), d the signed distance (mm) of the tool
+    centre to the pocket boundary, negative outside; 0 for a path that keeps the centre in
+    ``jb.allowed()``). ``ev`` must have been evaluated on ``jb``.
 
     >>> from shapely.geometry import box
     >>> from cnclab.toolpath.path import Tool
@@ -188,14 +188,10 @@ def wall_gouge_mm(ev: Evaluation, jb: Job) -> float:
     >>> round(wall_gouge_mm(evaluate(p, jb, 0.1), jb), 6)          # centre 2 mm from the x = 40 wall, r = 3
     1.0
     """
-    t = ev.trace
-    low = t["z"] < jb.top_z - 1e-9
-    if not low.any():
-        return 0.0
-    x, y = t["x"][low], t["y"][low]
-    d = shapely.distance(jb.polygon.boundary, shapely.points(x, y))
-    d = np.where(shapely.contains_xy(jb.polygon, x, y), d, -d)
-    return float(max(0.0, jb.tool_radius - d.min()))
+    if math.isfinite(ev.wall_gouge_max_mm):
+        return float(ev.wall_gouge_max_mm)
+    t = ev.trace          # an Evaluation made without the slab simulation: measure its samples
+    return float(wall_gouge(np.column_stack([t["x"], t["y"], t["z"]]), jb)[0].max(initial=0.0))
 
 
 def lifts(ev: Evaluation, top_z: float = 0.0) -> int:
