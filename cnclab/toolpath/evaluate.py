@@ -596,7 +596,7 @@ def resample_by_length(path: ToolPath, step_mm: float, corner_tol: float | None 
     S, I = np.concatenate(out_s), np.concatenate(out_src)
     X = np.column_stack([np.interp(S, s, Q[:, c]) for c in range(3)])
     out = ToolPath(X, path.kind[I], path.tag[I], path.feed[I], path.spindle[I], None, None, path.tool,
-                   dict(path.info))
+                   dict(path.info), path.cleared[I])
     return out, I
 
 
