@@ -235,3 +235,75 @@ def test_statement_without_word_is_an_error_naming_the_line():
     for fast in (True, False):
         with pytest.raises(apt.AptError, match=r"x\.apt:3: '/ RPM, 2000, CLW' does not start with an APT word"):
             apt.parse_apt(text, "x.apt", fast=fast)
+
+
+# --- CLPoints <-> ToolPath: one path type, one arc convention (0 / 2 G2 / 3 G3) ---------------------
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+from cnclab.toolpath.path import ToolPath  # noqa: E402
+
+
+@st.composite
+def _paths(draw):
+    """Random programs as ToolPaths: a start above the part, then rapids, lines and CCW/CW arcs (the
+    arc end on the circle through its start; z may change: helices), feeds > 0, a spindle speed."""
+    n = draw(st.integers(2, 12))
+    coord = st.floats(-100, 100, allow_nan=False).map(lambda v: round(v, 3))
+    pts, kind, feed, arc, ctr = [[0.0, 0.0, 50.0]], ["rapid"], [np.nan], [0], [[np.nan, np.nan]]
+    for _ in range(n):
+        x, y, z = draw(coord), draw(coord), draw(st.floats(-20, 40).map(lambda v: round(v, 3)))
+        what = draw(st.sampled_from(["rapid", "line", "arc"]))
+        if what == "arc":
+            c = np.array(pts[-1][:2]) + [draw(st.floats(1, 20)), draw(st.floats(-20, 20))]
+            r = float(np.hypot(*(np.array(pts[-1][:2]) - c)))
+            a = draw(st.floats(0, 2 * np.pi))
+            x, y = c[0] + r * np.cos(a), c[1] + r * np.sin(a)
+            arc.append(draw(st.sampled_from([2, 3]))); ctr.append(list(c))
+        else:
+            arc.append(0); ctr.append([np.nan, np.nan])
+        pts.append([x, y, z]); kind.append("rapid" if what == "rapid" else "cut")
+        feed.append(np.nan if what == "rapid" else draw(st.sampled_from([300.0, 500.0, 1200.0])))
+    return ToolPath.build(pts, kind=kind, feed=feed, arc=arc, arc_center=ctr, spindle=2000.0, cleared=False)
+
+
+@given(_paths())
+@settings(max_examples=80, deadline=None)
+def test_clpoints_toolpath_round_trip(path):
+    """ToolPath -> CLPoints -> ToolPath keeps every point, rapid flag, feed, spindle, arc (2/3) and
+    centre exactly, and the kinds become the geometric ones (classify_moves); CLPoints -> ToolPath ->
+    CLPoints is the identity on the CL arrays; both give the same move lengths."""
+    cl = apt.CLPoints.from_toolpath(path)
+    back = cl.to_toolpath()
+    for a in ("xyz", "feed", "spindle", "arc", "arc_center"):
+        np.testing.assert_array_equal(getattr(back, a)[1:], getattr(path, a)[1:], err_msg=a)
+    np.testing.assert_array_equal(back.xyz[0], path.xyz[0])
+    assert np.array_equal(back.is_kind("rapid"), path.is_kind("rapid"))
+    again = apt.CLPoints.from_toolpath(back)
+    for a in ("xyz", "rapid", "feed", "spindle", "arc", "start"):
+        np.testing.assert_array_equal(getattr(again, a), getattr(cl, a), err_msg=a)
+    np.testing.assert_array_equal(again.centre[:, :2], cl.centre[:, :2])
+    np.testing.assert_allclose(cl.segment_lengths(), path.segment_lengths()[1:], rtol=1e-12, atol=1e-12)
+
+
+@given(_paths())
+@settings(max_examples=60, deadline=None)
+def test_apt_writer_takes_a_toolpath_and_reads_back(path):
+    """apt_program(path) (6 decimals) parses back (CIRCLE checks included) to the same motions: points
+    within 5e-7 mm (half a unit of the 6th decimal), arcs with the same sense, same feeds."""
+    cl = apt.parse_apt(apt.apt_program(path, tool_diameter=10, decimals=6).to_text(), "w.apt").cl_points()
+    np.testing.assert_allclose(cl.xyz, path.xyz[1:], atol=5e-7)
+    np.testing.assert_array_equal(cl.arc, path.arc[1:])
+    np.testing.assert_array_equal(cl.rapid, path.is_kind("rapid")[1:])
+    np.testing.assert_array_equal(cl.feed[~cl.rapid], path.feed[1:][~cl.rapid])
+
+
+def test_cl_program_is_apt_program_of_its_toolpath():
+    """The sample ch. 8 APT (a committed file) is still written byte for byte by cl_program, which
+    now goes through the ToolPath writer."""
+    passes = [np.array([[0, 0, 1.0], [5, 0, 1.0]]), np.array([[5, 2, 1.0], [0, 2, 1.5]])]
+    for link in ("feed", "rapid"):
+        prog = apt.cl_program(passes, 500, 2000, 10, 30, link=link)
+        cl = prog.cl_points()
+        assert cl.rapid.tolist() == ([True, False, False, False, False, True] if link == "feed" else
+                                     [True, False, False, True, True, False, False, True])
+        assert np.array_equal(apt.CLPoints.from_toolpath(cl.to_toolpath()).xyz, cl.xyz)

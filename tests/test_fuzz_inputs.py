@@ -518,7 +518,7 @@ def test_circle_is_an_arc_through_to_gcode():
     prog = apt.parse_apt(VALID_APT, "c.apt")
     cl = prog.cl_points()
     k = int(np.flatnonzero(cl.arc)[0])
-    assert cl.arc[k] == 1 and np.allclose(cl.centre[k], 0)
+    assert cl.arc[k] == 3 and np.allclose(cl.centre[k], 0)          # G3 (the ToolPath convention)
     assert np.isclose(cl.segment_lengths()[k], np.pi / 2 * 10)
     mesh = tessellate_heightfield(lambda x, y: 0 * x, (-15, 15), (-5, 15), 6, 4)
     s = sc.spindle_schedule(mesh, cl, tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2)
@@ -529,7 +529,7 @@ def test_circle_is_an_arc_through_to_gcode():
     i = words.index("CIRCLE")
     assert words[i + 1] == "GOTO" and words[i - 1] in ("SPINDL", "FEDRAT")
     back = apt.parse_apt(new.to_text(), "n.apt").cl_points()           # still a valid program
-    assert back.arc.sum() == 1
+    assert np.count_nonzero(back.arc) == 1
     moves = parse_gcode(write_gcode(sc.to_gcode_moves(new)), "x.ngc")
     arcs = [m for m in moves if m.motion in ("G2", "G3")]
     assert len(arcs) == 1 and arcs[0].motion == "G3" and np.isclose(arcs[0].i, -10) and np.isclose(arcs[0].j, 0)

@@ -148,3 +148,19 @@ def test_insertions_match_a_python_walk(seed):
     assert new.to_text() == "".join(want)
     assert counts["spindl_inserted"] == sum(w.startswith("SPINDL / RPM") for w in want) - 2
     assert counts["fedrat_inserted"] == sum(w.startswith("FEDRAT") for w in want) - 2
+
+
+def test_schedule_of_the_toolpath_equals_the_schedule_of_its_cl_points():
+    """The post-processor works on the one path type: the schedule of cl.to_toolpath() is the
+    schedule of the CL points, value for value (same lengths, directions, facets)."""
+    mesh, prog = _flat_case()
+    cl = prog.cl_points()
+    kw = dict(tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2, n_max=9000)
+    a = sc.spindle_schedule(mesh, cl, **kw)
+    b = sc.spindle_schedule(mesh, cl.to_toolpath(), **kw)
+    for name in ("n", "v_f", "d_eff", "index"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    np.testing.assert_array_equal(sc.path_surface_deviation(mesh, cl, 5.0),
+                                  sc.path_surface_deviation(mesh, cl.to_toolpath(), 5.0))
+    with pytest.raises(TypeError, match="CLPoints or a ToolPath"):
+        sc.spindle_schedule(mesh, cl.xyz, **kw)

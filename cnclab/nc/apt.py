@@ -44,8 +44,8 @@ check goes through the careful per-line parser, so records, text and error messa
 >>> cl.xyz.tolist(), cl.rapid.tolist(), cl.feed.tolist()
 ([[0.0, 0.0, 5.0], [10.0, 0.0, 0.0]], [True, False], [nan, 500.0])
 >>> arc = parse_apt("UNITS/MM\\nFROM/10,0,0\\nFEDRAT/500\\nCIRCLE/0,0,0,0,0,1,10\\nGOTO/0,10,0\\n").cl_points()
->>> arc.arc.tolist(), round(float(arc.segment_lengths()[0]), 6)          # quarter circle, CCW
-([1], 15.707963)
+>>> arc.arc.tolist(), round(float(arc.segment_lengths()[0]), 6)          # quarter circle, CCW (G3)
+([3], 15.707963)
 >>> prog.to_text() == "UNITS / MM\\nRAPID\\nGOTO / 0, 0, 5\\nFEDRAT / 500, MMPM\\nGOTO / 10, 0, 0\\nFINI\\n"
 True
 """
@@ -60,9 +60,10 @@ import numpy as np
 from numba import njit
 
 from ..fileio import atomic_write
+from ..toolpath.path import Tool, ToolPath, ToolPathBuilder, classify_moves
 
 __all__ = ["AptError", "AptRecord", "AptProgram", "CLPoints", "parse_apt", "read_apt", "write_apt",
-           "goto", "spindl", "fedrat", "cl_program"]
+           "goto", "spindl", "fedrat", "circle", "apt_program", "cl_program"]
 
 
 class AptError(ValueError):
@@ -162,8 +163,14 @@ class CLPoints:
     ``xyz`` (N, 3) mm end points; ``rapid`` (N,) bool; ``feed`` (N,) mm/min in force (NaN for rapids);
     ``spindle`` (N,) rpm in force (NaN before any SPINDL); ``record`` (N,) index into ``records``;
     ``line`` (N,) source line; ``start`` (3,) the FROM point (or the first point); ``arc`` (N,) int8:
-    0 straight, +1 counter-clockwise (G3), -1 clockwise (G2) arc from a ``CIRCLE`` record;
-    ``centre`` (N, 3) arc centres (mm, NaN for straight moves).
+    the :class:`~cnclab.toolpath.path.ToolPath` convention, 0 straight, 3 counter-clockwise (G3),
+    2 clockwise (G2) arc from a ``CIRCLE`` record; ``centre`` (N, 3) arc centres (mm, NaN for
+    straight moves). :meth:`to_toolpath` / :meth:`from_toolpath` convert to and from the one path
+    type (the start becomes the path's point 0, a rapid).
+
+    >>> cl = parse_apt("UNITS/MM\\nFROM/0,0,5\\nFEDRAT/300\\nGOTO/0,0,-1\\nGOTO/10,0,-1\\n").cl_points()
+    >>> cl.to_toolpath().kinds().tolist()
+    ['rapid', 'plunge', 'cut']
     """
 
     xyz: np.ndarray
@@ -187,20 +194,34 @@ class CLPoints:
 
     def segment_lengths(self) -> np.ndarray:
         """Length (mm) of the motion ending at each point: chord for straight moves, arc (helix) length
-        for CIRCLE moves (a move ending where it starts is a full circle)."""
-        prev = np.vstack([np.asarray(self.start, float)[None], self.xyz[:-1]])
-        L = np.linalg.norm(self.xyz - prev, axis=1)
-        k = np.flatnonzero(self.arc != 0)
-        if k.size:
-            c = self.centre[k]
-            a0 = np.arctan2(prev[k, 1] - c[:, 1], prev[k, 0] - c[:, 0])
-            a1 = np.arctan2(self.xyz[k, 1] - c[:, 1], self.xyz[k, 0] - c[:, 0])
-            sweep = np.mod((a1 - a0) * self.arc[k], 2 * np.pi)
-            full = np.hypot(*(self.xyz[k, :2] - prev[k, :2]).T) == 0
-            sweep[full] = 2 * np.pi
-            r = np.hypot(prev[k, 0] - c[:, 0], prev[k, 1] - c[:, 1])
-            L[k] = np.hypot(r * sweep, self.xyz[k, 2] - prev[k, 2])
-        return L
+        for CIRCLE moves (a move ending where it starts is a full circle):
+        :meth:`ToolPath.segment_lengths <cnclab.toolpath.path.ToolPath.segment_lengths>`."""
+        return self.to_toolpath().segment_lengths()[1:]
+
+    def to_toolpath(self, tool: Tool | None = None, z_tol: float = 1e-6) -> ToolPath:
+        """The motions as a :class:`~cnclab.toolpath.path.ToolPath`: point 0 the start (a rapid), then
+        every CL point; kinds from the geometry (:func:`~cnclab.toolpath.path.classify_moves`), feed,
+        spindle, arcs and their xy centres as they are (``cleared`` False: a CL file states no proof)."""
+        P = np.vstack([np.asarray(self.start, float)[None], self.xyz])
+        rapid = np.r_[True, self.rapid]
+        arc = np.r_[0, self.arc].astype(np.int8)
+        return ToolPath.build(P, kind=classify_moves(P, rapid, arc, z_tol), feed=np.r_[np.nan, self.feed],
+                              spindle=np.r_[np.nan, self.spindle], arc=arc,
+                              arc_center=np.vstack([[np.nan, np.nan], self.centre[:, :2]]), tool=tool, cleared=False)
+
+    @classmethod
+    def from_toolpath(cls, path: ToolPath) -> "CLPoints":
+        """The CL points of ``path`` (the inverse of :meth:`to_toolpath` up to kinds, tags and flags,
+        which a CL file does not carry): point 0 becomes the start; ``record``/``line`` are -1 (no
+        file); an arc's centre z is the height of its start point."""
+        if len(path) < 2:
+            raise ValueError(f"path must have a start point and at least one move, got {len(path)} points")
+        arc = path.arc[1:].astype(np.int8)
+        cz = np.where(arc != 0, path.xyz[:-1, 2], np.nan)
+        n = len(path) - 1
+        return cls(path.xyz[1:].copy(), path.is_kind("rapid")[1:], path.feed[1:].copy(), path.spindle[1:].copy(),
+                   np.full(n, -1, np.int64), np.full(n, -1, np.int64), path.xyz[0].copy(), arc,
+                   np.column_stack([path.arc_center[1:], cz]))
 
 
 class GotoRun:
@@ -384,7 +405,7 @@ class AptProgram:
                 if pending_rapid:
                     raise AptError(f"{self.source}:{r.line}: CIRCLE after RAPID (an arc is a feed motion)")
                 v = r.values
-                circle = (1 if v[5] > 0 else -1, np.array(v[:3]), v[6], r.line)
+                circle = (3 if v[5] > 0 else 2, np.array(v[:3]), v[6], r.line)
             elif w == "RAPID":
                 pending_rapid = True
             elif w == "FEDRAT":
@@ -783,6 +804,85 @@ def write_apt(path, program: AptProgram, inputs=()) -> Path:
     return atomic_write(path, program.to_text(), inputs=inputs)
 
 
+def apt_program(path: ToolPath, *, tool_diameter: float | None = None, partno: str = "CNCLAB",
+                decimals: int = 3) -> AptProgram:
+    """The APT writer: an :class:`AptProgram` of ``path`` (tool-tip points, mm).
+
+    Header as in Sec. 7.2.2 (``PARTNO``, ``MACHIN``, ``OUTPUT_ON_TIP``, ``UNITS / MM``, the ``CUTTER``
+    diameter — ``tool_diameter`` or ``path.tool`` — and ``SPINDL`` at the first spindle speed set),
+    ``FROM`` the path's point 0 (``RAPID FROM`` when move 1 is a rapid), then every move: ``RAPID`` + ``GOTO`` for rapids; for feed
+    moves ``FEDRAT`` when the feed changes, ``CIRCLE / xc, yc, z0, 0, 0, +-1, r`` before an arc (z0
+    the arc's start height; +1 counter-clockwise), ``GOTO``; ``SPINDL`` where the speed changes; ``FINI``.
+
+    >>> from cnclab.toolpath.path import ToolPath
+    >>> p = ToolPath.build([[0, 0, 30], [0, 0, 30], [0, 0, 0], [5, 0, 0]], kind=["rapid", "rapid", "plunge", "cut"],
+    ...                    feed=500, spindle=2000)
+    >>> print(apt_program(p, tool_diameter=10).to_text())   # doctest: +NORMALIZE_WHITESPACE
+    PARTNO / CNCLAB
+    MACHIN / MILL, 1
+    $$-> CUTCOM_GEOMETRY_TYPE / OUTPUT_ON_TIP
+    UNITS / MM
+    $$-> CUTTER / 10.000000
+    SPINDL / RPM, 2000, CLW
+    RAPID
+    FROM / 0.000, 0.000, 30.000
+    RAPID
+    GOTO / 0.000, 0.000, 30.000
+    FEDRAT / 500.0, MMPM
+    GOTO / 0.000, 0.000, 0.000
+    GOTO / 5.000, 0.000, 0.000
+    FINI
+    """
+    if len(path) < 2:
+        raise ValueError(f"path must have a start point and at least one move, got {len(path)} points")
+    if tool_diameter is None:
+        if path.tool is None:
+            raise ValueError("tool_diameter (mm) is required when the path has no tool")
+        tool_diameter = path.tool.diameter
+    spin = path.spindle[np.isfinite(path.spindle)]
+    if not len(spin) or not spin[0] > 0:
+        raise ValueError("the path sets no spindle speed > 0 rpm (ToolPath.spindle)")
+    recs = [_word(f"PARTNO / {partno}", "PARTNO", [partno]), _word("MACHIN / MILL, 1", "MACHIN", ["MILL", "1"]),
+            _word("$$-> CUTCOM_GEOMETRY_TYPE / OUTPUT_ON_TIP", ""), _word("UNITS / MM", "UNITS", ["MM"]),
+            _word(f"$$-> CUTTER / {tool_diameter:.6f}", "")]
+    recs[-1].comment = recs[-1].raw.strip()
+    recs.append(spindl(spin[0]))
+    p0 = path.xyz[0]
+    rapid = path.is_kind("rapid")
+    if rapid[1]:       # (the reader carries a RAPID over FROM to the next motion: only before a rapid)
+        recs.append(_word("RAPID", "RAPID"))
+    recs.append(_word("FROM / " + ", ".join(_format_num(v, decimals) for v in p0), "FROM", [str(v) for v in p0]))
+    f_cur, s_cur = math.nan, float(spin[0])
+    for k in range(1, len(path)):
+        x, y, z = path.xyz[k]
+        if np.isfinite(path.spindle[k]) and path.spindle[k] != s_cur:
+            s_cur = float(path.spindle[k])
+            recs.append(spindl(s_cur))
+        if rapid[k]:
+            recs += [_word("RAPID", "RAPID"), goto(x, y, z, decimals)]
+            continue
+        if path.feed[k] != f_cur:
+            f_cur = float(path.feed[k])
+            recs.append(fedrat(f_cur))
+        if path.arc[k]:
+            recs.append(circle(path.xyz[k - 1], path.arc_center[k], path.arc[k] == 3, decimals))
+        recs.append(goto(x, y, z, decimals))
+    recs.append(_word("FINI", "FINI"))
+    for i, r in enumerate(recs, start=1):
+        r.line = i
+    return AptProgram(recs, partno)
+
+
+def circle(start, center_xy, ccw: bool, decimals: int = 3) -> AptRecord:
+    """A generated ``CIRCLE / xc, yc, z0, 0, 0, +-1, r`` record (mm) announcing an arc from ``start``
+    (x, y, z0) about ``center_xy``; axis +Z counter-clockwise (``ccw``), -Z clockwise."""
+    xc, yc = float(center_xy[0]), float(center_xy[1])
+    r = math.hypot(start[0] - xc, start[1] - yc)
+    vals = (xc, yc, float(start[2]), 0.0, 0.0, 1.0 if ccw else -1.0, r)
+    text = "CIRCLE / " + ", ".join(_format_num(v, decimals) for v in vals)
+    return AptRecord("CIRCLE", [repr(v) for v in vals], text + "\n", nums=_finite_nums(*vals))
+
+
 def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: float,
                clearance_z: float, partno: str = "CNCLAB", decimals: int = 3, link: str = "feed") -> AptProgram:
     """An APT program cutting each pass (list of (M, 3) arrays of tool-tip points, mm) in order.
@@ -791,41 +891,29 @@ def cl_program(passes, feed_mm_min: float, spindle_rpm: float, tool_diameter: fl
     onto the part), then feeds through all passes in order, and retracts at the end. ``link="feed"``:
     consecutive passes are linked by a feed move (a zig-zag); ``"rapid"``: by a rapid retract straight
     up to ``clearance_z``, a rapid over the next pass start at ``clearance_z`` and a feed down onto it.
-    Header as in Sec. 7.2.2 (``OUTPUT_ON_TIP``: the points are tool-tip positions).
+    Header as in Sec. 7.2.2 (``OUTPUT_ON_TIP``: the points are tool-tip positions); written by
+    :func:`apt_program` from the :class:`~cnclab.toolpath.path.ToolPath` of the passes.
     """
     if feed_mm_min <= 0 or spindle_rpm <= 0:
         raise ValueError(f"feed_mm_min and spindle_rpm must be > 0, got {feed_mm_min}, {spindle_rpm}")
     if link not in ("feed", "rapid"):
         raise ValueError(f"link must be 'feed' or 'rapid', got {link!r}")
-    recs = [_word(f"PARTNO / {partno}", "PARTNO", [partno]), _word("MACHIN / MILL, 1", "MACHIN", ["MILL", "1"]),
-            _word("$$-> CUTCOM_GEOMETRY_TYPE / OUTPUT_ON_TIP", ""), _word("UNITS / MM", "UNITS", ["MM"]),
-            _word(f"$$-> CUTTER / {tool_diameter:.6f}", "")]
-    recs[-1].comment = recs[-1].raw.strip()
-    recs.append(spindl(spindle_rpm))
     passes = [np.asarray(p, float) for p in passes if len(p)]
     if not passes:
         raise ValueError("passes: no points")
-    p0 = passes[0][0]
-    recs += [_word("RAPID", "RAPID"), _word("FROM / " + ", ".join(_format_num(v, decimals) for v in
-                                                                    (p0[0], p0[1], clearance_z)),
-                                             "FROM", [str(p0[0]), str(p0[1]), str(clearance_z)])]
     top = max(float(p[:, 2].max()) for p in passes)
     if not clearance_z > top:
         raise ValueError(f"clearance_z must be above every point of the passes ({top:g} mm), got {clearance_z}")
+    b = ToolPathBuilder(tool=Tool(float(tool_diameter)), spindle=spindle_rpm)
+    b.rapid(passes[0][:1, :2], z=clearance_z)                     # the FROM point
     for k, p in enumerate(passes):
         if k == 0 or link == "rapid":
             if k > 0:
-                q = passes[k - 1][-1]
-                recs += [_word("RAPID", "RAPID"), goto(q[0], q[1], clearance_z, decimals)]
-            recs += [_word("RAPID", "RAPID"), goto(p[0, 0], p[0, 1], clearance_z, decimals)]
-        if k == 0:
-            recs.append(fedrat(feed_mm_min))
-        recs += [goto(*q, decimals=decimals) for q in p]  # the first GOTO feeds down onto the pass
-    last = passes[-1][-1]
-    recs += [_word("RAPID", "RAPID"), goto(last[0], last[1], clearance_z, decimals), _word("FINI", "FINI")]
-    for i, r in enumerate(recs, start=1):
-        r.line = i
-    return AptProgram(recs, partno)
+                b.rapid(passes[k - 1][-1:, :2], z=clearance_z)
+            b.rapid(p[:1, :2], z=clearance_z)
+        b.add(p, classify_moves(np.vstack([b.position[None], p]), False, 0)[1:], feed_mm_min)
+    b.rapid(passes[-1][-1:, :2], z=clearance_z)
+    return apt_program(b.build(), tool_diameter=tool_diameter, partno=partno, decimals=decimals)
 
 
 def reordered_program(points, result, *, feed_mm_min: float, spindle_rpm: float,

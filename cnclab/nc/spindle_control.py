@@ -37,7 +37,7 @@ from ..cutting.speeds import feed_speed, spindle_speed
 from ..cutting.spindle_model import POINT_RULES, apply_acceleration_limit, feed_directions, working_diameters
 from ..fileio import atomic_write_many, check_outputs
 from ..geometry.mesh import FacetLocator, TriMesh, closest_point_on_triangles, machined_surface_mask, read_stl
-from ..toolpath.path import Move
+from ..toolpath.path import Move, ToolPath
 from .apt import AptProgram, AptRecord, CLPoints, GotoRun, fedrat, read_apt, spindl
 from .numfmt import fixed, scaled_ints
 from .gcode import write_gcode, write_gcode_linear
@@ -102,13 +102,23 @@ class SpindleSchedule:
                 "vc_within_5pct_share": self.within_share(0.05)}
 
 
-def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: float, v_c: float,
+def _cl_points(cl) -> CLPoints:
+    """``cl`` as :class:`CLPoints` (a :class:`~cnclab.toolpath.path.ToolPath` converted)."""
+    if isinstance(cl, ToolPath):
+        return CLPoints.from_toolpath(cl)
+    if not isinstance(cl, CLPoints):
+        raise TypeError(f"cl must be CLPoints or a ToolPath, got {type(cl).__name__}")
+    return cl
+
+
+def spindle_schedule(mesh: TriMesh, cl: CLPoints | ToolPath, *, tool_diameter: float, a_p: float, v_c: float,
                      f_z: float, teeth: int, feed_direction_deg: float | None = None,
                      facet_rule: str = "centroid", point: str = "max", n_max: float | None = None,
                      n_min: float | None = None, vf_max: float | None = None,
                      accel_rpm_s: float | None = None, filter_facets: bool = True,
                      locator: FacetLocator | None = None, workers: int = -1) -> SpindleSchedule:
-    """Compute the point-by-point spindle speed and feed for the feed points of ``cl``.
+    """Compute the point-by-point spindle speed and feed for the feed points of ``cl`` (the CL points
+    of an APT program, or any :class:`~cnclab.toolpath.path.ToolPath`: the same schedule).
 
     Parameters: tool_diameter (mm), a_p (mm), v_c nominal cutting speed (m/min), f_z (mm), teeth;
     feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule 'centroid' | 'nearest';
@@ -133,6 +143,7 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints, *, tool_diameter: float, a_p: 
             raise ValueError(f"{name} must be finite, got {v}")
     if n_min is not None and n_max is not None and n_min > n_max:
         raise ValueError(f"n_min must be <= n_max, got n_min={n_min}, n_max={n_max}")
+    cl = _cl_points(cl)
     if locator is None:
         m = mesh.subset(machined_surface_mask(mesh.normals)) if filter_facets else mesh
         if m.n_facets == 0:
@@ -347,7 +358,7 @@ def _motion_blocks(program: AptProgram):
             pos = list(r.values[:3])
 
 
-def path_surface_deviation(mesh: TriMesh, cl: CLPoints, tool_radius: float, *, output: str = "tip",
+def path_surface_deviation(mesh: TriMesh, cl: CLPoints | ToolPath, tool_radius: float, *, output: str = "tip",
                            max_points: int = 2000) -> np.ndarray:
     """Gap (mm) between the ball of a ball-end mill at each feed CL point and the part surface.
 
@@ -369,6 +380,7 @@ def path_surface_deviation(mesh: TriMesh, cl: CLPoints, tool_radius: float, *, o
         raise ValueError(f"output must be 'tip' or 'centre', got {output!r}")
     if not (np.isfinite(tool_radius) and tool_radius > 0):
         raise ValueError(f"tool_radius must be a finite number > 0 mm, got {tool_radius!r}")
+    cl = _cl_points(cl)
     pts = cl.xyz[~cl.rapid]
     if len(pts) > max_points:
         pts = pts[np.linspace(0, len(pts) - 1, max_points).round().astype(int)]

@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 __all__ = ["MOTIONS", "Move", "KINDS", "ENTRY_KINDS", "Tool", "ToolPath", "ToolPathBuilder", "arc_geometry",
-           "helix_ring", "sample_arc", "subdivide", "resample_polyline"]
+           "helix_ring", "sample_arc", "subdivide", "resample_polyline", "classify_moves"]
 
 MOTIONS = ("G0", "G1", "G2", "G3")
 
@@ -466,27 +466,16 @@ class ToolPath:
         evaluator tells cuts from links by the material). ``start`` (x, y, z) is where the tool is
         before the first move (it then becomes point 0, a rapid)."""
         moves = list(moves)
-        pts, kind, feed, spin, arc, ctr = [], [], [], [], [], []
+        pts, rapid, feed, spin, arc, ctr = [], [], [], [], [], []
         cur = None
         if start is not None:
             cur = np.asarray(start, float)
-            pts.append(cur); kind.append("rapid"); feed.append(np.nan); spin.append(np.nan)
+            pts.append(cur); rapid.append(True); feed.append(np.nan); spin.append(np.nan)
             arc.append(0); ctr.append((np.nan, np.nan))
         for mv in moves:
             end = mv.xyz
-            sp = np.nan if mv.spindle is None else mv.spindle
-            if mv.motion == "G0":
-                kd = "rapid"
-            elif cur is None:
-                kd = "cut"
-            elif end[2] > cur[2] + z_tol:
-                kd = "retract"
-            elif end[2] < cur[2] - z_tol:
-                kd = "helix" if mv.motion in ("G2", "G3") else (
-                    "plunge" if math.hypot(*(end[:2] - cur[:2])) <= z_tol else "ramp")
-            else:
-                kd = "cut"
-            pts.append(end); kind.append(kd); spin.append(sp)
+            pts.append(end); rapid.append(mv.motion == "G0")
+            spin.append(np.nan if mv.spindle is None else mv.spindle)
             feed.append(np.nan if mv.motion == "G0" else mv.feed)
             if mv.motion in ("G2", "G3") and cur is not None:
                 arc.append(int(mv.motion[1])); ctr.append((cur[0] + mv.i, cur[1] + mv.j))
@@ -495,9 +484,32 @@ class ToolPath:
             cur = end
         if not pts:
             return cls(np.zeros((0, 3)), None, None, None, None, None, None, tool, dict(info or {}))
-        return cls.build(np.array(pts), kind=kind, feed=np.array(feed, float), spindle=np.array(spin, float),
-                         arc=np.array(arc), arc_center=np.array(ctr, float), tool=tool, info=info, cleared=False)
+        P, arc = np.array(pts), np.array(arc)
+        return cls.build(P, kind=classify_moves(P, rapid, arc, z_tol), feed=np.array(feed, float),
+                         spindle=np.array(spin, float), arc=arc, arc_center=np.array(ctr, float), tool=tool,
+                         info=info, cleared=False)
 
+
+def classify_moves(xyz, rapid, arc, z_tol: float = 1e-6) -> np.ndarray:
+    """Kind names of the moves to the points ``xyz`` (N, 3) mm of a program, from the geometry: a
+    rapid stays ``rapid``; a feed move with rising z is a ``retract``, with falling z a ``helix``
+    (``arc`` != 0), ``plunge`` (no xy motion, within ``z_tol`` mm) or ``ramp``; a level move a ``cut``
+    (the evaluator tells cuts from links by the material). Move 0 (no start known): rapid or cut.
+
+    >>> classify_moves([[0, 0, 5], [0, 0, 0], [1, 0, -1], [2, 0, -1], [2, 0, 5]], [1, 0, 0, 0, 0], 0).tolist()
+    ['rapid', 'plunge', 'ramp', 'cut', 'retract']
+    """
+    P = np.asarray(xyz, float).reshape(-1, 3)
+    n = len(P)
+    rapid = np.broadcast_to(np.asarray(rapid, bool), (n,))
+    arc = np.broadcast_to(np.asarray(arc), (n,))
+    dz = np.r_[0.0, np.diff(P[:, 2])]
+    flat = np.r_[False, np.hypot(*np.diff(P[:, :2], axis=0).T) <= z_tol]
+    down = np.where(arc != 0, "helix", np.where(flat, "plunge", "ramp"))
+    k = np.where(dz > z_tol, "retract", np.where(dz < -z_tol, down, "cut")).astype(object)
+    k[0] = "cut"
+    k[rapid] = "rapid"
+    return k
 
 def _legacy_cleared(tags) -> np.ndarray:
     """Legacy default of ``ToolPath.build(cleared=None)``: the proof stated in the tag text only."""
