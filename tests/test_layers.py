@@ -167,3 +167,130 @@ def test_the_checker_sees_each_kind_of_violation(tmp_path):
     assert any(t.startswith("private import across modules: from cnclab.nc.a import _p") for t in texts)
     assert any(t.startswith("function-local import of cnclab.geometry") for t in texts)
     assert any("module cnclab.mystery has no layer" in t for t in texts)
+
+
+# --- size budgets -------------------------------------------------------------------------------
+#: a function (its def line to its last line, docstring included) at most this many lines; at most
+#: this many named parameters (self/cls not counted, *args/**kwargs counted); a module at most this
+#: many lines
+MAX_FUNCTION_LINES, MAX_PARAMETERS, MAX_MODULE_LINES = 120, 12, 800
+
+_ADAPTIVE = "being split into cnclab/toolpath/adaptive/ (issue 29 item 1): remove the entry when it lands"
+_NJIT = "numba nopython kernel: arrays and scalars passed positionally (no dataclass in nopython mode)"
+#: shrink-only allow-list: (what, module path, qualified name) -> (today's size, reason). The test fails
+#: when an entry grows, when an entry already fits (remove it) or no longer exists, and for any new
+#: offender. Sizes: lines for "lines"/"module", a count for "params".
+BUDGET_ALLOWED = {
+    ("params", "cnclab/analysis/mlp.py", "train_mlp"): (15, "the thesis' training settings as keywords; to become a TrainConfig"),
+    ("module", "cnclab/geometry/mesh.py", ""): (899, "mesh type, STL exchange, repair, locator: to split by role (issue 27)"),
+    ("module", "cnclab/nc/apt.py", ""): (940, "APT reader (bulk + careful parser) and writer: to split reader / writer"),
+    ("module", "cnclab/nc/gcode.py", ""): (805, "G-code reader and writer: the writer goes into nc/program.py (issue 27 item 4)"),
+    ("lines", "cnclab/nc/gcode.py", "read_gcode"): (183, "the reader's one-pass word state machine: to split per word group"),
+    ("params", "cnclab/nc/spindle_control.py", "spindle_schedule"): (17, "the post-processor's options mirror the CLI flags; to become one options object"),
+    ("params", "cnclab/nc/spindle_control.py", "postprocess_files"): (16, "the post-processor's options mirror the CLI flags; to become one options object"),
+    ("module", "cnclab/simulation/_kernels.py", ""): (860, "the numba kernels of both stocks in one module (one JIT cache)"),
+    ("params", "cnclab/simulation/_kernels.py", "_refine"): (18, _NJIT),
+    ("params", "cnclab/simulation/_kernels.py", "_band"): (14, _NJIT),
+    ("params", "cnclab/simulation/_kernels.py", "_finish"): (17, _NJIT),
+    ("params", "cnclab/simulation/_kernels.py", "simulate_path"): (30, _NJIT),
+    ("params", "cnclab/simulation/common.py", "simulate"): (13, "simulator options (feed, direction, model switches); to become one options object"),
+    ("params", "cnclab/simulation/common.py", "_simulate_loop"): (13, "the loop behind simulate() with its options"),
+    ("lines", "cnclab/simulation/dixel.py", "Stock.engagement"): (126, "vectorised engagement of the dixel stock, one pass over rays; to split the ray set-up out"),
+    ("module", "cnclab/toolpath/adaptive_clearing.py", ""): (1847, _ADAPTIVE),
+    ("params", "cnclab/toolpath/adaptive_clearing.py", "_root"): (18, _ADAPTIVE),
+    ("params", "cnclab/toolpath/adaptive_clearing.py", "_heading"): (16, _ADAPTIVE),
+    ("params", "cnclab/toolpath/adaptive_clearing.py", "_bow_runs"): (14, _ADAPTIVE),
+    ("lines", "cnclab/toolpath/adaptive_clearing.py", "_pass"): (133, _ADAPTIVE),
+    ("params", "cnclab/toolpath/adaptive_clearing.py", "_pass"): (26, _ADAPTIVE),
+    ("params", "cnclab/toolpath/adaptive_clearing.py", "_Grid.run_pass"): (15, _ADAPTIVE),
+    ("lines", "cnclab/toolpath/adaptive_clearing.py", "_dijkstra_nb"): (127, _ADAPTIVE),
+    ("params", "cnclab/toolpath/adaptive_clearing.py", "_dijkstra_nb"): (20, _ADAPTIVE),
+    ("lines", "cnclab/toolpath/adaptive_clearing.py", "adaptive_clearing"): (499, _ADAPTIVE),
+    ("params", "cnclab/toolpath/adaptive_clearing.py", "adaptive_clearing"): (23, _ADAPTIVE),
+    ("lines", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (185, "the old clearing planner, to be retired (issue 29 item 1)"),
+    ("params", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (22, "the old clearing planner, to be retired (issue 29 item 1)"),
+    ("params", "cnclab/toolpath/constant_engagement.py", "multi_pass"): (13, "Thesis II/III integration settings; to take a Job"),
+    ("params", "cnclab/toolpath/dropcutter.py", "_grid_drop"): (15, _NJIT),
+    ("lines", "cnclab/toolpath/evaluate.py", "evaluate"): (137, "the evaluator's one pass: to split the metric groups into helpers"),
+    ("params", "cnclab/toolpath/reorder.py", "reorder_path"): (13, "Sec. 9.2 search settings; to become one options object"),
+    ("module", "cnclab/toolpath/trochoidal.py", ""): (968, "patterns and the study sweeps: to split (issue 27 item 6)"),
+    ("params", "cnclab/toolpath/trochoidal.py", "ce_period"): (13, "Thesis IV period settings; to take a pattern options object"),
+    ("params", "cnclab/toolpath/trochoidal.py", "ce_trochoid"): (13, "Thesis IV period settings; to take a pattern options object"),
+}
+
+
+def budget_sizes(pkg: Path = None) -> dict:
+    """Every budget offender of the package as ``{(what, path, qualname): size}`` (see the limits)."""
+    pkg = PKG if pkg is None else pkg
+    out = {}
+    for p in sorted(pkg.rglob("*.py")):
+        rel = p.relative_to(pkg.parent).as_posix()
+        src = p.read_text(encoding="utf-8")
+        if len(src.splitlines()) > MAX_MODULE_LINES:
+            out[("module", rel, "")] = len(src.splitlines())
+
+        def walk(node, prefix):
+            for ch in ast.iter_child_nodes(node):
+                if isinstance(ch, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    q = prefix + ch.name
+                    a = ch.args
+                    names = [x.arg for x in a.posonlyargs + a.args + a.kwonlyargs]
+                    names += [x.arg for x in (a.vararg, a.kwarg) if x is not None]
+                    n_par = len([x for x in names if x not in ("self", "cls")])
+                    n_lines = ch.end_lineno - ch.lineno + 1
+                    if n_lines > MAX_FUNCTION_LINES:
+                        out[("lines", rel, q)] = n_lines
+                    if n_par > MAX_PARAMETERS:
+                        out[("params", rel, q)] = n_par
+                    walk(ch, q + ".")
+                elif isinstance(ch, ast.ClassDef):
+                    walk(ch, prefix + ch.name + ".")
+                else:
+                    walk(ch, prefix)
+
+        walk(ast.parse(src), "")
+    return out
+
+
+def budget_problems(sizes: dict, allowed: dict) -> list:
+    """Messages for new offenders, grown entries, entries that fit (or are gone)."""
+    msgs = []
+    for key, size in sorted(sizes.items()):
+        what, path, name = key
+        label = f"{path}{':' + name if name else ''} ({what} {size})"
+        if key not in allowed:
+            msgs.append(f"over budget: {label}; limits {MAX_FUNCTION_LINES} lines / {MAX_PARAMETERS} "
+                        f"parameters / {MAX_MODULE_LINES} module lines: split it (or, with a reason, allow-list it)")
+        elif size > allowed[key][0]:
+            msgs.append(f"allow-listed item grew: {label}, allowed {allowed[key][0]}: shrink it")
+    for key, (size, _) in sorted(allowed.items()):
+        if key not in sizes:
+            msgs.append(f"allow-listed item fits its budget or is gone: {key}: remove it from BUDGET_ALLOWED")
+    return msgs
+
+
+def test_size_budgets_with_a_shrink_only_allow_list():
+    problems = budget_problems(budget_sizes(), BUDGET_ALLOWED)
+    assert not problems, "\n".join(problems)
+    assert all(isinstance(r, str) and r for _, r in BUDGET_ALLOWED.values())
+
+
+def test_budget_checker_catches_growth_fits_and_newcomers(tmp_path):
+    """The checker itself on a fake package: a long function, a wide one, a big module."""
+    fake = tmp_path / "cnclab"
+    fake.mkdir()
+    body = "\n".join(f"    x{i} = {i}" for i in range(MAX_FUNCTION_LINES))
+    params = ", ".join(f"p{i}" for i in range(MAX_PARAMETERS + 1))
+    (fake / "a.py").write_text(f"def long():\n{body}\n\n\nclass K:\n    def wide(self, {params}):\n        pass\n")
+    (fake / "b.py").write_text("\n" * (MAX_MODULE_LINES + 1))
+    sizes = budget_sizes(fake)
+    assert sizes == {("lines", "cnclab/a.py", "long"): MAX_FUNCTION_LINES + 1,
+                     ("params", "cnclab/a.py", "K.wide"): MAX_PARAMETERS + 1,
+                     ("module", "cnclab/b.py", ""): MAX_MODULE_LINES + 1}
+    ok = {k: (v, "r") for k, v in sizes.items()}
+    assert budget_problems(sizes, ok) == []
+    grown = {**ok, ("module", "cnclab/b.py", ""): (MAX_MODULE_LINES, "r")}
+    assert any("grew" in m for m in budget_problems(sizes, grown))
+    stale = {**ok, ("lines", "cnclab/a.py", "gone"): (200, "r")}
+    assert any("fits its budget or is gone" in m for m in budget_problems(sizes, stale))
+    assert any("over budget" in m for m in budget_problems(sizes, {}))
