@@ -276,3 +276,33 @@ def test_unreadable_inputs_name_the_file(tmp_path):
         read_drawing(tmp_path / "x.dwg")
     with pytest.raises(ValueError, match=r"tolerance must be a positive number"):
         read_drawing(FIX / "inch.dxf", tolerance=0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_corrupted_drawings_give_an_error_naming_the_file_or_valid_regions(tmp_path_factory, data):
+    """Bytes of the done-when DXF/SVG replaced, deleted or inserted: a ValueError starting with the file
+    name, or regions that are valid polygons (never another exception, never an invalid pocket)."""
+    src = data.draw(st.sampled_from(["done_when.dxf", "done_when.svg"]))
+    raw = bytearray((FIX / src).read_bytes())
+    for _ in range(data.draw(st.integers(1, 6))):
+        i = data.draw(st.integers(0, len(raw) - 1))
+        op = data.draw(st.sampled_from(["replace", "delete", "insert", "digit"]))
+        if op == "replace":
+            raw[i] = data.draw(st.integers(0, 255))
+        elif op == "delete":
+            del raw[i]
+        elif op == "insert":
+            raw.insert(i, data.draw(st.integers(0, 255)))
+        else:                                   # a digit changed: coordinates, handles, group codes
+            raw[i] = ord(data.draw(st.sampled_from("0123456789-.")))
+    f = tmp_path_factory.mktemp("corrupt") / src
+    f.write_bytes(bytes(raw))
+    try:
+        d = read_drawing(f, layer="POCKET")
+    except ValueError as e:
+        assert str(e).startswith(str(f)), str(e)
+        return
+    poly = d.polygon()
+    assert poly.is_valid and poly.area > 0
+    assert all(r.polygon().is_valid for r in d.regions)

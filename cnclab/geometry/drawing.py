@@ -394,6 +394,21 @@ def _dxf_entities(msp, layer: str | None):
             yield (e, f"{e.dxftype()} #{e.dxf.handle}", e.dxf.layer)
 
 
+def _recover_dxf(src: str, first: Exception):
+    """(document, number of fixes) of ezdxf's recover mode; ValueError naming the file if it fails too."""
+    from ezdxf import recover
+
+    try:
+        doc, auditor = recover.readfile(src)
+    except Exception as exc:
+        raise ValueError(f"{src}: not a readable DXF file ({type(first).__name__}: {first}; recover mode: "
+                         f"{type(exc).__name__}: {exc})") from None
+    if auditor.has_errors:
+        raise ValueError(f"{src}: not a readable DXF file (recover mode left {len(auditor.errors)} errors, "
+                         f"first: {auditor.errors[0].message})")
+    return doc, len(auditor.fixes)
+
+
 def read_dxf(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
              join_tol: float = JOIN_TOL_MM) -> Drawing:
     """Read the pocket outline(s) of a DXF file; see the module docstring. Lengths in mm."""
@@ -403,11 +418,15 @@ def read_dxf(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
     src = str(path)
     if not Path(src).is_file():
         raise FileNotFoundError(f"{src}: no such drawing file")
+    notes = []
     try:
         doc = ezdxf.readfile(src)
-    except Exception as exc:       # ezdxf: DXFError, IOError 'not a DXF file', UnicodeDecodeError, ...
+    except ezdxf.DXFStructureError as exc:
+        # sloppy writers (e.g. header variables after ENDSEC): ezdxf's recover mode repairs the structure
+        doc, fixes = _recover_dxf(src, exc)
+        notes.append(f"the DXF structure was repaired by ezdxf.recover ({fixes} fixes; strict read: {exc})")
+    except Exception as exc:       # ezdxf: IOError 'not a DXF file', UnicodeDecodeError, ...
         raise ValueError(f"{src}: not a readable DXF file ({type(exc).__name__}: {exc})") from None
-    notes = []
     code = int(doc.header.get("$INSUNITS", 0) or 0)
     if units is not None:
         unit, scale = units, _units_scale(units, src)
@@ -437,7 +456,16 @@ def read_dxf(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
         if e is None or t not in _CURVES:
             skipped[t] = skipped.get(t, 0) + 1
             continue
-        kind, P, circ = _dxf_entity(e, name, tol_du, src)
+        try:
+            kind, P, circ = _dxf_entity(e, name, tol_du, src)
+        except ValueError as exc:
+            if str(exc).startswith(src):
+                raise
+            raise ValueError(f"{src}: {name} cannot be read ({type(exc).__name__}: {exc})") from None
+        except (ArithmeticError, LookupError, TypeError, AttributeError, ezdxf.DXFError) as exc:
+            raise ValueError(f"{src}: {name} cannot be read ({type(exc).__name__}: {exc})") from None
+        if not np.all(np.isfinite(P)):
+            raise ValueError(f"{src}: {name} has coordinates that are not finite numbers")
         P = P * scale
         if circ is not None:
             circ = (circ[0] * scale, circ[1] * scale, circ[2] * scale)
@@ -539,6 +567,8 @@ def read_svg(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
         svg = se.SVG.parse(src, reify=True, ppi=SVG_PX_PER_INCH)
     except Exception as exc:           # xml.etree.ElementTree.ParseError and svgelements' own errors
         raise ValueError(f"{src}: not a readable SVG file ({type(exc).__name__}: {exc})") from None
+    if not isinstance(svg, se.SVG):
+        raise ValueError(f"{src}: not a readable SVG file (no <svg> root element)")
     notes = []
     if units is not None:
         # svgelements already mapped the viewBox to px: undo the physical size, keep user units
@@ -559,7 +589,13 @@ def read_svg(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
             continue
         sid = shape.values.get("id") or f"#{k}"
         kind = type(shape).__name__.lower()
-        for m, (P, is_closed) in enumerate(_svg_subpaths(shape, tol_px)):
+        try:
+            subpaths = _svg_subpaths(shape, tol_px)
+        except (ArithmeticError, LookupError, TypeError, AttributeError, ValueError) as exc:
+            raise ValueError(f"{src}: {kind} id={sid} cannot be read ({type(exc).__name__}: {exc})") from None
+        for m, (P, is_closed) in enumerate(subpaths):
+            if not np.all(np.isfinite(P)):
+                raise ValueError(f"{src}: {kind} id={sid} has coordinates that are not finite numbers")
             n_shapes += 1
             P = np.c_[P[:, 0] * scale, (height - P[:, 1]) * scale]
             name = f"{kind} id={sid}" + (f" subpath {m}" if m else "")
