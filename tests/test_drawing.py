@@ -246,6 +246,7 @@ def test_svg_paths_layers_and_units():
     circ = reg.islands[1].polygon()
     assert 0 < math.pi * 64 - circ.area <= 2 * math.pi * 8 * TOL * 1.01
     assert circ.centroid.coords[0] == pytest.approx((35, 70 - 35), abs=1e-6)          # y flipped at the page height
+    assert reg.islands[1].circle == pytest.approx((35, 35, 8))            # an SVG circle stays a circle ring
     assert reg.islands[0].polygon().area == pytest.approx(128 + math.pi * 64, abs=2 * math.pi * 8 * TOL * 1.01)
     # the outline's cubic (10,5) (2,20) (2,50) (10,65) in SVG coordinates, evaluated here (Bernstein form)
     t = np.linspace(0, 1, 4001)[:, None]
@@ -274,8 +275,11 @@ def test_unreadable_inputs_name_the_file(tmp_path):
         read_drawing(tmp_path / "missing.dxf")
     with pytest.raises(ValueError, match=r"must be a .dxf or .svg file"):
         read_drawing(tmp_path / "x.dwg")
-    with pytest.raises(ValueError, match=r"tolerance must be a positive number"):
-        read_drawing(FIX / "inch.dxf", tolerance=0)
+    for bad in (0, -1, float("nan"), 1e-9, 2.0):
+        with pytest.raises(ValueError, match=r"inch.dxf: tolerance must be a number of mm in \(1e-05, 1\], got"):
+            read_drawing(FIX / "inch.dxf", tolerance=bad)
+    with pytest.raises(ValueError, match=r"join_tol must be a number of mm in \(0, 1\], got inf"):
+        read_drawing(FIX / "inch.dxf", join_tol=float("inf"))
 
 
 @settings(max_examples=60, deadline=None)

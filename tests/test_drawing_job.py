@@ -68,6 +68,9 @@ def test_circle_rings_wherever_a_ring_is_allowed():
     ({"circle": {"center": [0, 0], "radius": -1}}, "$.polygon.circle.radius: -1 is less than or equal to the minimum"),
     ({"circle": {"center": [0, 0], "radius": 30, "tol": 1}}, "$.polygon.circle: unknown key(s) ['tol'] ('tol': did you "
                                                             "mean 'tolerance'? (it is not given))"),
+    ({"circle": {"center": [0, 0], "radius": 30, "tolerance": 1e-9}},
+     "$.polygon.circle.tolerance: 1e-09 is less than the minimum of 1e-05"),
+    ({"circle": {"center": [0, 0], "radius": 1e7}}, "$.polygon.circle.radius: 10000000.0 is greater than the maximum"),
     ({"circ": {}}, "$.polygon: unknown key(s) ['circ'] ('circ': did you mean 'circle'? (it is not given)); missing "
                    "required key(s): circle"),
     ({"circle": {"center": [0, 0], "radius": 2}}, "$.polygon: the tool (diameter 8 mm) cannot enter the pocket"),

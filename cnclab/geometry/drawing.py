@@ -24,10 +24,12 @@ another region, and so on; several regions are allowed.
 Tolerances (mm; both stated in :attr:`Drawing.notes`):
 
 * ``tolerance`` (default :data:`CHORD_TOL_MM` = 0.005 mm): chord error of the flattening. Arcs and
-  circles are flattened exactly (sagitta ``r (1 - cos(dphi/2)) <= tolerance``, vertices on the curve:
-  the polygon lies inside each convex arc), ellipses and splines by ezdxf's adaptive flattening, SVG
-  curves by bisection until the curve point at each chord's middle (and quarter points) is within
-  ``tolerance`` of the chord. 0.005 mm is a tenth of a usual +-0.05 mm pocket tolerance.
+  circles are flattened exactly (sagitta ``r (1 - cos(dphi/2)) <= tolerance``, vertices on the curve),
+  ellipses and splines by ezdxf's adaptive flattening, SVG curves by bisection until the curve point at
+  each chord's middle (and quarter points) is within ``tolerance`` of the chord. Chords lie on the
+  inner side of each arc: the pocket shrinks by up to ``tolerance`` at its convex walls and grows by up
+  to ``tolerance`` into round islands and inward-bulging walls. 0.005 mm is a tenth of a usual
+  +-0.05 mm pocket tolerance.
 * ``join_tol`` (default :data:`JOIN_TOL_MM` = 0.001 mm): the largest gap two chained ends may have; far
   below any machining tolerance and far above the rounding of DXF coordinates (16 digits).
 
@@ -63,6 +65,9 @@ __all__ = ["CHORD_TOL_MM", "JOIN_TOL_MM", "Drawing", "Region", "Ring", "arc_poin
 CHORD_TOL_MM = 0.005
 #: default largest gap between two chained ends (mm)
 JOIN_TOL_MM = 0.001
+#: accepted range of ``tolerance`` (mm): below 1e-5 mm flattening makes millions of vertices with no
+#: machining meaning; above 1 mm a curve is no longer the drawn one (``join_tol`` shares the upper bound)
+TOL_RANGE_MM = (1e-5, 1.0)
 #: unit name -> mm per unit (the ``units=`` override of :func:`read_drawing`)
 UNITS_MM = {"mm": 1.0, "inch": 25.4, "in": 25.4, "cm": 10.0, "m": 1000.0, "ft": 304.8, "um": 1e-3}
 #: SVG user units (CSS px) per inch
@@ -508,6 +513,20 @@ def _svg_walk(node, groups):
             yield child, groups
 
 
+def _svg_circle(shape, scale: float, height: float):
+    """``(cx, cy, r)`` (mm, y flipped) of a circle or equal-radius ellipse left untransformed by reify
+    (its transform folded into cx, cy, r), else None."""
+    import svgelements as se
+
+    if not isinstance(shape, (se.Circle, se.Ellipse)):
+        return None
+    m = shape.transform
+    rx, ry = float(shape.rx), float(shape.ry)
+    if not (m.is_identity() and rx > 0 and abs(rx - ry) <= 1e-12 * rx):
+        return None
+    return (float(shape.cx) * scale, (height - float(shape.cy)) * scale, rx * scale)
+
+
 def _svg_subpaths(shape, tol_px: float):
     """Flattened subpaths of one shape: list of (points (N, 2) user units, closed)."""
     import svgelements as se
@@ -600,7 +619,7 @@ def read_svg(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
             P = np.c_[P[:, 0] * scale, (height - P[:, 1]) * scale]
             name = f"{kind} id={sid}" + (f" subpath {m}" if m else "")
             if is_closed or (len(P) > 2 and np.hypot(*(P[0] - P[-1])) <= join_tol):
-                closed.append(_closed_ring(P, name))
+                closed.append(_closed_ring(P, name, _svg_circle(shape, scale, height)))
             else:
                 pieces.append(_Piece(P, name))
     if n_shapes == 0:
@@ -616,9 +635,9 @@ def read_drawing(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM
     """Read a DXF (``.dxf``) or SVG (``.svg``) drawing: the closed outlines on ``layer`` (None: every
     layer) as regions of an outline with islands, in mm, flattened to ``tolerance`` (mm chord error).
     Errors: ``ValueError`` naming the file and the entity; a missing file ``OSError``."""
-    for name, v in (("tolerance", tolerance), ("join_tol", join_tol)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{path}: {name} must be a positive number of mm, got {v!r}")
+    for name, v, lo in (("tolerance", tolerance, TOL_RANGE_MM[0]), ("join_tol", join_tol, 0.0)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and lo <= v <= TOL_RANGE_MM[1] and v > 0):
+            raise ValueError(f"{path}: {name} must be a number of mm in ({lo:g}, {TOL_RANGE_MM[1]:g}], got {v!r}")
     suffix = Path(path).suffix.lower()
     if suffix == ".dxf":
         return read_dxf(path, layer, tolerance, units, join_tol)

@@ -83,9 +83,10 @@ _CIRCLE = {"type": "object", "required": ["circle"], "additionalProperties": Fal
            "properties": {"circle": {
                "type": "object", "required": ["center", "radius"], "additionalProperties": False,
                "description": "a circle {center: [x, y], radius: r, tolerance: chord error} (mm)",
-               "properties": {"center": _POINT, "radius": dict(_POS, description="circle radius, mm"),
-                              "tolerance": dict(_POS, maximum=1, description="chord error of the circle's "
-                                                f"flattening, mm (default {CHORD_TOL_MM})")}}}}
+               "properties": {"center": _POINT, "radius": dict(_POS, maximum=1e6, description="circle radius, mm"),
+                              "tolerance": {"type": "number", "minimum": 1e-5, "maximum": 1,
+                                            "description": "chord error of the circle's flattening, mm "
+                                            f"(default {CHORD_TOL_MM})"}}}}}
 #: a ring: a list of >= 3 [x, y] points, or {"circle": {"center": [x, y], "radius": r}} (mm)
 _RING = {"if": {"type": "object"}, "then": _CIRCLE, "else": _POINTS,
          "description": "a list of >= 3 [x, y] points or {circle: {center: [x, y], radius: r}} (mm)"}
