@@ -213,9 +213,8 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/toolpath/dropcutter.py", "_grid_drop"): (15, _NJIT),
     ("lines", "cnclab/toolpath/evaluate.py", "evaluate"): (137, "the evaluator's one pass: to split the metric groups into helpers"),
     ("params", "cnclab/toolpath/reorder.py", "reorder_path"): (13, "Sec. 9.2 search settings; to become one options object"),
-    ("module", "cnclab/toolpath/trochoidal.py", ""): (968, "patterns and the study sweeps: to split (issue 27 item 6)"),
-    ("params", "cnclab/toolpath/trochoidal.py", "ce_period"): (13, "Thesis IV period settings; to take a pattern options object"),
-    ("params", "cnclab/toolpath/trochoidal.py", "ce_trochoid"): (13, "Thesis IV period settings; to take a pattern options object"),
+    ("params", "cnclab/toolpath/trochoidal/ce.py", "ce_period"): (13, "Thesis IV period settings; to take a pattern options object"),
+    ("params", "cnclab/toolpath/trochoidal/ce.py", "ce_trochoid"): (13, "Thesis IV period settings; to take a pattern options object"),
 }
 
 

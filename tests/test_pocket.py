@@ -9,6 +9,7 @@ import shapely
 from cnclab.nc.gcode import gcode_roundtrip_error
 from cnclab.toolpath import pocket as pk
 from cnclab.toolpath.evaluate import evaluate
+from cnclab.works.jacso2021.studies import design_star
 
 
 def level(path, job, res, feed_control=False):
@@ -28,7 +29,7 @@ def _star_job():
 
 
 def test_star_design_volume_and_arms():
-    R = pk.design_star(2098, 3, 11, n_arms=5, inner_ratio=0.5, tip_radius=4.0, root_radius=2.0)
+    R = design_star(2098, 3, 11, n_arms=5, inner_ratio=0.5, tip_radius=4.0, root_radius=2.0)
     job = _star_job()
     assert abs(R - 24.2856) < 1e-3
     assert job.volume_mm3() == pytest.approx(2098, abs=0.1)

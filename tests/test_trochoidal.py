@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from cnclab.toolpath import trochoidal as tr
+from cnclab.works.jacso2021.studies import compare_patterns
 
 
 @settings(max_examples=30, deadline=None, derandomize=True)
@@ -128,7 +129,7 @@ SWEEP_THETAS = (30.0, 45.0, 60.0, 75.0, 90.0)        # theta_max of the notebook
 def sweep_w12():
     """compare_patterns at W/r = 4 (the fast-mode width of the notebook's sweep), 0.1 mm dixels,
     links at 1500 mm/min (Table 4.1 / §4 feeds)."""
-    return {th: tr.compare_patterns(12.0, 3.0, th, 0.1, a_p=3.0, feed_mm_min=255.0, link_feed_mm_min=1500.0)
+    return {th: compare_patterns(12.0, 3.0, th, 0.1, a_p=3.0, feed_mm_min=255.0, link_feed_mm_min=1500.0)
             for th in SWEEP_THETAS}
 
 

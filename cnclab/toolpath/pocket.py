@@ -34,7 +34,6 @@ import time
 
 import numpy as np
 import shapely
-from scipy.optimize import brentq
 from shapely import affinity
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 
@@ -49,7 +48,7 @@ from .path import ToolPath, subdivide
 from .trochoidal import ce_period, disk_has_material, pattern_kinds
 from .zigzag import raster_lines
 
-__all__ = ["Job", "load_job", "star_polygon", "design_star", "medial_axis", "arm_branches", "arm_regions",
+__all__ = ["Job", "load_job", "star_polygon", "medial_axis", "arm_branches", "arm_regions",
            "centre_lap", "hybrid_path", "choose_candidate", "contour_parallel_path", "zigzag_path",
            "planar_view", "entry_hole", "SEGMENT_KINDS"]
 
@@ -102,20 +101,6 @@ def _tag_hole_plunges(path: ToolPath, job: Job) -> ToolPath:
         path.tag[k] = "cleared" if not path.tag[k] else f"{path.tag[k]} cleared"
         path.cleared[k] = True
     return path
-
-
-# ---------------------------------------------------------------------------------------------
-# the star pocket of §4 (contour not printed: a parameterised stand-in)
-# ---------------------------------------------------------------------------------------------
-def design_star(volume_mm3, a_p, hole_diameter, **star_kw) -> float:
-    """Outer radius (mm) of :func:`star_polygon` whose volume a_p (A - A_hole) equals ``volume_mm3``."""
-    hole = math.pi * (0.5 * hole_diameter) ** 2
-    star_kw = {k: v for k, v in star_kw.items() if k != "outer_radius"}
-
-    def f(R):
-        return a_p * (star_polygon(outer_radius=R, **star_kw).area - hole) - volume_mm3
-
-    return float(brentq(f, 10.0, 100.0, xtol=1e-9))
 
 
 # ---------------------------------------------------------------------------------------------

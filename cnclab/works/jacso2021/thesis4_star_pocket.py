@@ -27,7 +27,7 @@ from cnclab.toolpath import pocket as pk
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import load_job
 from cnclab.toolpath.planners import plan
-from cnclab.toolpath.trochoidal import compare_patterns, pattern_sweep
+from .studies import compare_patterns, pattern_sweep
 
 
 @functools.cache
@@ -185,7 +185,7 @@ def trochoid_sweep(resolution_mm=None):
     """MRR gain of the constant-engagement pattern over W/r and theta_max (slow in full mode).
 
     Every point compares the three patterns at the same simulated maximum engagement theta_max
-    (:func:`cnclab.toolpath.trochoidal.compare_patterns`: all steps bisected to it).
+    (:func:`cnclab.works.jacso2021.studies.compare_patterns`: all steps bisected to it).
     Fast mode: W/r = 4 at 0.1 mm dixels; full: W/r in {3, 4, 5, 6} at 0.05 mm; theta_max in
     {30, 45, 60, 75, 90} deg in both. Gains are reported with links at 1500 mm/min and with every
     move at the cutting feed (``mrr_gain_same_feed_vs_*``)."""

@@ -1,54 +1,6 @@
-"""Trochoidal slot-milling patterns: circular trochoid, cycloid and the constant-engagement pattern.
-
-Jacsó (2021) §3.4, Thesis IV. A straight slot of width ``width`` (mm) runs along +X with its
-centre line on y = 0; the tool (radius ``tool_radius`` r, mm — a *radius*) advances by the
-trochoidal step ``step`` (mm) per period. The tool centre must stay in |y| <= W/2 - r (the
-final-contour limit). All patterns are climb milling with a clockwise (M3) spindle: the uncut
-material lies on the right of the feed direction, so circles run counter-clockwise.
-
-Patterns (each returned as a :class:`~cnclab.toolpath.path.ToolPath` at z = 0: centre points, kind
-``link`` on linking moves, tags ``"period k"`` / ``"period k:roll-in"`` (:func:`period_index`,
-:func:`pattern_kinds`), ``info["step"]``):
-
-* **circular trochoid** — full circles of radius R = W/2 - r whose centres advance by ``step``; the
-  transfer from one circle to the next is a straight move of length ``step`` at the rear point of
-  the circle (circle-and-line trochoid; Otkur & Lazoglu, "Trochoidal milling", *Int. J. Mach. Tools
-  Manuf.* 47 (2007) 1324-1332, Fig. 1; Rauch, Duc & Hascoët, *Int. J. Mach. Tools Manuf.* 49 (2009)
-  375-383, "circular" pattern).
-* **cycloid** — the prolate trochoid x = s phi / (2 pi) + R cos phi, y = R sin phi (the classical
-  trochoid x = a phi - b sin phi, y = a - b cos phi of Weisstein, MathWorld "Trochoid", with
-  a = s / 2pi, b = R, rotated a quarter turn), one period per 2 pi.
-* **constant engagement** (Thesis IV) — per period the current front of the material is read from
-  a dixel stock, the Thesis III algorithm (:func:`cnclab.toolpath.constant_engagement.thesis3_path`)
-  generates the cut holding ``theta_deg`` along it from one wall to the other, the cut is clipped
-  to the final-contour limit (roll-in/roll-out), the stock is cut, and a linking arc through the
-  cleared region leads back to the next period. The period shape converges (booklet Fig. 3.5);
-  :func:`ce_trochoid_iteration` returns every period and its change, :func:`ce_trochoid` repeats the
-  converged period with the largest step whose simulated maximum engagement stays at the limit
-  (:func:`ce_admissible_step`, the same bisection as for the circle and the cycloid).
-  **Roll-in corner.** The Thesis III cut leaves the wall at a steep angle (about 75 deg to the wall
-  at theta = 30 deg): a tool arriving along the wall then meets the previous period's corner and
-  its engagement jumps to about that turn angle however small the step (simulated: 4 -> 46 deg
-  within one 0.1 mm sample; 43 deg at a 0.05 mm step, 59 deg at the iteration's step at
-  theta = 30 deg). :func:`fillet_entry` replaces the corner by a G1 arc of radius rho tangent to the
-  wall and to the cut (and :func:`fillet_exit` the corner at the far wall): the next period,
-  shifted by s, then cuts a rounded corner like a circular trochoid of radius rho at step s, and
-  its engagement rises without a jump.
-
-Evaluation (:func:`evaluate_pattern`) cuts the pattern through a dixel slot stock and reports the
-steady-state engagement trace, path length per period and per mm of slot, cutting vs linking
-length and the average MRR; :func:`admissible_step` finds the largest step whose simulated maximum
-engagement stays at ``theta_max_deg``.
-
-Units: mm, mm/min, mm^3/min; angles in degrees at the API.
-
->>> p = circular_trochoid(step=1.0, width=12.0, tool_radius=3.0, n_periods=2, ds=0.1)
->>> round(length_per_period(p), 2)          # 2 pi R + step = 2 pi 3 + 1
-19.85
->>> c = cycloid(step=1.0, width=12.0, tool_radius=3.0, n_periods=1, ds=0.05)
->>> bool(abs(c.xyz[:, 1]).max() <= 3.0 + 1e-9)
-True
-"""
+"""The constant-engagement trochoidal pattern (Jacsó 2021, Thesis IV): the material front read from a
+dixel stock, Thesis III cuts along it, fillets at the walls, linking arcs, the converged period
+repeated at the admissible step (see :mod:`cnclab.toolpath.trochoidal`)."""
 from __future__ import annotations
 
 import math
@@ -59,274 +11,17 @@ import pandas as pd
 import shapely
 from shapely.geometry import box
 
-from ..geometry.contours import SplineContour
-from ..simulation import dixel
-from ..simulation.common import simulate
-from .constant_engagement import clamp_to_region, resample_path, thesis3_path
-from .path import ToolPath, subdivide
+from ...geometry.contours import SplineContour
+from ...simulation import dixel
+from ...simulation.common import simulate
+from ..constant_engagement import clamp_to_region, resample_path, thesis3_path
+from ..path import ToolPath, subdivide
+from . import _common
+from .patterns import circle_front_step, evaluate_pattern, pattern_kinds, slot_limit
 
-__all__ = ["period_index", "pattern_kinds", "pattern_lengths", "length_per_period", "disk_has_material", "circular_trochoid", "cycloid", "slot_limit", "evaluate_pattern",
-           "admissible_step", "front_contour", "linking_arc", "ce_period", "ce_trochoid_iteration",
-           "ce_trochoid", "ce_admissible_step", "fillet_entry", "fillet_exit", "tangent_arc", "compare_patterns", "pattern_sweep", "max_engagement_circle_front", "circle_front_step"]
-
-
-def _pos(name, v):
-    v = float(v)
-    if not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive finite number, got {v!r}")
-    return v
+__all__ = ["disk_has_material", "front_contour", "roll_arc", "linking_arc", "ce_period", "ce_trochoid_iteration", "ce_trochoid", "ce_admissible_step", "fillet_entry", "fillet_exit", "tangent_arc", "CEIteration"]
 
 
-def slot_limit(width, tool_radius) -> float:
-    """Largest |y| (mm) of the tool centre in a slot of width ``width`` (mm): W/2 - r.
-
-    Raises ValueError naming ``width`` if the slot is not wider than the tool diameter 2r.
-
-    >>> slot_limit(12.0, 3.0)
-    3.0
-    """
-    W, r = _pos("width", width), _pos("tool_radius", tool_radius)
-    if W <= 2 * r:
-        raise ValueError(f"width must exceed the tool diameter 2*tool_radius = {2 * r} mm for a "
-                         f"trochoidal slot, got {W}")
-    return 0.5 * W - r
-
-
-def _pattern(points, kinds, period, step, pattern, feed_mm_min, link_feed_mm_min=None) -> ToolPath:
-    """A planar pattern (z = 0) as a :class:`ToolPath`: ``kinds`` per point (cut / roll-in / roll-out
-    / link; the move ending at point i), ``period`` per point (tag ``"period k"`` or
-    ``"period k:roll-in"``), ``info`` with the step (mm) and the pattern name."""
-    K = np.asarray(kinds, dtype=object)
-    tags = np.array([f"period {int(k)}" + ("" if n in ("cut", "link") else f":{n}") for k, n in zip(period, K)],
-                    dtype=object)
-    lf = feed_mm_min if link_feed_mm_min is None else link_feed_mm_min
-    return ToolPath.build(np.asarray(points, float), kind=np.where(K == "link", "link", "cut"), tag=tags,
-                          feed=np.where(K == "link", lf, feed_mm_min),
-                          info={"step": float(step), "pattern": pattern, "name": pattern})
-
-
-def period_index(path: ToolPath) -> np.ndarray:
-    """Period index of every point of a pattern (from its ``"period k"`` tags)."""
-    return np.array([int(str(t).split(":")[0].split(" ")[1]) for t in path.tag])
-
-
-def pattern_kinds(path: ToolPath) -> np.ndarray:
-    """cut / roll-in / roll-out / link per point of a pattern or period."""
-    roll = np.array([str(t).split(":")[1] if ":" in str(t) else "" for t in path.tag], dtype=object)
-    return np.where(path.is_kind("link"), "link", np.where(roll != "", roll, "cut")).astype(object)
-
-
-def pattern_lengths(path: ToolPath, periods=None) -> dict:
-    """Cutting and linking length (mm) of a pattern, over all periods or the given period indices."""
-    ds = path.segment_lengths()
-    m = np.ones(len(ds), bool) if periods is None else np.isin(period_index(path), list(periods))
-    link = path.is_kind("link")
-    return {"cut": float(ds[m & ~link].sum()), "link": float(ds[m & link].sum())}
-
-
-def length_per_period(path: ToolPath, k: int | None = None) -> float:
-    """Path length (mm) of one period (default: the middle period)."""
-    k = int(np.median(np.unique(period_index(path)))) if k is None else k
-    L = pattern_lengths(path, [k])
-    return L["cut"] + L["link"]
-
-
-def circular_trochoid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05, feed_mm_min=255.0,
-                      link_feed_mm_min=None) -> ToolPath:
-    """Circle-and-line trochoid: ccw circles of radius W/2 - r, centres at x0 + k*step (mm).
-
-    Each period starts at the circle's rear point (angle pi), runs one full circle and moves
-    straight by ``step`` to the rear point of the next circle (that transfer is flagged as link).
-    ``ds``: sampling distance along the path (mm).
-    """
-    s = _pos("step", step)
-    R = slot_limit(width, tool_radius)
-    n = int(n_periods)
-    if n < 1:
-        raise ValueError(f"n_periods must be >= 1, got {n_periods!r}")
-    m = max(int(math.ceil(2 * math.pi * R / ds)), 16)
-    phi = math.pi + np.linspace(0.0, 2 * math.pi, m + 1)
-    pts, link, per = [], [], []
-    for k in range(n):
-        cx = x0 + k * s
-        circ = np.c_[cx + R * np.cos(phi), R * np.sin(phi)]
-        if k > 0:
-            circ = circ[1:]
-        pts.append(circ)
-        link.append(np.zeros(len(circ), bool))
-        per.append(np.full(len(circ), k))
-        ml = max(int(math.ceil(s / ds)), 1)
-        line = np.c_[cx - R + np.linspace(0, s, ml + 1)[1:], np.zeros(ml)]
-        pts.append(line)
-        link.append(np.ones(ml, bool))
-        per.append(np.full(ml, k))
-    link = np.concatenate(link)
-    return _pattern(np.vstack(pts), np.where(link, "link", "cut"), np.concatenate(per), s, "circular",
-                    feed_mm_min, link_feed_mm_min)
-
-
-def cycloid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05, feed_mm_min=255.0) -> ToolPath:
-    """Prolate-trochoid path x = x0 + s phi/(2 pi) + R cos(phi), y = R sin(phi), R = W/2 - r (mm).
-
-    One period per 2 pi, starting at the rear point phi = pi (so the pattern is comparable with
-    :func:`circular_trochoid`); no linking moves (the rear half is an air cut at feed).
-    """
-    s = _pos("step", step)
-    R = slot_limit(width, tool_radius)
-    n = int(n_periods)
-    if n < 1:
-        raise ValueError(f"n_periods must be >= 1, got {n_periods!r}")
-    m = max(int(math.ceil((2 * math.pi * R + s) / ds)), 16)
-    phi = math.pi + np.linspace(0.0, 2 * math.pi * n, n * m + 1)
-    pts = np.c_[x0 + s * (phi - math.pi) / (2 * math.pi) + R * np.cos(phi), R * np.sin(phi)]
-    per = np.minimum(((phi - math.pi) // (2 * math.pi)).astype(int), n - 1)
-    return _pattern(pts, np.full(len(pts), "cut"), per, s, "cycloid", feed_mm_min)
-
-
-def max_engagement_circle_front(step, width, tool_radius) -> float:
-    """Exact engagement (deg) at the front point of a circular trochoid in steady state.
-
-    The material ahead is bounded by the previous circle's envelope, a circle of radius R + r about
-    the previous centre; the tool at the front point (distance d = R + step from it, feed along +y)
-    engages psi in [0, alpha] with cos(alpha) = ((R + r)^2 - d^2 - r^2) / (2 d r).
-    Used to check the simulator (the maximum over the period lies slightly after this point).
-
-    >>> round(max_engagement_circle_front(circle_front_step(60.0, 12.0, 3.0), 12.0, 3.0), 6)
-    60.0
-    """
-    R = slot_limit(width, tool_radius)
-    r, s = float(tool_radius), _pos("step", step)
-    d = R + s
-    c = ((R + r) ** 2 - d * d - r * r) / (2 * d * r)
-    return math.degrees(math.acos(max(-1.0, min(1.0, c))))
-
-
-def circle_front_step(theta_deg, width, tool_radius) -> float:
-    """Inverse of :func:`max_engagement_circle_front`: the step (mm) giving ``theta_deg`` at the front point.
-
-    d = -r cos(theta) + sqrt((R + r)^2 - r^2 sin^2(theta)), step = d - R.
-
-    >>> round(max_engagement_circle_front(circle_front_step(45.0, 15.0, 3.0), 15.0, 3.0), 9)
-    45.0
-    """
-    R = slot_limit(width, tool_radius)
-    r = float(tool_radius)
-    th = math.radians(theta_deg)
-    d = -r * math.cos(th) + math.sqrt((R + r) ** 2 - (r * math.sin(th)) ** 2)
-    return d - R
-
-
-# ---------------------------------------------------------------------------------------------
-# simulation-based evaluation
-# ---------------------------------------------------------------------------------------------
-def _slot_stock(path: ToolPath, width, resolution_mm, x_start=0.0):
-    x_end = float(path.xyz[:, 0].max()) + 4 * float(width)
-    return dixel.Stock.from_polygon(box(x_start, -0.5 * width, x_end, 0.5 * width), resolution_mm)
-
-
-def evaluate_pattern(path: ToolPath, width, tool_radius, resolution_mm=0.05, a_p=3.0,
-                     feed_mm_min=255.0, link_feed_mm_min=None, steady_periods=None, stock=None):
-    """Cut ``path`` through a slot stock (material x >= 0) with the dixel simulator; steady-state metrics.
-
-    Returns ``(table, metrics)``: the per-step DataFrame of :func:`cnclab.simulation.dixel.simulate`
-    with ``period`` and ``link`` columns, and a dict over the ``steady_periods`` (default: all but
-    the first two and the last) with ``max_engagement_deg``, ``step_mm``, ``length_per_period_mm``,
-    ``length_per_mm_slot`` (path mm per mm of slot), ``cut_mm``/``link_mm`` per period,
-    ``time_per_period_s``, ``mrr_avg_mm3_min`` (= a_p W step / time per period, the geometric
-    steady-state removal), ``mrr_avg_sim_mm3_min`` (simulated removed area over the same time),
-    ``link_removed_mm2`` (material cut by linking moves) and ``max_engagement_link_deg``: for the
-    constant-engagement pattern the link's final approach along the wall is the roll-in into the
-    corner left by the previous period and does cut (see the notebook discussion).
-    Linking moves run at ``link_feed_mm_min`` (default: the cutting feed).
-    """
-    r = _pos("tool_radius", tool_radius)
-    W = _pos("width", width)
-    st = _slot_stock(path, W, resolution_mm) if stock is None else stock
-    period, link, kinds, step = period_index(path), path.is_kind("link"), pattern_kinds(path), path.info["step"]
-    df = dixel.simulate(st, path.xyz[:, :2], r, a_p, feed_mm_min)
-    df["period"] = period
-    df["link"] = link
-    df["kind"] = kinds
-    periods = np.unique(period)
-    if steady_periods is None:
-        steady_periods = periods[2:-1] if len(periods) > 3 else periods[-1:]
-    m = np.isin(period, list(steady_periods))
-    vlink = feed_mm_min if link_feed_mm_min is None else link_feed_mm_min
-    n_p = len(steady_periods)
-    cut = float(df.ds[m & ~link].sum()) / n_p
-    lnk = float(df.ds[m & link].sum()) / n_p
-    t_min = cut / feed_mm_min + lnk / vlink
-    removed = float(df.removed_mm2[m].sum()) / n_p
-    eng = df.engagement_deg.to_numpy()
-    metrics = {
-        "max_engagement_deg": float(np.nanmax(eng[m & ~link])),
-        "max_engagement_link_deg": float(np.nanmax(np.r_[0.0, eng[m & link]])),
-        "step_mm": step,
-        "cut_mm": cut, "link_mm": lnk,
-        "length_per_period_mm": cut + lnk,
-        "length_per_mm_slot": (cut + lnk) / step,
-        "time_per_period_s": 60.0 * t_min,
-        "mrr_avg_mm3_min": a_p * W * step / t_min,
-        "mrr_avg_sim_mm3_min": a_p * removed / t_min,
-        "link_removed_mm2": float(df.removed_mm2[m & link].sum()) / n_p,
-        "engaged_share": float(np.mean(eng[m] > 1.0)),
-    }
-    for name in ("roll-in", "cut", "roll-out", "link"):
-        e = eng[m & (kinds == name)]
-        metrics[f"max_eng_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
-    return df, metrics
-
-
-def admissible_step(pattern, theta_max_deg, width, tool_radius, resolution_mm=0.05, n_periods=5,
-                    tol_mm=0.01, s_max=None):
-    """Largest trochoidal step (mm) of ``pattern`` ("circular" or "cycloid") whose simulated
-    steady-state maximum engagement does not exceed ``theta_max_deg`` (bisection on the step).
-
-    The maximum engagement grows monotonically with the step (the material ahead grows).
-    """
-    gen = {"circular": circular_trochoid, "cycloid": cycloid}.get(pattern)
-    if gen is None:
-        raise ValueError(f"pattern must be 'circular' or 'cycloid', got {pattern!r}")
-    if not 0 < theta_max_deg <= 180:
-        raise ValueError(f"theta_max_deg must be in (0, 180], got {theta_max_deg!r}")
-    r = _pos("tool_radius", tool_radius)
-    slot_limit(width, r)
-    ds = resolution_mm
-
-    def emax(s):
-        p = gen(s, width, r, n_periods, ds=ds)
-        return evaluate_pattern(p, width, r, resolution_mm)[1]["max_engagement_deg"]
-
-    # bracket: the exact front-point step of the circle (a lower bound of the maximum engagement)
-    s_front = circle_front_step(theta_max_deg, width, r)
-    return _largest_step(emax, theta_max_deg, 0.5 * s_front, 1.5 * s_front if s_max is None else s_max, tol_mm)
-
-
-def _largest_step(emax, theta_max_deg, lo, hi, tol_mm, grow_limit=None):
-    """Largest step s (mm, to ``tol_mm``) with ``emax(s) <= theta_max_deg``, emax growing with s:
-    halve ``lo`` until it is admissible; with ``grow_limit`` (mm) also grow ``hi`` by 1.5x until it
-    is not (returning the last admissible step if hi passes the limit); then bisect."""
-    while emax(lo) > theta_max_deg:
-        hi, lo = lo, 0.5 * lo
-        if lo < tol_mm:
-            raise ValueError(f"theta_max_deg={theta_max_deg} is below the engagement of the smallest step")
-    if grow_limit is not None:
-        while emax(hi) <= theta_max_deg:
-            lo, hi = hi, 1.5 * hi
-            if hi > grow_limit:
-                return lo
-    while hi - lo > tol_mm:
-        mid = 0.5 * (lo + hi)
-        if emax(mid) <= theta_max_deg:
-            lo = mid
-        else:
-            hi = mid
-    return lo
-
-
-# ---------------------------------------------------------------------------------------------
-# constant-engagement pattern (Thesis IV)
-# ---------------------------------------------------------------------------------------------
 def front_contour(stock, x_min=-math.inf, every_rows=3, min_points=6):
     """Front of the material (smallest x of material per row, x >= ``x_min``) as an open spline
     contour traversed from the lowest to the highest row: material on the right (Thesis II).
@@ -388,10 +83,10 @@ def roll_arc(end_xy, tangent_xy, radius_mm, sweep_deg, ds=0.05, into=True):
     E = np.asarray(end_xy, float)
     T = np.asarray(tangent_xy, float)
     T = T / np.hypot(*T)
-    rho = _pos("radius_mm", radius_mm)
+    rho = _common.positive("radius_mm", radius_mm)
     C = E + rho * np.array([-T[1], T[0]])
     a_end = math.atan2(E[1] - C[1], E[0] - C[0])
-    sw = math.radians(_pos("sweep_deg", sweep_deg))
+    sw = math.radians(_common.positive("sweep_deg", sweep_deg))
     m = max(int(math.ceil(sw * rho / ds)), 2)
     ang = a_end - sw + sw * np.linspace(0, 1, m + 1) if into else a_end + sw * np.linspace(0, 1, m + 1)
     P = np.c_[C[0] + rho * np.cos(ang), C[1] + rho * np.sin(ang)]
@@ -456,8 +151,8 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
     Returns a :class:`ToolPath` of the period (:func:`pattern_kinds` gives roll-in / cut / roll-out),
     or None when no material is left in reach.
     """
-    r = _pos("tool_radius", tool_radius)
-    rho = _pos("roll_radius", roll_radius)
+    r = _common.positive("tool_radius", tool_radius)
+    rho = _common.positive("roll_radius", roll_radius)
     fs = stock if front_stock is None else front_stock
     c = front_contour(fs, x_min=x_min)
     if c is None or c.t_max < 2 * stock.resolution_mm:
@@ -615,7 +310,7 @@ def fillet_entry(roll_in, cut, radius_mm, roll_radius_mm=1.0, roll_sweep_deg=90.
     ([0.0, 1.0], [0.0, 1.0])
     """
     roll_in, cut = np.asarray(roll_in, float), np.asarray(cut, float)
-    rf = _pos("radius_mm", radius_mm)
+    rf = _common.positive("radius_mm", radius_mm)
     Ps = cut[0]
     d_in = np.diff(roll_in, axis=0)
     d_in = d_in[np.hypot(*d_in.T) > 1e-9]
@@ -667,7 +362,7 @@ def fillet_exit(cut, wall_direction, radius_mm, ds=0.05, allowed=None, min_turn_
     Returns ``(cut, D, T_wall)``: the new cut ending at D, where the roll-out starts along T_wall.
     """
     cut = np.asarray(cut, float)
-    rf = _pos("radius_mm", radius_mm)
+    rf = _common.positive("radius_mm", radius_mm)
     TE = _unit2(wall_direction)
     sc = _arclength(cut)
     E = cut[-1]
@@ -776,7 +471,7 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
     shape change (max residual after removing the shift, mm), lengths, removed area, the maximum
     engagement per segment type (deg) and the material cut by the link (mm^2).
     """
-    r = _pos("tool_radius", tool_radius)
+    r = _common.positive("tool_radius", tool_radius)
     yl = slot_limit(width, r)
     W = float(width)
     length = x_front0 + (n_periods + 2) * 2 * r + 4 * r
@@ -832,7 +527,7 @@ def _repeat_period(per: ToolPath, step, n_periods, resolution_mm, feed_mm_min=25
         kinds.append(KC)
         per_ix.append(np.full(len(C), k))
     kinds = np.concatenate(kinds)
-    return _pattern(np.vstack(pts), kinds, np.concatenate(per_ix), step, "constant-engagement", feed_mm_min,
+    return _common.pattern_path(np.vstack(pts), kinds, np.concatenate(per_ix), step, "constant-engagement", feed_mm_min,
                     link_feed_mm_min)
 
 
@@ -845,14 +540,14 @@ def ce_admissible_step(per: ToolPath, theta_max_deg, width, tool_radius, resolut
     patterns are compared at equal simulated maximum engagement. ``s_guess`` (mm, e.g. the
     iteration's shift) seeds the bracket.
     """
-    r = _pos("tool_radius", tool_radius)
-    s0 = _pos("s_guess", s_guess) if s_guess is not None else 0.5 * r
+    r = _common.positive("tool_radius", tool_radius)
+    s0 = _common.positive("s_guess", s_guess) if s_guess is not None else 0.5 * r
 
     def emax(s):
         p = _repeat_period(per, s, n_periods, resolution_mm)
         return evaluate_pattern(p, width, r, resolution_mm)[1]["max_engagement_deg"]
 
-    return _largest_step(emax, theta_max_deg, 0.5 * s0, 1.5 * s0, tol_mm, grow_limit=4 * r)
+    return _common.largest_step(emax, theta_max_deg, 0.5 * s0, 1.5 * s0, tol_mm, grow_limit=4 * r)
 
 
 def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
@@ -894,75 +589,7 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
         else:
             raise ValueError(f"step must be 'admissible', 'shift' or a number (mm), got {step!r}")
     else:
-        s = _pos("step", step)
+        s = _common.positive("step", step)
     p = _repeat_period(per, s, n_periods, resolution_mm, feed_mm_min, link_feed_mm_min)
     p.info["shift"] = shift
     return p
-
-
-def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=3.0,
-                     feed_mm_min=255.0, link_feed_mm_min=None, n_periods=6, plan_offsets_deg=(0.0, 3.0),
-                     fillet_fractions=(0.5, 1.0)):
-    """The three patterns at the same engagement limit: admissible step, lengths, MRR (one row each).
-
-    All three steps are bisected to the same limit: circular and cycloid by :func:`admissible_step`,
-    the constant-engagement pattern by :func:`ce_admissible_step` — every pattern's simulated
-    steady-state maximum engagement over all cutting moves (roll-in included) is <= theta_max
-    (column ``theta_limit_deg``). The CE period is planned by :func:`ce_trochoid_iteration` with
-    entry/exit fillets; as the cycloid's one parameter (its step) is optimised by the bisection,
-    the CE pattern's two shape parameters are chosen from a small grid by the same simulation: the
-    planning angle theta_plan in ``plan_offsets_deg`` + theta_max and the fillet radius in
-    ``fillet_fractions`` x (W/2 - r); the candidate with the shortest path per mm of slot (at its
-    admissible step) wins (columns ``theta_plan_deg``, ``fillet_radius_mm``, ``shift_mm``).
-    Returns a pandas DataFrame.
-    """
-    R = slot_limit(width, tool_radius)
-    best, errs = None, []
-    for d_plan in plan_offsets_deg:
-        for frac in fillet_fractions:
-            th_plan = float(theta_max_deg) + float(d_plan)
-            try:
-                it = ce_trochoid_iteration(width, tool_radius, th_plan, 8, resolution_mm, a_p=a_p,
-                                           feed_mm_min=feed_mm_min, fillet_radius_mm=frac * R)
-                p = ce_trochoid(width, tool_radius, th_plan, n_periods, resolution_mm, iteration=it,
-                                theta_max_deg=theta_max_deg, feed_mm_min=feed_mm_min,
-                                link_feed_mm_min=link_feed_mm_min)
-            except ValueError as e:
-                errs.append(f"theta_plan={th_plan}, fillet={frac * R:.3g} mm: {e}")
-                continue
-            _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
-            m.update(theta_plan_deg=th_plan, fillet_radius_mm=frac * R, shift_mm=p.info["shift"])
-            if best is None or m["length_per_mm_slot"] < best["length_per_mm_slot"]:
-                best = m
-    if best is None:
-        raise ValueError(f"no constant-engagement period keeps theta_max_deg={theta_max_deg}: {'; '.join(errs)}")
-    m_ce = best
-    lim = float(theta_max_deg)
-    rows = []
-    for kind in ("circular", "cycloid"):
-        s = admissible_step(kind, lim, width, tool_radius, resolution_mm)
-        gen = circular_trochoid if kind == "circular" else cycloid
-        p = gen(s, width, tool_radius, n_periods, ds=resolution_mm)
-        _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
-        rows.append({"pattern": kind, "theta_limit_deg": lim, **m})
-    rows.append({"pattern": "constant-engagement", "theta_limit_deg": lim, **m_ce})
-    df = pd.DataFrame(rows).set_index("pattern")
-    # every move (links included) at the cutting feed: the "same feed" comparison of Thesis IV
-    df["mrr_same_feed_mm3_min"] = a_p * float(width) * df.step_mm / ((df.cut_mm + df.link_mm) / feed_mm_min)
-    for ref in ("circular", "cycloid"):
-        df[f"mrr_gain_same_feed_vs_{ref}_pct"] = 100 * (df.mrr_same_feed_mm3_min / df.loc[ref, "mrr_same_feed_mm3_min"] - 1)
-    df["mrr_gain_vs_circular_pct"] = 100 * (df.mrr_avg_mm3_min / df.loc["circular", "mrr_avg_mm3_min"] - 1)
-    df["mrr_gain_vs_cycloid_pct"] = 100 * (df.mrr_avg_mm3_min / df.loc["cycloid", "mrr_avg_mm3_min"] - 1)
-    return df
-
-
-def pattern_sweep(width_over_r, theta_max_deg, tool_radius=3.0, resolution_mm=0.05, **kw):
-    """:func:`compare_patterns` over a grid of W/r and theta_max; one row per (W/r, theta, pattern)."""
-    out = []
-    for wr in width_over_r:
-        for th in theta_max_deg:
-            df = compare_patterns(wr * tool_radius, tool_radius, th, resolution_mm, **kw).reset_index()
-            df.insert(0, "theta_max_deg", th)
-            df.insert(0, "W_over_r", wr)
-            out.append(df)
-    return pd.concat(out, ignore_index=True)
