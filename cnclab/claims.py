@@ -446,10 +446,22 @@ def results_frame(results: list[Result]):
 
 
 def table(notebook: str | None = None, work: str | None = None, prefix: str | None = None):
-    """Compute and tabulate the claims shown by a notebook (its last cell calls this)."""
+    """Compute and tabulate the claims shown by a notebook (its last cell calls this): the numeric
+    rows, then the notebook's qualitative rows (``status`` = the stated verdict, ``reproduced`` = the
+    recipe's measurements)."""
+    import pandas as pd
+
     res = evaluate_all(select(load(), work=work, notebook=notebook, prefix=prefix),
                        skip_slow=fast_mode())
-    return results_frame(res)
+    out = results_frame(res)
+    if prefix is None and (notebook or work):
+        q = qualitative_table(notebook=notebook, work=work)
+        if len(q):
+            q = pd.DataFrame({"claim": q.claim, "location": q.location, "quantity": q.quote,
+                              "unit": "statement", "reproduced": q.numbers, "status": q.verdict,
+                              "holds": q.holds, "note": q.measured})
+            out = pd.concat([out, q], ignore_index=True).fillna("")
+    return out
 
 
 def summary_frame(results: list[Result]):
@@ -522,9 +534,169 @@ def headline(summary=None):
     return out
 
 
-def write_report(results: list[Result], outdir: Path) -> tuple[Path, Path]:
-    """Write ``claims.csv`` and ``claims.md`` into ``outdir`` (atomically)."""
+# ------------------------------------------------------------------ qualitative claims (statements)
+#: data/qualitative_claims.csv: one row per thesis statement, conclusion or headline sentence
+QUALITATIVE_CSV = CLAIMS_CSV.parent / "qualitative_claims.csv"
+QUAL_COLUMNS = ("claim_id", "work", "seed_file", "location", "quote", "verdict", "measure",
+                "computed_by", "test", "notebook", "note")
+VERDICTS = ("HOLDS", "PARTIAL", "FAILS", "NOT_TESTABLE")
+
+
+@dataclasses.dataclass(frozen=True)
+class Verdict:
+    """What a qualitative recipe returns: the verdict and the measurements it rests on.
+
+    ``numbers`` maps a measured quantity (name with unit) to its value; ``text`` says in one sentence
+    what was measured against which threshold.
+
+    >>> Verdict("HOLDS", "max |s - s_Thesis| = 0 mm", {"residual_mm": 0.0}).verdict
+    'HOLDS'
+    """
+
+    verdict: str
+    text: str
+    numbers: dict = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.verdict not in VERDICTS:
+            raise ValueError(f"verdict must be one of {VERDICTS}, got {self.verdict!r}")
+
+
+@dataclasses.dataclass(frozen=True)
+class QualitativeClaim:
+    claim_id: str
+    work: str
+    seed_file: str
+    location: str
+    quote: str
+    verdict: str
+    measure: str
+    computed_by: str
+    test: str
+    notebook: str
+    note: str
+    slow: bool = False
+    line: int = 0
+
+
+def load_qualitative(path: Path | str = QUALITATIVE_CSV) -> list[QualitativeClaim]:
+    """Read and validate ``data/qualitative_claims.csv`` (errors name file, line and column).
+
+    Every row quotes the seed (``quote``), names its expected ``verdict`` and, unless NOT_TESTABLE,
+    the zero-argument recipe (``computed_by``) returning a :class:`Verdict`; ``test`` names the test
+    asserting it. A ``slow`` column (optional) marks recipes that take more than a few seconds.
+    """
+    path = Path(path)
+    with open(path, newline="", encoding="utf-8") as fh:
+        reader = csv.DictReader(fh)
+        missing = [c for c in QUAL_COLUMNS if c not in (reader.fieldnames or [])]
+        if missing:
+            raise LedgerError(f"{path}: header lacks columns {missing}")
+        out, seen = [], {}
+        for i, raw in enumerate(reader, start=2):
+            where = f"{path}:{i}"
+            r = {k: (raw.get(k) or "").strip() for k in (*QUAL_COLUMNS, "slow")}
+            cid = r["claim_id"]
+            if not cid or cid in seen:
+                raise LedgerError(f"{where}: empty or duplicate claim_id {cid!r}")
+            seen[cid] = i
+            if r["work"] not in WORK_IDS:
+                raise LedgerError(f"{where}: column 'work' must be one of {WORK_IDS}, got {r['work']!r}")
+            if r["seed_file"] != SEED_FILES[r["work"]]:
+                raise LedgerError(f"{where}: seed_file {r['seed_file']!r} is not the seed of {r['work']}")
+            if r["verdict"] not in VERDICTS:
+                raise LedgerError(f"{where}: column 'verdict' must be one of {VERDICTS}, got {r['verdict']!r}")
+            for col in ("location", "quote", "measure", "test"):
+                if not r[col]:
+                    raise LedgerError(f"{where}: column {col!r} is empty")
+            if r["computed_by"] and not _DOTTED.match(r["computed_by"]):
+                raise LedgerError(f"{where}: column 'computed_by' is not a dotted name: {r['computed_by']!r}")
+            if not r["computed_by"] and r["verdict"] != "NOT_TESTABLE":
+                raise LedgerError(f"{where}: a {r['verdict']} verdict needs computed_by (only NOT_TESTABLE has none)")
+            if r["verdict"] == "NOT_TESTABLE" and not r["computed_by"] and not quotes(r["note"]):
+                raise LedgerError(f"{where}: a NOT_TESTABLE row without a recipe must quote in its note "
+                                  f"(in “…”) the seed sentence showing the evidence is measured or not given")
+            out.append(QualitativeClaim(**{k: r[k] for k in QUAL_COLUMNS},
+                                        slow=r["slow"] in ("1", "true", "True", "yes"), line=i))
+    return out
+
+
+@dataclasses.dataclass
+class QualitativeResult:
+    claim: QualitativeClaim
+    verdict: Verdict | None = None
+    ok: bool = False
+    skipped: bool = False
+    error: str = ""
+
+
+def evaluate_qualitative(claim: QualitativeClaim, skip_slow: bool = False) -> QualitativeResult:
+    """Run the row's recipe; ``ok`` when it returns the verdict the row states."""
+    res = QualitativeResult(claim)
+    if not claim.computed_by:
+        res.ok = claim.verdict == "NOT_TESTABLE"
+        return res
+    if skip_slow and claim.slow:
+        res.skipped = True
+        return res
+    try:
+        v = resolve(claim.computed_by)()
+        if not isinstance(v, Verdict):
+            raise LedgerError(f"{claim.computed_by} returned {type(v).__name__}, not a claims.Verdict")
+        res.verdict = v
+        res.ok = v.verdict == claim.verdict
+    except Exception as exc:  # reported, never hidden
+        res.error = f"{type(exc).__name__}: {exc}"
+    return res
+
+
+def _numbers(v: Verdict | None) -> str:
+    if v is None:
+        return ""
+    return "; ".join(f"{k} = {_fmt(x) if isinstance(x, (int, float)) else x}" for k, x in v.numbers.items())
+
+
+def qualitative_frame(results: list[QualitativeResult]):
+    """A pandas DataFrame of qualitative results: quote, stated verdict, computed verdict, numbers."""
+    import pandas as pd
+
+    rows = []
+    for r in results:
+        c = r.claim
+        rows.append({"claim": c.claim_id, "location": c.location, "quote": c.quote, "verdict": c.verdict,
+                     "computed": "skipped" if r.skipped else (r.verdict.verdict if r.verdict else
+                                                              ("" if r.ok else "ERROR")),
+                     "holds": "skipped" if r.skipped else ("yes" if r.ok else "NO"),
+                     "measured": r.error or (r.verdict.text if r.verdict else c.note),
+                     "numbers": _numbers(r.verdict)})
+    return pd.DataFrame(rows)
+
+
+def qualitative_table(notebook: str | None = None, work: str | None = None):
+    """Compute and tabulate the qualitative rows (of one notebook or work)."""
+    qs = [q for q in load_qualitative() if (notebook is None or q.notebook == notebook)
+          and (work is None or q.work == work)]
+    return qualitative_frame([evaluate_qualitative(q, skip_slow=fast_mode()) for q in qs])
+
+
+def qualitative_counts(results: list[QualitativeResult]):
+    """Rows per work and verdict (the closing note's qualitative counts)."""
+    import pandas as pd
+
+    df = pd.DataFrame([{"work": r.claim.work, "verdict": r.claim.verdict} for r in results])
+    if df.empty:
+        return df
+    return df.pivot_table(index="work", columns="verdict", aggfunc="size", fill_value=0).reindex(
+        columns=list(VERDICTS), fill_value=0)
+
+
+def write_report(results: list[Result], outdir: Path,
+                 qualitative: list[QualitativeResult] | None = None) -> tuple[Path, Path]:
+    """Write ``claims.csv`` and ``claims.md`` into ``outdir`` (atomically); ``claims.md`` ends with
+    the qualitative rows (computed now, slow ones skipped in fast mode, unless given)."""
     outdir = Path(outdir)
+    if qualitative is None:
+        qualitative = [evaluate_qualitative(q, skip_slow=fast_mode()) for q in load_qualitative()]
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["claim_id", "work", "seed_file", "location", "quantity", "unit", "paper_value",
@@ -560,8 +732,34 @@ def write_report(results: list[Result], outdir: Path) -> tuple[Path, Path]:
                       f"{_fmt(r.reconstructed)} | {_fmt(r.alt)} | ±({c.atol:g}+{c.rtol:g}·p) | {c.status} | "
                       f"{holds} |")
         md.append("")
+    md += _qualitative_markdown(qualitative)
     p_md = atomic_write(outdir / "claims.md", "\n".join(md) + "\n")
     return p_csv, p_md
+
+
+def _cell(text: str) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def _qualitative_markdown(results: list[QualitativeResult]) -> list[str]:
+    if not results:
+        return []
+    md = ["## Qualitative claims (thesis statements, conclusions, headline sentences)", "",
+          "Each verdict is computed by the recipe named in `data/qualitative_claims.csv`; a test fails "
+          "if the computed verdict changes.", ""]
+    counts = qualitative_counts(results)
+    md += ["| work | " + " | ".join(VERDICTS) + " |", "|---" * (len(VERDICTS) + 1) + "|"]
+    for work, s in counts.iterrows():
+        md.append(f"| {work} | " + " | ".join(str(s[v]) for v in VERDICTS) + " |")
+    md += ["", "| claim | location | quote | verdict | holds | measured |", "|---|---|---|---|---|---|"]
+    for r in results:
+        c = r.claim
+        holds = "skipped" if r.skipped else ("yes" if r.ok else "**NO**")
+        meas = r.error or ((r.verdict.text + (" (" + _numbers(r.verdict) + ")" if r.verdict.numbers else ""))
+                           if r.verdict else c.note)
+        md.append(f"| {c.claim_id} | {_cell(c.location)} | {_cell(c.quote)} | {c.verdict} | {holds} | "
+                  f"{_cell(meas)} |")
+    return md + [""]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -587,8 +785,22 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}")
         return 2
     results = evaluate_all(claims, skip_slow=args.skip_slow, progress=not args.json)
+    try:
+        quals = [q for q in load_qualitative() if (not args.work or q.work == args.work)
+                 and (not args.prefix or q.claim_id.startswith(args.prefix))]
+    except (LedgerError, FileNotFoundError) as exc:
+        print(f"error: {exc}")
+        return 2
+    qres = [evaluate_qualitative(q, skip_slow=args.skip_slow) for q in quals]
     if args.json:
-        print(json.dumps([r.to_json() for r in results], indent=1, default=_json_default))
+        print(json.dumps([r.to_json() for r in results] + [
+            {"claim_id": r.claim.claim_id, "work": r.claim.work, "seed_file": r.claim.seed_file,
+             "location": r.claim.location, "paper_value": None, "reproduced_value": None,
+             "status": r.claim.verdict, "kind": "qualitative", "quote": r.claim.quote,
+             "verdict": r.claim.verdict, "computed_verdict": r.verdict.verdict if r.verdict else None,
+             "measured": r.verdict.text if r.verdict else "", "numbers": r.verdict.numbers if r.verdict else {},
+             "ok": r.ok, "skipped": r.skipped, "error": r.error} for r in qres],
+            indent=1, default=_json_default))
     else:
         import pandas as pd
 
@@ -597,10 +809,19 @@ def main(argv: list[str] | None = None) -> int:
             print(results_frame(results).drop(columns=["note"]).to_string(index=False))
         print()
         print(headline(summary_frame(results)).to_string())
+        if qres:
+            with pd.option_context("display.max_rows", None, "display.width", 200,
+                                   "display.max_colwidth", 70):
+                print()
+                print(qualitative_frame(qres)[["claim", "verdict", "computed", "holds", "numbers"]]
+                      .to_string(index=False))
+                print()
+                print(qualitative_counts(qres).to_string())
     if args.report:
-        for p in write_report(results, Path(args.report)):
+        for p in write_report(results, Path(args.report), qualitative=qres):
             print(f"wrote {p}")
     failed = [r for r in results if not r.ok and not r.skipped]
+    failed += [r for r in qres if not r.ok and not r.skipped]
     if failed and not args.json:
         print(f"\n{len(failed)} claim(s) do not hold: " + ", ".join(r.claim.claim_id for r in failed[:20]))
     return 1 if failed else 0

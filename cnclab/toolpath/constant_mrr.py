@@ -140,15 +140,19 @@ class ModifiedPath:
 
 def modify_path(passes, stock, tool_radius: float, reference_per_mm: float, allowed: Polygon,
                 step_mm: float = 1.0, shift_mm: float | None = None, tolerance: float = 0.15,
-                max_insertions: int = 12) -> ModifiedPath:
+                max_insertions: int = 12, side: str = "left") -> ModifiedPath:
     """Kim & Yang §3.2 path modification on a pixel ``stock`` (cut in place as the tool moves).
 
     ``reference_per_mm``: reference pixel count per mm of path (eq. 4 / Δs); a segment of length L is
     excessive when its ``Linear_Motion`` count exceeds ``(1 + tolerance)·reference_per_mm·L``.
     ``shift_mm``: end-point shift per iteration to the left (default: one pixel); ``allowed``: where
     the tool centre may go (extensions leaving it stop the insertion). Each pass starts with a
-    plunge at its first point (the disk there is cut, not checked).
+    plunge at its first point (the disk there is cut, not checked). ``side``: the side of the moving
+    direction the end point is shifted to (the paper says "to the left"; ``"right"`` is the other
+    reading for clockwise passes).
     """
+    if side not in ("left", "right"):
+        raise ValueError(f"side must be 'left' or 'right', got {side!r}")
     r = float(tool_radius)
     shift = stock.resolution_mm if shift_mm is None else float(shift_mm)
     guard = allowed.buffer(1e-6)
@@ -168,7 +172,7 @@ def modify_path(passes, stock, tool_radius: float, reference_per_mm: float, allo
                     n_unres += 1
                     break
                 tries += 1
-                excursion = _additional_path(stock, a, b, r, shift, guard, ref)
+                excursion = _additional_path(stock, a, b, r, shift if side == "left" else -shift, guard, ref)
                 if not excursion:
                     n_unres += 1
                     break
@@ -196,7 +200,7 @@ def _additional_path(stock, start, end, r, shift, guard, ref, max_extend: int = 
         L = float(np.hypot(*d))
         left = np.array([-d[1], d[0]]) / L
         k, ok = 0, False
-        while k * shift <= 2 * r:                     # shift the end point to the left
+        while k * abs(shift) <= 2 * r:                # shift the end point to the left (shift < 0: right)
             k += 1
             e_k = e + k * shift * left
             if linear_motion(stock, s, e_k, r) <= ref(s, e_k):

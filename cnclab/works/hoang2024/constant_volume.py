@@ -224,3 +224,10 @@ def uncut_volume_table(resolution: float = 0.005) -> pd.DataFrame:
                "heightfield_discrete": uncut_volume_per_cell(r.Sc_mm, r.RT_mm, fr, resolution, True)}
         out.append(row)
     return pd.DataFrame(out).set_index("row")
+
+
+def table3_printed() -> dict:
+    """Table 3 as printed (mm): ``traditional_machining``, ``traditional_toolpath``,
+    ``constant_volume_machining``, ``constant_volume_toolpath``."""
+    t = _table3_setup()["table3"]
+    return {k.replace("_length_mm", ""): float(v) for k, v in t.items() if k.endswith("_length_mm")}

@@ -55,6 +55,15 @@ def _k_that_inverts(kind):
     return float(best[0])
 
 
+def thesis1_inverse_residual_with_k(kind: str, k: float) -> float:
+    """max |theta_kind(s_I(theta, rho; k), rho) - theta| (deg) of Thesis I with the sign ``k`` given
+    (``inf`` when that sign leaves the stepover range [0, 2r] or the arccos domain)."""
+    try:
+        return _inverse_residual(kind, k=k)
+    except ValueError:
+        return math.inf
+
+
 def thesis1_k_concave() -> float:
     """The sign k for which Thesis I inverts the concave cosine-theorem relation."""
     return _k_that_inverts("concave")

@@ -15,8 +15,10 @@ from __future__ import annotations
 import functools
 import json
 
+import numpy as np
 import pandas as pd
 
+from cnclab.cutting.feed_control import controlled_feed, mrr_error_windowed
 from cnclab.cutting.speeds import spindle_speed
 from cnclab.geometry.engagement import stepover_straight
 from cnclab.cache import cached
@@ -252,3 +254,48 @@ def wall_share_candidates(resolution_mm=None):
         for m in hp.info["wall_share_candidates"]:
             rows.append(dict(m, shape=case, chosen=m["max_wall_share"] == hp.info["max_wall_share"]))
     return pd.DataFrame(rows).set_index(["shape", "max_wall_share"])
+
+
+# ------------------------------------------------------------------------------ issue 25: §4 "1.5 %"
+#: readings of §4's feed control the text allows: block length (mm; unstated), which blocks get the
+#: MRR-holding feed (the roll-in/roll-out sections only, as §4 says, or every block whose engagement
+#: leaves theta by more than the margin), the margin (deg) and the MRR window (mm; Fig. 4.1's
+#: resolution is unstated), and where the error is read (the constant-engagement cuts, or every cut)
+MRR_READINGS_BLOCK_MM = (0.25, 0.5, 1.0, 2.0)
+MRR_READINGS_WINDOW_MM = (1.0, 5.0)
+
+
+@functools.cache
+def mrr_error_readings(resolution_mm=None):
+    """MRR error (%) of the hybrid path on the designed star under every reading of the §4 feed
+    control (:data:`MRR_READINGS_BLOCK_MM`, adjusted blocks, margin 2 or 5 deg,
+    :data:`MRR_READINGS_WINDOW_MM`, error read on the constant-engagement cuts or on every cut).
+
+    One level simulation (:func:`level_evaluation`, constant feed) gives the removed area per step;
+    each reading recomputes the feeds with :func:`cnclab.cutting.feed_control.controlled_feed` and the
+    error with :func:`cnclab.cutting.feed_control.mrr_error_windowed`. Columns: the reading,
+    ``mean_abs_pct``, ``p95_abs_pct``, ``v_fmax_share`` (share of cut length at the feed cap).
+    """
+    res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
+    job = star_job()
+    hp = star_strategies(resolution_mm)[1]["hybrid"][0]
+    T, _ = level_evaluation(hp, job, res, feed_control=False)
+    kinds = T.kind.to_numpy()
+    rem, ds, eng = T.removed_mm2.to_numpy(), T.ds.to_numpy(), T.engagement_deg.to_numpy()
+    cut = (kinds != "link") | T.link_cuts.to_numpy()
+    roll = np.isin(kinds, ("roll-in", "roll-out"))
+    rows = []
+    for block in MRR_READINGS_BLOCK_MM:
+        for adjusted, adj in (("roll-in/out", roll), ("any block off theta", None)):
+            for margin in (2.0, 5.0):
+                v = controlled_feed(rem, ds, eng, cut, job.a_e, job.feed_mm_min, job.v_fmax, job.theta_deg,
+                                    block, margin, adjust=adj)
+                capped = cut & np.isclose(v, job.v_fmax)
+                for window in MRR_READINGS_WINDOW_MM:
+                    for where, mask in (("constant-engagement cuts", kinds == "cut"), ("every cut", cut)):
+                        e = mrr_error_windowed(rem, ds, v, job.a_p, job.mrr_nominal(), mask, window)
+                        rows.append({"block_mm": block, "adjusted": adjusted, "margin_deg": margin,
+                                     "window_mm": window, "error_on": where, "mean_abs_pct": e["mean_abs_pct"],
+                                     "p95_abs_pct": e["p95_abs_pct"],
+                                     "v_fmax_share": float(ds[capped].sum() / ds[cut].sum())})
+    return pd.DataFrame(rows)

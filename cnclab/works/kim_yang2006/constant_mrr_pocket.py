@@ -110,8 +110,9 @@ def program(which: str) -> tuple:
     return tuple(gcode.parse_gcode(text, source=f"kim_yang2006_{which}.nc")), text
 
 
-def _cut_polylines(moves, max_segment):
-    """Split a parsed program into cutting polylines (z below 0), arcs sampled."""
+def cut_polylines(moves, max_segment):
+    """Split a parsed program (or :meth:`ToolPath.to_moves`) into cutting polylines (z below 0), arcs
+    sampled every ``max_segment`` mm; one polyline per pass."""
     polys, cur, prev = [], [], None
     for mv in moves:
         if prev is not None and mv.z < 0 and prev[2] < 0:
@@ -133,7 +134,7 @@ def mrr_trace(which: str, model: str = "pixel", sample_mm: float | None = None) 
     mod = {"pixel": (pixel, c["pixel_mm"]), "dixel": (dixel, pick(0.1, 0.2))}[model]
     stock = mod[0].Stock.from_polygon(pocket(), mod[1])
     frames, s0 = [], 0.0
-    for poly in _cut_polylines(moves, sample):
+    for poly in cut_polylines(moves, sample):
         pts = cm.resample_polyline(poly, sample)
         df = mod[0].simulate(stock, pts, tool_radius(), a_p=c["axial_depth_mm"], feed_mm_min=c["feed_mm_min"])
         df["s"] += s0

@@ -693,3 +693,24 @@ def printed_r1_coefficients() -> dict:
     p = printed_r1_table()
     ids = list(TERM_IDS.values())
     return {ids[i]: float(v) for i, v in enumerate(p["coef"].to_numpy())}
+
+
+# ------------------------------------------------------------------------------ ledger rules (issue 25)
+@functools.cache
+def line_rsq_from_printed_coefficients() -> dict:
+    """Table 6-2's last column recomputed from the table's own printed per-D coefficients: the plain
+    R² (%) of the straight line through the four printed values of each term, keyed by term id.
+
+    This is arithmetic on printed numbers (no data set involved), so the column is checked at half a
+    printed unit (0.005 %) without any allowance for the numerical data.
+    """
+    t = printed_table6_2().drop(index="R-Sq(adj)")
+    cols = [c for c in t.columns if c.startswith("D")]
+    D = np.array([float(c[1:]) for c in cols])
+    out = {}
+    for term in t.index:
+        y = t.loc[term, cols].astype(float).to_numpy()
+        slope, intercept = np.polyfit(D, y, 1)
+        resid = y - (slope * D + intercept)
+        out[TERM_IDS[term]] = 100.0 * (1.0 - resid @ resid / np.sum((y - y.mean()) ** 2))
+    return out
