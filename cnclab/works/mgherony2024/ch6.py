@@ -714,3 +714,10 @@ def line_rsq_from_printed_coefficients() -> dict:
         resid = y - (slope * D + intercept)
         out[TERM_IDS[term]] = 100.0 * (1.0 - resid @ resid / np.sum((y - y.mean()) ** 2))
     return out
+
+
+def r2_from_printed_training_R() -> dict:
+    """Table 6-3's R² restated from §6.3.2's printed training R of each network: ``{model: R²}``
+    (0.99512² = 0.9903 for a1, 0.99892² = 0.9978 for a2)."""
+    f = printed_ann_figures()
+    return {m: float(f.loc[m, "r_train"]) ** 2 for m in f.index}
