@@ -157,6 +157,16 @@ def test_branch_and_duplicate_refused(tmp_path):
         read_drawing(_save(tmp_path, tee))
 
 
+def test_duplicated_outline_refused_and_zero_length_line_skipped(tmp_path):
+    p = _save(tmp_path, lambda m: (m.add_circle((0, 0), 5), m.add_circle((0, 0), 5)))
+    with pytest.raises(ValueError, match=r"outlines of CIRCLE #\w+ and CIRCLE #\w+ coincide \(a duplicated entity\?\)"):
+        read_drawing(p)
+    p = _save(tmp_path, lambda m: (m.add_lwpolyline([(0, 0), (10, 0), (10, 10), (0, 10), (0, 0)]),   # open, ends meet
+                                   m.add_line((5, 5), (5, 5))), name="z.dxf")
+    d = read_drawing(p)
+    assert d.polygon().area == pytest.approx(100) and any("1 LINE of zero length" in n for n in d.notes)
+
+
 def test_crossing_outlines_refused_naming_both(tmp_path):
     p = _save(tmp_path, lambda m: (m.add_circle((0, 0), 10), m.add_circle((15, 0), 10)))
     hs = _handles(p, type="CIRCLE")

@@ -292,9 +292,11 @@ def _nest(rings: list, source: str) -> tuple:
         raise ValueError(f"{source}: no closed outline found")
     polys = []
     for r in rings:
+        if len(r.points) < 3:
+            raise ValueError(f"{source}: the outline of {r.describe()} is not a simple polygon (fewer than 3 points)")
         poly = Polygon(r.points)
-        if len(r.points) < 3 or not poly.is_valid or poly.area <= 0:
-            why = shapely.is_valid_reason(poly) if len(r.points) >= 3 else "fewer than 3 points"
+        if not poly.is_valid or poly.area <= 0:
+            why = shapely.is_valid_reason(poly) if not poly.is_valid else "zero area"
             raise ValueError(f"{source}: the outline of {r.describe()} is not a simple polygon ({why})")
         polys.append(poly)
     order = sorted(range(len(rings)), key=lambda i: -polys[i].area)
@@ -306,6 +308,10 @@ def _nest(rings: list, source: str) -> tuple:
             j = int(j)
             if j == i:
                 continue
+            same_area = abs(polys[j].area - polys[i].area) <= 1e-9 * polys[i].area
+            if same_area and polys[i].symmetric_difference(polys[j]).area <= 1e-9 * polys[i].area:
+                raise ValueError(f"{source}: the outlines of {rings[i].describe()} and {rings[j].describe()} "
+                                 "coincide (a duplicated entity?)")
             if polys[j].area > polys[i].area and polys[j].contains(polys[i]):
                 if best is None or polys[j].area < polys[best].area:
                     best = j
@@ -476,6 +482,8 @@ def read_dxf(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
             circ = (circ[0] * scale, circ[1] * scale, circ[2] * scale)
         if kind == "closed":
             closed.append(_closed_ring(P, name, circ))
+        elif float(np.hypot(*np.diff(P, axis=0).T).sum()) <= join_tol:
+            skipped[f"{t} of zero length"] = skipped.get(f"{t} of zero length", 0) + 1
         else:
             pieces.append(_Piece(P, name))
     if not closed and not pieces:
