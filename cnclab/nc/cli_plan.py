@@ -31,21 +31,31 @@ __all__ = ["main", "plan_program", "planned_program"]
 
 
 def planned_program(job_file, strategy: str | None = None, source: str | None = None, *, cutting=None,
-                    layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None):
+                    layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
+                    allow_uncut: bool = False):
     """Plan ``job_file`` with ``strategy`` (None: the planner's default) and write its program text:
     ``(text, job, path, check)`` — what ``python -m cnclab plan`` writes (also used by
     ``python -m cnclab programs``). Raises ``ValueError`` when the program fails the static safety
-    check; ``source`` names the program in the messages. ``job_file`` may be a drawing (.dxf/.svg):
-    then ``cutting`` (CUTTING.json) gives every other job key, ``layer``/``tolerance`` (mm)/``units``
-    how the drawing is read (:func:`cnclab.toolpath.from_drawing.load_job_input`)."""
+    check or leaves more uncut area than :func:`cnclab.toolpath.coverage.uncut_limit_mm2` allows in a
+    region (with ``allow_uncut``: a WARNING line in the program header instead, and in
+    ``path.info["warnings"]``); ``source`` names the program in the messages. ``job_file`` may be a
+    drawing (.dxf/.svg): then ``cutting`` (CUTTING.json) gives every other job key,
+    ``layer``/``tolerance`` (mm)/``units`` how the drawing is read
+    (:func:`cnclab.toolpath.from_drawing.load_job_input`)."""
     if load_job is None or plan is None:
         raise RuntimeError("cnclab plan needs cnclab.toolpath.job and cnclab.toolpath.planners "
                            f"(issue 12, toolpath-core), not available: {_MISSING}")
     job_file = Path(job_file)
     job = load_job_input(job_file, cutting=cutting, layer=layer, tolerance=tolerance, units=units)
-    path = plan(job) if strategy is None else plan(job, strategy)
+    path = plan(job, strategy or DEFAULT_STRATEGY, allow_uncut=allow_uncut)
     name = strategy or path.info.get("strategy", "default")
-    text = write_program(path, job, header=[f"cnclab plan {job_file.name} strategy {name}"])
+    rep = path.info["uncut"]
+    header = [f"cnclab plan {job_file.name} strategy {name}",
+              "uncut beyond unreachable corners by region, mm^2: "
+              + ", ".join(f"{u:.1f} of limit {lim:.1f}" for u, lim in zip(rep["uncut_mm2"], rep["limit_mm2"]))]
+    # a header line is a G-code comment: no parentheses inside
+    header += ["WARNING --allow-uncut: " + w.replace("(", "[").replace(")", "]") for w in path.info.get("warnings", [])]
+    text = write_program(path, job, header=header)
     src = str(source or job_file.with_suffix(".ngc").name)
     chk = check_program(text, clearance_z=job.clearance_z, top_z=getattr(job, "top_z", 0.0), source=src)
     if chk.errors:      # every planner tags its plunges into a start hole or cleared area 'cleared'
@@ -54,23 +64,30 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
 
 
 def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False, *, cutting=None,
-                 layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None) -> Path:
+                 layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
+                 allow_uncut: bool = False) -> Path:
     """Plan ``job_file`` (a job file, or a drawing with ``cutting`` data, see :func:`planned_program`)
     with ``strategy`` (None: the planner's default) and write the program to ``out``; returns the
-    output path. Raises ``ValueError`` when the written program fails the static safety check
-    (nothing is written then). The job's plausibility warnings go to stderr unless ``quiet``."""
+    output path. Raises ``ValueError`` when the written program fails the static safety check or
+    leaves too much uncut (nothing is written then); with ``allow_uncut`` the uncut warning is
+    printed to stderr and written in the header. The job's plausibility warnings go to stderr
+    unless ``quiet``."""
     job_file, out = Path(job_file), Path(out)
     inputs = [job_file] + ([Path(cutting)] if cutting is not None else [])
     check_outputs([out], inputs)
     text, job, path, chk = planned_program(job_file, strategy, source=str(out), cutting=cutting, layer=layer,
-                                           tolerance=tolerance, units=units)
+                                           tolerance=tolerance, units=units, allow_uncut=allow_uncut)
+    for w in path.info.get("warnings", []):
+        print(f"warning: {w}", file=sys.stderr)
     name = strategy or path.info.get("strategy", "default")
     atomic_write(out, text, inputs=inputs)
     if not quiet:
         for w in getattr(job, "warnings", ()):
             print(f"warning: {w}", file=sys.stderr)
+        uncut = ", ".join(f"{u:.1f}" for u in path.info["uncut"]["uncut_mm2"])
         print(f"wrote {out}: {len(path)} moves, strategy {name}, entries {chk.entries}, "
-              f"plunges below the stock top marked cleared or none: {chk.plunges_into_material == 0}")
+              f"plunges below the stock top marked cleared or none: {chk.plunges_into_material == 0}, "
+              f"uncut beyond the unreachable corners by region: {uncut} mm^2")
     return out
 
 
@@ -100,10 +117,13 @@ def main(argv=None) -> int:
                     help=f"with a drawing: chord error of the flattening of curves, mm (default {CHORD_TOL_MM})")
     ap.add_argument("--units", default=None, help="with a drawing: its unit (mm, inch, cm, m), overriding "
                     "$INSUNITS / the SVG size (default: from the drawing; a unitless DXF is read as mm)")
+    ap.add_argument("--allow-uncut", action="store_true",
+                    help="write the program even when it leaves more uncut area in a region than the limit "
+                         "(1 mm^2 + 1 %% of the region's reachable area), with a WARNING in the output and the header")
     args = ap.parse_args(argv)
     try:
         plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
-                     tolerance=args.tolerance, units=args.units)
+                     tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut)
     except (ValueError, OSError, RuntimeError, KeyError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

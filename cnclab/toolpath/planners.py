@@ -28,14 +28,17 @@ kim-yang-modified        the same with Kim & Yang's §3.2 constant-MRR modificat
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
 from . import adaptive_clearing   # the default; the other planners' modules are imported when used
+from . import coverage
 from .job import Job
 from .path import ToolPath
 
-__all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "plan", "register"]
+__all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "MAX_LEVELS", "MIN_LEVEL_STEP_MM", "UncutError", "check_limits", "plan",
+           "register"]
 
 #: name -> (planner(job, resolution_mm, **options) -> ToolPath for one level, one-line description)
 STRATEGIES: dict = {}
@@ -101,16 +104,56 @@ def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
 DEFAULT_STRATEGY = "adaptive"
 
 
-def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1, **options) -> ToolPath:
+#: the most levels :func:`plan` accepts (depth / a_p): a deeper job is refused up front
+MAX_LEVELS = 1000
+#: the smallest level step (mm) :func:`plan` accepts: 10 units of the program's 4th decimal, so every
+#: level is written below the one above it (a_p = 1e-6 would be written at Z0)
+MIN_LEVEL_STEP_MM = 0.001
+
+
+class UncutError(ValueError):
+    """A plan leaves more uncut area than :func:`cnclab.toolpath.coverage.uncut_limit_mm2` allows in a
+    region (``report``: :func:`cnclab.toolpath.coverage.uncut_report`)."""
+
+    def __init__(self, msg, report):
+        super().__init__(msg)
+        self.report = report
+
+
+def check_limits(job: Job) -> None:
+    """Refuse, before any planning, a job whose levels exceed :data:`MAX_LEVELS` or are thinner than
+    :data:`MIN_LEVEL_STEP_MM` (ValueError naming the job key and the number the job would need)."""
+    n = int(math.ceil(job.depth / job.a_p - 1e-9)) if job.a_p > 0 else math.inf
+    if n > MAX_LEVELS:
+        raise ValueError(f"{job.source}: $.depth / $.a_p: depth {job.depth:g} mm at a_p {job.a_p:g} mm needs {n} "
+                         f"levels; at most {MAX_LEVELS} are planned (raise a_p to >= {job.depth / MAX_LEVELS:g} mm)")
+    if job.depth / n < MIN_LEVEL_STEP_MM:
+        raise ValueError(f"{job.source}: $.a_p: levels {job.depth / n:g} mm apart are below {MIN_LEVEL_STEP_MM:g} mm "
+                         "(the program's z resolution x 10): the cut would be written at or near the stock top")
+
+
+def _uncut_message(job: Job, strategy: str, rep: dict) -> str:
+    parts = "; ".join(f"region {k}: {rep['uncut_mm2'][k]:.1f} of {rep['reach_mm2'][k]:.0f} mm^2 reachable "
+                      f"(limit {rep['limit_mm2'][k]:.1f})" for k in rep["over"])
+    return (f"{job.source}: strategy {strategy} leaves material uncut beyond the corners no tool disc reaches: "
+            f"{parts}")
+
+
+def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1, allow_uncut: bool = False,
+         **options) -> ToolPath:
     """Plan ``job`` with ``strategy`` (a key of :data:`STRATEGIES`) level by level.
 
     ``resolution_mm``: the planners' dixel row height / sampling step (mm); ``options`` go to the
     planner. Returns one :class:`ToolPath`; ``info["levels"]`` holds the cutting z of each level,
-    ``info["strategy"]`` the name."""
+    ``info["strategy"]`` the name, ``info["uncut"]`` what the plan leaves by region
+    (:func:`cnclab.toolpath.coverage.uncut_report`). A plan leaving more than the stated limit in a
+    region raises :class:`UncutError`, unless ``allow_uncut`` (then ``info["warnings"]`` says it).
+    A job beyond :data:`MAX_LEVELS` / :data:`MIN_LEVEL_STEP_MM` is refused before planning."""
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r}: must be one of {sorted(STRATEGIES)}")
     if not isinstance(job, Job):
         raise TypeError(f"job must be a cnclab.toolpath.job.Job, got {type(job).__name__}")
+    check_limits(job)
     f = STRATEGIES[strategy][0]
     levels = job.levels()
     tops = [job.top_z] + levels[:-1]
@@ -120,4 +163,11 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1,
         paths.append(f(lv, resolution_mm, **options))
     out = paths[0] if len(paths) == 1 else ToolPath.concat(paths)
     out.info.update(strategy=strategy, levels=levels)
+    rep = coverage.uncut_report(out, job)
+    out.info["uncut"] = rep
+    if rep["over"]:
+        msg = _uncut_message(job, strategy, rep)
+        if not allow_uncut:
+            raise UncutError(msg + " (accept it with allow_uncut=True, CLI --allow-uncut)", rep)
+        out.info.setdefault("warnings", []).append(msg)
     return out

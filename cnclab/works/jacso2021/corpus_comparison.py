@@ -46,8 +46,8 @@ RESULTS = REPO_ROOT / "benchmarks" / "results" / "corpus_rows.csv"
 #: the axes of the comparison: planner column -> FreeCAD column is the same name + "_fc"
 AXES = ["p95_deg", "max_deg", "share>θ+5_pct", "plunges_into_material", "rapids_into_material", "wall_gouge_mm",
         "lifts", "uncut_beyond_mm2", "program_time_min", "plan_time_s"]
-ROW_COLUMNS = ["family", "D_mm", "theta_deg", "levels"] + AXES + [a + "_fc" for a in AXES] + ["ok_safe", "ok_engagement",
-                                                                                           "note"]
+ROW_COLUMNS = (["family", "D_mm", "theta_deg", "levels"] + AXES + [a + "_fc" for a in AXES]
+               + ["uncut_over_limit", "ok_safe", "ok_engagement", "note"])
 
 
 def job_names() -> list:
@@ -97,12 +97,14 @@ def score_job(name: str, fast: bool | None = None) -> dict:
            "levels": len(jb.levels()), "resolution_mm": h}
     t0 = time.perf_counter()
     try:
-        tp = planners.plan(jb, "adaptive", h)
+        tp = planners.plan(jb, "adaptive", h, allow_uncut=True)     # what it leaves is a column here
         t_plan = time.perf_counter() - t0
         r = fx.row(evaluate(tp, jb, h), t_plan, jb=jb)
-        out.update({a: r[a] for a in AXES}, note="")
+        out.update({a: r[a] for a in AXES}, note="; ".join(tp.info.get("warnings", [])))
+        out["uncut_over_limit"] = bool(tp.info["uncut"]["over"])
     except Exception as exc:       # noqa: BLE001 -- a refusal or a crash is a result of this benchmark
         out.update({a: math.nan for a in AXES}, note=f"{type(exc).__name__}: {str(exc)[:200]}")
+    out.setdefault("uncut_over_limit", math.nan)
     out.update(_freecad(name, jb, h))
     th = jb.theta_deg
     out["ok_safe"] = bool(out["plunges_into_material"] == 0 and out["rapids_into_material"] == 0

@@ -1,0 +1,100 @@
+"""What a plan leaves: the area of each pocket region that no tool disc at a level's depth swept,
+beyond the corners no tool disc can reach (:func:`uncut_report`), and the limit above which
+:func:`cnclab.toolpath.planners.plan` refuses a plan (:data:`UNCUT_ABS_MM2`, :data:`UNCUT_REL`).
+
+At each level z (:meth:`Job.levels`) the part of every region a tool disc can reach (its
+morphological opening by the disc of radius r, shapely) is rasterised (pixel stock of
+:mod:`cnclab.simulation.pixel`, pixel h = r / 25, pixel centres inside) and the tool disc is stamped
+every r / 10 along every move whose two ends are at that z (arcs sampled with chords of at most
+r / 10): the stamped discs' edge is within (r/10)^2 / (8 r) = r / 800 (a thirtieth of a pixel) of the
+swept band's. Pixels left are
+opened by a 3 x 3 square (pieces narrower than about 2 h = r / 12 are dropped: a pass that follows a
+wall leaves a one-pixel fringe of the rasterised opening). Uncut areas are summed over the levels
+(as :func:`cnclab.toolpath.evaluate.evaluate` sums them). Units: mm, mm^2.
+
+>>> from shapely.geometry import box
+>>> from cnclab.toolpath.path import Tool, ToolPath
+>>> job = Job(box(0, 0, 20, 10), Tool(6.0), 60.0, 2.0, v_c=100, f_z=0.05)
+>>> p = ToolPath.build([[3, 5, 5], [3, 5, -2], [17, 5, -2], [17, 5, 5]], kind=["rapid", "plunge", "cut", "retract"],
+...                    feed=300)
+>>> rep = uncut_report(p, job)     # one pass along the middle: 2 x (20 x 2) minus the rounded ends = 80.0 mm^2
+>>> abs(rep["uncut_mm2"][0] - 80.0) < 1.0, rep["over"]
+(True, [0])
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from scipy.ndimage import binary_opening
+
+from ..simulation.pixel import Stock
+
+from .job import Job
+from .path import ToolPath
+
+__all__ = ["UNCUT_ABS_MM2", "UNCUT_REL", "uncut_report", "uncut_limit_mm2"]
+
+#: uncut area a plan may leave in a region (mm^2): UNCUT_ABS_MM2 + UNCUT_REL x the region's reachable
+#: area -- 1 mm^2 of cusps and chord errors plus 1 % (a pass boundary's cusps: an a_e / 2-high ridge
+#: left along a pass is far below this; a skipped neck, finger or annulus is far above it)
+UNCUT_ABS_MM2 = 1.0
+UNCUT_REL = 0.01
+
+
+def uncut_limit_mm2(reach_area_mm2: float) -> float:
+    """The uncut area (mm^2) :func:`cnclab.toolpath.planners.plan` accepts in a region whose reachable
+    area is ``reach_area_mm2``."""
+    return UNCUT_ABS_MM2 + UNCUT_REL * float(reach_area_mm2)
+
+
+def _centres(path: ToolPath, z: float, r: float, step: float) -> np.ndarray:
+    """Tool centres (x, y) every ``step`` mm of arc length along each run of moves whose two ends
+    are at ``z`` (and each run's last point; single points at z are kept)."""
+    P, _ = path.polyline(max(r / 10.0, 1e-3))
+    at = np.abs(P[:, 2] - z) <= 1e-6
+    seg = at[1:] & at[:-1]
+    pts = []
+    edges = np.flatnonzero(np.diff(np.r_[0, seg.astype(int), 0]))
+    for i0, i1 in zip(edges[0::2], edges[1::2]):          # segments i0..i1-1: points i0..i1
+        Q = P[i0:i1 + 1, :2]
+        sc = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Q, axis=0).T))]
+        t = np.r_[np.arange(0.0, sc[-1], step), sc[-1]]
+        pts.append(np.c_[np.interp(t, sc, Q[:, 0]), np.interp(t, sc, Q[:, 1])])
+    lone = at & ~np.r_[seg, False] & ~np.r_[False, seg]
+    pts.append(P[lone, :2])
+    return np.vstack(pts)
+
+
+def _left_mm2(region, centres, r: float) -> float:
+    if region.is_empty:
+        return 0.0
+    h = r / 25.0
+    x0, y0, x1, y1 = region.bounds
+    h = max(h, math.sqrt((x1 - x0) * (y1 - y0) / 2e7))          # at most ~2e7 pixels
+    st = Stock.from_polygon(region, h)
+    for cx, cy in centres:
+        st.cut_disk_pixels((cx, cy), r, backend="numba")
+    return float(np.count_nonzero(binary_opening(st.grid, np.ones((3, 3), bool)))) * h * h
+
+
+def uncut_report(path: ToolPath, job: Job) -> dict:
+    """Uncut area beyond the unreachable corners, by region of ``job.polygon`` (largest first as
+    shapely lists them), summed over the levels: ``{"uncut_mm2": [..], "reach_mm2": [..],
+    "limit_mm2": [..], "over": [region indices above their limit], "levels": [z ..]}``."""
+    r = job.tool_radius
+    regions = list(shapely.get_parts(job.polygon))
+    reach = [g.buffer(-r, quad_segs=64).buffer(r, quad_segs=64) for g in regions]
+    levels = job.levels()
+    uncut = np.zeros(len(regions))
+    for z in levels:
+        c = _centres(path, z, r, r / 10.0)
+        for k, R in enumerate(reach):
+            x0, y0, x1, y1 = R.bounds if not R.is_empty else (0, 0, 0, 0)
+            near = c[(c[:, 0] > x0 - r) & (c[:, 0] < x1 + r) & (c[:, 1] > y0 - r) & (c[:, 1] < y1 + r)]
+            uncut[k] += _left_mm2(R, near, r)
+    lim = [uncut_limit_mm2(R.area) for R in reach]
+    return {"uncut_mm2": uncut.round(3).tolist(), "reach_mm2": [round(R.area, 3) for R in reach],
+            "limit_mm2": [round(v, 3) for v in lim], "over": [k for k in range(len(regions)) if uncut[k] > lim[k]],
+            "levels": levels}
