@@ -178,7 +178,7 @@ def test_orient_fast_path_identical_to_graph_path(seed):
     """The compiled fast path (hash weld, edge hash, union-find parity) gives exactly what the
     scipy breadth-first graph path gives: triangles, flipped mask and every info count, on open and
     closed parts with random windings, shuffled facets and several components."""
-    from cnclab.geometry import mesh as M
+    from cnclab.geometry.mesh import repair as M
     from cnclab.geometry.freeform_part import FreeformPart, freeform_part_mesh
 
     rng = np.random.default_rng(seed)
@@ -197,7 +197,7 @@ def test_orient_fast_path_identical_to_graph_path(seed):
 def test_orient_non_orientable_strip_takes_the_graph_path():
     """A Moebius strip has no consistent winding: the union-find finds the conflict and the graph
     path decides (winding_conflicts > 0), as before."""
-    from cnclab.geometry import mesh as M
+    from cnclab.geometry.mesh import repair as M
 
     n = 12
     ang = np.linspace(0, 2 * np.pi, n, endpoint=False)
@@ -210,7 +210,7 @@ def test_orient_non_orientable_strip_takes_the_graph_path():
     for i in range(n):
         tri += [[col(i, -1), col(i + 1, -1), col(i + 1, 1)], [col(i, -1), col(i + 1, 1), col(i, 1)]]
     tri = np.array(tri)
-    assert M._edge_parity(M._weld_ids(tri))[0]                       # conflict detected
+    assert M._edge_parity(M.weld_ids(tri))[0]                       # conflict detected
     out, flipped, info = M.orient_facets(tri)
     ref = M._orient_graph(np.array(tri, copy=True), _info0())
     assert info["winding_conflicts"] > 0 and info == ref[2] and np.array_equal(flipped, ref[1])
