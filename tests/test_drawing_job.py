@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from cnclab.nc import cli_drawing, cli_plan
-from cnclab.nc.gcode import read_gcode
+from cnclab.nc.gcode import read_gcode, read_toolpath
 from cnclab.nc.program import check_program
 from cnclab.paths import data_path
+from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.from_drawing import job_from_drawing, load_cutting, load_job_input
 from cnclab.toolpath.job import SPINDLE_RPM_MAX, Job, load_job, ring_points
 
@@ -230,5 +231,11 @@ def test_plan_from_the_done_when_dxf_writes_a_safe_program(tmp_path, capsys):
     assert chk.ok and chk.plunges_into_material == 0, chk.errors[:3]
     prog = read_gcode(text)
     assert prog.tool_number == 1
+    # the written program cut through a simulated stock of the drawing's pocket (0.1 mm dixels): no
+    # wall or island gouge, nothing rapid or plunged into material, the engagement held near theta
+    job = load_job_input(FIX / "done_when.dxf", cutting=CUT, layer="POCKET")
+    ev = evaluate(read_toolpath(out, tool=job.tool), job, resolution_mm=0.1, sampling="arc_length")
+    assert ev.wall_gouge_max_mm == 0 and ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    assert ev.engagement_p95_deg <= job.theta_deg + 2
     assert cli_plan.main([str(FIX / "done_when.dxf"), "-o", str(tmp_path / "x.ngc")]) == 2
     assert "give the cutting data" in capsys.readouterr().err
