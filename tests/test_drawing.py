@@ -78,6 +78,35 @@ def test_bulge_arc_hand_cases(bulge, center, radius, sweep):
     assert np.sign(mid[1]) == -np.sign(bulge)           # y < 0: right of +x travel for bulge > 0
 
 
+@settings(max_examples=40, deadline=None)
+@given(w=st.floats(20, 60), h=st.floats(20, 60), bulges=st.lists(st.floats(-0.15, 0.15), min_size=4, max_size=4),
+       ccw=st.booleans())
+def test_bulged_rectangle_area_by_hand(tmp_path_factory, w, h, bulges, ccw):
+    """A W x H rectangle whose edges carry bulges b (either traversal direction): area = W H plus, per
+    edge, the circular segment r^2/2 (theta - sin theta), theta = 4 atan|b|, r = c / (2 sin(theta/2)),
+    added where the arc bulges outward (b > 0 on a counter-clockwise outline) and removed where inward;
+    within (arc length) x tol."""
+    pts = [(0, 0), (w, 0), (w, h), (0, h)]
+    if not ccw:
+        pts = pts[::-1]
+    doc = ezdxf.new(units=4)
+    doc.modelspace().add_lwpolyline([(x, y, b) for (x, y), b in zip(pts, bulges)], format="xyb", close=True)
+    p = tmp_path_factory.mktemp("bulge") / "b.dxf"
+    doc.saveas(p)
+    area, arcs = w * h, 0.0
+    for k, b in enumerate(bulges):
+        (x0, y0), (x1, y1) = pts[k], pts[(k + 1) % 4]
+        c = math.hypot(x1 - x0, y1 - y0)
+        if abs(b) < 1e-12:
+            continue
+        th = 4 * math.atan(abs(b))
+        r = c / (2 * math.sin(th / 2))
+        outward = (b > 0) == ccw
+        area += (1 if outward else -1) * 0.5 * r * r * (th - math.sin(th))
+        arcs += r * th
+    assert abs(read_drawing(p).polygon().area - area) <= arcs * TOL + 1e-9
+
+
 # -- the done-when drawing ---------------------------------------------------------------------------
 def _done_when_area():
     """Hand area of the done-when pocket (mm^2): 80 x 60 rectangle + semicircle r 30 + the circular
