@@ -544,10 +544,8 @@ VERDICTS = ("HOLDS", "PARTIAL", "FAILS", "NOT_TESTABLE")
 
 @dataclasses.dataclass(frozen=True)
 class Verdict:
-    """What a qualitative recipe returns: the verdict and the measurements it rests on.
-
-    ``numbers`` maps a measured quantity (name with unit) to its value; ``text`` says in one sentence
-    what was measured against which threshold.
+    """What a qualitative recipe returns: the verdict, one sentence saying what was measured against
+    which threshold (``text``) and the measured quantities (``numbers``, name with unit -> value).
 
     >>> Verdict("HOLDS", "max |s - s_Thesis| = 0 mm", {"residual_mm": 0.0}).verdict
     'HOLDS'
@@ -562,21 +560,9 @@ class Verdict:
             raise ValueError(f"verdict must be one of {VERDICTS}, got {self.verdict!r}")
 
 
-@dataclasses.dataclass(frozen=True)
-class QualitativeClaim:
-    claim_id: str
-    work: str
-    seed_file: str
-    location: str
-    quote: str
-    verdict: str
-    measure: str
-    computed_by: str
-    test: str
-    notebook: str
-    note: str
-    slow: bool = False
-    line: int = 0
+#: one row of ``data/qualitative_claims.csv`` (the columns, plus ``slow`` and the CSV ``line``)
+QualitativeClaim = dataclasses.make_dataclass(
+    "QualitativeClaim", [(c, str) for c in QUAL_COLUMNS] + [("slow", bool, False), ("line", int, 0)], frozen=True)
 
 
 def load_qualitative(path: Path | str = QUALITATIVE_CSV) -> list[QualitativeClaim]:
@@ -606,9 +592,8 @@ def load_qualitative(path: Path | str = QUALITATIVE_CSV) -> list[QualitativeClai
                 raise LedgerError(f"{where}: seed_file {r['seed_file']!r} is not the seed of {r['work']}")
             if r["verdict"] not in VERDICTS:
                 raise LedgerError(f"{where}: column 'verdict' must be one of {VERDICTS}, got {r['verdict']!r}")
-            for col in ("location", "quote", "measure", "test"):
-                if not r[col]:
-                    raise LedgerError(f"{where}: column {col!r} is empty")
+            if any(not r[col] for col in ("location", "quote", "measure", "test")):
+                raise LedgerError(f"{where}: a column of location, quote, measure, test is empty")
             if r["computed_by"] and not _DOTTED.match(r["computed_by"]):
                 raise LedgerError(f"{where}: column 'computed_by' is not a dotted name: {r['computed_by']!r}")
             if not r["computed_by"] and r["verdict"] != "NOT_TESTABLE":
@@ -633,11 +618,8 @@ class QualitativeResult:
 def evaluate_qualitative(claim: QualitativeClaim, skip_slow: bool = False) -> QualitativeResult:
     """Run the row's recipe; ``ok`` when it returns the verdict the row states."""
     res = QualitativeResult(claim)
-    if not claim.computed_by:
-        res.ok = claim.verdict == "NOT_TESTABLE"
-        return res
-    if skip_slow and claim.slow:
-        res.skipped = True
+    if not claim.computed_by or (skip_slow and claim.slow):
+        res.ok, res.skipped = claim.verdict == "NOT_TESTABLE", bool(claim.computed_by)
         return res
     try:
         v = resolve(claim.computed_by)()
@@ -651,9 +633,8 @@ def evaluate_qualitative(claim: QualitativeClaim, skip_slow: bool = False) -> Qu
 
 
 def _numbers(v: Verdict | None) -> str:
-    if v is None:
-        return ""
-    return "; ".join(f"{k} = {_fmt(x) if isinstance(x, (int, float)) else x}" for k, x in v.numbers.items())
+    return "" if v is None else "; ".join(f"{k} = {_fmt(x) if isinstance(x, (int, float)) else x}"
+                                          for k, x in v.numbers.items())
 
 
 def qualitative_frame(results: list[QualitativeResult]):
@@ -737,28 +718,24 @@ def write_report(results: list[Result], outdir: Path,
     return p_csv, p_md
 
 
-def _cell(text: str) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
-
-
 def _qualitative_markdown(results: list[QualitativeResult]) -> list[str]:
     if not results:
         return []
     md = ["## Qualitative claims (thesis statements, conclusions, headline sentences)", "",
           "Each verdict is computed by the recipe named in `data/qualitative_claims.csv`; a test fails "
-          "if the computed verdict changes.", ""]
-    counts = qualitative_counts(results)
-    md += ["| work | " + " | ".join(VERDICTS) + " |", "|---" * (len(VERDICTS) + 1) + "|"]
-    for work, s in counts.iterrows():
+          "if the computed verdict changes.", "", "| work | " + " | ".join(VERDICTS) + " |",
+          "|---" * (len(VERDICTS) + 1) + "|"]
+    for work, s in qualitative_counts(results).iterrows():
         md.append(f"| {work} | " + " | ".join(str(s[v]) for v in VERDICTS) + " |")
     md += ["", "| claim | location | quote | verdict | holds | measured |", "|---|---|---|---|---|---|"]
+    cell = lambda t: str(t).replace("|", "\\|").replace("\n", " ")  # noqa: E731
     for r in results:
         c = r.claim
         holds = "skipped" if r.skipped else ("yes" if r.ok else "**NO**")
         meas = r.error or ((r.verdict.text + (" (" + _numbers(r.verdict) + ")" if r.verdict.numbers else ""))
                            if r.verdict else c.note)
-        md.append(f"| {c.claim_id} | {_cell(c.location)} | {_cell(c.quote)} | {c.verdict} | {holds} | "
-                  f"{_cell(meas)} |")
+        md.append(f"| {c.claim_id} | {cell(c.location)} | {cell(c.quote)} | {c.verdict} | {holds} | "
+                  f"{cell(meas)} |")
     return md + [""]
 
 
@@ -810,13 +787,9 @@ def main(argv: list[str] | None = None) -> int:
         print()
         print(headline(summary_frame(results)).to_string())
         if qres:
-            with pd.option_context("display.max_rows", None, "display.width", 200,
-                                   "display.max_colwidth", 70):
-                print()
-                print(qualitative_frame(qres)[["claim", "verdict", "computed", "holds", "numbers"]]
-                      .to_string(index=False))
-                print()
-                print(qualitative_counts(qres).to_string())
+            with pd.option_context("display.max_rows", None, "display.width", 200, "display.max_colwidth", 70):
+                q = qualitative_frame(qres)[["claim", "verdict", "computed", "holds", "numbers"]]
+                print(f"\n{q.to_string(index=False)}\n\n{qualitative_counts(qres).to_string()}")
     if args.report:
         for p in write_report(results, Path(args.report), qualitative=qres):
             print(f"wrote {p}")
