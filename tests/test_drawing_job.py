@@ -220,6 +220,26 @@ def test_cli_registered():
     assert COMMANDS["job-from-drawing"][0] == "cnclab.nc.cli_drawing"
 
 
+def test_plan_names_implausible_keys_and_writes_warnings_in_the_header(tmp_path, capsys):
+    """`plan DRAWING`: a_p beyond the stated cutting length is refused naming $.a_p (nothing written);
+    a pocket that looks typed in inches (an 8 x 6 'mm' plate, a 0.8 mm tool) is planned with the
+    warning naming $.tool_diameter on stderr and in the program header."""
+    cut, out = tmp_path / "cut.json", tmp_path / "w.ngc"
+    cut.write_text(json.dumps(dict(json.loads(CUT.read_text()), a_p=3.0, cutting_length=2.5)))
+    assert cli_plan.main([str(FIX / "inch.dxf"), "--cutting", str(cut), "-o", str(out)]) == 2
+    assert "$.a_p: a_p = 3 mm is beyond the tool's cutting length 2.5 mm" in capsys.readouterr().err
+    assert not out.exists()
+    small = tmp_path / "small.svg"
+    small.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" viewBox="0 0 10 10">'
+                     '<rect x="1" y="1" width="8" height="6"/></svg>')
+    cut.write_text(json.dumps({"tool_diameter": 0.8, "teeth": 2, "theta_deg": 60, "a_p": 0.5,
+                               "spindle_rpm": 20000, "feed_mm_min": 100}))
+    assert cli_plan.main([str(small), "--cutting", str(cut), "-o", str(out), "--strategy", "zig-zag"]) == 0
+    assert "warning: " in capsys.readouterr().err
+    head = [ln for ln in out.read_text().splitlines() if ln.startswith("(WARNING job:")]
+    assert len(head) == 1 and "$.tool_diameter: the lengths look like inches [tool_diameter 0.8, pocket 8 across" in head[0]
+
+
 def test_plan_from_the_done_when_dxf_writes_a_safe_program(tmp_path, capsys):
     """Issue 24's done-when drawing: bulged outline, CIRCLE island, LINE/ARC island, on layer POCKET
     among annotation layers -> `plan` writes a program that passes the static safety check."""
@@ -231,6 +251,7 @@ def test_plan_from_the_done_when_dxf_writes_a_safe_program(tmp_path, capsys):
     assert chk.ok and chk.plunges_into_material == 0, chk.errors[:3]
     prog = read_gcode(text)
     assert prog.tool_number == 1
+    assert "(geometry from done_when.dxf layer POCKET, chord tolerance 0.005 mm; cutting data from cutting.json)" in text
     # the written program cut through a simulated stock of the drawing's pocket (0.1 mm dixels): no
     # wall or island gouge, nothing rapid or plunged into material, the engagement held near theta
     job = load_job_input(FIX / "done_when.dxf", cutting=CUT, layer="POCKET")

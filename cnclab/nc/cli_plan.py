@@ -53,8 +53,12 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
     header = [f"cnclab plan {job_file.name} strategy {name}",
               "uncut beyond unreachable corners by region, mm^2: "
               + ", ".join(f"{u:.1f} of limit {lim:.1f}" for u, lim in zip(rep["uncut_mm2"], rep["limit_mm2"]))]
+    if cutting is not None:
+        header.insert(1, f"geometry from {job_file.name} layer {layer if layer is not None else 'all'}, chord "
+                         f"tolerance {tolerance:g} mm; cutting data from {Path(cutting).name}")
     # a header line is a G-code comment: no parentheses inside
     header += ["WARNING --allow-uncut: " + w.replace("(", "[").replace(")", "]") for w in path.info.get("warnings", [])]
+    header += ["WARNING job: " + w.replace("(", "[").replace(")", "]") for w in getattr(job, "warnings", ())]
     text = write_program(path, job, header=header)
     src = str(source or job_file.with_suffix(".ngc").name)
     chk = check_program(text, clearance_z=job.clearance_z, top_z=getattr(job, "top_z", 0.0), source=src)
