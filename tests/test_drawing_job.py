@@ -260,3 +260,26 @@ def test_plan_from_the_done_when_dxf_writes_a_safe_program(tmp_path, capsys):
     assert ev.engagement_p95_deg <= job.theta_deg + 2
     assert cli_plan.main([str(FIX / "done_when.dxf"), "-o", str(tmp_path / "x.ngc")]) == 2
     assert "give the cutting data" in capsys.readouterr().err
+
+
+def test_cli_job_from_drawing_hostile_arguments(tmp_path, capsys):
+    """Each bad argument: exit 2, a message naming the file or option, nothing written."""
+    out = tmp_path / "j.json"
+    dw = str(FIX / "done_when.dxf")
+    cases = [
+        ([str(tmp_path / "none.dxf"), "--cutting", str(CUT)], "none.dxf: no such drawing file"),
+        ([dw, "--cutting", str(tmp_path / "none.json")], "none.json"),
+        ([str(CUT), "--cutting", str(CUT)], "a drawing must be a .dxf or .svg file"),
+        ([dw, "--cutting", str(CUT), "--layer", "NOPE"], "no outline entity (LINE, ARC"),
+        ([dw, "--cutting", str(CUT), "--tolerance", "nan"], "tolerance must be a number of mm"),
+        ([dw, "--cutting", str(CUT), "--units", "parsec"], "units 'parsec' unknown"),
+        ([dw, "--cutting", str(CUT), "--layer", "POCKET", "--join-tol", "0"], "join_tol must be a number of mm"),
+    ]
+    for args, msg in cases:
+        assert cli_drawing.main([*args, "-o", str(out)]) == 2, args
+        err = capsys.readouterr().err
+        assert err.startswith("error: ") and msg in err, (args, err)
+        assert not out.exists()
+    (tmp_path / "adir").mkdir()
+    assert cli_drawing.main([dw, "--cutting", str(CUT), "--layer", "POCKET", "-o", str(tmp_path / "adir")]) == 2
+    assert "adir" in capsys.readouterr().err
