@@ -297,6 +297,10 @@ def test_svg_paths_layers_and_units():
     # the arc A 30 30 0 0 0 from (90, 65) to (90, 5): a semicircle bulging to x = 120
     assert reg.shell.polygon().bounds[2] == pytest.approx(120, abs=1e-6)
     assert read_drawing(path, layer="layer1").polygon().area == pytest.approx(d.polygon().area)   # group id
+    as_mm = read_drawing(path, layer="POCKET", units="mm")          # one user unit = 1 mm, as the viewBox says
+    assert as_mm.polygon().area == pytest.approx(d.polygon().area, rel=1e-9)
+    cm = read_drawing(path, layer="POCKET", units="cm")                # x 10; flattened at 0.005 mm of the bigger part
+    assert cm.polygon().area == pytest.approx(100 * d.polygon().area, rel=1e-4)
     notes = read_drawing(path, layer="NOTES")
     assert notes.polygon().area == pytest.approx(138 * 68)                           # the frame; text skipped
 
