@@ -46,7 +46,7 @@ def bench_cell(shape: str, res: float, name: str) -> dict:
     t2 = time.perf_counter()
     row = {"shape": shape, "resolution_mm": res, "strategy": name, "plan_s": t1 - t0,
            "simulate_s": t2 - t1, "total_s": t2 - t0, "points": len(p),
-           "machining_time_s": s["time_s"], "max_eng_deg": s["max_engagement_deg"],
+           "machining_time_s": s["time_s"], "engagement_max_deg": s["engagement_max_deg"],
            "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"]}
     if name == "hybrid":
         c = p.info["wall_share_candidates"]

@@ -85,7 +85,7 @@ def test_ce_growth_progress_grows_the_path():
 
 def test_trochoid_circle_simulated_max_is_near_the_exact_front_engagement():
     sc = S.trochoid_scene("circle", 1.0, 12.0, 3.0, resolution_mm=0.1)
-    m = sc["metrics"]["max_engagement_deg"]
+    m = sc["metrics"]["engagement_max_deg"]
     # the exact front-point engagement is a lower bound of the period's maximum (docstring of
     # max_engagement_circle_front); the maximum lies slightly after it: within 8 deg here
     assert sc["front_engagement_deg"] - 1.0 <= m <= sc["front_engagement_deg"] + 8.0
@@ -93,7 +93,7 @@ def test_trochoid_circle_simulated_max_is_near_the_exact_front_engagement():
 
 def test_trochoid_ce_pattern_cuts_at_theta():
     sc = S.trochoid_scene("constant-engagement", 1.0, 12.0, 3.0, theta_deg=60.0, resolution_mm=0.1)
-    cut = sc["metrics"]["max_eng_cut_deg"]
+    cut = sc["metrics"]["engagement_max_cut_deg"]
     assert abs(cut - 60.0) < 6.0     # coarse 0.1 mm dixels and 4 iterations (explorer speed)
     with pytest.raises(ValueError, match="pattern"):
         S.trochoid_scene("square", 1.0, 12.0, 3.0)

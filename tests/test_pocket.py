@@ -53,7 +53,7 @@ def test_auto_wall_share_records_candidates(planned):
     c = hp.info["wall_share_candidates"]
     assert [m["max_wall_share"] for m in c] == [0.3, 0.5]
     assert hp.info["max_wall_share"] == 0.3 and hp.info["laps"] == c[0]["laps"]
-    assert c[0]["max_engagement_deg"] == pytest.approx(s["max_engagement_deg"])
+    assert c[0]["engagement_max_deg"] == pytest.approx(s["engagement_max_deg"])
     assert c[0]["uncut_beyond_unreachable_mm2"] == pytest.approx(s["uncut_area_mm2"] - s["unreachable_area_mm2"])
     # 0.5 was planned anew exactly when the lap that stopped the 0.3 centre ran along the wall on <= 0.5
     stop = hp.info["stop_lap_wall_share"]
@@ -78,7 +78,7 @@ def test_numeric_wall_share_gives_the_auto_winner():
 
 
 def _m(uncut, share, eng, t):
-    return {"uncut_beyond_unreachable_mm2": uncut, "share_above_theta_plus5": share, "max_engagement_deg": eng,
+    return {"uncut_beyond_unreachable_mm2": uncut, "share_above_theta_plus5": share, "engagement_max_deg": eng,
             "time_s": t}
 
 
@@ -100,7 +100,7 @@ def test_choose_candidate_lexicographic_rule():
     assert i == 1 and why["uncut_beyond_unreachable_mm2"]["kept"] == [1, 2]
     assert why["share_above_theta_plus5"]["kept"] == [1] and why["clean"] == [False, True, False]
     with pytest.raises(ValueError, match="time_s"):
-        ch([{"uncut_beyond_unreachable_mm2": 1, "share_above_theta_plus5": 0, "max_engagement_deg": 60}], 100)
+        ch([{"uncut_beyond_unreachable_mm2": 1, "share_above_theta_plus5": 0, "engagement_max_deg": 60}], 100)
     with pytest.raises(ValueError, match="at least one"):
         ch([], 100)
 
@@ -140,7 +140,7 @@ def test_engagement_bounded_and_pocket_cleared(planned):
     assert s["share_above_theta_plus5"] < 0.015
     assert s["share_above_roll-in"] < 0.01
     assert s["share_above_roll-out"] < 0.03       # rectangle: last periods roll out in the end-wall corners
-    assert s["max_engagement_deg"] < 105.0                       # never near a full-slot plunge
+    assert s["engagement_max_deg"] < 105.0                       # never near a full-slot plunge
     assert s["link_removed_mm3"] < 0.01 * job.volume_mm3()
     # uncut beyond the geometrically unreachable corners (rectangle: 4 r^2 (1 - pi/4) = 7.73 mm^2)
     assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 0.005 * job.polygon.area
@@ -169,7 +169,7 @@ def test_comparison_paths_cover_rectangle():
     for f in (pk.contour_parallel_path, pk.zigzag_path):
         T, s, _ = level(f(job), job, 0.1)
         assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 1.0     # sharp corners: unreachable
-        assert s["max_engagement_deg"] >= 60.0 - 1.0
+        assert s["engagement_max_deg"] >= 60.0 - 1.0
 
 
 def test_strategies_are_machine_safe_toolpaths():
@@ -239,13 +239,13 @@ def test_l_shaped_pocket_from_json():
     c = hp.info["wall_share_candidates"]
     assert hp.info["max_wall_share"] == 0.5 and hp.info["wall_share_choice"]["clean"] == [False, True]
     assert c[0]["uncut_beyond_unreachable_mm2"] > c[1]["uncut_beyond_unreachable_mm2"] + 0.0025 * job.polygon.area
-    assert c[0]["max_engagement_deg"] > 150 and c[0]["laps"] < c[1]["laps"]
+    assert c[0]["engagement_max_deg"] > 150 and c[0]["laps"] < c[1]["laps"]
     assert len(hp.info["arms"]) == 2
     angles = sorted(round(a["angle_deg"] / 10) * 10 for a in hp.info["arms"])
     assert angles == [0, 90]                                       # one arm per leg
     assert s["unreachable_area_mm2"] == pytest.approx(5 * 9 * (1 - np.pi / 4), rel=1e-3)
     assert s["uncut_area_mm2"] - s["unreachable_area_mm2"] < 0.005 * job.polygon.area
-    assert s["max_engagement_deg"] < 110.0
+    assert s["engagement_max_deg"] < 110.0
     assert s["share_above_theta_plus5"] < 0.015
     assert s["link_removed_mm3"] < 0.01 * job.volume_mm3()
     assert shapely.distance(shapely.points(hp.xyz[:, :2]), job.allowed()).max() < 1e-3

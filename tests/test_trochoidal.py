@@ -44,7 +44,7 @@ def test_simulated_front_engagement_matches_exact():
     assert sel.engagement_deg.mean() == pytest.approx(tr.max_engagement_circle_front(s, 12, 3), abs=1.0)
     # steady state removes W * step per period
     assert m["mrr_avg_sim_mm3_min"] == pytest.approx(m["mrr_avg_mm3_min"], rel=0.01)
-    assert m["max_engagement_deg"] >= sel.engagement_deg.max() - 1e-9
+    assert m["engagement_max_deg"] >= sel.engagement_deg.max() - 1e-9
 
 
 @pytest.mark.parametrize("rho,into", [(1.0, True), (2.5, False)])
@@ -79,8 +79,8 @@ def test_ce_slot_engagement_by_segment(ce_slot):
     starts in air and rises without a jump (the old roll-in jumped 4 -> 46 deg in one 0.1 mm sample
     at the previous period's corner); the cut holds theta within the dixel noise; roll-out drops."""
     _, p, df, m = ce_slot
-    assert m["max_engagement_deg"] <= 60.0
-    assert m["max_eng_link_deg"] < 1.0 and m["link_removed_mm2"] < 1e-3
+    assert m["engagement_max_deg"] <= 60.0
+    assert m["engagement_max_link_deg"] < 1.0 and m["link_removed_mm2"] < 1e-3
     for k in (2, 3):
         e = df[(df.period == k) & (df.kind == "roll-in")].engagement_deg.to_numpy()
         assert e[0] < 1.0 and e[-1] == pytest.approx(60.0, abs=8.0) and e.max() <= 60.0
@@ -137,9 +137,9 @@ def sweep_w12():
 def test_ce_never_worse_than_cycloid_at_equal_simulated_max(sweep_w12, theta):
     df = sweep_w12[theta]
     assert (df.theta_limit_deg == theta).all()
-    assert (df.max_engagement_deg <= theta).all()                       # every pattern within the limit
+    assert (df.engagement_max_deg <= theta).all()                       # every pattern within the limit
     ce = df.loc["constant-engagement"]
-    assert ce["max_eng_roll-in_deg"] <= theta
+    assert ce["engagement_max_roll-in_deg"] <= theta
     # path per mm of slot (same feed) and time per mm of slot (links at 1500 mm/min): CE >= cycloid
     assert ce.mrr_gain_same_feed_vs_cycloid_pct >= 0.0
     assert ce.mrr_gain_vs_cycloid_pct >= 0.0

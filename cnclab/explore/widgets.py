@@ -162,7 +162,7 @@ def trochoid_explorer(resolution_mm=0.1):
 
     def describe(sc):
         m = sc["metrics"]
-        return (f"step <b>{sc['step_mm']:.3f} mm</b>, max steady engagement <b>{m['max_engagement_deg']:.1f}°</b>, "
+        return (f"step <b>{sc['step_mm']:.3f} mm</b>, max steady engagement <b>{m['engagement_max_deg']:.1f}°</b>, "
                 f"path per mm of slot <b>{m['length_per_mm_slot']:.2f}</b>, MRR <b>{m['mrr_avg_mm3_min']:.0f} mm³/min</b>")
 
     return Explorer("Thesis IV — trochoid patterns in a slot",

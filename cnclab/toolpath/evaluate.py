@@ -270,7 +270,7 @@ def _cutting_level(path: ToolPath, job: Job, resolution_mm, feed_control, block_
     extra_s = 60.0 * float(np.sum(ds[ok] / v[ok] - ds[ok] / fp[ok]))
     Lc = float(ds[cut].sum())
     lim = job.theta_deg + margin_deg
-    summary = {"strategy": path.info.get("name", ""), "max_engagement_deg": float(np.nanmax(eng[cut])),
+    summary = {"strategy": path.info.get("name", ""), "engagement_max_deg": float(np.nanmax(eng[cut])),
                "share_above_theta_plus5": float(ds[cut & (eng > lim)].sum()) / Lc,
                "cut_length_mm": Lc, "link_length_mm": float(ds[~cut].sum()),
                "rapid_length_mm": path.lengths()["rapid_mm"],
@@ -280,7 +280,7 @@ def _cutting_level(path: ToolPath, job: Job, resolution_mm, feed_control, block_
         m = kinds == k
         Lk = float(ds[m].sum())
         summary[f"length_{k}_mm"] = Lk
-        summary[f"max_eng_{k}_deg"] = float(np.nanmax(eng[m])) if np.isfinite(eng[m]).any() else float("nan")
+        summary[f"engagement_max_{k}_deg"] = float(np.nanmax(eng[m])) if np.isfinite(eng[m]).any() else float("nan")
         summary[f"share_above_{k}"] = float(ds[m & (eng > lim)].sum()) / Lk if Lk > 0 else float("nan")
     reach = job.allowed().buffer(job.tool_radius, 64)
     summary.update({"time_s": time_s, "uncut_area_mm2": stock.area(),
@@ -616,7 +616,7 @@ def _level_evaluation(path: ToolPath, job: Job, h: float, level) -> Evaluation:
     lengths, times = path.lengths(), path.time_s(job.rapid_mm_min)
     T, summary, _ = level
     return Evaluation(
-        engagement_p50_deg=nan, engagement_p95_deg=nan, engagement_max_deg=summary["max_engagement_deg"],
+        engagement_p50_deg=nan, engagement_p95_deg=nan, engagement_max_deg=summary["engagement_max_deg"],
         share_above_5_pct=100.0 * summary["share_above_theta_plus5"], share_above_15_pct=nan,
         entry_engagement_max_deg=nan, mrr_max_over_nominal=nan,
         entries_helix=_count_runs(path.kind, "helix"), entries_ramp=_count_runs(path.kind, "ramp"),

@@ -280,7 +280,7 @@ def hybrid_path(job: Job, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=2
         rows.append({"max_wall_share": w, "same_as": None, "laps": hp.info["laps"], "arms": len(hp.info["arms"]),
                      "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"],
                      "share_above_theta_plus5": s["share_above_theta_plus5"],
-                     "max_engagement_deg": s["max_engagement_deg"], "time_s": s["time_s"],
+                     "engagement_max_deg": s["engagement_max_deg"], "time_s": s["time_s"],
                      "plan_s": t1 - t0, "evaluate_s": time.perf_counter() - t1})
         if stop_when_clean and choose_candidate(rows[-1:], job.polygon.area, job.theta_deg)[1]["clean"][0]:
             break
@@ -295,7 +295,7 @@ def choose_candidate(metrics, pocket_area_mm2, theta_deg=60.0, uncut_tol_frac=0.
     """Pick one of several planned paths from their simulated metrics (lexicographic, with tolerances).
 
     ``metrics``: list of dicts with ``uncut_beyond_unreachable_mm2`` (mm^2),
-    ``share_above_theta_plus5`` (fraction of the cutting length), ``max_engagement_deg`` and
+    ``share_above_theta_plus5`` (fraction of the cutting length), ``engagement_max_deg`` and
     ``time_s``. Successive filters, each keeping the candidates within a tolerance of the best:
 
     1. uncut area beyond the unreachable corners, within ``uncut_tol_frac`` x pocket area
@@ -311,15 +311,15 @@ def choose_candidate(metrics, pocket_area_mm2, theta_deg=60.0, uncut_tol_frac=0.
     ``clean_max_eng_margin_deg``).
 
     >>> m = [{"uncut_beyond_unreachable_mm2": 10.1, "share_above_theta_plus5": 0.011,
-    ...       "max_engagement_deg": 174.5, "time_s": 196.2},
+    ...       "engagement_max_deg": 174.5, "time_s": 196.2},
     ...      {"uncut_beyond_unreachable_mm2": 2.0, "share_above_theta_plus5": 0.011,
-    ...       "max_engagement_deg": 100.6, "time_s": 184.8}]
+    ...       "engagement_max_deg": 100.6, "time_s": 184.8}]
     >>> choose_candidate(m, 960.0)[0]
     1
     """
     if not metrics:
         raise ValueError("metrics must hold at least one candidate")
-    keys = ("uncut_beyond_unreachable_mm2", "share_above_theta_plus5", "max_engagement_deg", "time_s")
+    keys = ("uncut_beyond_unreachable_mm2", "share_above_theta_plus5", "engagement_max_deg", "time_s")
     for j, m in enumerate(metrics):
         for k in keys:
             if k not in m or not np.isfinite(float(m[k])):
@@ -335,7 +335,7 @@ def choose_candidate(metrics, pocket_area_mm2, theta_deg=60.0, uncut_tol_frac=0.
     why["time_s"] = {"best": float(metrics[i]["time_s"]), "kept": [i]}
     why["clean"] = [bool(float(m["uncut_beyond_unreachable_mm2"]) <= tol_uncut
                          and float(m["share_above_theta_plus5"]) <= clean_max_share
-                         and float(m["max_engagement_deg"]) < theta_deg + clean_max_eng_margin_deg)
+                         and float(m["engagement_max_deg"]) < theta_deg + clean_max_eng_margin_deg)
                     for m in metrics]
     return i, why
 

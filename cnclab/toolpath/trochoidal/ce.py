@@ -498,7 +498,7 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
                "link_removed_mm2": float(df.removed_mm2[kk == "link"].sum())}
         for name in ("roll-in", "cut", "roll-out", "link"):
             e = eng[kk == name]
-            row[f"max_eng_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
+            row[f"engagement_max_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
         rows.append(row)
         cuts.append(P)
         periods.append(per)
@@ -545,7 +545,7 @@ def ce_admissible_step(per: ToolPath, theta_max_deg, width, tool_radius, resolut
 
     def emax(s):
         p = _repeat_period(per, s, n_periods, resolution_mm)
-        return evaluate_pattern(p, width, r, resolution_mm)[1]["max_engagement_deg"]
+        return evaluate_pattern(p, width, r, resolution_mm)[1]["engagement_max_deg"]
 
     return _common.largest_step(emax, theta_max_deg, 0.5 * s0, 1.5 * s0, tol_mm, grow_limit=4 * r)
 

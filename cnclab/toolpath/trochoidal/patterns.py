@@ -159,12 +159,13 @@ def evaluate_pattern(path: ToolPath, width, tool_radius, resolution_mm=0.05, a_p
 
     Returns ``(table, metrics)``: the per-step DataFrame of :func:`cnclab.simulation.dixel.simulate`
     with ``period`` and ``link`` columns, and a dict over the ``steady_periods`` (default: all but
-    the first two and the last) with ``max_engagement_deg``, ``step_mm``, ``length_per_period_mm``,
+    the first two and the last) with ``engagement_max_deg``, ``step_mm``, ``length_per_period_mm``,
     ``length_per_mm_slot`` (path mm per mm of slot), ``cut_mm``/``link_mm`` per period,
     ``time_per_period_s``, ``mrr_avg_mm3_min`` (= a_p W step / time per period, the geometric
     steady-state removal), ``mrr_avg_sim_mm3_min`` (simulated removed area over the same time),
-    ``link_removed_mm2`` (material cut by linking moves) and ``max_engagement_link_deg``: for the
-    constant-engagement pattern the link's final approach along the wall is the roll-in into the
+    ``link_removed_mm2`` (material cut by linking moves) and ``engagement_max_<kind>_deg`` for the
+    segment kinds roll-in, cut, roll-out and link (NaN for a kind the pattern lacks; the names of
+    :class:`~cnclab.toolpath.evaluate.Evaluation`). On the link: for the constant-engagement pattern the link's final approach along the wall is the roll-in into the
     corner left by the previous period and does cut (see the notebook discussion).
     Linking moves run at ``link_feed_mm_min`` (default: the cutting feed).
     """
@@ -188,8 +189,7 @@ def evaluate_pattern(path: ToolPath, width, tool_radius, resolution_mm=0.05, a_p
     removed = float(df.removed_mm2[m].sum()) / n_p
     eng = df.engagement_deg.to_numpy()
     metrics = {
-        "max_engagement_deg": float(np.nanmax(eng[m & ~link])),
-        "max_engagement_link_deg": float(np.nanmax(np.r_[0.0, eng[m & link]])),
+        "engagement_max_deg": float(np.nanmax(eng[m & ~link])),
         "step_mm": step,
         "cut_mm": cut, "link_mm": lnk,
         "length_per_period_mm": cut + lnk,
@@ -202,7 +202,7 @@ def evaluate_pattern(path: ToolPath, width, tool_radius, resolution_mm=0.05, a_p
     }
     for name in ("roll-in", "cut", "roll-out", "link"):
         e = eng[m & (kinds == name)]
-        metrics[f"max_eng_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
+        metrics[f"engagement_max_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
     return df, metrics
 
 
@@ -224,7 +224,7 @@ def admissible_step(pattern, theta_max_deg, width, tool_radius, resolution_mm=0.
 
     def emax(s):
         p = gen(s, width, r, n_periods, ds=ds)
-        return evaluate_pattern(p, width, r, resolution_mm)[1]["max_engagement_deg"]
+        return evaluate_pattern(p, width, r, resolution_mm)[1]["engagement_max_deg"]
 
     # bracket: the exact front-point step of the circle (a lower bound of the maximum engagement)
     s_front = circle_front_step(theta_max_deg, width, r)

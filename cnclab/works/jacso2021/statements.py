@@ -56,11 +56,11 @@ def thesis4_constant_engagement() -> Verdict:
     equals θ (within 0.5°); the minimum along the segment is not measured by the pattern comparison,
     so the verdict is PARTIAL at best."""
     t = s4.trochoid_comparison().loc["constant-engagement"]
-    dev = abs(float(t["max_eng_cut_deg"]) - float(t["theta_limit_deg"]))
+    dev = abs(float(t["engagement_max_cut_deg"]) - float(t["theta_limit_deg"]))
     return Verdict("PARTIAL" if dev <= ENGAGEMENT_TOL_DEG else "FAILS",
                    "max engagement on the cut segment vs θ (the minimum is not measured)",
-                   {"theta_deg": float(t["theta_limit_deg"]), "max_eng_cut_deg": float(t["max_eng_cut_deg"]),
-                    "max_eng_roll_in_deg": float(t["max_eng_roll-in_deg"])})
+                   {"theta_deg": float(t["theta_limit_deg"]), "engagement_max_cut_deg": float(t["engagement_max_cut_deg"]),
+                    "engagement_max_roll_in_deg": float(t["engagement_max_roll-in_deg"])})
 
 
 def thesis4_shorter_path() -> Verdict:
