@@ -87,6 +87,14 @@ ENTRY_KINDS = ("helix", "ramp", "plunge")
 _KIND_INDEX = {k: i for i, k in enumerate(KINDS)}
 
 
+def _kind_indices(names) -> np.ndarray:
+    """Indices into :data:`KINDS` of the kind names (ValueError naming an unknown one)."""
+    try:
+        return np.array([_KIND_INDEX[x] for x in names], np.int8)
+    except KeyError as exc:
+        raise ValueError(f"kind must be one of {KINDS}, got {exc.args[0]!r}") from None
+
+
 def arc_geometry(start, end, center_xy, ccw: bool):
     """Arc from ``start`` to ``end`` (x, y[, z], mm) about ``center_xy``: returns
     ``(cx, cy, radius, start_angle_rad, sweep_rad)``; sweep > 0 counter-clockwise. Equal start and
@@ -246,10 +254,7 @@ class ToolPath:
         names = [kind] * n if isinstance(kind, str) else list(kind)
         if len(names) != n:
             raise ValueError(f"kind must have one entry per point ({n}), got {len(names)}")
-        try:
-            k = np.array([_KIND_INDEX[x] for x in names], np.int8)
-        except KeyError as exc:
-            raise ValueError(f"kind must be one of {KINDS}, got {exc.args[0]!r}") from None
+        k = _kind_indices(names)
         f = _col(feed, n, np.nan, float, "feed")
         f[k == _KIND_INDEX["rapid"]] = np.nan
         if cleared is None:
@@ -580,10 +585,7 @@ class ToolPathBuilder:
         elif P.shape[1] != 3:
             raise ValueError(f"points must be (m, 2) or (m, 3) mm, got shape {P.shape}")
         names = np.broadcast_to(np.asarray(kind, dtype=object), (m,))
-        try:
-            k = np.array([_KIND_INDEX[x] for x in names], np.int8)
-        except KeyError as exc:
-            raise ValueError(f"kind must be one of {KINDS}, got {exc.args[0]!r}") from None
+        k = _kind_indices(names)
         ctr = np.full((m, 2), np.nan) if center is None else np.broadcast_to(np.asarray(center, float), (m, 2))
         self._chunks.append((P, k, np.broadcast_to(np.asarray(feed, float), (m,)),
                              np.broadcast_to(np.asarray(tag, dtype=object), (m,)),

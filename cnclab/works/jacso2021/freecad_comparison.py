@@ -194,6 +194,59 @@ def wall_gouge_mm(ev: Evaluation, jb: Job) -> float:
     return float(wall_gouge(np.column_stack([t["x"], t["y"], t["z"]]), jb)[0].max(initial=0.0))
 
 
+def gouge_points(ev: Evaluation, jb: Job, tol_mm: float = 0.05):
+    """x, y (mm) of the evaluated samples whose tool disc reaches more than ``tol_mm`` into a wall or
+    island (the mask of :func:`cnclab.toolpath.evaluate.wall_gouge`), e.g. to mark them on a plot.
+
+    >>> from cnclab.toolpath.path import Tool
+    >>> jb = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.0, feed_mm_min=300, spindle_rpm=5000)
+    >>> p = ToolPath.build([[5, 10, 5], [5, 10, -2], [38, 10, -2]], kind=["rapid", "plunge", "cut"], feed=300)
+    >>> x, y = gouge_points(evaluate(p, jb, 0.1), jb)
+    >>> float(x.min()) > 37 - 0.05, bool((y == 10).all())    # the samples beyond x = 37 (r = 3)
+    (True, True)
+    """
+    t = ev.trace
+    mask = wall_gouge(np.column_stack([t["x"], t["y"], t["z"]]), jb, tol_mm=tol_mm)[2]
+    return t["x"][mask], t["y"][mask]
+
+
+def engagement_targets(p95_deg, max_deg, share5_pct, share15_pct, plunges, rapids, gouge_mm, theta_deg,
+                       gouge_tol_mm: float = 1e-3) -> dict:
+    """The issue-16 targets of one program (deg, %, counts, mm): p95 <= theta + 2, share above
+    theta + 5 <= 0.5 %, above theta + 15 <= 0.05 %, max <= theta + 10, no plunge or rapid into
+    material, no wall gouge beyond ``gouge_tol_mm`` (1e-3 mm: the finishing snap's tolerance).
+    Shared by the comparison notebook (:func:`targets`) and ``benchmarks/bench_random_pockets.py``.
+
+    >>> all(engagement_targets(41, 49, 0.2, 0.0, 0, 0, 0.0, theta_deg=40).values())
+    True
+    """
+    th = float(theta_deg)
+    return {"p95<=θ+2": bool(p95_deg <= th + 2), "share>θ+5<=0.5%": bool(share5_pct <= 0.5),
+            "share>θ+15<=0.05%": bool(share15_pct <= 0.05), "max<=θ+10": bool(max_deg <= th + 10),
+            "no plunges": bool(plunges == 0), "no rapids in mat.": bool(rapids == 0),
+            f"no gouge (<={gouge_tol_mm:g} mm)": bool(gouge_mm <= gouge_tol_mm)}
+
+
+def targets(t: pd.DataFrame, theta_deg: float, ours: str = "adaptive_clearing", gouge_tol_mm: float = 0.05) -> dict:
+    """The targets of one pocket's :func:`comparison` table ``t`` for the row ``ours``: the
+    :func:`engagement_targets` and, against FreeCAD's row, lifts, uncut area and program time no
+    larger, the §4 feed control lowering the time, plan time at most twice FreeCAD's (None where
+    FreeCAD wrote no program)."""
+    a, f = t.loc[ours], t.loc[FREECAD]
+    fc_time = t.loc[ours + FEED_CONTROL_SUFFIX, "program_time_min"]
+
+    def le(x, y):
+        return bool(x <= y) if np.isfinite(y) else None
+
+    out = engagement_targets(a.p95_deg, a.max_deg, a["share>θ+5_pct"], a["share>θ+15_pct"], a.plunges_into_material,
+                             a.rapids_into_material, a.wall_gouge_mm, theta_deg, gouge_tol_mm)
+    out.update({"lifts<=FC": le(a.lifts, f.lifts), "uncut<=FC": le(a.uncut_beyond_mm2, f.uncut_beyond_mm2),
+                "time<=FC": le(a.program_time_min, f.program_time_min),
+                "feed ctrl lower": bool(fc_time < a.program_time_min),
+                "plan<=2xFC": le(a.plan_time_s, 2 * f.plan_time_s)})
+    return out
+
+
 def lifts(ev: Evaluation, top_z: float = 0.0) -> int:
     """Number of times the tool rises from below ``top_z`` (mm) to above it along the evaluated samples
     (any move kind: a G0 lift counts like a G1 retract).
