@@ -237,3 +237,145 @@ def test_a_g20_copy_reads_the_same_path(tmp_path, job):
     assert a["rapids_into_material"] == b["rapids_into_material"] == 0
     _compare(a, b)
     assert any("G20" in w for w in rb["warnings"]) and not any("units look wrong" in w for w in rb["warnings"])
+
+
+# --- strict where LinuxCNC is strict, louder where it is lenient ------------------------------------
+BASE = "G21 G90 G17\nG0 X15 Y10 Z5\nS6000 M3\nG1 Z-1 F500\nG1 X20 Y10\n"
+
+#: (program text, outcome): "error: <regex>" or a regex that one of the reader's warnings matches, or
+#: "" (no warning). LinuxCNC's verdict (rs274 -g, LinuxCNC 2.9) is in the comment; checked against
+#: rs274 itself in test_strict_cases_agree_with_rs274 when it is installed.
+STRICT_CASES = {
+    "closing % stops": ("%\n" + BASE + "M5\n%\nG0 X1000\n", r"1 non-blank line\(s\) after the closing '%'"),
+    "closing % without M30": ("%\n" + BASE + "M5\n%\n", ""),                                    # rs274: ok
+    "% not on the first line": ("(hdr)\n%\n" + BASE + "M30\n%\n", "error: :2: '%' here"),       # Bad character '%'
+    "% with text": ("% hello\n" + BASE + "M30\n", "error: :1: '%' here"),                       # Bad character '%'
+    "opening % never closed": ("%\n" + BASE + "M5\n", "error: :7: the file opens with '%'"),   # File ended with no percent sign
+    "no end at all": (BASE + "M5\n", r"no program end \(M2/M30\) and no closing '%'"),         # runs, then errors
+    "last block cut off": (BASE + "G1 X2", r":6: the last block has no line end"),
+    "blocks after M30": (BASE + "M5 M30\nG0 X1000\n", r"1 non-blank line\(s\) after M30"),
+    "bare O-word": ("O1001\n" + BASE + "M5 M30\n", ""),                                         # rs274: ok
+    "N then O-word": ("N10 O1001 (name)\n" + BASE + "M5 M30\n", ""),                            # rs274: ok
+    "O-word and motion": ("O1001 G0 X1 Y1 Z5\n" + BASE + "M30\n", "error: :1: cannot read 'G0 X1 Y1 Z5' after the O-word"),
+    "O-word sub": ("o100 sub\nG0 X7\no100 endsub\n" + BASE + "M30\n", "error: :1: O-word 'sub'"),
+    "O-word non-integer": ("O10.5\n" + BASE + "M30\n", "error: :1: O-word O10.5"),              # Non integer value
+    "mid-program tool change": (BASE + "T2 M6\nG1 X21\nM5 M30\n", r":6: tool change 'T2 M6' after the program has moved"),
+    "tool comment vs job": ("(T1 D=8 mm)\n" + BASE + "M5 M30\n", r":1: the program's tool comment says D 8 mm, the given tool is D 6 mm"),
+}
+
+
+def _outcome(tmp_path, text):
+    from cnclab.nc.gcode import GcodeError, read_toolpath
+    from cnclab.toolpath.path import Tool
+
+    p = tmp_path / "s.ngc"
+    p.write_bytes(text.encode())
+    try:
+        path = read_toolpath(p, tool=Tool(6.0))
+    except GcodeError as exc:
+        assert str(exc).startswith(str(p) + ":") or str(exc).startswith(str(p))
+        return "error", str(exc)
+    return "ok", path.info["warnings"]
+
+
+@pytest.mark.parametrize("name", list(STRICT_CASES))
+def test_strict_and_loud_reader(tmp_path, name):
+    text, expect = STRICT_CASES[name]
+    kind, got = _outcome(tmp_path, text)
+    if expect.startswith("error: "):
+        assert kind == "error" and re.search(expect[7:], got), got
+    else:
+        assert kind == "ok", got
+        if expect:
+            assert any(re.search(expect, w) for w in got), got
+        else:
+            assert got == [], got
+
+
+def test_closing_percent_ends_the_program_as_in_linuxcnc():
+    prog = read_gcode("%\nG21\nG0 X1 Y1 Z5\n%\nG0 X1000 Y0 Z5\n#<bad> = [1\n")
+    assert [m.x for m in prog.moves] == [1.0] and prog.closing_percent_line == 4
+
+
+@pytest.mark.skipif(not __import__("shutil").which("rs274"), reason="LinuxCNC rs274 not installed")
+@pytest.mark.parametrize("name", [n for n in STRICT_CASES if n not in ("tool comment vs job", "last block cut off",
+                                                                        "O-word sub", "no end at all")])
+def test_strict_cases_agree_with_rs274(tmp_path, name):
+    """Where we refuse, LinuxCNC refuses; where we read (with or without a warning), it runs to its end
+    (the subroutine definition, which it skips, and a file without any end, which it runs and then
+    flags, are the documented exceptions)."""
+    from cnclab.nc.rs274 import Rs274Error, run_rs274
+
+    text, expect = STRICT_CASES[name]
+    p = tmp_path / "s.ngc"
+    p.write_text(text)
+    try:
+        run_rs274(p)
+        ok = True
+    except Rs274Error:
+        ok = False
+    assert ok == (not expect.startswith("error: ")), name
+
+
+@pytest.mark.parametrize("h, fragment", [(0.0001, r"--resolution must be in \[0.005, 0.6\] mm"),
+                                         (100, r"--resolution must be in \[0.005, 0.6\] mm"),
+                                         (float("nan"), "--resolution must be a finite number")])
+def test_resolution_is_bounded(tmp_path, job, h, fragment, capsys):
+    prog = tmp_path / "p.ngc"
+    prog.write_text(_loops_program())
+    rc = cli_analyze.main([str(prog), "--job", str(job), "--resolution", str(h), "-o", str(tmp_path / "o")])
+    assert rc == 2 and re.search(fragment, capsys.readouterr().err)
+    assert not (tmp_path / "o").exists()
+
+
+def test_outputs_never_overwrite_the_program_and_are_refused_before_writing(tmp_path, job, capsys):
+    """The program inside the output folder under an output's name: refused before anything is written
+    (the other outputs are not created either); an output folder that is a file, or below a file."""
+    out = tmp_path / "o"
+    out.mkdir()
+    prog = out / "trace.csv"
+    prog.write_text(_loops_program())
+    before = prog.read_bytes()
+    assert cli_analyze.main([str(prog), "--job", str(job), "-o", str(out)]) == 2
+    assert "refusing to overwrite the input file" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == ["trace.csv"] and prog.read_bytes() == before
+    assert cli_analyze.main([str(prog), "--job", str(job), "-o", str(prog)]) == 2
+    assert re.search(r"-o/--outdir: .*trace.csv is a file, not a folder \(the output folder\)", capsys.readouterr().err)
+    assert cli_analyze.main([str(prog), "--job", str(job), "-o", str(prog / "sub")]) == 2
+    assert re.search(r"trace.csv is a file, not a folder \(a parent of the output folder", capsys.readouterr().err)
+    assert prog.read_bytes() == before and sorted(p.name for p in out.iterdir()) == ["trace.csv"]
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("", r"e.ngc: 0 move\(s\) with a known position: nothing to analyze"),
+    ("(only a comment)\n\n; another\n", r"e.ngc: 0 move\(s\)"),
+    (b"G21\n(caf\xe9)\nG0 X1 Y1 Z5\nM30\n", r"e.ngc:2: byte 0xe9 at column 5 is not UTF-8 text"),
+    (b"G21\nG0 X1\x00 Y1\n", r"e.ngc:2: NUL byte at column 6: a binary file"),
+])
+def test_empty_binary_and_latin1_programs_name_the_file(tmp_path, job, capsys, text, fragment):
+    prog = tmp_path / "e.ngc"
+    prog.write_bytes(text if isinstance(text, bytes) else text.encode())
+    assert cli_analyze.main([str(prog), "--job", str(job), "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert re.search(fragment, err) and "codec" not in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_excursions_and_units_are_flagged(tmp_path, job, capsys):
+    far = _loops_program().replace("G1 X27.0000 Y10.0000\n", "G1 X1000.0000 Y10.0000\nG1 X27.0000 Y10.0000\n", 1)
+    res = _run(tmp_path, job, far, "far.ngc")
+    line = far.splitlines().index("G1 X1000.0000 Y10.0000") + 1
+    assert any(re.search(rf"far.ngc:{line}: feed moves leave the pocket's bounding box .*farthest 967 mm", w)
+               for w in res["warnings"]), res["warnings"]
+    # a G20 program whose numbers are mm: every feed move far outside the pocket -> a clear error
+    mm_as_inch = _loops_program().replace("G21", "G20")
+    prog = tmp_path / "g20.ngc"
+    prog.write_text(mm_as_inch)
+    assert cli_analyze.main([str(prog), "--job", str(job), "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "no feed move comes near the pocket" in err and "G20 (inches): its numbers look like mm" in err
+    assert not (tmp_path / "o").exists()
+    # an inch program without G20 (numbers / 25.4, read as mm): inside the pocket but 25 x too small
+    inch_as_mm = _to_inch(_loops_program()).replace("G20", "G21")
+    res = _run(tmp_path, job, inch_as_mm, "inch_as_mm.ngc")
+    assert any("units look wrong: Its numbers look like inches without G20" in w for w in res["warnings"])
