@@ -23,8 +23,8 @@ import threading
 from pathlib import Path
 from typing import Iterator
 
-__all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "same_file",
-           "check_outputs", "live_temporary_files"]
+__all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "deferred_signals",
+           "same_file", "check_outputs", "live_temporary_files"]
 
 _LIVE_TMP: set = set()
 _LOCK = threading.Lock()
@@ -65,8 +65,18 @@ def check_outputs(outputs, inputs=(), names=None) -> None:
                 raise ValueError(f"{names[k]} ({p}) and {nq} ({q}) name the same file: choose different outputs")
 
 
-def _mkstemp(dest: Path):
+def _make_parent(dest: Path) -> None:
+    """Create the folder of ``dest``; a clear error (naming the output) when a parent is a file."""
+    for q in [dest.parent, *dest.parent.parents]:
+        if q.exists():
+            if not q.is_dir():
+                raise NotADirectoryError(f"cannot write {dest}: {q} is a file, not a folder")
+            break
     dest.parent.mkdir(parents=True, exist_ok=True)
+
+
+def _mkstemp(dest: Path):
+    _make_parent(dest)
     fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp", dir=dest.parent)
     with _LOCK:
         _LIVE_TMP.add(tmp)
@@ -155,6 +165,18 @@ def atomic_write_many(items, inputs=()) -> list:
                 fh.write(data)
                 fh.flush()
                 os.fsync(fh.fileno())
+    except BaseException:
+        for tmp in tmps:
+            _discard(tmp)
+        raise
+    with deferred_signals():      # the renames (or their rollback) run to the end: all or none
+        _commit(items, tmps, backups, done)
+    return [p for p, _ in items]
+
+
+def _commit(items, tmps, backups, done) -> None:
+    """Rename the complete temporary files into place; on any failure undo the renames made."""
+    try:
         for (dest, _), tmp in zip(items, tmps):
             bak = None
             if dest.exists():      # keep the old content until every rename succeeded (rollback)
@@ -180,7 +202,47 @@ def atomic_write_many(items, inputs=()) -> list:
     for b in backups:
         if b:
             _discard(b)
-    return [p for p, _ in items]
+
+
+@contextlib.contextmanager
+def deferred_signals(signals=("SIGINT", "SIGTERM", "SIGHUP")):
+    """While active, the given signals are only recorded; on exit the handlers are restored and the
+    first recorded signal is delivered to the handler that was in force (``KeyboardInterrupt`` for
+    SIGINT, ``SystemExit`` under :func:`cleanup_on_signals`, the default action otherwise). For
+    steps that must not be cut in the middle (the renames of :func:`atomic_write_many`): an
+    interrupt then lands before or after them, never between. Main thread only; elsewhere a no-op.
+
+    >>> import signal, os
+    >>> try:
+    ...     with deferred_signals():
+    ...         os.kill(os.getpid(), signal.SIGINT); done = "the block ran to its end"
+    ... except KeyboardInterrupt:
+    ...     print(done, "- then KeyboardInterrupt")
+    the block ran to its end - then KeyboardInterrupt
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got, old = [], {}
+
+    def record(signum, frame):
+        got.append(signum)
+
+    for name in signals:
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            old[sig] = signal.signal(sig, record)
+    try:
+        yield
+    finally:
+        for sig, h in old.items():
+            signal.signal(sig, h)
+        if got:
+            h = old[got[0]]
+            if callable(h):
+                h(got[0], None)
+            elif h == signal.SIG_DFL:
+                signal.raise_signal(got[0])
 
 
 def _raise_exit(signum, frame):

@@ -52,14 +52,15 @@ def _theta(theta_deg):
     return np.radians(t)
 
 
-def _rho(rho):
-    """rho in (0, inf] mm; rho = inf is the straight-cut limit (handled in closed form, never NaN)."""
+def _rho(rho, name: str = "rho (contour curvature radius)"):
+    """rho in (0, inf] mm; rho = inf is the straight-cut limit (handled in closed form, never NaN);
+    ``name`` is the parameter the caller's user passed (e.g. Kim & Yang's corner radius R)."""
     try:
         p = np.asarray(rho, float)
     except (TypeError, ValueError):
-        raise ValueError(f"rho (contour curvature radius) must be a number or array in mm, got {rho!r}") from None
+        raise ValueError(f"{name} must be a number or array in mm, got {rho!r}") from None
     if np.any(~(p > 0)):
-        raise ValueError(f"rho (contour curvature radius) must be in (0, inf] mm (inf = straight cut), got {rho!r}")
+        raise ValueError(f"{name} must be in (0, inf] mm (inf = straight cut), got {rho!r}")
     return p
 
 
@@ -207,7 +208,7 @@ def theta_kim_yang(s, R, tool_radius):
     _shapes(s=s, R=R, tool_radius=tool_radius)
     r = _r(tool_radius)
     s = _s(s, r)
-    R = _rho(R)
+    R = _rho(R, "R (corner radius)")
     if np.any(R <= r):
         raise ValueError(f"R (corner radius) must be in (r, inf] mm (r = tool radius; inf = straight cut), got R={R!r}")
     # divide numerator and denominator by R: R = inf gives the straight limit (s - r)/r

@@ -4,19 +4,25 @@ Constant-cutting-speed post-processing of an APT CL file against an STL surface 
 Sec. 7.2.3): inserts SPINDL/FEDRAT records; optional RS274/NGC export with ``--gcode OUT.ngc``.
 Inputs are never overwritten and outputs must differ from the inputs and from each other; all
 outputs are written together at the end or none (also on Ctrl-C / SIGTERM: no temporary file is
-left). Every numeric option must be finite and in its range. Errors: exit code 2 with a message on
+left). An interrupt at any moment says what is on disk: "nothing written" (exit 130 for SIGINT,
+143 for SIGTERM) or, when it comes after the outputs were committed, that they are complete (exit
+0); the renames of the outputs are never cut in the middle
+(:func:`cnclab.fileio.deferred_signals`). Every numeric option must be finite and in its range. Errors: exit code 2 with a message on
 its own line naming the option or the file and line.
 """
 from __future__ import annotations
 
 import argparse
 import math
+import os
+import re
+import signal
 import sys
+import threading
 import warnings
 
-from ..cutting.spindle_model import POINT_RULES
 from .. import clihelp
-from ..fileio import cleanup_on_signals
+from ..cutting.spindle_model import POINT_RULES
 from .apt import NUMBER_RE
 from .spindle_control import postprocess_files
 
@@ -40,8 +46,71 @@ def _number(name, lo=None, lo_open=True, hi=None, kind=float):
     conv.__name__ = name
     return conv
 
-from ..cutting.spindle_model import POINT_RULES
-from .spindle_control import postprocess_files
+class _Interrupts:
+    """SIGINT / SIGTERM / SIGHUP while a run is in progress: the handler records the signal and raises
+    (``KeyboardInterrupt`` for SIGINT, ``SystemExit(128 + signum)`` for the others, so temporary files
+    are removed and renames rolled back on the way out); :meth:`check` raises again if a library
+    swallowed that exception (an interrupt is never lost; an exception raised inside a ``__del__`` or
+    a C extension's callback is only printed as "ignored")."""
+
+    NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
+
+    def __init__(self):
+        self.signum = None
+        self.old = {}
+
+    def _handler(self, signum, frame):
+        self.signum = self.signum or signum
+        self._raise(signum)
+
+    @staticmethod
+    def _raise(signum):
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise SystemExit(128 + signum)
+
+    def check(self, *_):
+        if self.signum is not None:
+            self._raise(self.signum)
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for name in self.NAMES:
+                sig = getattr(signal, name, None)
+                if sig is not None:
+                    self.old[sig] = signal.signal(sig, self._handler)
+        return self
+
+    def __exit__(self, *exc):
+        for sig, h in self.old.items():
+            signal.signal(sig, h)
+        return False
+
+
+def _identity(path):
+    """What names the file now (inode, mtime, size), or None: an atomic write replaces all three."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return st.st_ino, st.st_mtime_ns, st.st_size
+
+
+def _interrupted(signum: int, outputs, before) -> int:
+    """The message after an interrupt says what is on disk; the exit code follows it."""
+    name = signal.Signals(signum).name
+    new = [p for p in outputs if _identity(p) is not None and _identity(p) != before[p]]
+    if new and len(new) == len(outputs):
+        print(f"\n{name} after the outputs were written: complete {' and '.join(map(str, outputs))} on disk "
+              "(the summary was not printed)", file=sys.stderr)
+        return 0
+    if not new:
+        print(f"\ninterrupted ({name}): nothing written (no output created or changed, no temporary file left)",
+              file=sys.stderr)
+    else:                               # cannot happen: the renames run with signals deferred
+        print(f"\ninterrupted ({name}) while writing: {', '.join(map(str, new))} written, the other outputs not",
+              file=sys.stderr)
+    return 128 + signum
 
 
 def main(argv=None) -> int:
@@ -94,8 +163,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.ae is not None and args.tool_diameter is not None and args.ae > args.tool_diameter:
         ap.error(f"--ae must be <= the tool diameter ({args.tool_diameter:g} mm), got {args.ae:g}")
+    outputs = [args.out] + ([args.gcode] if args.gcode else [])
+    before = {p: _identity(p) for p in outputs}
+    stop = _Interrupts()
     try:
-        with cleanup_on_signals(), warnings.catch_warnings(record=True) as caught:
+        with stop, warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             s = postprocess_files(args.stl, args.apt, args.out, v_c=args.vc, f_z=args.fz, teeth=args.teeth,
                                   a_p=args.ap, tool_diameter=args.tool_diameter, gcode_path=args.gcode,
@@ -104,15 +176,25 @@ def main(argv=None) -> int:
                                   facet_rule=args.facet, n_max=args.nmax, vf_max=args.vfmax,
                                   accel_rpm_s=args.accel, mismatch_tol=args.mismatch_tol,
                                   max_off_share=args.max_off_share, allow_mismatch=args.allow_mismatch)
+            stop.check()
+            for w in caught:
+                print(f"warning: {w.message}", file=sys.stderr)
+            _print_summary(s, args)
+            stop.check()
     except (ValueError, OSError) as exc:
+        if stop.signum is not None:
+            return _interrupted(stop.signum, outputs, before)
         sys.stderr.flush()
         print(f"\nerror: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("\ninterrupted: nothing written", file=sys.stderr)
-        return 130
-    for w in caught:
-        print(f"warning: {w.message}", file=sys.stderr)
+    except (KeyboardInterrupt, SystemExit) as exc:
+        if stop.signum is None and not isinstance(exc, KeyboardInterrupt):
+            raise
+        return _interrupted(stop.signum or signal.SIGINT, outputs, before)
+    return 0
+
+
+def _print_summary(s: dict, args) -> None:
     print(f"{s['cl_points']} CL points ({s['feed_points']} feed) vs {s['facets']} facets, D = {s['tool_diameter']} mm"
           + (f", a_e = {args.ae} mm" if args.ae else ""))
     print(f"part/path check: {100 * s['off_surface_share']:.1f} % of feed points more than {args.mismatch_tol:g} mm "
@@ -124,8 +206,6 @@ def main(argv=None) -> int:
     wrote = f"{s['out']}" + (f" and {args.gcode}" if args.gcode else "")
     print(f"inserted SPINDL {s['spindl_inserted']}, FEDRAT {s['fedrat_inserted']}; wrote {wrote} "
           f"({s['seconds']:.2f} s)")
-    return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -452,6 +452,19 @@ def gcode_text(program: AptProgram, header: str = "") -> str:
     return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, sp, header=header)
 
 
+def _join_uninterrupted(thread) -> None:
+    """``thread.join()`` that a further Ctrl-C / SIGTERM does not cut short (the first one is raised
+    after the thread has ended)."""
+    pending = None
+    while thread.is_alive():
+        try:
+            thread.join()
+        except BaseException as exc:             # noqa: BLE001 -- re-raised below
+            pending = pending or exc
+    if pending is not None:
+        raise pending
+
+
 def read_inputs(stl_path, apt_path):
     """``read_stl(stl_path)`` and ``read_apt(apt_path)`` with its ``cl_points()``, read concurrently
     (the STL in a second thread; its compiled kernels and numpy release the GIL). Returns
@@ -476,7 +489,13 @@ def read_inputs(stl_path, apt_path):
         err = None
     except Exception as exc:                     # reported after the STL's own error, if any
         err = exc
-    reader.join()
+    except BaseException:
+        # Ctrl-C / SIGTERM: wait for the reader before unwinding. A daemon thread still running the
+        # compiled (nogil) STL kernels while the interpreter shuts down and numba's JIT memory is
+        # released crashes the process (SIGSEGV seen after a SIGINT ~1.2 s into a run).
+        _join_uninterrupted(reader)
+        raise
+    _join_uninterrupted(reader)
     if "exc" in out:
         raise out["exc"]
     if err is not None:

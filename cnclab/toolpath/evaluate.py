@@ -336,7 +336,8 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     if not mrr_window_mm > 0:
         raise ValueError(f"mrr_window_mm must be > 0 mm, got {mrr_window_mm!r}")
     if len(path) < 2:
-        raise ValueError("path must have at least 2 points")
+        raise ValueError(f"{path.info.get('source', 'path')}: the path has {len(path)} point(s), at least 2 are "
+                         "needed (an empty or comment-only program?)")
     level = None
     if feed_control is not None:
         level = _cutting_level(path, job, h, bool(feed_control), block_mm, margin_deg, link_tol_mm2, mrr_window_mm)
@@ -346,12 +347,7 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         return _level_evaluation(path, job, h, level)
     air = 0.5 * h * h if air_tol_mm2 is None else float(air_tol_mm2)
     r = job.tool_radius
-    if sampling == "arc_length":
-        rp, src = resample_by_length(path, h)
-    elif sampling == "vertices":
-        rp, src = path.resample(h, return_index=True)
-    else:
-        raise ValueError(f"sampling must be 'vertices' or 'arc_length', got {sampling!r}")
+    rp, src = _samples(path, h, sampling)
     P, K = rp.xyz, rp.kind
     n = len(P)
     L3 = rp.segment_lengths()
@@ -431,6 +427,15 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         wall_gouge_max_mm=float(gouge.max(initial=0.0)), wall_gouge_area_mm2=g_area,
         gouges=len(_runs(g_mask)), events=events,
         **_level_fields(times, level, trace))
+
+
+def _samples(path: ToolPath, h: float, sampling: str):
+    """The evaluator's samples ``(path, move index)``: see ``sampling`` in :func:`evaluate`."""
+    if sampling == "arc_length":
+        return resample_by_length(path, h)
+    if sampling == "vertices":
+        return path.resample(h, return_index=True)
+    raise ValueError(f"sampling must be 'vertices' or 'arc_length', got {sampling!r}")
 
 
 def _simulate_slabs(P, dxy, job: Job, h: float):

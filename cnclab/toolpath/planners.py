@@ -153,6 +153,9 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1,
         raise ValueError(f"unknown strategy {strategy!r}: must be one of {sorted(STRATEGIES)}")
     if not isinstance(job, Job):
         raise TypeError(f"job must be a cnclab.toolpath.job.Job, got {type(job).__name__}")
+    if isinstance(resolution_mm, bool) or not isinstance(resolution_mm, (int, float, np.integer, np.floating)) \
+            or not (math.isfinite(resolution_mm) and resolution_mm > 0):
+        raise ValueError(f"resolution_mm must be a finite number > 0 mm, got {resolution_mm!r}")
     check_limits(job)
     f = STRATEGIES[strategy][0]
     levels = job.levels()
