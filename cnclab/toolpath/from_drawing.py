@@ -2,7 +2,8 @@
 plus a cutting-data file (every job key except the geometry) -> a job (:mod:`cnclab.toolpath.job`).
 
 A CUTTING.json holds what a job file holds except ``polygon``, ``star``, ``islands`` and ``regions``,
-e.g. ``{"tool_diameter": 6, "teeth": 2, "theta_deg": 60, "a_p": 3, "depth": 6, "v_c": 120, "f_z": 0.04}``.
+e.g. ``{"tool_diameter": 6, "teeth": 2, "theta_deg": 60, "a_p": 3, "depth": 6, "v_c": 120, "f_z": 0.04}``
+(a ``start_hole`` may be given too, in the drawing's coordinates converted to mm).
 The drawing's regions become ``polygon`` + ``islands`` (one region) or ``regions`` (several); a ring
 that is one circle of the drawing is written ``{"circle": {"center": [x, y], "radius": r}}``. The job
 records where its geometry came from under ``_drawing`` (file, layer, units, tolerances, entities).
