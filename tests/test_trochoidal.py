@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from cnclab.toolpath import trochoidal as tr
+from cnclab.toolpath.evaluate import Evaluation
 from cnclab.works.jacso2021.studies import compare_patterns
 
 
@@ -45,6 +46,11 @@ def test_simulated_front_engagement_matches_exact():
     # steady state removes W * step per period
     assert m["mrr_avg_sim_mm3_min"] == pytest.approx(m["mrr_avg_mm3_min"], rel=0.01)
     assert m["engagement_max_deg"] >= sel.engagement_deg.max() - 1e-9
+    # one metric vocabulary: an Evaluation (p50 <= p95 <= max over the cutting moves; the pattern's own
+    # metrics in extra; what the slot evaluation does not measure is NaN / -1)
+    assert isinstance(m, Evaluation) and m.engagement_max_deg == m["engagement_max_deg"]
+    assert m.engagement_p50_deg <= m.engagement_p95_deg <= m.engagement_max_deg
+    assert m["step_mm"] == pytest.approx(s) and m.plunges_into_material == -1 and math.isnan(m.uncut_area_mm2)
 
 
 @pytest.mark.parametrize("rho,into", [(1.0, True), (2.5, False)])

@@ -189,7 +189,7 @@ def trochoid_scene(pattern, step_mm, width_mm, tool_radius_mm, theta_deg=60.0, n
     return {"pattern": pattern, "points": path.xyz[:, :2], "link": path.is_kind("link"),
             "kinds": np.asarray(trochoidal.pattern_kinds(path)),
             "engagement_deg": df.engagement_deg.to_numpy(), "s_mm": df.s.to_numpy(),
-            "metrics": metrics, "step_mm": step, "width_mm": W, "tool_radius_mm": r,
+            "metrics": metrics.to_dict(), "step_mm": step, "width_mm": W, "tool_radius_mm": r,
             "theta_deg": float(theta_deg), "front_engagement_deg": front}
 
 

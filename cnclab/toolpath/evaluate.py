@@ -139,10 +139,41 @@ class Evaluation:
     gouges: int = -1
     trace: dict = dataclasses.field(repr=False, compare=False, default_factory=dict)
     events: pd.DataFrame = dataclasses.field(repr=False, compare=False, default_factory=lambda: _events_frame([]))
+    #: further scalar metrics of a special evaluation (e.g. a trochoidal pattern's ``step_mm``), units in
+    #: the names; part of :meth:`to_dict` and of the mapping access ``ev["name"]``
+    extra: dict = dataclasses.field(compare=False, default_factory=dict)
+
+    @classmethod
+    def partial(cls, **known) -> "Evaluation":
+        """An Evaluation of the ``known`` fields only: every other metric NaN (a count -1: "not
+        measured"), e.g. for a path evaluated without the job's stock (a slot pattern).
+
+        >>> ev = Evaluation.partial(engagement_max_deg=42.0, extra={"step_mm": 0.5})
+        >>> ev["engagement_max_deg"], ev["step_mm"], ev.plunges_into_material
+        (42.0, 0.5, -1)
+        """
+        out = {}
+        for f in dataclasses.fields(cls):
+            if f.name in known or f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING:
+                continue
+            out[f.name] = -1 if f.type in ("int", int) else float("nan")
+        return cls(**out, **known)
 
     def to_dict(self) -> dict:
-        """The scalar fields (``trace`` and ``events`` left out)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in ("trace", "events")}
+        """The scalar fields and :attr:`extra` (``trace`` and ``events`` left out)."""
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+               if f.name not in ("trace", "events", "extra")}
+        return {**out, **self.extra}
+
+    def keys(self):
+        """The metric names (mapping access: ``ev["engagement_max_deg"]``, ``{**ev}``)."""
+        return self.to_dict().keys()
+
+    def __getitem__(self, name: str):
+        d = self.to_dict()
+        if name not in d:
+            raise KeyError(f"no metric {name!r} in this Evaluation")
+        return d[name]
 
     def summary_table(self) -> pd.DataFrame:
         """Scalars as a table: columns ``metric``, ``value``, ``unit``."""

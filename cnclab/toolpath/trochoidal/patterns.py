@@ -13,6 +13,7 @@ import numpy as np
 from shapely.geometry import box
 
 from ...simulation import dixel
+from ..evaluate import Evaluation, weighted_percentile
 from ..path import ToolPath
 from . import _common
 
@@ -158,8 +159,11 @@ def evaluate_pattern(path: ToolPath, width, tool_radius, resolution_mm=0.05, a_p
     """Cut ``path`` through a slot stock (material x >= 0) with the dixel simulator; steady-state metrics.
 
     Returns ``(table, metrics)``: the per-step DataFrame of :func:`cnclab.simulation.dixel.simulate`
-    with ``period`` and ``link`` columns, and a dict over the ``steady_periods`` (default: all but
-    the first two and the last) with ``engagement_max_deg``, ``step_mm``, ``length_per_period_mm``,
+    with ``period`` and ``link`` columns, and an :class:`~cnclab.toolpath.evaluate.Evaluation` over
+    the ``steady_periods`` (default: all but the first two and the last): the engagement p50 / p95 /
+    max over the cutting moves (deg, length-weighted), cut and link lengths and times over those
+    periods; the pattern's own metrics in ``metrics.extra`` (read as ``metrics["step_mm"]``):
+    ``step_mm``, ``length_per_period_mm``,
     ``length_per_mm_slot`` (path mm per mm of slot), ``cut_mm``/``link_mm`` per period,
     ``time_per_period_s``, ``mrr_avg_mm3_min`` (= a_p W step / time per period, the geometric
     steady-state removal), ``mrr_avg_sim_mm3_min`` (simulated removed area over the same time),
@@ -188,8 +192,8 @@ def evaluate_pattern(path: ToolPath, width, tool_radius, resolution_mm=0.05, a_p
     t_min = cut / feed_mm_min + lnk / vlink
     removed = float(df.removed_mm2[m].sum()) / n_p
     eng = df.engagement_deg.to_numpy()
-    metrics = {
-        "engagement_max_deg": float(np.nanmax(eng[m & ~link])),
+    cutting = m & ~link
+    extra = {
         "step_mm": step,
         "cut_mm": cut, "link_mm": lnk,
         "length_per_period_mm": cut + lnk,
@@ -202,7 +206,13 @@ def evaluate_pattern(path: ToolPath, width, tool_radius, resolution_mm=0.05, a_p
     }
     for name in ("roll-in", "cut", "roll-out", "link"):
         e = eng[m & (kinds == name)]
-        metrics[f"engagement_max_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
+        extra[f"engagement_max_{name}_deg"] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
+    w = df.ds.to_numpy()[cutting]
+    metrics = Evaluation.partial(
+        engagement_p50_deg=weighted_percentile(eng[cutting], w, 50), engagement_p95_deg=weighted_percentile(eng[cutting], w, 95),
+        engagement_max_deg=float(np.nanmax(eng[cutting])), cut_length_mm=cut * n_p, link_length_mm=lnk * n_p,
+        time_cut_s=60.0 * cut * n_p / feed_mm_min, time_link_s=60.0 * lnk * n_p / vlink,
+        time_total_s=60.0 * t_min * n_p, resolution_mm=float(resolution_mm), extra=extra)
     return df, metrics
 
 

@@ -34,6 +34,12 @@ def design_star(volume_mm3, a_p, hole_diameter, **star_kw) -> float:
     return float(brentq(f, 10.0, 100.0, xtol=1e-9))
 
 
+def _row(ev) -> dict:
+    """A table row of a pattern's Evaluation: its engagement percentiles and the pattern metrics."""
+    return {"engagement_p50_deg": ev.engagement_p50_deg, "engagement_p95_deg": ev.engagement_p95_deg,
+            "engagement_max_deg": ev.engagement_max_deg, **ev.extra}
+
+
 def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=3.0,
                      feed_mm_min=255.0, link_feed_mm_min=None, n_periods=6, plan_offsets_deg=(0.0, 3.0),
                      fillet_fractions=(0.5, 1.0)):
@@ -65,7 +71,7 @@ def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=
                 errs.append(f"theta_plan={th_plan}, fillet={frac * R:.3g} mm: {e}")
                 continue
             _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
-            m.update(theta_plan_deg=th_plan, fillet_radius_mm=frac * R, shift_mm=p.info["shift"])
+            m = {**_row(m), "theta_plan_deg": th_plan, "fillet_radius_mm": frac * R, "shift_mm": p.info["shift"]}
             if best is None or m["length_per_mm_slot"] < best["length_per_mm_slot"]:
                 best = m
     if best is None:
@@ -78,7 +84,7 @@ def compare_patterns(width, tool_radius, theta_max_deg, resolution_mm=0.05, a_p=
         gen = circular_trochoid if kind == "circular" else cycloid
         p = gen(s, width, tool_radius, n_periods, ds=resolution_mm)
         _, m = evaluate_pattern(p, width, tool_radius, resolution_mm, a_p, feed_mm_min, link_feed_mm_min)
-        rows.append({"pattern": kind, "theta_limit_deg": lim, **m})
+        rows.append({"pattern": kind, "theta_limit_deg": lim, **_row(m)})
     rows.append({"pattern": "constant-engagement", "theta_limit_deg": lim, **m_ce})
     df = pd.DataFrame(rows).set_index("pattern")
     # every move (links included) at the cutting feed: the "same feed" comparison of Thesis IV
