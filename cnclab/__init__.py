@@ -9,13 +9,13 @@ Pipeline modules (geometry -> tool path -> cutting physics / simulation -> analy
 - :mod:`cnclab.analysis`   regression, statistics, learned models
 - :mod:`cnclab.works`      one sub-package per reproduced work, holding its claim recipes
 
-Support: :mod:`cnclab.claims` (ledger), :mod:`cnclab.plotting` (style, ``savefig``),
+Support: :mod:`cnclab.claims` (ledger), :mod:`cnclab.plotting` (style, ``figsize``, ``savefig``, ``export_figure``),
 :mod:`cnclab.runtime` (fast mode, seeding, environment report), :mod:`cnclab.fileio`
 (atomic writes), :mod:`cnclab.paths`.
 """
-from .plotting import savefig, use_style
+from .plotting import export_figure, figsize, savefig, use_style
 from .runtime import environment_report, fast_mode, notebook_setup, seed_everything
 
 __version__ = "0.1.0"
-__all__ = ["savefig", "use_style", "environment_report", "fast_mode", "notebook_setup",
+__all__ = ["export_figure", "figsize", "savefig", "use_style", "environment_report", "fast_mode", "notebook_setup",
            "seed_everything", "__version__"]

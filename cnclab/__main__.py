@@ -19,6 +19,7 @@ COMMANDS = {
     "plan": ("cnclab.nc.cli_plan", "plan a pocket job and write a machine-safe program"),
     "job": ("cnclab.toolpath.job_format", "the job file format: reference (--schema), JSON schema, check a file"),
     "job-from-drawing": ("cnclab.nc.cli_drawing", "write a pocket job from a DXF/SVG drawing and cutting data"),
+    "figure": ("cnclab.figures", "re-render a figure of the collection for a paper (width in mm, formats, dpi, style)"),
     "programs": ("cnclab.works.programs", "write every program the collection produces to build/gcode/<work>/"),
     "warm": ("cnclab.warm", "compile the shared numba kernels once into their cache (make test/reproduce run it first)"),
 }

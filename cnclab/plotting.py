@@ -1,12 +1,27 @@
-"""Figure style and export shared by every notebook.
+"""Figure style, size and export shared by every notebook and by ``python -m cnclab figure``.
+
+* :func:`use_style` activates the collection's style sheet ``cnclab/paper.mplstyle`` (fonts, line
+  widths, the default figure size ``figure.figsize``);
+* :func:`figsize` gives a figure size in units of the style's default size, so notebooks never
+  hard-code inches and a new style sheet resizes every figure;
+* :func:`export_figure` writes a figure for a paper: into any folder, at a journal width in mm
+  (:data:`WIDTH_PRESETS_MM`: ``"column"`` 85 mm, ``"page"`` 175 mm) and height, in any formats, dpi,
+  under a style sheet (the collection's by default); :func:`savefig` is the notebooks' shortcut to
+  ``build/figures/<work>/``.
 
 >>> import matplotlib; matplotlib.use("Agg")
 >>> import matplotlib.pyplot as plt
 >>> use_style()
->>> fig, ax = plt.subplots(); _ = ax.plot([0, 1], [0, 1])
+>>> figsize(2, 1) == (12.0, 3.8)                  # two panels of the style's 6.0 x 3.8 in
+True
+>>> fig, ax = plt.subplots(figsize=figsize()); _ = ax.plot([0, 1], [0, 1])
 >>> paths = savefig(fig, "doctest_line", "mgherony2024")   # PDF, SVG, PNG under build/figures/
 >>> sorted(p.suffix for p in paths)
 ['.pdf', '.png', '.svg']
+>>> import tempfile
+>>> [p] = export_figure(fig, "doctest_line", tempfile.mkdtemp(), width_mm="column", formats=("pdf",))
+>>> round(pdf_page_size_pt(p)[0], 1)               # 85 mm = 240.9 pt
+240.9
 """
 from __future__ import annotations
 
@@ -18,28 +33,109 @@ from .fileio import atomic_write
 from .paths import PACKAGE_DIR, figures_dir
 
 STYLE_PATH = PACKAGE_DIR / "paper.mplstyle"
+#: journal figure widths (mm): one column and the full page width
+WIDTH_PRESETS_MM = {"column": 85.0, "page": 175.0}
+MM_PER_INCH = 25.4
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]*$")
+_MEDIABOX_RE = re.compile(rb"/MediaBox\s*\[\s*([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)\s*\]")
 
 
-def use_style() -> None:
-    """Activate the packaged paper style (``cnclab/paper.mplstyle``)."""
+def use_style(style=None) -> None:
+    """Activate a style sheet: ``style`` (a path or matplotlib style name), by default the packaged
+    paper style ``cnclab/paper.mplstyle``."""
     import matplotlib.pyplot as plt
 
-    plt.style.use(str(STYLE_PATH))
+    plt.style.use(str(style or STYLE_PATH))
+
+
+def figsize(width: float = 1.0, height: float = 1.0) -> tuple[float, float]:
+    """Figure size (inches) ``width`` x ``height`` times the active style's ``figure.figsize``.
+
+    ``plt.subplots(1, 2, figsize=figsize(2, 1))``: two panels side by side, each of the style's
+    default size; change the style sheet and every figure follows.
+    """
+    import matplotlib as mpl
+
+    w, h = mpl.rcParams["figure.figsize"]
+    return (round(float(width) * w, 6), round(float(height) * h, 6))
+
+
+def _mm(value, name: str):
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if value not in WIDTH_PRESETS_MM:
+            raise ValueError(f"{name} must be a number (mm) or one of {sorted(WIDTH_PRESETS_MM)}, got {value!r}")
+        return WIDTH_PRESETS_MM[value]
+    v = float(value)
+    if not (v > 0 and v < 5000):
+        raise ValueError(f"{name} must be in (0, 5000) mm, got {value!r}")
+    return v
+
+
+def export_figure(fig, name: str, outdir, *, width_mm=None, height_mm=None, formats=("pdf", "svg", "png"),
+                  dpi: int = 300, style=None) -> list[Path]:
+    """Write ``fig`` as ``outdir/<name>.<format>`` for each format, atomically; returns the paths.
+
+    Parameters
+    ----------
+    fig : a matplotlib figure.
+    name : file stem (letters, digits, '_', '-', '.'), e.g. ``"fig3-5_rz_ra_ratio"``.
+    outdir : output folder (created if missing).
+    width_mm : page width of the figure in mm, or a preset of :data:`WIDTH_PRESETS_MM` (``"column"``
+        85 mm, ``"page"`` 175 mm). None: the figure's own size, cropped to its content (the style's
+        ``savefig.bbox: tight``). With a width, the page is exactly ``width_mm`` x ``height_mm``
+        (constrained layout inside it; the figure is resized).
+    height_mm : page height in mm; None keeps the figure's aspect ratio.
+    formats : any of matplotlib's formats ('pdf', 'svg', 'png', 'eps', ...).
+    dpi : resolution of raster formats (dots per inch).
+    style : style sheet (path or name) active while saving (its ``savefig.*``, ``pdf.fonttype``, ...);
+        None: the collection's ``paper.mplstyle``. Text sizes are set when a figure is drawn, so a
+        figure drawn under another style is best re-drawn: ``python -m cnclab figure NAME --style S``.
+
+    PDF and SVG carry no date, so identical figures give identical files.
+    """
+    import matplotlib as mpl
+    import matplotlib.pyplot as plt
+
+    if not _NAME_RE.match(name):
+        raise ValueError(f"figure name {name!r}: use letters, digits, '_', '-', '.' only")
+    w, h = _mm(width_mm, "width_mm"), _mm(height_mm, "height_mm")
+    if not (isinstance(dpi, (int, float)) and 10 <= dpi <= 10000):
+        raise ValueError(f"dpi must be in [10, 10000], got {dpi!r}")
+    outdir = Path(outdir)
+    blobs = []
+    with plt.style.context(str(style or STYLE_PATH)):
+        if w is not None:
+            old_w, old_h = fig.get_size_inches()
+            h_in = h / MM_PER_INCH if h is not None else w / MM_PER_INCH * old_h / old_w
+            fig.set_size_inches(w / MM_PER_INCH, h_in)
+            if fig.get_layout_engine() is None or type(fig.get_layout_engine()).__name__ == "PlaceHolderLayoutEngine":
+                fig.set_layout_engine("constrained")
+            mpl.rcParams["savefig.bbox"] = "standard"   # no cropping: the page is exactly the requested size
+        for fmt in formats:
+            buf = io.BytesIO()
+            meta = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}.get(fmt)
+            fig.savefig(buf, format=fmt, dpi=dpi, metadata=meta)
+            blobs.append((outdir / f"{name}.{fmt}", buf.getvalue()))
+    outdir.mkdir(parents=True, exist_ok=True)
+    return [atomic_write(path, data) for path, data in blobs]
 
 
 def savefig(fig, name: str, work: str, formats=("pdf", "svg", "png"), dpi: int = 300) -> list[Path]:
-    """Save ``fig`` as ``build/figures/<work>/<name>.{pdf,svg,png}`` (PNG at ``dpi``), atomically.
+    """Save ``fig`` as ``build/figures/<work>/<name>.{pdf,svg,png}`` (PNG at ``dpi``), atomically:
+    :func:`export_figure` into the collection's figure folder at the figure's own size.
 
     ``name`` should say which seed figure it reproduces, e.g. ``"fig3-5_rz_ra_ratio"``.
     Returns the written paths.
     """
-    if not _NAME_RE.match(name):
-        raise ValueError(f"figure name {name!r}: use letters, digits, '_', '-', '.' only")
-    out = []
-    for fmt in formats:
-        buf = io.BytesIO()
-        meta = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}.get(fmt)
-        fig.savefig(buf, format=fmt, dpi=dpi if fmt == "png" else None, metadata=meta)
-        out.append(atomic_write(figures_dir(work) / f"{name}.{fmt}", buf.getvalue()))
-    return out
+    return export_figure(fig, name, figures_dir(work), formats=formats, dpi=dpi)
+
+
+def pdf_page_size_pt(path) -> tuple[float, float]:
+    """(width, height) of the first page of a PDF in points (1/72 in), from its ``/MediaBox``."""
+    m = _MEDIABOX_RE.search(Path(path).read_bytes())
+    if not m:
+        raise ValueError(f"{path}: no /MediaBox found (not a PDF written by matplotlib?)")
+    x0, y0, x1, y1 = (float(v) for v in m.groups())
+    return (x1 - x0, y1 - y0)

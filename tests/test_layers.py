@@ -33,7 +33,7 @@ LAYERS = {
     "toolpath": 3,
     "nc": 4,
     "works": 5,
-    "notebook_tools": 6, "reproduce": 6, "warm": 6, "explore": 6, "site": 6, "__main__": 6,
+    "notebook_tools": 6, "figures": 6, "reproduce": 6, "warm": 6, "explore": 6, "site": 6, "__main__": 6,
 }
 
 #: function-local imports of cnclab modules that are allowed, with the reason

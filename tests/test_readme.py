@@ -85,6 +85,9 @@ def test_getting_started_blocks_run(tmp_path):
               "ch8_limited.ngc", "ch8_af0.apt", "part_af45.apt", "part_af45_vc63.ngc", "freecad_two_regions/summary.csv"):
         assert (start / f).stat().st_size > 0, f
     assert (tmp_path / "build" / "analyze" / "my_pocket" / "engagement_map.png").is_file()
+    from cnclab.plotting import pdf_page_size_pt
+    w_pt = pdf_page_size_pt(start / "paper" / "fig3-1_engagement_vs_stepover.pdf")[0]
+    assert abs(w_pt - 85 * 72 / 25.4) < 0.5                      # the 85 mm-wide PDF figure
     # the sweep printed the same table locally and on the Dask cluster
     rows = [ln for ln in res.stdout.splitlines() if ln.startswith("a_e = ")]
     assert len(rows) == 10 and rows[:5] == rows[5:]

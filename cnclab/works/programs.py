@@ -215,6 +215,9 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     man = write_programs(args.outdir, args.work)
     bad = [k for k, v in man["programs"].items() if "error" in v]
+    outdir = Path(args.outdir) if args.outdir is not None else build_dir() / "gcode"
+    print(f"wrote {len(man['programs']) - len(bad)} programs under {outdir}/<work>/ and {outdir / 'manifest.json'}"
+          + (f"; {len(bad)} not written (errors in the manifest)" if bad else ""))
     return 1 if bad else 0
 
 

@@ -1,0 +1,160 @@
+"""Figure recipes: re-render a figure of the collection for a paper without running its notebook.
+
+:data:`FIGURES` maps a figure name (the stem ``savefig`` gives it in ``build/figures/<work>/``) to a
+recipe: its work, a one-line description and a function that draws the figure from the package
+alone. :func:`draw` runs a recipe under a style sheet (the collection's ``paper.mplstyle`` by
+default: fonts and line widths are fixed when a figure is drawn); :func:`render` draws and exports
+it with :func:`cnclab.plotting.export_figure` (width/height in mm, formats, dpi). The notebooks that
+show these figures call the same recipes, so the notebook and the paper figure cannot differ.
+
+``python -m cnclab figure NAME --width-mm 85 --format pdf -o DIR`` is the command line;
+``python -m cnclab figure --list`` lists the covered figures. Covered so far: the figures whose
+plotting lives in the package (Jacsó Fig 3-1; Mgherony Fig 6-2, 6-3, 6-10); the other notebook
+figures still draw in their notebook cell (``--list`` shows the state).
+
+>>> sorted(FIGURES)[:2]
+['fig3-1_engagement_vs_stepover', 'fig6-10_regression_estimates']
+"""
+from __future__ import annotations
+
+import dataclasses
+import sys
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from . import clihelp
+from .geometry import engagement as eng
+from .paths import build_dir
+from .plotting import STYLE_PATH, WIDTH_PRESETS_MM, export_figure, figsize
+from .works.mgherony2024 import ch6
+
+__all__ = ["FIGURES", "Recipe", "draw", "render", "main"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Recipe:
+    """A figure recipe: ``work`` (the reproduced work), ``description``, ``draw() -> Figure``."""
+
+    work: str
+    description: str
+    draw: Callable
+
+
+FIGURES: dict[str, Recipe] = {}
+
+
+def _register(name: str, work: str, description: str):
+    def deco(f):
+        FIGURES[name] = Recipe(work, description, f)
+        return f
+    return deco
+
+
+@_register("fig3-1_engagement_vs_stepover", "jacso2021",
+           "Jacsó (2021) Fig 3-1: engagement angle against stepover, straight and on arcs (r = 3 mm)")
+def fig3_1_engagement_vs_stepover(r: float = 3.0):
+    import matplotlib.pyplot as plt
+
+    s = np.linspace(0.01, 2 * r, 300)
+    fig, ax = plt.subplots(figsize=figsize())
+    ax.plot(s, eng.theta_straight(s, r), "k", label="straight")
+    for rho in (4.0, 8.0, 20.0):
+        ax.plot(s, eng.theta_concave(s, rho, r), label=f"concave ρ={rho:g}")
+        ok = rho - s + r > 0
+        ax.plot(s[ok], eng.theta_convex(s[ok], rho, r), "--", label=f"convex ρ={rho:g}")
+    ax.set(xlabel="stepover s [mm]", ylabel="engagement θ [deg]")
+    ax.legend(fontsize=7)
+    return fig
+
+
+@_register("fig6-2_main_effects", "mgherony2024", "Mgherony (2024) Fig 6-2: main effects on D_eff1")
+def fig6_2_main_effects():
+    return ch6.fig_main_effects()
+
+
+@_register("fig6-3_interaction_plot", "mgherony2024", "Mgherony (2024) Fig 6-3: interaction plot of D_eff1")
+def fig6_3_interaction_plot():
+    return ch6.fig_interactions()
+
+
+@_register("fig6-10_regression_estimates", "mgherony2024",
+           "Mgherony (2024) Fig 6-10: regression estimates r1 (eq 6-4) and r2 (eq 6-5) against the data")
+def fig6_10_regression_estimates():
+    df = ch6.dataset()
+    return ch6.fig_estimated_vs_calculated({"r1 (eq 6-4)": ch6.r1_fit().predict(df),
+                                           "r2 (eq 6-5)": ch6.unified_model().predict(df)})
+
+
+def draw(name: str, style=None):
+    """Draw figure ``name`` under ``style`` (a style-sheet path or name; default the collection's)."""
+    import matplotlib.pyplot as plt
+
+    if name not in FIGURES:
+        raise ValueError(f"unknown figure {name!r}: covered are {', '.join(sorted(FIGURES))}")
+    with plt.style.context(str(style or STYLE_PATH)):
+        return FIGURES[name].draw()
+
+
+def render(name: str, outdir=None, *, width_mm=None, height_mm=None, formats=("pdf",), dpi: int = 300,
+           style=None) -> list[Path]:
+    """Draw figure ``name`` and export it (:func:`cnclab.plotting.export_figure`) into ``outdir``
+    (default ``build/paper/<work>/``); returns the written paths."""
+    import matplotlib.pyplot as plt
+
+    fig = draw(name, style)
+    try:
+        outdir = Path(outdir) if outdir is not None else build_dir() / "paper" / FIGURES[name].work
+        return export_figure(fig, name, outdir, width_mm=width_mm, height_mm=height_mm, formats=formats,
+                             dpi=dpi, style=style)
+    finally:
+        plt.close(fig)
+
+
+def _size(text: str):
+    if text in WIDTH_PRESETS_MM:
+        return text
+    return clihelp.number("--width-mm/--height-mm", 0, hi=5000)(text)
+
+
+def main(argv=None) -> int:
+    ap = clihelp.parser(
+        "python -m cnclab figure",
+        "Re-render a figure of the collection from its recipe (no notebook is run) at a journal width,\n"
+        "in the formats and resolution a paper needs, under the collection's style sheet or your own.\n"
+        "Widths: a number of mm or 'column' (85 mm) / 'page' (175 mm); the height keeps the figure's\n"
+        "aspect ratio unless given. --list shows the figures covered.",
+        examples=["python -m cnclab figure fig3-1_engagement_vs_stepover --width-mm 85 --format pdf -o build/paper",
+                  "python -m cnclab figure fig6-2_main_effects --width-mm page --height-mm 60 --format pdf,png "
+                  "--dpi 600", "python -m cnclab figure --list"],
+        writes=["DIR/NAME.FORMAT for every format (default DIR: build/paper/<work>)"])
+    ap.add_argument("names", nargs="*", metavar="NAME", help="figure name(s), see --list")
+    ap.add_argument("--list", action="store_true", help="list the figures that have a recipe")
+    ap.add_argument("--width-mm", type=_size, default=None,
+                    help="page width: mm, 'column' (85) or 'page' (175) (default: the figure's own size, cropped)")
+    ap.add_argument("--height-mm", type=_size, default=None, help="page height in mm (default: keep the aspect ratio)")
+    ap.add_argument("--format", default="pdf", help="comma-separated formats: pdf, svg, png, eps, ...")
+    ap.add_argument("--dpi", type=clihelp.number("--dpi", 10, lo_open=False, hi=10000, kind=int), default=300,
+                    help="resolution of raster formats (dots per inch)")
+    ap.add_argument("--style", default=None,
+                    help="matplotlib style sheet (path or name) (default: cnclab/paper.mplstyle)")
+    ap.add_argument("-o", "--outdir", default=None, help="output folder (default: build/paper/<work>)")
+    args = ap.parse_args(argv)
+    if args.list or not args.names:
+        for name, rec in sorted(FIGURES.items()):
+            print(f"{name:<34} {rec.work:<13} {rec.description}")
+        return 0 if args.list else 2
+    formats = tuple(f.strip() for f in args.format.split(",") if f.strip())
+    if args.height_mm is not None and args.width_mm is None:
+        ap.error("--height-mm needs --width-mm")
+    written = []
+    try:
+        for name in args.names:
+            written += render(name, args.outdir, width_mm=args.width_mm, height_mm=args.height_mm, formats=formats,
+                              dpi=args.dpi, style=args.style)
+    except (ValueError, OSError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0

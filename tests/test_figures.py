@@ -1,0 +1,93 @@
+"""Figures for papers: export at a journal width in mm, sizes from the style, recipes re-rendered by
+``python -m cnclab figure`` without a notebook."""
+import re
+from pathlib import Path
+
+import matplotlib
+import matplotlib.pyplot as plt
+import pytest
+
+from cnclab import figures, plotting
+from cnclab.paths import NOTEBOOKS_DIR
+
+PT_PER_MM = 72 / 25.4
+TOL_PT = 0.5        # the page size is written with 10+ significant digits; 0.5 pt = 0.18 mm is generous
+
+
+def _line_figure():
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot([0, 1], [0, 1])
+    ax.set(xlabel="x [mm]", ylabel="y [mm]")
+    return fig
+
+
+@pytest.mark.parametrize("width, height", [(85, None), ("column", None), ("page", 60), (120.5, 80)])
+def test_pdf_page_is_the_requested_size(tmp_path, width, height):
+    fig = _line_figure()
+    [p] = plotting.export_figure(fig, "line", tmp_path, width_mm=width, height_mm=height, formats=("pdf",))
+    plt.close(fig)
+    w_mm = plotting.WIDTH_PRESETS_MM.get(width, width)
+    w, h = plotting.pdf_page_size_pt(p)
+    assert abs(w - w_mm * PT_PER_MM) < TOL_PT
+    expected_h = (height if height is not None else w_mm * 4 / 6) * PT_PER_MM     # aspect kept without height
+    assert abs(h - expected_h) < TOL_PT
+    if width == 85:
+        assert abs(w - 240.9) < TOL_PT
+
+
+def test_formats_dpi_and_deterministic_output(tmp_path):
+    fig = _line_figure()
+    a = plotting.export_figure(fig, "line", tmp_path / "a", width_mm=85, formats=("pdf", "svg", "png"), dpi=150)
+    b = plotting.export_figure(fig, "line", tmp_path / "b", width_mm=85, formats=("pdf", "svg", "png"), dpi=150)
+    plt.close(fig)
+    assert [p.suffix for p in a] == [".pdf", ".svg", ".png"]
+    for p, q in zip(a, b):
+        assert p.read_bytes() == q.read_bytes(), p.name
+    from PIL import Image
+    # 85 mm at 150 dpi = 501.97 px; matplotlib truncates the pixel count, so within 1 px
+    assert abs(Image.open(a[2]).size[0] - 85 / 25.4 * 150) < 1
+
+
+@pytest.mark.parametrize("kw, msg", [({"width_mm": "wide"}, "width_mm"), ({"width_mm": -1}, "width_mm"),
+                                     ({"width_mm": 85, "height_mm": 0}, "height_mm"), ({"dpi": 0}, "dpi")])
+def test_bad_sizes_are_refused_and_nothing_written(tmp_path, kw, msg):
+    fig = _line_figure()
+    with pytest.raises(ValueError, match=msg):
+        plotting.export_figure(fig, "line", tmp_path, **kw)
+    plt.close(fig)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_figsize_follows_the_style():
+    with matplotlib.rc_context({"figure.figsize": (4.0, 3.0)}):
+        assert plotting.figsize() == (4.0, 3.0)
+        assert plotting.figsize(2, 0.5) == (8.0, 1.5)
+
+
+def test_notebooks_do_not_hard_code_figure_sizes():
+    hard = [str(p.relative_to(NOTEBOOKS_DIR)) for p in sorted(NOTEBOOKS_DIR.rglob("*.ipynb"))
+            if re.search(r"figsize=\(", p.read_text(encoding="utf-8"))]
+    assert hard == [], "use figsize=figsize(w, h) (units of the style's figure.figsize): " + ", ".join(hard)
+
+
+@pytest.mark.parametrize("name", sorted(figures.FIGURES))
+def test_every_recipe_draws(name):
+    fig = figures.draw(name)
+    assert any(ax.has_data() for ax in fig.axes)       # something was drawn
+    plt.close(fig)
+
+
+def test_figure_cli_renders_an_85_mm_pdf(tmp_path, capsys):
+    assert figures.main(["fig3-1_engagement_vs_stepover", "--width-mm", "85", "--format", "pdf",
+                         "-o", str(tmp_path)]) == 0
+    out = tmp_path / "fig3-1_engagement_vs_stepover.pdf"
+    assert str(out) in capsys.readouterr().out
+    assert abs(plotting.pdf_page_size_pt(out)[0] - 240.9) < TOL_PT
+    assert figures.main(["--list"]) == 0
+    assert "fig6-2_main_effects" in capsys.readouterr().out
+    assert figures.main(["no_such_figure", "-o", str(tmp_path)]) == 2
+    assert "unknown figure" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        figures.main(["fig3-1_engagement_vs_stepover", "--width-mm", "nan"])
+    assert "--width-mm" in capsys.readouterr().err
+    assert sorted(p.name for p in Path(tmp_path).iterdir()) == ["fig3-1_engagement_vs_stepover.pdf"]
