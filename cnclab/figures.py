@@ -9,11 +9,12 @@ show these figures call the same recipes, so the notebook and the paper figure c
 
 ``python -m cnclab figure NAME --width-mm 85 --format pdf -o DIR`` is the command line;
 ``python -m cnclab figure --list`` lists the covered figures. Covered so far: the figures whose
-plotting lives in the package (Jacsó Fig 3-1; Mgherony Fig 6-2, 6-3, 6-10); the other notebook
-figures still draw in their notebook cell (``--list`` shows the state).
+plotting lives in the package or was moved here from its notebook (Jacsó Fig 3-1; Mgherony Fig 5-6,
+5-7, 5-8/5-9, 6-2, 6-3, 6-10); the other notebook figures still draw in their notebook cell
+(``--list`` shows the state).
 
->>> sorted(FIGURES)[:2]
-['fig3-1_engagement_vs_stepover', 'fig6-10_regression_estimates']
+>>> FIGURES["fig5-6_deff_vs_depth_of_cut"].work
+'mgherony2024'
 """
 from __future__ import annotations
 
@@ -25,10 +26,11 @@ from typing import Callable
 import numpy as np
 
 from . import clihelp
+from .geometry import ball_end as be
 from .geometry import engagement as eng
 from .paths import build_dir
 from .plotting import STYLE_PATH, WIDTH_PRESETS_MM, export_figure, figsize
-from .works.mgherony2024 import ch6
+from .works.mgherony2024 import ch4_5, ch6
 
 __all__ = ["FIGURES", "Recipe", "draw", "render", "main"]
 
@@ -85,6 +87,50 @@ def fig6_10_regression_estimates():
     df = ch6.dataset()
     return ch6.fig_estimated_vs_calculated({"r1 (eq 6-4)": ch6.r1_fit().predict(df),
                                            "r2 (eq 6-5)": ch6.unified_model().predict(df)})
+
+
+@_register("fig5-6_deff_vs_depth_of_cut", "mgherony2024",
+           "Mgherony (2024) Fig 5-6: true working diameter against the depth of cut (D = 6, 8, 10 mm)")
+def fig5_6_deff_vs_depth_of_cut():
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=figsize(1, 0.9))
+    for Dm, g in ch4_5.fig5_6_curves().groupby("D_mm"):
+        line, = ax.plot(g.a_p_mm, g.d1_lead_mm, label=f"D={Dm:g} up (1′)")
+        ax.plot(g.a_p_mm, g.d1_trail_mm, "--", color=line.get_color(), label=f"D={Dm:g} down (1″)")
+    ax.set(xlabel="a_p [mm]", ylabel="true working diameter [mm]", title="Fig 5-6")
+    ax.legend(fontsize=7, ncol=3)
+    return fig
+
+
+@_register("fig5-7_deff_change_during_chip_removal", "mgherony2024",
+           "Mgherony (2024) Fig 5-7: change of the true working diameter during chip removal against a_e")
+def fig5_7_deff_change_during_chip_removal():
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=figsize(1, 0.9))
+    for (Dm, mode), g in ch4_5.fig5_7_variation().groupby(["D_mm", "milling"]):
+        ax.plot(g.a_e_mm, g.variation_mm, "-" if mode == "up" else "--", label=f"D={Dm:g} {mode}")
+    ax.set(xlabel="a_e [mm]", ylabel="|Δ true working diameter| [mm]", title="Fig 5-7")
+    ax.legend(fontsize=7, ncol=3)
+    return fig
+
+
+@_register("fig5-8_5-9_deff_vs_feed_direction", "mgherony2024",
+           "Mgherony (2024) Fig 5-8, 5-9: the thesis' 'D_eff' (a radius) against the feed direction")
+def fig5_8_5_9_deff_vs_feed_direction():
+    import matplotlib.pyplot as plt
+
+    Afs = np.linspace(0, 360, 721)
+    fig, axs = plt.subplots(1, 2, figsize=figsize(1.5, 0.85), sharey=True)
+    for ax, ap_ in zip(axs, (1.0, 0.3)):
+        r1, r2 = be.paper_deff_radius_valued(10, ap_, 35, 25, Afs)
+        ax.plot(Afs, r1, label="point 1")
+        ax.plot(Afs, r2, label="point 2")
+        ax.set(xlabel="A_f [deg]", title=f"a_p = {ap_:g} mm (Fig 5-{8 if ap_ == 1 else 9})")
+    axs[0].set_ylabel("distance from axis ('D_eff' of the thesis) [mm]")
+    axs[0].legend()
+    return fig
 
 
 def draw(name: str, style=None):
