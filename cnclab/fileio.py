@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Iterator
 
 __all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "deferred_signals",
-           "same_file", "check_outputs", "live_temporary_files"]
+           "same_file", "check_outputs", "live_temporary_files", "InterruptReport"]
 
 _LIVE_TMP: set = set()
 _LOCK = threading.Lock()
@@ -275,3 +275,97 @@ def cleanup_on_signals(signals=("SIGTERM", "SIGHUP")):
     finally:
         for sig, h in old.items():
             signal.signal(sig, h)
+
+
+def _identity(path):
+    """What names the file now (inode, mtime, size), or None: an atomic write replaces all three."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return st.st_ino, st.st_mtime_ns, st.st_size
+
+
+class InterruptReport:
+    """For a command-line run writing ``outputs``: SIGINT / SIGTERM / SIGHUP at any moment end it with a
+    message that says what is on disk, and an exit code that follows it.
+
+    While active (main thread), a signal is recorded and raised (``KeyboardInterrupt`` for SIGINT,
+    ``SystemExit(128 + signum)`` for the others), so temporary files are removed and renames rolled
+    back on the way out (:func:`atomic_write_many` defers signals during its renames: outputs are all
+    new or all old). :meth:`check` raises a recorded signal again (a library may have swallowed the
+    exception, e.g. in a ``__del__``). :meth:`exit_code` (in the ``except`` clause) compares the
+    outputs with their state at the start: all replaced -> "complete ... on disk", exit 0; none ->
+    "nothing written", exit 128 + signum.
+
+    >>> import os, signal, tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "a.txt"
+    >>> with InterruptReport([out]) as run:
+    ...     try:
+    ...         os.kill(os.getpid(), signal.SIGINT)
+    ...         for _ in range(100): pass
+    ...     except KeyboardInterrupt as exc:
+    ...         code = run.exit_code(exc, quiet=True)
+    >>> code, out.exists()
+    (130, False)
+    """
+
+    NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
+
+    def __init__(self, outputs):
+        self.outputs = [Path(p) for p in outputs if p is not None]
+        self.before = {p: _identity(p) for p in self.outputs}
+        self.signum = None
+        self.old = {}
+
+    def _handler(self, signum, frame):
+        self.signum = self.signum or signum
+        self._raise(signum)
+
+    @staticmethod
+    def _raise(signum):
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise SystemExit(128 + signum)
+
+    def check(self) -> None:
+        """Raise the recorded signal again (no-op without one)."""
+        if self.signum is not None:
+            self._raise(self.signum)
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for name in self.NAMES:
+                sig = getattr(signal, name, None)
+                if sig is not None:
+                    self.old[sig] = signal.signal(sig, self._handler)
+        return self
+
+    def __exit__(self, *exc):
+        for sig, h in self.old.items():
+            signal.signal(sig, h)
+        self.old = {}
+        return False
+
+    def exit_code(self, exc: BaseException, quiet: bool = False):
+        """The exit code after ``exc`` (None: ``exc`` is not an interrupt, re-raise it); the message is
+        printed on stderr unless ``quiet``."""
+        import sys
+
+        if self.signum is None and not isinstance(exc, KeyboardInterrupt):
+            return None
+        signum = self.signum or signal.SIGINT
+        name = signal.Signals(signum).name
+        new = [p for p in self.outputs if _identity(p) is not None and _identity(p) != self.before[p]]
+        if new and len(new) == len(self.outputs):
+            msg, code = (f"{name} after the outputs were written: complete {' and '.join(map(str, new))} on disk "
+                         "(the summary was not printed)"), 0
+        elif not new:
+            msg, code = f"interrupted ({name}): nothing written (no output created or changed, no temporary file left)", \
+                128 + signum
+        else:                           # not expected: the renames run with signals deferred
+            msg, code = f"interrupted ({name}) while writing: {', '.join(map(str, new))} written, the others not", \
+                128 + signum
+        if not quiet:
+            print("\n" + msg, file=sys.stderr)
+        return code

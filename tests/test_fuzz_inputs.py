@@ -1113,3 +1113,85 @@ def test_atomic_write_many_rolls_back_on_a_failing_rename(tmp_path, monkeypatch)
     assert a.read_text() == "old a" and not b.exists()
     assert sorted(os.listdir(tmp_path)) == ["a.txt"] and fileio.live_temporary_files() == []
     OUTCOMES[("cli", "error")] += 1
+
+
+# --- finish-path: hostile STLs and hostile options (issue 28 item 7) ------------------------------
+FP_BASE = ["--tool-diameter", "10", "--stepover", "5", "--step", "2", "--quiet"]
+
+
+def _finish_path_run(tmp_path, capsys, stl, opts):
+    out = tmp_path / "fp.apt"
+    h = _sha(stl)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", STLWarning)
+        rc = cli(["finish-path", str(stl), "-o", str(out), *opts])
+    cap = capsys.readouterr()
+    assert _sha(stl) == h, "input STL modified"
+    assert not [f for f in os.listdir(tmp_path) if ".tmp" in f]
+    return rc, cap, out
+
+
+def _verify_finish_path(stl, out, D):
+    """The APT reads back, every CL point is finite, and the ball never enters the part: its centre
+    is at least D/2 from every facet at every feed point (exact distance; 1e-3 mm: GOTO records are
+    written with 3 decimals, each coordinate rounded by up to 0.0005 mm)."""
+    prog = apt.read_apt(out)
+    cl = prog.cl_points()
+    assert np.isfinite(cl.xyz).all() and len(cl.xyz) > 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", STLWarning)
+        mesh = read_stl(stl)
+    gap = sc.path_surface_deviation(mesh, cl, D / 2, output="tip", max_points=400)
+    assert gap.min() >= -1e-3, gap.min()
+
+
+@pytest.mark.parametrize("name", list(STL_CASES))
+def test_finish_path_on_hostile_stl(tmp_path, capsys, name):
+    data, expect, pattern = STL_CASES[name]
+    raw = data.encode("utf-8") if isinstance(data, str) else data
+    stl = tmp_path / "part.stl"
+    stl.write_bytes(raw)
+    rc, cap, out = _finish_path_run(tmp_path, capsys, stl, FP_BASE)
+    if expect == "error":
+        assert rc == 2 and cap.err.startswith("error: ") and str(stl) in cap.err, cap.err
+        assert re.search(pattern, cap.err), cap.err
+        assert not out.exists()
+        OUTCOMES[("finish-path", "error")] += 1
+    else:
+        assert rc == 0, cap.err
+        _verify_finish_path(stl, out, 10.0)
+        OUTCOMES[("finish-path", "correct")] += 1
+
+
+def _hostile_options(seed=28, n=24):
+    """(option, value) pairs from a seeded generator over every numeric option of finish-path."""
+    rnd = np.random.default_rng(seed)
+    opts = ["--tool-diameter", "--stepover", "--step", "--feed-angle", "--feed", "--rpm", "--clearance"]
+    values = ["0", "-1", "nan", "inf", "-inf", "1e-9", "1e300", "1_0", "", "0x10", "\uff11", "1e-4", "370", "12.5", "3"]
+    return [(opts[int(rnd.integers(len(opts)))], values[int(rnd.integers(len(values)))]) for _ in range(n)]
+
+
+@pytest.mark.parametrize("opt, value", _hostile_options())
+def test_finish_path_hostile_options(tmp_path, capsys, opt, value):
+    """Each case: exit 2 naming the option (or, for a huge path, --stepover/--step), nothing written;
+    or a verified path."""
+    stl = tmp_path / "part.stl"
+    stl.write_bytes(_binary(GRID.triangles))
+    opts = list(FP_BASE)
+    if opt in opts:
+        opts[opts.index(opt) + 1] = value
+    else:
+        opts += [opt, value]
+    try:
+        rc, cap, out = _finish_path_run(tmp_path, capsys, stl, opts)
+    except SystemExit as exc:            # argparse: exit 2 and the message on stderr
+        rc, cap, out = exc.code, capsys.readouterr(), tmp_path / "fp.apt"
+    if rc == 2:
+        assert opt in cap.err or "--stepover" in cap.err or "--step" in cap.err, cap.err
+        assert not out.exists()
+        OUTCOMES[("finish-path", "error")] += 1
+    else:
+        assert rc == 0, cap.err
+        D = float(opts[opts.index("--tool-diameter") + 1])
+        _verify_finish_path(stl, out, D)
+        OUTCOMES[("finish-path", "correct")] += 1

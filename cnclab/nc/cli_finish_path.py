@@ -30,10 +30,11 @@ from pathlib import Path
 import numpy as np
 
 from .. import clihelp
-from ..fileio import cleanup_on_signals
+from ..fileio import InterruptReport
 from ..geometry.mesh import read_stl
 from ..toolpath.dropcutter import split_passes, zigzag_finishing_path
 from .apt import cl_program, write_apt
+from .gcode import MAX_COORD_MM, MAX_FEED_MM_MIN, MAX_SPINDLE_RPM
 
 __all__ = ["finish_path", "main"]
 
@@ -60,6 +61,7 @@ def finish_path(stl, out, tool_diameter: float, stepover: float, feed_angle_deg:
     if out.resolve() == stl.resolve():
         raise ValueError(f"-o {out}: the output must differ from the input STL")
     mesh = read_stl(stl)
+    _check_size(mesh, stepover, step)
     path = zigzag_finishing_path(mesh, tool_diameter, stepover, feed_angle_deg, step=step, feed_mm_min=feed_mm_min)
     passes = split_passes(path)
     z = path.xyz[:, 2]
@@ -71,6 +73,21 @@ def finish_path(stl, out, tool_diameter: float, stepover: float, feed_angle_deg:
             "path_mm": float(np.linalg.norm(np.diff(path.xyz, axis=0), axis=1).sum()),
             "z_min": float(z.min()), "z_max": float(z.max()), "clearance_z": clearance_z, "out": str(out),
             "seconds": time.perf_counter() - t0}
+
+
+#: largest path the command plans (CL points): beyond it a stepover or step far below the part's size
+#: (a unit error, 0.0001 for 0.25) would run for hours and fill the memory
+MAX_CL_POINTS = 5_000_000
+
+
+def _check_size(mesh, stepover: float, step: float) -> None:
+    """ValueError naming --stepover / --step when the path would exceed :data:`MAX_CL_POINTS`."""
+    lo, hi = mesh.triangles.reshape(-1, 3).min(axis=0), mesh.triangles.reshape(-1, 3).max(axis=0)
+    span = float(np.hypot(*(hi - lo)[:2]))            # longest pass and widest spread of passes (mm)
+    need = (span / stepover + 1.0) * (span / step + 1.0)
+    if need > MAX_CL_POINTS:
+        raise ValueError(f"--stepover {stepover:g} mm and --step {step:g} mm would need about {need:.3g} CL points on "
+                         f"this part ({span:.4g} mm across; limit {MAX_CL_POINTS:.0e}): use a larger stepover or step")
 
 
 def main(argv=None) -> int:
@@ -90,34 +107,40 @@ def main(argv=None) -> int:
         writes=["OUT: the APT CL file (only this file)"])
     ap.add_argument("stl", help="part surface STL (ASCII or binary, mm)")
     ap.add_argument("-o", "--out", required=True, help="APT file to write (must differ from the STL)")
-    ap.add_argument("--tool-diameter", type=num("--tool-diameter", 0), required=True, help="ball diameter D (mm)")
+    ap.add_argument("--tool-diameter", type=num("--tool-diameter", 0, hi=MAX_COORD_MM), required=True, help="ball diameter D (mm)")
     ap.add_argument("--stepover", type=num("--stepover", 0), required=True, help="distance a_e between passes (mm)")
     ap.add_argument("--feed-angle", type=num("--feed-angle", -360, lo_open=False, hi=360), default=0.0,
                     help="feed direction A_f of the passes (deg from +x, -360..360)")
     ap.add_argument("--step", type=num("--step", 0), default=0.5, help="largest distance between CL points along a pass (mm)")
-    ap.add_argument("--feed", type=num("--feed", 0), default=500.0, help="feed v_f of the program (mm/min; Table 7-1)")
-    ap.add_argument("--rpm", type=num("--rpm", 0), default=2000.0, help="spindle speed n of the program (rpm; Table 7-1)")
-    ap.add_argument("--clearance", type=num("--clearance", 0), default=10.0,
+    ap.add_argument("--feed", type=num("--feed", 0.1, lo_open=False, hi=MAX_FEED_MM_MIN), default=500.0, help="feed v_f of the program (mm/min, 0.1 .. 1e6: FEDRAT is written with 1 decimal; Table 7-1)")
+    ap.add_argument("--rpm", type=num("--rpm", 1, lo_open=False, hi=MAX_SPINDLE_RPM), default=2000.0, help="spindle speed n of the program (rpm, 1 .. 1e6: SPINDL is written in whole rpm; Table 7-1)")
+    ap.add_argument("--clearance", type=num("--clearance", 0, hi=MAX_COORD_MM), default=10.0,
                     help="clearance plane height above the highest CL point (mm)")
     ap.add_argument("--link", choices=("feed", "rapid"), default="feed",
                     help="between passes: feed along the boundary (zig-zag) or lift and rapid")
     ap.add_argument("--partno", default=None, help="PARTNO record (default: the output file name in upper case)")
     ap.add_argument("--quiet", action="store_true", help="print nothing on success")
     args = ap.parse_args(argv)
+    run = InterruptReport([args.out])
     try:
-        with cleanup_on_signals():
+        with run:
             s = finish_path(args.stl, args.out, args.tool_diameter, args.stepover, args.feed_angle, args.step,
                             args.feed, args.rpm, args.clearance, args.link, args.partno)
+            if not args.quiet:
+                print(f"{s['passes']} passes, {s['cl_points']} CL points, path {s['path_mm']:.0f} mm, z "
+                      f"{s['z_min']:.3f} .. {s['z_max']:.3f} mm, clearance plane z {s['clearance_z']:.3f} mm; "
+                      f"wrote {s['out']} ({s['seconds']:.2f} s)")
+            run.check()
     except (ValueError, OSError) as exc:
+        if run.signum is not None:
+            return run.exit_code(KeyboardInterrupt())
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("\ninterrupted: nothing written", file=sys.stderr)
-        return 130
-    if not args.quiet:
-        print(f"{s['passes']} passes, {s['cl_points']} CL points, path {s['path_mm']:.0f} mm, z {s['z_min']:.3f} .. "
-              f"{s['z_max']:.3f} mm, clearance plane z {s['clearance_z']:.3f} mm; wrote {s['out']} "
-              f"({s['seconds']:.2f} s)")
+    except (KeyboardInterrupt, SystemExit) as exc:
+        code = run.exit_code(exc)
+        if code is None:
+            raise
+        return code
     return 0
 
 

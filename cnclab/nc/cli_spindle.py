@@ -14,14 +14,11 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-import re
-import signal
 import sys
-import threading
 import warnings
 
 from .. import clihelp
+from ..fileio import InterruptReport
 from ..cutting.spindle_model import POINT_RULES
 from .apt import NUMBER_RE
 from .spindle_control import postprocess_files
@@ -45,73 +42,6 @@ def _number(name, lo=None, lo_open=True, hi=None, kind=float):
         return v
     conv.__name__ = name
     return conv
-
-class _Interrupts:
-    """SIGINT / SIGTERM / SIGHUP while a run is in progress: the handler records the signal and raises
-    (``KeyboardInterrupt`` for SIGINT, ``SystemExit(128 + signum)`` for the others, so temporary files
-    are removed and renames rolled back on the way out); :meth:`check` raises again if a library
-    swallowed that exception (an interrupt is never lost; an exception raised inside a ``__del__`` or
-    a C extension's callback is only printed as "ignored")."""
-
-    NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
-
-    def __init__(self):
-        self.signum = None
-        self.old = {}
-
-    def _handler(self, signum, frame):
-        self.signum = self.signum or signum
-        self._raise(signum)
-
-    @staticmethod
-    def _raise(signum):
-        if signum == signal.SIGINT:
-            raise KeyboardInterrupt
-        raise SystemExit(128 + signum)
-
-    def check(self, *_):
-        if self.signum is not None:
-            self._raise(self.signum)
-
-    def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            for name in self.NAMES:
-                sig = getattr(signal, name, None)
-                if sig is not None:
-                    self.old[sig] = signal.signal(sig, self._handler)
-        return self
-
-    def __exit__(self, *exc):
-        for sig, h in self.old.items():
-            signal.signal(sig, h)
-        return False
-
-
-def _identity(path):
-    """What names the file now (inode, mtime, size), or None: an atomic write replaces all three."""
-    try:
-        st = os.stat(path)
-    except OSError:
-        return None
-    return st.st_ino, st.st_mtime_ns, st.st_size
-
-
-def _interrupted(signum: int, outputs, before) -> int:
-    """The message after an interrupt says what is on disk; the exit code follows it."""
-    name = signal.Signals(signum).name
-    new = [p for p in outputs if _identity(p) is not None and _identity(p) != before[p]]
-    if new and len(new) == len(outputs):
-        print(f"\n{name} after the outputs were written: complete {' and '.join(map(str, outputs))} on disk "
-              "(the summary was not printed)", file=sys.stderr)
-        return 0
-    if not new:
-        print(f"\ninterrupted ({name}): nothing written (no output created or changed, no temporary file left)",
-              file=sys.stderr)
-    else:                               # cannot happen: the renames run with signals deferred
-        print(f"\ninterrupted ({name}) while writing: {', '.join(map(str, new))} written, the other outputs not",
-              file=sys.stderr)
-    return 128 + signum
-
 
 def main(argv=None) -> int:
     ap = clihelp.parser(
@@ -163,12 +93,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.ae is not None and args.tool_diameter is not None and args.ae > args.tool_diameter:
         ap.error(f"--ae must be <= the tool diameter ({args.tool_diameter:g} mm), got {args.ae:g}")
-    outputs = [args.out] + ([args.gcode] if args.gcode else [])
-    before = {p: _identity(p) for p in outputs}
-    stop = _Interrupts()
+    run = InterruptReport([args.out, args.gcode])
     try:
-        with stop, warnings.catch_warnings(record=True) as caught:
+        with run, warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
+            run.check()
             s = postprocess_files(args.stl, args.apt, args.out, v_c=args.vc, f_z=args.fz, teeth=args.teeth,
                                   a_p=args.ap, tool_diameter=args.tool_diameter, gcode_path=args.gcode,
                                   rpm_threshold=args.rpm_threshold, vf_threshold=args.vf_threshold,
@@ -176,21 +105,22 @@ def main(argv=None) -> int:
                                   facet_rule=args.facet, n_max=args.nmax, vf_max=args.vfmax,
                                   accel_rpm_s=args.accel, mismatch_tol=args.mismatch_tol,
                                   max_off_share=args.max_off_share, allow_mismatch=args.allow_mismatch)
-            stop.check()
+            run.check()
             for w in caught:
                 print(f"warning: {w.message}", file=sys.stderr)
             _print_summary(s, args)
-            stop.check()
+            run.check()
     except (ValueError, OSError) as exc:
-        if stop.signum is not None:
-            return _interrupted(stop.signum, outputs, before)
+        if run.signum is not None:
+            return run.exit_code(KeyboardInterrupt())
         sys.stderr.flush()
         print(f"\nerror: {exc}", file=sys.stderr)
         return 2
     except (KeyboardInterrupt, SystemExit) as exc:
-        if stop.signum is None and not isinstance(exc, KeyboardInterrupt):
+        code = run.exit_code(exc)
+        if code is None:
             raise
-        return _interrupted(stop.signum or signal.SIGINT, outputs, before)
+        return code
     return 0
 
 
