@@ -35,7 +35,8 @@ if os.environ.get("CI"):
 # time on 2 cores). Order only; nothing is skipped. The list names the tests that take > ~10 s.
 _SLOW_FIRST = ("adaptive_vs_freecad", "ce_vs_constant_mrr", "ch6_neural", "s4_star", "test_notebooks.py::",
                "test_plan_real_every_job_file", "test_claim_status_holds[mgherony2024.ch6",
-               "test_random_pockets", "test_claim_status_holds[jacso2021.s4", "test_auto_wall_share",
+               "test_random_pockets", "test_getting_started_blocks_run", "test_claim_status_holds[jacso2021.s4",
+               "test_auto_wall_share",
                "test_claim_status_holds[mgherony2024.ch8", "test_every_strategy_plans")
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -58,6 +59,17 @@ def test_getting_started_is_first_and_skips_only_make_targets():
         assert len(re.findall(rf"^python -m cnclab {cmd} ", text, re.M)) >= 3, cmd
 
 
+def test_reading_order_is_the_collections():
+    """The README's reading order is the index notebook's and the site's (cnclab.site.READING_ORDER)."""
+    from cnclab import site
+
+    m = re.search(r"^Reading order .*?\n((?:\d+\. .*\n)+)", getting_started(), re.M)
+    assert m, "no numbered reading order in Getting started"
+    listed = re.findall(r"\]\(notebooks/([^)]+\.ipynb)\)", m.group(1))
+    assert listed == [rel for rel, _ in site.READING_ORDER]
+    assert all((REPO / "notebooks" / rel).is_file() for rel in listed)
+
+
 def test_make_lab_opens_the_index():
     if shutil.which("make") is None:
         pytest.skip("make is not installed")
@@ -77,8 +89,18 @@ def test_getting_started_blocks_run(tmp_path):
     env.pop("CNCLAB_DASK_SCHEDULER", None)
     env.pop("CNCLAB_SWEEP_JOBS", None)
     script = "set -euo pipefail\n" + "".join(runnable(b)[0] for b in shell_blocks(getting_started()))
-    res = subprocess.run(["bash", "-c", script], cwd=tmp_path, env=env, capture_output=True, text=True,
-                         timeout=1800)
+    # its own process group: the Dask scheduler and worker the README starts in the background are
+    # ended with the group even when a line fails before the README's own `kill`
+    proc = subprocess.Popen(["bash", "-c", script], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        out, err = proc.communicate(timeout=1800)
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGTERM)
+        except ProcessLookupError:
+            pass
+    res = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
     assert res.returncode == 0, f"README Getting started failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}"
     start = tmp_path / "build" / "start"
     for f in ("my_pocket.ngc", "my_pocket_zz.ngc", "two_regions.ngc", "ch8_vc63.apt", "ch8_limited.apt",
