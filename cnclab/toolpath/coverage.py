@@ -34,7 +34,7 @@ from ..simulation.pixel import Stock
 from .job import Job
 from .path import ToolPath
 
-__all__ = ["UNCUT_ABS_MM2", "UNCUT_REL", "uncut_report", "uncut_limit_mm2"]
+__all__ = ["UNCUT_ABS_MM2", "UNCUT_REL", "uncut_report", "uncut_limit_mm2", "wall_gouge"]
 
 #: uncut area a plan may leave in a region (mm^2): UNCUT_ABS_MM2 + UNCUT_REL x the region's reachable
 #: area -- 1 mm^2 of cusps and chord errors plus 1 % (a pass boundary's cusps: an a_e / 2-high ridge
@@ -98,3 +98,42 @@ def uncut_report(path: ToolPath, job: Job) -> dict:
     return {"uncut_mm2": uncut.round(3).tolist(), "reach_mm2": [round(R.area, 3) for R in reach],
             "limit_mm2": [round(v, 3) for v in lim], "over": [k for k in range(len(regions)) if uncut[k] > lim[k]],
             "levels": levels}
+
+
+def wall_gouge(path: ToolPath, job: Job) -> tuple:
+    """How far (mm) the tool disc reaches past a wall or island below the stock top, and where:
+    ``(depth_mm, (x, y))`` -- max over every move below ``job.top_z`` of r - d, d the exact distance
+    (mm) of the move's segment to the pocket boundary (a segment with an end outside the pocket:
+    r + that end's distance). Arcs are taken by chords of at most r / 50 (sagitta <= r / 400 on an arc
+    of radius r / 10, the smallest helix). ``(0.0, None)`` when the disc never leaves the pocket.
+
+    >>> from shapely.geometry import box
+    >>> from cnclab.toolpath.path import Tool, ToolPath
+    >>> job = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.0, v_c=100, f_z=0.05)
+    >>> p = ToolPath.build([[5, 10, 5], [5, 10, -2], [38, 10, -2]], kind=["rapid", "plunge", "cut"], feed=300)
+    >>> g, at = wall_gouge(p, job)          # centre 2 mm from the x = 40 wall, r = 3
+    >>> round(g, 6), at
+    (1.0, (38.0, 10.0))
+    """
+    r = job.tool_radius
+    P, _ = path.polyline(max(r / 50.0, 1e-3))
+    low = P[:, 2] < job.top_z - 1e-9
+    if not low.any():
+        return 0.0, None
+    B = job.polygon.boundary
+    inside = shapely.contains_xy(job.polygon, P[:, 0], P[:, 1])
+    pts = P[low, :2]
+    d_pt = shapely.distance(B, shapely.points(pts))
+    d_pt = np.where(inside[low], d_pt, -d_pt)
+    worst, at = r - float(d_pt.min()), tuple(float(v) for v in pts[int(np.argmin(d_pt))])
+    seg = np.flatnonzero(low[1:] & low[:-1] & inside[1:] & inside[:-1])
+    seg = seg[np.any(P[seg, :2] != P[seg + 1, :2], axis=1)]
+    if len(seg):
+        lines = shapely.linestrings(np.stack([P[seg, :2], P[seg + 1, :2]], axis=1))
+        d = shapely.distance(B, lines)
+        k = int(np.argmin(d))
+        if r - float(d[k]) > worst:
+            worst = r - float(d[k])
+            q = shapely.get_coordinates(shapely.shortest_line(lines[k], B))[0]
+            at = (float(q[0]), float(q[1]))
+    return (worst, at) if worst > 0 else (0.0, None)

@@ -31,14 +31,16 @@ import dataclasses
 import math
 
 import numpy as np
+import shapely
 
 from . import adaptive_clearing   # the default; the other planners' modules are imported when used
 from . import coverage
+from .evaluate import evaluate
 from .job import Job
 from .path import ToolPath
 
-__all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "MAX_LEVELS", "MIN_LEVEL_STEP_MM", "UncutError", "check_limits", "plan",
-           "register"]
+__all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "MAX_LEVELS", "MIN_LEVEL_STEP_MM", "GOUGE_TOL_MM", "CE_PROMISE_DEG",
+           "UncutError", "check_limits", "plan", "register"]
 
 #: name -> (planner(job, resolution_mm, **options) -> ToolPath for one level, one-line description)
 STRATEGIES: dict = {}
@@ -53,18 +55,47 @@ def register(name: str, description: str):
     return deco
 
 
+#: the engagement bound (deg above theta) the old constant-engagement strategy keeps: a path beyond
+#: it (measured by the evaluator at r / 10) is refused, and so is every job with islands. Its laps do
+#: NOT hold theta: 3 % of the cutting length above theta + 15 and max theta + 60 on Jacsó's own
+#: rectangle; the bound only keeps the full-slot runs (179-180 deg beside a hole near a wall or in a
+#: 10 deg wedge, issue 28) out of a program. The adaptive strategy holds theta + 10.
+CE_PROMISE_DEG = 90.0
+
+
+def _has_islands(job: Job) -> bool:
+    return any(len(g.interiors) for g in getattr(job.polygon, "geoms", [job.polygon]))
+
+
 @register("constant-engagement", "Jacsó Thesis III constant-engagement laps from helical entries (ce_clearing)")
 def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
     from . import ce_clearing
 
-    return ce_clearing.clearing_path(job, resolution_mm=resolution_mm, **options)
+    if _has_islands(job):
+        raise ValueError(f"{job.source}: the constant-engagement strategy (Thesis III laps) cannot hold the "
+                         "engagement around islands (issue 28: 176-180 deg beside a hole near a wall); use the "
+                         "adaptive strategy")
+    path = ce_clearing.clearing_path(job, resolution_mm=resolution_mm, **options)
+    ev = evaluate(path, job, max(resolution_mm, job.tool_radius / 10.0))
+    if not ev.engagement_max_deg <= job.theta_deg + CE_PROMISE_DEG:
+        raise ValueError(f"{job.source}: the constant-engagement strategy cannot keep this pocket's engagement: "
+                         f"its laps reach {ev.engagement_max_deg:.0f} deg, beyond theta {job.theta_deg:g} + "
+                         f"{CE_PROMISE_DEG:g} (narrow wedges, necks); use the adaptive strategy")
+    return path
 
 
 @register("hybrid", "Jacsó §4 hybrid: centre laps around the start hole, CE trochoid arms")
 def _hybrid(job: Job, resolution_mm: float, **options) -> ToolPath:
     from . import pocket
 
-    return pocket.hybrid_path(job, resolution_mm, **options)
+    if not hasattr(job.polygon, "exterior"):
+        raise ValueError(f"{job.source}: the hybrid strategy plans one pocket outline around one start hole; "
+                         "this job has several regions (use the adaptive strategy)")
+    try:
+        return pocket.hybrid_path(job, resolution_mm, **options)
+    except (IndexError, AttributeError, TypeError) as exc:   # its medial-axis arms need a pocket wide enough
+        raise ValueError(f"{job.source}: the hybrid strategy cannot build its arms in this pocket "
+                         f"({type(exc).__name__}: {exc}); use the adaptive strategy") from None
 
 
 @register("contour-parallel", "contour-parallel offsets at a_e, inside-out")
@@ -81,18 +112,51 @@ def _zigzag(job: Job, resolution_mm: float, **options) -> ToolPath:
     return pocket.zigzag_path(job, resolution_mm=resolution_mm, **options)
 
 
+#: arc-fit tolerance (mm) of the Kim & Yang strategies' programs: the paper's 0.02 mm lets an arc
+#: bulge up to ~0.035 mm past the tool-centre region (into the wall); 0.5 um keeps it inside
+#: :data:`GOUGE_TOL_MM`
+ARC_FIT_TOL_MM = 5e-4
+
+
+def _no_islands(job: Job, name: str) -> None:
+    if _has_islands(job):
+        raise ValueError(f"{job.source}: the {name} strategy has no island support (Kim & Yang 2006 offset "
+                         "one outline: its passes and links would cut through the islands); use the adaptive "
+                         "or contour-parallel strategy")
+
+
 @register("kim-yang-original", "Kim & Yang 2006 contour-parallel path (offsets at a_e, spiral entries)")
 def _kim_yang_original(job: Job, resolution_mm: float, **options) -> ToolPath:
     from . import constant_mrr
 
-    return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, **options), job, entry="helix")
+    _no_islands(job, "kim-yang-original")
+    return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, **options), job, entry="helix",
+                                    tol_mm=ARC_FIT_TOL_MM)
 
 
 @register("kim-yang-modified", "Kim & Yang 2006 constant-MRR modified contour-parallel path")
 def _kim_yang_modified(job: Job, resolution_mm: float, **options) -> ToolPath:
     from . import constant_mrr
 
-    return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, modified=True, **options), job, entry="helix")
+    _no_islands(job, "kim-yang-modified")
+    passes = _snap_inside(constant_mrr.kim_yang_passes(job, modified=True, **options), job)
+    return constant_mrr.passes_path(passes, job, entry="helix", tol_mm=ARC_FIT_TOL_MM)
+
+
+def _snap_inside(passes, job: Job) -> list:
+    """The §3.2 modification moves pass points on a 0.3 mm pixel stock, up to ~0.04 mm past the
+    tool-centre region (into the wall): such points are moved to the nearest point of the region."""
+    allowed = job.allowed()
+    edge = allowed.boundary
+    out = []
+    for q in passes:
+        q = np.array(q, float)
+        bad = np.flatnonzero(~shapely.contains_xy(allowed, q[:, 0], q[:, 1]))
+        for k in bad:
+            p = edge.interpolate(edge.project(shapely.Point(q[k])))
+            q[k] = (p.x, p.y)
+        out.append(q)
+    return out
 
 
 @register("adaptive", "engagement-controlled clearing of the simulated stock, links at depth (adaptive_clearing)")
@@ -109,6 +173,9 @@ MAX_LEVELS = 1000
 #: the smallest level step (mm) :func:`plan` accepts: 10 units of the program's 4th decimal, so every
 #: level is written below the one above it (a_p = 1e-6 would be written at Z0)
 MIN_LEVEL_STEP_MM = 0.001
+#: how far (mm) a tool disc may reach past a wall or island (exact geometry, every r / 10 along the
+#: path) before plan refuses the strategy's path: the planners' finishing-snap tolerance
+GOUGE_TOL_MM = 1e-3
 
 
 class UncutError(ValueError):
@@ -166,6 +233,11 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1,
         paths.append(f(lv, resolution_mm, **options))
     out = paths[0] if len(paths) == 1 else ToolPath.concat(paths)
     out.info.update(strategy=strategy, levels=levels)
+    gouge, at = coverage.wall_gouge(out, job)
+    if gouge > GOUGE_TOL_MM:
+        raise ValueError(f"{job.source}: strategy {strategy} cannot honour this job: its tool reaches {gouge:.3f} mm "
+                         f"into a wall or island near ({at[0]:.2f}, {at[1]:.2f}) (tolerance {GOUGE_TOL_MM:g} mm); "
+                         "use the adaptive strategy")
     rep = coverage.uncut_report(out, job)
     out.info["uncut"] = rep
     if rep["over"]:

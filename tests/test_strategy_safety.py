@@ -1,0 +1,118 @@
+"""Issue 28 item 2 (and the plan fuzz of item 7): every registered strategy is safe on every job it
+accepts, or refuses it clearly.
+
+Seeded random pockets of three adversarial families -- islands (1-3 discs or boxes, some one tool
+diameter from a wall), necks (two blobs joined by a neck 1.2-2.5 D wide) and wedges (a triangle
+with a 10-25 deg apex) -- are planned by EVERY strategy of :data:`cnclab.toolpath.planners.STRATEGIES`
+(``allow_uncut``: what a plan leaves is issue 28.1's check, tested in tests/test_plan_limits.py).
+A strategy either raises ``ValueError`` whose message names the job (its source) -- a clear
+refusal -- or returns a path on which the independent checks hold: no plunge and no rapid into
+material (the dixel evaluator, 0.15 mm), the tool disc never past a wall or island (exact geometry
+along the path, 1e-3 mm: :data:`~cnclab.toolpath.planners.GOUGE_TOL_MM`), and the engagement bound of
+the strategies that promise one (adaptive: max <= theta + 10 deg, issue 16's target;
+constant-engagement: theta + :data:`~cnclab.toolpath.planners.CE_PROMISE_DEG`), measured by the
+evaluator at 0.15 mm (a dixel of r / 20: the engagement it reports is within ~2 deg of the exact one
+away from the first contact). Each strategy must actually plan a minimum number of the pockets (no
+silent pass by refusing everything).
+"""
+import numpy as np
+import pytest
+from shapely.geometry import Point, Polygon, box
+from shapely.ops import unary_union
+
+from cnclab.runtime import pick
+from cnclab.toolpath import coverage, planners
+from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.job import Job
+from cnclab.toolpath.path import Tool
+
+H = 0.15
+D = 6.0
+THETA = 60.0
+#: engagement bound (deg above theta) of the strategies that promise one
+PROMISE = {"adaptive": 10.0, "constant-engagement": planners.CE_PROMISE_DEG}
+#: strategies with no island or wedge caveat must plan at least this share of the pockets
+MIN_PLANNED = {"adaptive": 0.6, "contour-parallel": 0.6, "zig-zag": 0.6}
+
+
+def _islands(rng):
+    W, Hh = rng.uniform(30, 45), rng.uniform(24, 34)
+    P = box(0, 0, W, Hh)
+    for _ in range(int(rng.integers(1, 4))):
+        near_wall = rng.random() < 0.4
+        c = (rng.uniform(0.25, 0.75) * W, (1.0 * D + 3.0) if near_wall else rng.uniform(0.3, 0.7) * Hh)
+        isl = Point(c).buffer(rng.uniform(2, 4), 16) if rng.random() < 0.5 else box(c[0] - 3, c[1] - 2, c[0] + 3,
+                                                                                    c[1] + 2)
+        if P.buffer(-2.0).contains(isl.buffer(1.0)):
+            P = P.difference(isl)
+    return P
+
+
+def _neck(rng):
+    a, b = rng.uniform(8, 12), rng.uniform(8, 12)
+    L = a + b + rng.uniform(6, 14)
+    w = rng.uniform(1.2, 2.5) * D
+    return unary_union([Point(0, 0).buffer(a, 16), Point(L, 0).buffer(b, 16), box(0, -w / 2, L, w / 2)])
+
+
+def _wedge(rng):
+    apex = np.radians(rng.uniform(10, 25))
+    L = rng.uniform(40, 55)
+    h = L * np.tan(apex / 2)
+    return Polygon([(0, 0), (L, -h), (L + 8, -h), (L + 8, h), (L, h)])
+
+
+FAMILIES = (_islands, _neck, _wedge)
+
+
+def pockets(seed=2811, n=None):
+    """``n`` pockets (default 6, 3 in fast mode), cycling through the families."""
+    rng = np.random.default_rng(seed)
+    n = n or pick(6, 3)
+    out = []
+    for k in range(n):
+        P = FAMILIES[k % 3](rng)
+        out.append((f"{FAMILIES[k % 3].__name__[1:]}_{k}", P))
+    return out
+
+
+POCKETS = pockets()
+
+
+@pytest.mark.parametrize("strategy", sorted(planners.STRATEGIES))
+def test_every_strategy_safe_or_refusing(strategy):
+    planned, refused = [], []
+    for name, P in POCKETS:
+        job = Job(P, Tool(D), THETA, 1.0, v_c=100, f_z=0.05, source=f"{name}.json")
+        try:
+            path = planners.plan(job, strategy, 0.2, allow_uncut=True)
+        except ValueError as exc:
+            assert f"{name}.json" in str(exc), f"{strategy} refused {name} without naming the job: {exc}"
+            refused.append((name, str(exc)[:100]))
+            continue
+        ev = evaluate(path, job, H)
+        gouge, at = coverage.wall_gouge(path, job)
+        assert ev.plunges_into_material == 0, (strategy, name, "plunge into material")
+        assert ev.rapids_into_material == 0, (strategy, name, "rapid into material")
+        assert gouge <= planners.GOUGE_TOL_MM, (strategy, name, gouge, at)
+        if strategy in PROMISE:
+            assert ev.engagement_max_deg <= THETA + PROMISE[strategy], (strategy, name, ev.engagement_max_deg)
+        planned.append(name)
+    need = int(np.ceil(MIN_PLANNED.get(strategy, 0.0) * len(POCKETS)))
+    assert len(planned) >= need, f"{strategy} planned only {planned}; refused {refused}"
+
+
+def test_the_generator_makes_what_it_says():
+    """The adversarial families are what the docstring says (so the test above cannot pass on easy
+    pockets): islands really are holes, necks narrower than 2.5 D, wedges with an apex under 25 deg."""
+    fam = {}
+    for name, P in POCKETS:
+        fam.setdefault(name.split("_")[0], []).append(P)
+    assert set(fam) == {"islands", "neck", "wedge"}
+    assert all(len(P.interiors) >= 1 for P in fam["islands"])
+    for P in fam["neck"]:
+        assert P.buffer(-1.25 * D).geom_type == "MultiPolygon"          # the neck is narrower than 2.5 D
+    for P in fam["wedge"]:
+        x = np.asarray(P.exterior.coords)
+        apex = np.degrees(2 * np.arctan2(x[1, 1] * -1, x[1, 0]))
+        assert 10 <= apex <= 25
