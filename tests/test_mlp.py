@@ -99,3 +99,25 @@ def test_bad_shapes():
         train_mlp(np.zeros((10, 2)), np.zeros((9, 1)))
     with pytest.raises(ValueError, match="finite"):
         train_mlp(np.full((10, 1), np.nan), np.zeros((10, 1)))
+
+
+def test_init_is_matlab_initnw_by_hand():
+    """MATLAB initnw/calcnw (mathworks.com/help/deeplearning/ref/initnw.html, the toolbox's initnw.m):
+    hidden rows have norm 0.7·s^(1/r) × half the active range (logsig [-4, 4]: ×4), × 2/(hi−lo) of the
+    input range (layer 2 sees logsig's [0, 1]: ×2); biases are 0.7·s^(1/r)·linspace(−1, 1, s)·sign(w₁)
+    on the active scale (first layer, inputs in [-1, 1]); the linear output layer is rands in [-1, 1]."""
+    import numpy as np
+    from cnclab.analysis import mlp
+
+    spec = mlp.MLPSpec(4, (10, 5), 2, "logsig")
+    theta = mlp._init_params(spec, seed=3).numpy()
+    W1, b1 = theta[:40].reshape(10, 4), theta[40:50]
+    W2, b2 = theta[50:100].reshape(5, 10), theta[100:105]
+    W3, b3 = theta[105:115].reshape(2, 5), theta[115:117]
+    mag1, mag2 = 0.7 * 10 ** (1 / 4), 0.7 * 5 ** (1 / 10)
+    assert np.allclose(np.linalg.norm(W1, axis=1), 4 * mag1)
+    assert np.allclose(b1, 4 * mag1 * np.linspace(-1, 1, 10) * np.sign(W1[:, 0]))
+    assert np.allclose(np.linalg.norm(W2, axis=1), 2 * 4 * mag2)
+    # layer 2: b = 4·mag·linspace·sign(w) − Σ_j w_j (the [0, 1] input range mapped onto [-1, 1])
+    assert np.allclose(b2, 4 * mag2 * np.linspace(-1, 1, 5) * np.sign(W2[:, 0]) - W2.sum(axis=1) / 2)
+    assert np.all(np.abs(np.r_[W3.ravel(), b3]) <= 1.0)

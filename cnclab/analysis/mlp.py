@@ -112,24 +112,58 @@ class MLPSpec:
         return "-".join(map(str, self.sizes)) + f" ({self.activation})"
 
 
+#: MATLAB transfer functions' ranges (Neural Network Toolbox): ``'active'`` input range used by
+#: ``initnw`` and the ``'output'`` range a following layer sees as its input range
+ACTIVE_RANGE = {"logsig": (-4.0, 4.0), "tansig": (-2.0, 2.0)}
+OUTPUT_RANGE = {"logsig": (0.0, 1.0), "tansig": (-1.0, 1.0)}
+
+
+def _rands(g, *shape):
+    """MATLAB ``rands``: uniform on [-1, 1]."""
+    torch = _torch()
+    return torch.rand(*shape, generator=g, dtype=torch.float64) * 2 - 1
+
+
+def _calcnw(g, n_in: int, s: int, in_range, active):
+    """MATLAB ``initnw``'s ``calcnw`` for one layer of ``s`` neurons with ``n_in`` inputs ranging over
+    ``in_range`` (lo, hi) and a transfer function whose active input range is ``active``:
+    w = 0.7 s^(1/r) · normr(rands(s, r)); b = 0.7 s^(1/r) · linspace(-1, 1, s) · sign(w[:, 0]);
+    both scaled to the active range, then the input range mapped onto [-1, 1]."""
+    torch = _torch()
+    mag = 0.7 * s ** (1.0 / n_in)
+    w = _rands(g, s, n_in)
+    w = mag * w / w.norm(dim=1, keepdim=True)
+    b = (torch.zeros(s, dtype=torch.float64) if s == 1
+         else mag * torch.linspace(-1.0, 1.0, s, dtype=torch.float64) * torch.sign(w[:, 0]))
+    x, y = 0.5 * (active[1] - active[0]), 0.5 * (active[1] + active[0])
+    w, b = x * w, x * b + y
+    lo, hi = in_range
+    xi = 2.0 / (hi - lo)
+    b = w @ torch.full((n_in,), 1.0 - hi * xi, dtype=torch.float64) + b
+    return w * xi, b
+
+
 def _init_params(spec: MLPSpec, seed: int):
-    """Nguyen–Widrow initialisation (MATLAB ``initnw``) of the hidden layers; small uniform output layer."""
+    """MATLAB's default initialisation of a ``feedforwardnet``/``fitnet`` (``initlay`` calling ``initnw``
+    on every layer; documentation: https://mathworks.com/help/deeplearning/ref/initnw.html and the
+    toolbox's ``initnw.m``): each hidden layer by Nguyen–Widrow (:func:`_calcnw`) with its transfer
+    function's active range (``ACTIVE_RANGE``) and its input range — [-1, 1] after ``mapminmax`` for
+    the first layer, the previous layer's output range (``OUTPUT_RANGE``: [0, 1] for logsig) after
+    that; the linear output layer (``purelin``, infinite active range) by ``rands`` (uniform [-1, 1]),
+    as ``initnw`` falls back to. ``relu`` (no finite active range) is initialised by ``rands`` too."""
     torch = _torch()
     g = torch.Generator().manual_seed(int(seed))
     parts = []
     sizes = spec.sizes
+    in_range = (-1.0, 1.0)
     for li, (n_in, n_out) in enumerate(zip(sizes[:-1], sizes[1:])):
-        if li < len(sizes) - 2:
-            beta = 0.7 * n_out ** (1.0 / n_in)
-            W = torch.rand(n_out, n_in, generator=g, dtype=torch.float64) * 2 - 1
-            W = beta * W / W.norm(dim=1, keepdim=True)
-            b = beta * (torch.rand(n_out, generator=g, dtype=torch.float64) * 2 - 1)
-            if spec.activation == "logsig":  # logsig's active region is 4x wider than tansig's
-                W, b = 4 * W, 4 * b
+        hidden = li < len(sizes) - 2
+        if hidden and spec.activation in ACTIVE_RANGE:
+            W, b = _calcnw(g, n_in, n_out, in_range, ACTIVE_RANGE[spec.activation])
+            in_range = OUTPUT_RANGE[spec.activation]
         else:
-            lim = 1.0 / np.sqrt(n_in)
-            W = lim * (torch.rand(n_out, n_in, generator=g, dtype=torch.float64) * 2 - 1)
-            b = lim * (torch.rand(n_out, generator=g, dtype=torch.float64) * 2 - 1)
+            W, b = _rands(g, n_out, n_in), _rands(g, n_out)
+            in_range = (-1.0, 1.0)
         parts += [W.reshape(-1), b]
     return torch.cat(parts)
 

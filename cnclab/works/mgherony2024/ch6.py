@@ -721,3 +721,18 @@ def r2_from_printed_training_R() -> dict:
     (0.99512² = 0.9903 for a1, 0.99892² = 0.9978 for a2)."""
     f = printed_ann_figures()
     return {m: float(f.loc[m, "r_train"]) ** 2 for m in f.index}
+
+
+@functools.cache
+def ann_seed_intervals() -> dict:
+    """``<model>.<stat>`` -> :class:`Interval` (min … max over the :data:`N_SEEDS` LM seeds, centre = the
+    median) for every ``ROW_STATS`` statistic: what MATLAB-default training (``initnw``, ``dividerand``,
+    ``trainlm``) gives run to run. A printed value inside it is one possible run; which one the thesis
+    drew depends on MATLAB's random stream, which is not printed."""
+    out = {}
+    for model in ARCHITECTURES:
+        t = ann_seed_table(model).drop(index=["printed", "percentile"])
+        for col in ROW_STATS:
+            v = t[col].astype(float)
+            out[f"{model}.{col}"] = Interval(float(v.min()), float(v.max()), center=float(v.median()))
+    return out
