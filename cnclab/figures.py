@@ -9,8 +9,8 @@ show these figures call the same recipes, so the notebook and the paper figure c
 
 ``python -m cnclab figure NAME --width-mm 85 --format pdf -o DIR`` is the command line;
 ``python -m cnclab figure --list`` lists the covered figures. Covered so far: the figures whose
-plotting lives in the package or was moved here from its notebook (Jacsó Fig 3-1; Mgherony Fig 5-6,
-5-7, 5-8/5-9, 6-2, 6-3, 6-10); the other notebook figures still draw in their notebook cell
+plotting lives in the package or was moved here from its notebook (Jacsó Fig 3-1; Mgherony Fig 3-5,
+3-6/3-7/3-8, the three other ch. 3 figures, 5-6, 5-7, 5-8/5-9, 6-2, 6-3, 6-10); the other notebook figures still draw in their notebook cell
 (``--list`` shows the state).
 
 >>> FIGURES["fig5-6_deff_vs_depth_of_cut"].work
@@ -26,11 +26,13 @@ from typing import Callable
 import numpy as np
 
 from . import clihelp
+from .cutting.roughness import ideal_cusp_profile
 from .geometry import ball_end as be
+from .geometry import cusp
 from .geometry import engagement as eng
 from .paths import build_dir
 from .plotting import STYLE_PATH, WIDTH_PRESETS_MM, export_figure, figsize
-from .works.mgherony2024 import ch4_5, ch6
+from .works.mgherony2024 import ch3, ch4_5, ch6
 
 __all__ = ["FIGURES", "Recipe", "draw", "render", "main"]
 
@@ -130,6 +132,96 @@ def fig5_8_5_9_deff_vs_feed_direction():
         ax.set(xlabel="A_f [deg]", title=f"a_p = {ap_:g} mm (Fig 5-{8 if ap_ == 1 else 9})")
     axs[0].set_ylabel("distance from axis ('D_eff' of the thesis) [mm]")
     axs[0].legend()
+    return fig
+
+
+@_register("ch3_cusp_approximation_error", "mgherony2024",
+           "Mgherony (2024) ch. 3: underestimate of the cusp height by eq 3-2/3-4 against s/RE, Table 3-4 parts")
+def ch3_cusp_approximation_error():
+    import matplotlib.pyplot as plt
+
+    parts = ch3.parts()
+    ratio = np.linspace(0.01, 1.2, 300)
+    fig, ax = plt.subplots(figsize=figsize(0.85, 0.85))
+    ax.plot(ratio, -100 * cusp.approximation_relative_error(ratio, 1.0), label="eq 3-2 / 3-4 vs exact")
+    for part, r in parts.iterrows():
+        err = -100 * cusp.approximation_relative_error(r.spacing_mm, r.RE_mm)
+        ax.plot(r.spacing_mm / r.RE_mm, err, "o", color="C1" if r.process == "milling" else "C0")
+        ax.annotate(part, (r.spacing_mm / r.RE_mm, err), textcoords="offset points", xytext=(3, 3), fontsize=7)
+    ax.set(xlabel="spacing / corner radius  s/RE", ylabel="underestimate of CH [%]",
+           title="Error of the cusp-height approximation (Fig 3-1 geometry)")
+    return fig
+
+
+@_register("fig3-5_rz_ra_ratio", "mgherony2024", "Mgherony (2024) Fig 3-5: Rz/Ra of the turned and milled parts")
+def fig3_5_rz_ra_ratio():
+    import matplotlib.pyplot as plt
+
+    parts, stats = ch3.parts(), ch3.statistics()
+    fig, axes = plt.subplots(1, 2, figsize=figsize(1.15, 0.8), sharey=True)
+    for ax, proc in zip(axes, ["turning", "milling"]):
+        sub = parts[parts.process == proc]
+        ax.bar(sub.index, sub.Rz_um / sub.Ra_um, color="C0" if proc == "turning" else "C1")
+        ax.axhline(stats[f"ratio.{proc}"], color="k", lw=0.8, ls="--", label=f"mean {stats[f'ratio.{proc}']:.3f}")
+        ax.set(title=f"{proc} (Fig 3-5 {'a' if proc == 'turning' else 'b'})", xlabel="part")
+        ax.legend()
+    axes[0].set_ylabel("Rz / Ra")
+    return fig
+
+
+@_register("fig3-6_3-7_3-8_roughness_vs_cusp_height", "mgherony2024",
+           "Mgherony (2024) Fig 3-6, 3-7, 3-8: Ra and Rz against the cusp height with the linear fits")
+def fig3_6_3_7_3_8_roughness_vs_cusp_height():
+    import matplotlib.pyplot as plt
+
+    parts, stats = ch3.parts(), ch3.statistics()
+    fig, axes = plt.subplots(1, 3, figsize=figsize(1.5, 0.8), sharey=True)
+    for ax, (group, fig_no) in zip(axes, [("turning", "3-6"), ("milling", "3-7"), ("both", "3-8")]):
+        sub = parts if group == "both" else parts[parts.process == group]
+        xs = np.linspace(0, sub.CH_um.max() * 1.05, 50)
+        for resp, marker in [("Ra", "o"), ("Rz", "s")]:
+            ax.plot(sub.CH_um, sub[f"{resp}_um"], marker, ls="", label=resp)
+            b0, b1 = stats[f"linear.{group}.{resp}.intercept"], stats[f"linear.{group}.{resp}.slope"]
+            ax.plot(xs, b0 + b1 * xs, lw=0.8, label=f"{resp} = {b1:.4f}·CH + {b0:.4f}")
+        ax.set(title=f"{group} (Fig {fig_no})", xlabel="CH [µm]")
+        ax.legend(fontsize=6)
+    axes[0].set_ylabel("roughness [µm]")
+    return fig
+
+
+@_register("ch3_hybrid_model_erratum", "mgherony2024",
+           "Mgherony (2024) eqs 3-10 ... 3-12: the hybrid roughness model as printed and inverted")
+def ch3_hybrid_model_erratum():
+    import matplotlib.pyplot as plt
+
+    parts = ch3.parts()
+    fig, ax = plt.subplots(figsize=figsize(0.7, 0.95))
+    for resp, c, m in [("Ra", (1.94, -1.68, 11.6), "o"), ("Rz", (0.24, -0.37, 3.45), "s")]:
+        C = c[0] + c[1] * parts.RE_mm + c[2] * parts.p_mm
+        ax.plot(parts[f"{resp}_um"], parts.CH_um / C, m, label=f"{resp}: Rx = CH / C (printed coefficients)")
+        ax.plot(parts[f"{resp}_um"], parts.CH_um * C, m, mfc="none", label=f"{resp}: Rx = C·CH (eq 3-10 as printed)")
+    lim = [0, 22]
+    ax.plot(lim, lim, "k", lw=0.6)
+    ax.set(xlim=lim, ylim=[0, 40], xlabel="measured [µm]", ylabel="model [µm]", title="Hybrid model, eqs 3-10 … 3-12")
+    ax.legend(fontsize=6)
+    return fig
+
+
+@_register("ch3_ideal_profile_share", "mgherony2024",
+           "Mgherony (2024) ch. 3: the ideal profile of T3 and the share of Ra, Rz the geometry explains")
+def ch3_ideal_profile_share():
+    import matplotlib.pyplot as plt
+
+    parts, ideal = ch3.parts(), ch3.ideal_vs_measured()
+    fig, axes = plt.subplots(1, 2, figsize=figsize(1.35, 0.8))
+    x, z = ideal_cusp_profile(parts.loc["T3", "spacing_mm"], parts.loc["T3", "RE_mm"], 1.0, n=4001)
+    axes[0].plot(x, 1000 * z)
+    axes[0].set(xlabel="x [mm]", ylabel="z [µm]", title="Ideal profile of T3 (f = 0.2 mm, RE = 0.4 mm)")
+    w, idx = 0.38, np.arange(len(ideal))
+    axes[1].bar(idx - w / 2, ideal.Rz_share * 100, w, label="Rz ideal / measured")
+    axes[1].bar(idx + w / 2, ideal.Ra_share * 100, w, label="Ra ideal / measured")
+    axes[1].set(xticks=idx, xticklabels=ideal.index, ylabel="explained by geometry [%]")
+    axes[1].legend(fontsize=7)
     return fig
 
 
