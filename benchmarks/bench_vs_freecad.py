@@ -10,7 +10,9 @@ engagement-based feed control (``freecad_comparison.feed_controlled``), the old 
 (STRATEGIES["constant-engagement"]), ``hybrid_path`` on the pockets with a start hole, FreeCAD Adaptive.
 Columns: p95, max, share above theta+5 / +15 deg, entry max, retracts, plunges and rapids into
 material, uncut beyond the unreachable corners, program time (as written), plan time, wall gouge;
-then every row divided by FreeCAD's, measured in one run.
+then every row divided by FreeCAD's, measured in one run. Last, the written programs: motion blocks
+of adaptive_clearing's program as the one writer writes it (arcs fitted within 0.005 mm) against
+FreeCAD's program (issue 24 target: ours <= FreeCAD's on every pocket).
 
 FreeCAD is run live through its own Python (benchmarks/freecad_adaptive.py) when ``/usr/bin/python3``
 can import it (Debian: ``apt-get install -y --no-install-recommends freecad``); otherwise (or with
@@ -36,7 +38,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from freecad_adaptive import freecad_available, run_freecad  # noqa: E402
 
 from cnclab.fileio import atomic_write  # noqa: E402
-from cnclab.nc.gcode import read_toolpath  # noqa: E402
+from cnclab.nc.arcfit import DEFAULT_TOL_MM  # noqa: E402
+from cnclab.nc.gcode import read_gcode, read_toolpath  # noqa: E402
+from cnclab.nc.program import write_program  # noqa: E402
 from cnclab.works.jacso2021 import freecad_comparison as fx  # noqa: E402
 
 
@@ -82,11 +86,14 @@ def main(argv):
     # the planners' compiled kernels are loaded (or compiled) once before any timing, as FreeCAD's
     # plan time excludes its own start-up
     fx.warm_planners(sorted({s for n in names for s in planner_rows(fx.job(n), adaptive_only).values()}))
-    tables = {}
+    tables, written = {}, {}
     for name in names:
         job = fx.job(name)
         freecad = freecad_live(name, job, update) if live else None
-        T = fx.comparison(name, planner_rows(job, adaptive_only), fast=fast, freecad=freecad)
+        keep = {}
+        T = fx.comparison(name, planner_rows(job, adaptive_only), fast=fast, freecad=freecad, keep=keep)
+        fc_file = fx.FIXTURES / f"{name}.ngc" if (update or not live) else Path("/tmp") / f"cnclab_fc_{name}.ngc"
+        written[name] = written_programs(job, keep, fc_file)
         tables[name] = T
         R = fx.ratios(T)
         print(f"\n== {name} ({fx.POCKETS[name]}; theta = {job.theta_deg:.2f} deg, dixel {T.attrs['resolution_mm']} mm"
@@ -101,7 +108,26 @@ def main(argv):
     print("\n== summary: adaptive_clearing / FreeCAD Adaptive, measured in this run")
     with pd.option_context("display.width", 250, "display.max_columns", 20, "display.precision", 3):
         print(fx.summary(tables))
+        print("\n== written programs: motion blocks (G0/G1/G2/G3 read back by cnclab's reader), "
+              f"ours with arcs fitted within {DEFAULT_TOL_MM} mm; FreeCAD's committed/live program")
+        print(pd.DataFrame(written).T)
     return tables
+
+
+def written_programs(job, keep, fc_file) -> dict:
+    """Motion blocks of the programs as written: the first planner row's path through the one writer
+    (:func:`cnclab.nc.program.write_program`, default arc fitting) and FreeCAD's program."""
+    label = next(k for k in keep if k != fx.FREECAD) if any(k != fx.FREECAD for k in keep) else None
+    out = {}
+    if label is not None:
+        moves = read_gcode(write_program(keep[label][0], job)).moves
+        out["blocks ours"] = len(moves)
+        out["arc blocks ours"] = sum(m.motion in ("G2", "G3") for m in moves)
+    if fc_file.is_file():
+        out["blocks FreeCAD"] = len(read_gcode(fc_file.read_text(encoding="utf-8"), source=str(fc_file)).moves)
+    if "blocks ours" in out and out.get("blocks FreeCAD"):
+        out["blocks ratio"] = round(out["blocks ours"] / out["blocks FreeCAD"], 3)
+    return out
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from cnclab.nc.gcode import parse_gcode, program_time, read_gcode
-from cnclab.nc.program import START_BLOCK, check_program, save_program, write_program
+from cnclab.nc.program import START_BLOCK, check_program, write_program
 from cnclab.toolpath.path import Tool, ToolPath
 
 FREECAD = Path(__file__).parent / "fixtures" / "freecad"
@@ -28,11 +28,12 @@ def _pocket_path(tag_rapid=""):
 def test_start_block_tool_spindle_and_end():
     text = write_program(_pocket_path("cleared"), clearance_z=5, spindle_rpm=6366)
     lines = text.splitlines()
-    assert lines[2] == START_BLOCK
-    assert lines[3] == "T3 M6"
-    assert lines[4] == "S6366 M3"
-    assert lines[5].startswith("G0 X3.0000 Y0.0000 Z5.0000")   # over the first point at the clearance plane
-    assert lines[6].startswith("G1 Z1.0000")                    # fed down to the first point, never rapid
+    i = lines.index(START_BLOCK)
+    assert all(h.startswith("(") for h in lines[1:i])           # header comments only before it
+    assert lines[i + 1:i + 3] == ["T3 M6", "G43 H3"]
+    assert lines[i + 3] == "S6366 M3"
+    assert lines[i + 4].startswith("G0 X3.0000 Y0.0000 Z5.0000")   # over the first point at the clearance plane
+    assert lines[i + 5].startswith("G1 Z1.0000")                    # fed down to the first point, never rapid
     assert lines[-3:] == ["M5", "M30", "%"]
     chk = check_program(text, clearance_z=5)
     assert chk.ok, chk.errors
@@ -116,14 +117,14 @@ def test_written_programs_always_pass_the_checker(xy, depth, clear, decimals):
     assert back["feed_mm"] == pytest.approx(path.lengths()["feed_mm"], abs=tol)
 
 
-def test_save_program_is_atomic_and_never_overwrites_inputs(tmp_path):
+def test_written_program_file_is_atomic_and_never_overwrites_inputs(tmp_path):
     job = tmp_path / "job.json"
     job.write_text("{}")
     with pytest.raises(ValueError, match="refusing to overwrite"):
-        save_program(_pocket_path("cleared"), job, clearance_z=5, spindle_rpm=6000, inputs=[job])
+        write_program(_pocket_path("cleared"), out=job, clearance_z=5, spindle_rpm=6000, inputs=[job])
     assert job.read_text() == "{}"
-    out = save_program(_pocket_path("cleared"), tmp_path / "p.ngc", clearance_z=5, spindle_rpm=6000)
-    assert read_gcode(out.read_text()).end_word == "M30"
+    text = write_program(_pocket_path("cleared"), out=tmp_path / "p.ngc", clearance_z=5, spindle_rpm=6000)
+    assert (tmp_path / "p.ngc").read_text() == text and read_gcode(text).end_word == "M30"
 
 
 def test_bad_parameters():

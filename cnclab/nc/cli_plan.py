@@ -19,8 +19,10 @@ import sys
 from pathlib import Path
 
 from .. import clihelp
-from ..fileio import atomic_write, check_outputs
-from .program import check_program, write_program
+from ..fileio import check_outputs
+from .gcode import read_gcode
+from .machine import machine_for_dialect, machine_time
+from .program import COOLANT, DIALECTS, check_program, program_path, write_program
 
 from ..geometry.drawing import CHORD_TOL_MM
 from ..toolpath.from_drawing import load_job_input
@@ -32,7 +34,8 @@ __all__ = ["main", "plan_program", "planned_program"]
 
 def planned_program(job_file, strategy: str | None = None, source: str | None = None, *, cutting=None,
                     layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
-                    allow_uncut: bool = False):
+                    allow_uncut: bool = False, dialect: str = "linuxcnc", coolant: str | None = None, out=None,
+                    inputs=()):
     """Plan ``job_file`` with ``strategy`` (None: the planner's default) and write its program text:
     ``(text, job, path, check)`` — what ``python -m cnclab plan`` writes (also used by
     ``python -m cnclab programs``). Raises ``ValueError`` when the program fails the static safety
@@ -59,7 +62,8 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
     # a header line is a G-code comment: no parentheses inside
     header += ["WARNING --allow-uncut: " + w.replace("(", "[").replace(")", "]") for w in path.info.get("warnings", [])]
     header += ["WARNING job: " + w.replace("(", "[").replace(")", "]") for w in getattr(job, "warnings", ())]
-    text = write_program(path, job, header=header)
+    # with ``out`` the one writer checks the text and writes it atomically (nothing written on error)
+    text = write_program(path, job, header=header, dialect=dialect, coolant=coolant, out=out, inputs=inputs)
     src = str(source or job_file.with_suffix(".ngc").name)
     chk = check_program(text, clearance_z=job.clearance_z, top_z=getattr(job, "top_z", 0.0), source=src)
     if chk.errors:      # every planner tags its plunges into a start hole or cleared area 'cleared'
@@ -69,7 +73,7 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
 
 def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False, *, cutting=None,
                  layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
-                 allow_uncut: bool = False) -> Path:
+                 allow_uncut: bool = False, dialect: str = "linuxcnc", coolant: str | None = None) -> Path:
     """Plan ``job_file`` (a job file, or a drawing with ``cutting`` data, see :func:`planned_program`)
     with ``strategy`` (None: the planner's default) and write the program to ``out``; returns the
     output path. Raises ``ValueError`` when the written program fails the static safety check or
@@ -80,18 +84,23 @@ def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False
     inputs = [job_file] + ([Path(cutting)] if cutting is not None else [])
     check_outputs([out], inputs)
     text, job, path, chk = planned_program(job_file, strategy, source=str(out), cutting=cutting, layer=layer,
-                                           tolerance=tolerance, units=units, allow_uncut=allow_uncut)
+                                           tolerance=tolerance, units=units, allow_uncut=allow_uncut, dialect=dialect,
+                                           coolant=coolant, out=out, inputs=inputs)
     for w in path.info.get("warnings", []):
         print(f"warning: {w}", file=sys.stderr)
     name = strategy or path.info.get("strategy", "default")
-    atomic_write(out, text, inputs=inputs)
     if not quiet:
         for w in getattr(job, "warnings", ()):
             print(f"warning: {w}", file=sys.stderr)
         uncut = ", ".join(f"{u:.1f}" for u in path.info["uncut"]["uncut_mm2"])
-        print(f"wrote {out}: {len(path)} moves, strategy {name}, entries {chk.entries}, "
-              f"plunges below the stock top marked cleared or none: {chk.plunges_into_material == 0}, "
-              f"uncut beyond the unreachable corners by region: {uncut} mm^2")
+        moves = read_gcode(text).moves
+        t = program_path(path, job).time_s(job.rapid_mm_min)["total_s"]
+        m = machine_for_dialect(dialect)
+        print(f"wrote {out} ({dialect}): {len(path)} planned moves, {len(moves)} motion blocks, strategy {name}, "
+              f"entries {chk.entries}, plunges below the stock top marked cleared or none: "
+              f"{chk.plunges_into_material == 0}, uncut beyond the unreachable corners by region: {uncut} mm^2; "
+              f"program time {t / 60:.2f} min (length / feed), time_machine_s "
+              f"{machine_time(moves, m)['time_machine_s']:.1f} s ({m.name} model)")
     return out
 
 
@@ -124,10 +133,16 @@ def main(argv=None) -> int:
     ap.add_argument("--allow-uncut", action="store_true",
                     help="write the program even when it leaves more uncut area in a region than the limit "
                          "(1 mm^2 + 1 %% of the region's reachable area), with a WARNING in the output and the header")
+    ap.add_argument("--dialect", default="linuxcnc", choices=DIALECTS,
+                    help="controller dialect: linuxcnc (T M6, G43 H; default) or grbl (GRBL 1.1 words, lines <= 80 "
+                         "characters, tool named in a comment)")
+    ap.add_argument("--coolant", default=None, choices=sorted(COOLANT),
+                    help="coolant on after the spindle (flood M8, mist M7; grbl: flood only), off before M5")
     args = ap.parse_args(argv)
     try:
         plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
-                     tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut)
+                     tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut,
+                     dialect=args.dialect, coolant=args.coolant)
     except (ValueError, OSError, RuntimeError, KeyError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

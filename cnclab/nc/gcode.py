@@ -113,14 +113,18 @@ def _check_value(k: int, word: str, v, bound: float, positive: bool = False) -> 
 
 def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimals: int = 4,
                 feed_decimals: int = 1, comments: Sequence[str] | None = None,
-                start_block: Sequence[str] = ("G21 G90 G17 G94",), end_block: Sequence[str] = ("M30",)) -> str:
+                start_block: Sequence[str] = ("G21 G90 G17 G94",), end_block: Sequence[str] = ("M30",),
+                after_spindle_on: Sequence[str] = (), before_spindle_off: Sequence[str] = (),
+                percent: bool = True) -> str:
     """RS274/NGC text of ``moves`` (see module docstring for the conventions).
 
     ``header``: comment text (a string with newlines or a list of lines), written as ``( ... )``;
     ``decimals``: digits after the point for X Y Z I J [mm]; ``feed_decimals`` for F [mm/min] and S
     [rpm]; ``comments``: optional text per move, appended to its block as ``( ... )``;
     ``start_block``/``end_block``: lines written before the first/after the last move (``M5`` is
-    written before the end block whenever the spindle is on).
+    written before the end block whenever the spindle is on); ``after_spindle_on`` lines follow every
+    ``S.. M3`` that starts the spindle, ``before_spindle_off`` lines precede every ``M5`` (coolant
+    M8/M9); ``percent``: the ``%`` first and last lines (False for controllers that do not read them).
 
     Refuses (``ValueError`` naming the move index and word) a non-finite or out-of-range number
     (:data:`MAX_COORD_MM`, :data:`MAX_FEED_MM_MIN`, :data:`MAX_SPINDLE_RPM`) and an arc whose start and
@@ -129,7 +133,7 @@ def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimal
     """
     if not isinstance(decimals, int) or not 0 <= decimals <= 8:
         raise ValueError(f"decimals must be an int in [0, 8], got {decimals!r}")
-    lines = ["%"]
+    lines = ["%"] if percent else []
     hdr = header.splitlines() if isinstance(header, str) else list(header)
     for h in hdr:
         if "(" in h or ")" in h:
@@ -155,7 +159,12 @@ def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimal
             continue  # zero-length move after rounding: nothing to say, modal state untouched
         sp = None if mv.spindle is None else _fmt(mv.spindle, 0)
         if sp != spindle:
-            lines.append("M5" if sp is None else f"S{sp} M3")
+            if sp is None:
+                lines += list(before_spindle_off) + ["M5"]
+            else:
+                lines.append(f"S{sp} M3")
+                if spindle is None:
+                    lines += list(after_spindle_on)
             spindle = sp
         words = []
         if mv.motion != motion or mv.motion in ("G2", "G3"):
@@ -190,8 +199,8 @@ def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimal
             line += f" ({c})"
         lines.append(line)
     if spindle is not None:
-        lines.append("M5")
-    lines += list(end_block) + ["%"]
+        lines += list(before_spindle_off) + ["M5"]
+    lines += list(end_block) + (["%"] if percent else [])
     return "\n".join(lines) + "\n"
 
 

@@ -1,13 +1,22 @@
 """Machine-safe NC programs: the one writer every output uses, and a static safety checker.
 
-:func:`write_program` turns a :class:`~cnclab.toolpath.path.ToolPath` into RS274/NGC text:
+:func:`write_program` turns a :class:`~cnclab.toolpath.path.ToolPath` into a program for a
+``dialect`` — ``linuxcnc`` (RS274/NGC, the default) or ``grbl`` (GRBL 1.1) — returns its text and,
+given ``out``, writes it atomically (the one way a program reaches disk):
 
+* a header of comments: clearance plane and stock top, dialect and cnclab version, the tool, the
+  stock (pocket bounds, depth, levels, job file), the strategy, the estimated run time (length /
+  feed), the entry feed and the arc-fitting tolerance;
 * start block ``G21 G90 G17 G94 G40 G49 G80`` (mm, absolute, XY plane, feed per minute, no cutter
-  or length compensation, no canned cycle), ``T.. M6`` when a tool is given, ``S.. M3`` before the
-  first motion (so before the first cutting move), ``G0 Z<clearance>`` and a rapid over the first
+  or length compensation, no canned cycle); linuxcnc: ``T.. M6`` then ``G43 H..`` when a tool is
+  given; grbl: the tool in a comment (GRBL 1.1 has no ``M6`` and only ``G43.1``), no ``%`` lines,
+  every line at most 80 characters; ``S.. M3`` before the first motion (so before the first
+  cutting move), the coolant word after it when asked, ``G0 Z<clearance>`` and a rapid over the first
   point at the clearance plane;
-* every path move written as it is (G0 for rapids, G1/G2/G3 at its feed), so the program's time is
-  the path's :meth:`~cnclab.toolpath.path.ToolPath.time_s`;
+* the path's moves with helix and ramp entries at the entry feed (job key ``entry_feed_mm_min``,
+  default :data:`ENTRY_FEED_FRACTION` x ``feed_mm_min``) and runs of short moves fitted as G2/G3
+  arcs and longer lines within 0.005 mm (:mod:`cnclab.nc.arcfit`); :func:`program_path` is that
+  path, its :meth:`~cnclab.toolpath.path.ToolPath.time_s` the program's time;
 * rapids only at or above ``clearance_z``, or straight up (a retract), or where the path marks the
   move as inside cleared area (its ``cleared`` flag, the planner's proof; written as a ``(cleared)``
   comment on the block, as on any other move the path flags ``cleared``, e.g. a plunge into cleared
@@ -15,7 +24,11 @@
   clearance plane is refused
   (``ValueError`` naming the move index). The first point is reached from the clearance plane by
   a feed move when it lies below it (never a rapid onto the part);
-* the end: a rapid straight up to ``clearance_z``, ``M5``, ``M30``.
+* the end: a rapid straight up to ``clearance_z``, (``M9``), ``M5``, ``M30``.
+
+A number the program cannot carry (a feed that would be written ``F0.0``, a spindle speed written
+``S0``, a tool number beyond the controller's T range, a depth that rounds to the stock top...) is
+refused with the job key that produced it.
 
 :func:`check_program` reads a program (any post's) and checks: the spindle is on before the first
 feed move, no G0 below the clearance plane (except straight up, or a block commented
@@ -26,11 +39,17 @@ spindle (``M5``) and ends (``M30`` or ``M2``).
 >>> from cnclab.toolpath.path import Tool, ToolPath
 >>> p = ToolPath.build([[0, 0, 1], [0, 0, -1], [10, 0, -1]], kind=["rapid", "plunge", "cut"], feed=300)
 >>> text = write_program(p, clearance_z=5, tool=Tool(6), spindle_rpm=6000)
->>> print(text)   # doctest: +NORMALIZE_WHITESPACE
+>>> print(text)   # doctest: +NORMALIZE_WHITESPACE, +ELLIPSIS
 %
 (cnclab program: mm, clearance plane Z5 mm, stock top Z0 mm)
+(dialect linuxcnc, written by cnclab ...)
+(tool T1: D6 mm flat end mill, 2 teeth)
+(estimated run time 0.05 min: feed moves 0.05 min at their F, rapids 0.00 min at 10000 mm/min; ...)
+(estimated machine time 0.06 min on the small VMC, LinuxCNC model: ...)
+(arcs fitted within 0.005 mm of the planned path)
 G21 G90 G17 G94 G40 G49 G80
 T1 M6
+G43 H1
 S6000 M3
 G0 X0.0000 Y0.0000 Z5.0000
 G1 Z1.0000 F300.0
@@ -41,76 +60,222 @@ M5
 M30
 %
 >>> check_program(text, clearance_z=5).errors
-['<string>:8: word G1: plunge into material below the stock top Z0 (not marked cleared)']
+['<string>:14: word G1: plunge into material below the stock top Z0 (not marked cleared)']
+>>> print(write_program(p, clearance_z=5, tool=Tool(6), spindle_rpm=6000, dialect="grbl",
+...                     coolant="flood"))   # doctest: +NORMALIZE_WHITESPACE, +ELLIPSIS
+(cnclab program: mm, clearance plane Z5 mm, stock top Z0 mm)
+...
+(load tool T1 before running: GRBL has no tool change M6 and no G43)
+G21 G90 G17 G94 G40 G49 G80
+S6000 M3
+M8
+G0 X0.0000 Y0.0000 Z5.0000
+...
+G0 Z5.0000
+M9
+M5
+M30
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
 
+from .. import __version__
 from ..fileio import atomic_write
-from ..toolpath.path import Move, Tool, ToolPath
-from .gcode import GcodeProgram, read_gcode, read_program_text, write_gcode
+from ..toolpath.path import Move, ToolPath
+from .arcfit import DEFAULT_TOL_MM, fit_arcs
+from .machine import machine_for_dialect, machine_time
+from .gcode import (MAX_COORD_MM, MAX_FEED_MM_MIN, MAX_SPINDLE_RPM, GcodeProgram, program_time, read_gcode,
+                    read_program_text, write_gcode)
 
-__all__ = ["write_program", "save_program", "check_program", "ProgramCheck", "START_BLOCK"]
+__all__ = ["write_program", "program_path", "check_program", "ProgramCheck", "START_BLOCK", "DIALECTS",
+           "TOOL_NUMBER_RANGE", "ENTRY_FEED_FRACTION", "GRBL_LINE_MAX", "COOLANT"]
 
 START_BLOCK = "G21 G90 G17 G94 G40 G49 G80"
 CLEARED = "cleared"
 _TOL = 1e-6
 
 
-def _param(job, name, value):
-    if value is not None:
-        return value
-    return getattr(job, name, None) if job is not None else None
+#: the T word range each controller reads. LinuxCNC: ``read_t`` (src/emc/rs274ngc/interp_read.cc)
+#: reads the T number as a C ``int`` (larger values overflow to "Negative tool id used") and
+#: ``T0 M6`` unloads the spindle, so 1 .. 2**31 - 1 (the tool must also be in the machine's tool
+#: table); GRBL 1.1: ``MAX_TOOL_NUMBER 255`` (grbl/gcode.c, "limited by max unsigned 8-bit value").
+TOOL_NUMBER_RANGE = {"linuxcnc": (1, 2 ** 31 - 1), "grbl": (0, 255)}
+DIALECTS = tuple(TOOL_NUMBER_RANGE)
+#: GRBL 1.1 line buffer: at most 80 characters per line (``LINE_BUFFER_SIZE``, data/nc/grbl11_grammar.json)
+GRBL_LINE_MAX = 80
+#: default entry feed (helix and ramp entries) as a fraction of the cutting feed ``feed_mm_min``
+ENTRY_FEED_FRACTION = 0.5
+#: coolant words: flood M8, mist M7 (M7 is off in GRBL's default build: refused for grbl)
+COOLANT = {"flood": "M8", "mist": "M7"}
+_FEED_DEC = 1
+_ENTRY_KINDS = ("helix", "ramp")
+
+#: where a feed move's F comes from, by move kind: (job key, how it is derived) — for the messages
+_FEED_SOURCE = {
+    "cut": ("feed_mm_min", "or f_z x teeth x spindle_rpm"),
+    "plunge": ("feed_mm_min", "or f_z x teeth x spindle_rpm"),
+    "retract": ("feed_mm_min", "or f_z x teeth x spindle_rpm"),
+    "link": ("link_feed", "the linking feed"),
+    "helix": ("entry_feed_mm_min", f"default {ENTRY_FEED_FRACTION:g} x feed_mm_min"),
+    "ramp": ("entry_feed_mm_min", f"default {ENTRY_FEED_FRACTION:g} x feed_mm_min"),
+}
 
 
-def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None, tool: Tool | None = None,
-                  spindle_rpm: float | None = None, top_z: float | None = None, header=(),
-                  decimals: int = 4) -> str:
-    """RS274/NGC text of ``path`` as a machine-safe program (see the module docstring).
+@dataclasses.dataclass
+class _Setup:
+    """The numbers a program is written with, each with where it came from (for error messages)."""
 
-    ``job`` (optional, a :class:`cnclab.toolpath.job.Job` or any object with ``clearance_z``,
-    ``tool``, ``spindle_rpm``, ``top_z``) supplies defaults for the keyword parameters;
-    ``clearance_z`` [mm] the clearance plane; ``tool`` (``T.. M6``; default ``path.tool``);
-    ``spindle_rpm`` [rpm] (default: the path's first set spindle speed; required);
-    ``top_z`` [mm] stock top (default 0; stated in the header); ``header`` extra comment lines;
-    ``decimals`` digits of X Y Z I J.
-    Raises ``ValueError`` naming the move index for a rapid below the clearance plane that the path
-    does not mark as cleared, and for non-finite or out-of-range numbers (:func:`write_gcode`).
-    """
-    clearance_z = _param(job, "clearance_z", clearance_z)
-    tool = _param(job, "tool", tool) or path.tool
-    spindle_rpm = _param(job, "spindle_rpm", spindle_rpm)
-    top_z = _param(job, "top_z", top_z)
-    top_z = 0.0 if top_z is None else float(top_z)
-    if clearance_z is None or not math.isfinite(clearance_z):
-        raise ValueError(f"clearance_z must be a finite height in mm, got {clearance_z!r}")
-    clearance_z = float(clearance_z)
-    if not clearance_z > top_z:
-        raise ValueError(f"clearance_z ({clearance_z} mm) must be above the stock top top_z ({top_z} mm)")
-    if len(path) == 0:
-        raise ValueError("path has no moves")
-    if spindle_rpm is None:
+    values: dict
+    origin: dict
+
+    def __getitem__(self, key):
+        return self.values.get(key)
+
+    def blame(self, key: str) -> str:
+        return self.origin.get(key, f"write_program parameter {key!r}")
+
+
+_JOB_ATTR = {"clearance_z": "clearance_z", "top_z": "top_z", "spindle_rpm": "spindle_rpm", "tool": "tool",
+             "rapid_mm_min": "rapid_mm_min", "entry_feed_mm_min": "entry_feed_mm_min",
+             "feed_mm_min": "feed_mm_min", "link_feed": "link_feed_mm_min"}
+_OVERRIDES = {"clearance_z", "top_z", "spindle_rpm", "tool", "rapid_mm_min", "entry_feed_mm_min"}
+
+
+def _setup(path: ToolPath, job, overrides: dict) -> _Setup:
+    unknown = set(overrides) - _OVERRIDES
+    if unknown:
+        raise TypeError(f"write_program got unknown keyword(s) {sorted(unknown)}; allowed: {sorted(_OVERRIDES)}")
+    src = getattr(job, "source", None) or "the job"
+    values, origin = {}, {}
+    for key, attr in _JOB_ATTR.items():
+        if overrides.get(key) is not None:
+            values[key], origin[key] = overrides[key], f"write_program parameter {key!r}"
+        elif job is not None and getattr(job, attr, None) is not None:
+            values[key], origin[key] = getattr(job, attr), f"job key {key!r} of {src}"
+    if values.get("tool") is None and path.tool is not None:
+        values["tool"], origin["tool"] = path.tool, "the path's tool"
+    if job is not None and overrides.get("spindle_rpm") is None and getattr(job, "v_c", None) is not None:
+        origin["spindle_rpm"] = (f"job key 'spindle_rpm' of {src}, or v_c x 1000 / (pi x tool_diameter) with "
+                                 f"v_c = {job.v_c!r} m/min, tool_diameter = {job.tool.diameter!r} mm")
+    if values.get("spindle_rpm") is None:
         finite = path.spindle[np.isfinite(path.spindle)]
-        spindle_rpm = float(finite[0]) if len(finite) else None
-    if spindle_rpm is None or not (math.isfinite(spindle_rpm) and spindle_rpm > 0):
-        raise ValueError(f"spindle_rpm must be a finite speed > 0 rpm (the program starts the spindle "
-                         f"before cutting), got {spindle_rpm!r}")
-    rapid = path.is_kind("rapid")
+        if len(finite):
+            values["spindle_rpm"], origin["spindle_rpm"] = float(finite[0]), "the path's spindle speed"
+    if values.get("entry_feed_mm_min") is None and values.get("feed_mm_min") is not None:
+        values["entry_feed_mm_min"] = ENTRY_FEED_FRACTION * float(values["feed_mm_min"])
+        origin["entry_feed_mm_min"] = (f"default entry feed {ENTRY_FEED_FRACTION:g} x job key 'feed_mm_min' "
+                                       f"of {src}")
+    return _Setup(values, origin)
+
+
+def _limit(setup: _Setup, key: str, v, lo: float, hi: float, unit: str, rule: str = "") -> float:
+    """``v`` as a float within [lo, hi], else ValueError naming ``key`` and where it came from."""
+    ok = v is not None and not isinstance(v, bool) and isinstance(v, (int, float, np.floating, np.integer))
+    ok = ok and math.isfinite(float(v)) and lo <= float(v) <= hi
+    if not ok:
+        raise ValueError(f"{key} = {v!r} {unit} ({setup.blame(key)}) is outside what the program writer "
+                         f"can write: [{lo:g}, {hi:g}] {unit}{'; ' + rule if rule else ''}")
+    return float(v)
+
+
+def _check_setup(setup: _Setup, dialect: str, decimals: int) -> None:
+    """Range checks of the job's numbers, each error naming the job key (issue 28 item 3)."""
+    cz = _limit(setup, "clearance_z", setup["clearance_z"], -MAX_COORD_MM, MAX_COORD_MM, "mm")
+    tz = _limit(setup, "top_z", 0.0 if setup["top_z"] is None else setup["top_z"], -MAX_COORD_MM, MAX_COORD_MM, "mm")
+    if not cz > tz:
+        raise ValueError(f"clearance_z ({cz:g} mm, {setup.blame('clearance_z')}) must be above the stock top "
+                         f"top_z ({tz:g} mm, {setup.blame('top_z')})")
+    smin = 0.5    # S is written as an integer rpm: below 0.5 it would read S0 (spindle stopped)
+    _limit(setup, "spindle_rpm", setup["spindle_rpm"], smin, MAX_SPINDLE_RPM, "rpm",
+           "the program starts the spindle before cutting, with S written as a whole rpm")
+    fmin = 0.5 * 10.0 ** -_FEED_DEC   # F is written with one decimal: below 0.05 it would read F0.0
+    for key in ("feed_mm_min", "link_feed", "entry_feed_mm_min", "rapid_mm_min"):
+        if setup[key] is not None:
+            _limit(setup, key, setup[key], fmin, MAX_FEED_MM_MIN, "mm/min", f"F is written with {_FEED_DEC} decimal")
+    tool = setup["tool"]
+    if tool is not None:
+        lo, hi = TOOL_NUMBER_RANGE[dialect]
+        n = getattr(tool, "number", None)
+        if not (isinstance(n, (int, float, np.integer)) and math.isfinite(n) and float(n).is_integer()
+                and lo <= n <= hi):
+            raise ValueError(f"tool_number = {n!r} ({setup.blame('tool')}) is outside the {dialect} T word range "
+                             f"[{lo}, {hi}]" + (" (T0 M6 unloads the spindle)" if dialect == "linuxcnc" else ""))
+
+
+def _check_path_numbers(path: ToolPath, setup: _Setup, decimals: int) -> None:
+    """Every feed and coordinate of the path writable; a bad one is traced to the job key that
+    gives moves of its kind their feed (or to the job's geometry for a coordinate)."""
+    kinds = path.kinds()
+    fmin = 0.5 * 10.0 ** -_FEED_DEC
+    feedmove = ~path.is_kind("rapid")
+    bad = feedmove & ~((path.feed >= fmin) & (path.feed <= MAX_FEED_MM_MIN))
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        key, how = _FEED_SOURCE.get(kinds[k], ("feed_mm_min", "the planner's feed"))
+        val = setup[key]
+        raise ValueError(f"move {k} ({kinds[k]}): feed {path.feed[k]!r} mm/min cannot be written as F > 0 with "
+                         f"{_FEED_DEC} decimal (range [{fmin:g}, {MAX_FEED_MM_MIN:g}] mm/min); moves of this kind take "
+                         f"their feed from {key} = {val!r} ({how}; {setup.blame(key)})")
+    big = np.abs(path.xyz) > MAX_COORD_MM
+    if big.any():
+        k, ax = (int(v) for v in np.argwhere(big)[0])
+        raise ValueError(f"move {k} ({kinds[k]}): {'XYZ'[ax]} = {path.xyz[k, ax]:g} mm beyond the writer's "
+                         f"+-{MAX_COORD_MM:g} mm: check the job's polygon coordinates, depth and a_p (mm)")
+
+
+def _check_depth(path: ToolPath, job, setup: _Setup, decimals: int) -> None:
+    """A pocket job must cut below its stock top as written (a_p/depth rounding to nothing)."""
+    if job is None or getattr(job, "a_p", None) is None:
+        return
+    feed = ~path.is_kind("rapid")
+    tz = float(setup["top_z"] or 0.0)
+    if feed.any() and round(float(path.xyz[feed, 2].min()), decimals) >= round(tz, decimals):
+        raise ValueError(f"a_p = {job.a_p!r} mm, depth = {job.depth!r} mm (job keys 'a_p'/'depth' of "
+                         f"{getattr(job, 'source', 'the job')}): no feed move goes below the stock top Z{tz:g} "
+                         f"once written with {decimals} decimals")
+
+
+def program_path(path: ToolPath, job=None, *, arc_tol_mm: float | None = DEFAULT_TOL_MM, decimals: int = 4,
+                 **values) -> ToolPath:
+    """The path as :func:`write_program` writes it (before its approach from and retract to the
+    clearance plane): helix and ramp entries at the entry feed (``entry_feed_mm_min``: the job key,
+    else :data:`ENTRY_FEED_FRACTION` x the job's ``feed_mm_min``; without either, as planned) and
+    arcs fitted within ``arc_tol_mm`` (:func:`cnclab.nc.arcfit.fit_arcs`; curved G0 runs in
+    cleared area as G2/G3 links at ``rapid_mm_min``). Its :meth:`~ToolPath.time_s` is the written
+    program's time. ``values``: overrides of the job's numbers (see :func:`write_program`)."""
+    setup = _setup(path, job, values)
+    return _program_path(path, setup, arc_tol_mm, decimals)[0]
+
+
+def _program_path(path: ToolPath, setup: _Setup, arc_tol_mm, decimals) -> tuple:
+    notes = []
+    ef = setup["entry_feed_mm_min"]
+    entry = path.is_kind(*_ENTRY_KINDS)
+    if ef is not None and entry.any():
+        path = dataclasses.replace(path, feed=np.where(entry, float(ef), path.feed))
+        notes.append(f"helix and ramp entries at F{float(ef):g} mm/min ({setup.blame('entry_feed_mm_min')})")
+    elif entry.any():
+        notes.append("helix and ramp entries at the planned feed (no job: no entry_feed_mm_min)")
+    if arc_tol_mm is not None and arc_tol_mm <= 2 * 10.0 ** -decimals:
+        notes.append(f"no arc fitting: tolerance {arc_tol_mm:g} mm not above 2 units of the {decimals}-decimal output")
+    elif arc_tol_mm is not None:
+        rapid = setup["rapid_mm_min"]
+        path = fit_arcs(path, arc_tol_mm, decimals=decimals, rapid_arc_feed_mm_min=rapid)
+        notes.append(f"arcs fitted within {arc_tol_mm:g} mm of the planned path"
+                     + (f", curved G0 runs in cleared area as G2/G3 at F{rapid:g}" if rapid else ""))
+    return path, notes
+
+
+def _program_moves(path: ToolPath, clearance_z: float, spindle_rpm: float, decimals: int) -> tuple:
+    """Moves and comments: approach over the first point at the clearance plane, the path, retract."""
     xyz = path.xyz
-    for k in np.flatnonzero(rapid)[np.flatnonzero(rapid) > 0]:
-        a, b = xyz[k - 1], xyz[k]
-        above = min(a[2], b[2]) >= clearance_z - _TOL
-        straight_up = b[2] >= a[2] and math.hypot(*(b[:2] - a[:2])) <= _TOL
-        if not (above or straight_up or path.cleared[k]):
-            raise ValueError(f"move {k}: rapid from z {a[2]:g} to z {b[2]:g} mm below the clearance plane "
-                             f"z {clearance_z:g} mm, not marked as inside cleared area (ToolPath.cleared)")
-    # the moves the writer adds go to the clearance plane rounded *up* to the written precision
-    cz = math.ceil(clearance_z * 10 ** decimals - 1e-6) / 10 ** decimals
+    cz = math.ceil(clearance_z * 10 ** decimals - 1e-6) / 10 ** decimals   # rounded *up* to the written grid
     x0, y0, z0 = xyz[0]
     moves = [Move("G0", x0, y0, max(cz, z0), spindle=spindle_rpm)]
     comments = [""]
@@ -132,18 +297,128 @@ def write_program(path: ToolPath, job=None, *, clearance_z: float | None = None,
     xe, ye, ze = xyz[-1]
     if ze < clearance_z:
         moves.append(Move("G0", xe, ye, cz, spindle=spindle_rpm)); comments.append("")
-    hdr = [f"cnclab program: mm, clearance plane Z{clearance_z:g} mm, stock top Z{top_z:g} mm"]
-    hdr += [header] if isinstance(header, str) and header else list(header or [])
-    start = [START_BLOCK]
+    return moves, comments
+
+
+def _header(path: ToolPath, job, setup: _Setup, dialect: str, moves, notes, extra) -> list:
+    cz, tz = float(setup["clearance_z"]), float(setup["top_z"] or 0.0)
+    hdr = [f"cnclab program: mm, clearance plane Z{cz:g} mm, stock top Z{tz:g} mm",
+           f"dialect {dialect}, written by cnclab {__version__}"]
+    tool = setup["tool"]
     if tool is not None:
-        start.append(f"T{int(tool.number)} M6")
-    return write_gcode(moves, header=hdr, decimals=decimals, comments=comments, start_block=start,
-                       end_block=["M30"])
+        shape = "ball end" if tool.corner_radius >= 0.5 * tool.diameter else (
+            f"corner radius {tool.corner_radius:g} mm" if tool.corner_radius else "flat end")
+        hdr.append(f"tool T{tool.number}: D{tool.diameter:g} mm {shape} mill, {tool.flutes} teeth")
+    if job is not None and getattr(job, "polygon", None) is not None:
+        x0, y0, x1, y1 = job.polygon.bounds
+        hdr.append(f"stock: pocket X{x0:.3f}..{x1:.3f} Y{y0:.3f}..{y1:.3f} mm, depth {job.depth:g} mm below "
+                   f"Z{tz:g} in levels of a_p {job.a_p:g} mm, job {Path(str(job.source)).name}")
+    strategy = path.info.get("strategy") or path.info.get("planner")
+    if strategy:
+        hdr.append(f"strategy {strategy}")
+    rapid = setup["rapid_mm_min"] or RAPID_DEFAULT_MM_MIN
+    t = program_time(moves, rapid)
+    hdr.append(f"estimated run time {t['total_s'] / 60:.2f} min: feed moves {t['feed_s'] / 60:.2f} min at their F, "
+               f"rapids {t['rapid_s'] / 60:.2f} min at {rapid:g} mm/min; length / feed, no acceleration")
+    m = machine_for_dialect(dialect)
+    hdr.append(f"estimated machine time {machine_time(moves, m)['time_machine_s'] / 60:.2f} min on the {m.name} "
+               f"model: acceleration, junction deviation, G0 at its axis rates, cnclab.nc.machine")
+    hdr = [h.replace("(", "[").replace(")", "]") for h in hdr + notes]   # RS274 comments cannot nest
+    return hdr + ([extra] if isinstance(extra, str) and extra else list(extra or []))
 
 
-def save_program(path: ToolPath, out, job=None, inputs=(), **kw) -> Path:
-    """Write :func:`write_program` ``(path, job, **kw)`` to ``out`` atomically (never over ``inputs``)."""
-    return atomic_write(out, write_program(path, job, **kw), inputs=inputs)
+#: rapid rate [mm/min] stated in the run-time estimate when neither the job nor the caller gives one
+RAPID_DEFAULT_MM_MIN = 10000.0
+
+
+def write_program(path: ToolPath, job=None, *, out=None, inputs=(), dialect: str = "linuxcnc", header=(),
+                  decimals: int = 4, arc_tol_mm: float | None = DEFAULT_TOL_MM, coolant: str | None = None,
+                  **values) -> str:
+    """Program text of ``path`` (see the module docstring); with ``out`` also written to that file
+    atomically (never over a file of ``inputs``) after :func:`check_program` passed it (nothing is
+    written otherwise) — the one way a program reaches disk.
+
+    ``job`` (a :class:`cnclab.toolpath.job.Job` or any object with the attributes) supplies the
+    numbers; ``values`` override them: ``clearance_z`` [mm], ``top_z`` [mm] (default 0), ``tool``
+    (default ``path.tool``), ``spindle_rpm`` [rpm] (default the path's first spindle speed),
+    ``rapid_mm_min`` [mm/min] (curved G0 runs in cleared area become G2/G3 at this rate; run-time
+    estimate), ``entry_feed_mm_min`` [mm/min] (helix/ramp entries; default
+    :data:`ENTRY_FEED_FRACTION` x the job's ``feed_mm_min``). ``dialect``: ``"linuxcnc"`` (``%``
+    lines, ``T.. M6`` then ``G43 H..``) or ``"grbl"`` (GRBL 1.1 words only: no ``%``, no ``M6``/``G43``,
+    lines <= 80 characters, the tool named in a comment); ``coolant``: None, ``"flood"`` (M8) or
+    ``"mist"`` (M7, linuxcnc only), on after the spindle, off (M9) before ``M5``; ``header`` extra
+    comment lines; ``decimals`` digits of X Y Z I J [mm]; ``arc_tol_mm`` [mm] arc fitting tolerance
+    (None: every move as planned). The header names the tool, stock, strategy, cnclab version,
+    estimated run time, entry feed and arc tolerance.
+
+    Raises ``ValueError`` for a rapid below the clearance plane that the path does not mark as
+    cleared (naming the move), and for a number the program cannot carry, naming the job key (or
+    parameter) that produced it: ``clearance_z``, ``top_z``, ``spindle_rpm`` (and ``v_c``),
+    ``feed_mm_min`` (``f_z``, ``teeth``), ``link_feed``, ``entry_feed_mm_min``, ``rapid_mm_min``,
+    ``a_p``/``depth``, ``tool_number`` (:data:`TOOL_NUMBER_RANGE`).
+    """
+    if dialect not in DIALECTS:
+        raise ValueError(f"dialect must be one of {DIALECTS}, got {dialect!r}")
+    if coolant is not None and (coolant not in COOLANT or (dialect == "grbl" and coolant == "mist")):
+        ok = ["flood"] if dialect == "grbl" else sorted(COOLANT)
+        raise ValueError(f"coolant must be None or one of {ok} for dialect {dialect}, got {coolant!r}")
+    if len(path) == 0:
+        raise ValueError("path has no moves")
+    setup = _setup(path, job, values)
+    if setup["clearance_z"] is None:
+        raise ValueError("clearance_z must be a finite height in mm, got None (no job, no clearance_z)")
+    if setup["spindle_rpm"] is None:
+        raise ValueError("spindle_rpm must be a finite speed > 0 rpm (the program starts the spindle "
+                         "before cutting), got None")
+    _check_setup(setup, dialect, decimals)
+    clearance_z, spindle = float(setup["clearance_z"]), float(setup["spindle_rpm"])
+    _check_rapids(path, clearance_z)
+    path, notes = _program_path(path, setup, arc_tol_mm, decimals)
+    _check_path_numbers(path, setup, decimals)
+    _check_depth(path, job, setup, decimals)
+    moves, comments = _program_moves(path, clearance_z, spindle, decimals)
+    hdr = _header(path, job, setup, dialect, moves, notes, header)
+    text = _render(moves, comments, hdr, setup["tool"], dialect, decimals, coolant)
+    if out is not None:
+        chk = check_program(text, clearance_z, float(setup["top_z"] or 0.0), source=str(out))
+        if chk.errors:
+            raise ValueError(f"{out}: not written, the program fails the safety check: " + "; ".join(chk.errors[:5]))
+        atomic_write(out, text, inputs=inputs)
+    return text
+
+
+def _render(moves, comments, hdr, tool, dialect, decimals, coolant) -> str:
+    cool_on = [COOLANT[coolant]] if coolant else []
+    cool_off = ["M9"] if coolant else []
+    start = [START_BLOCK]
+    if dialect == "linuxcnc":
+        if tool is not None:
+            start += [f"T{int(tool.number)} M6", f"G43 H{int(tool.number)}"]
+        return write_gcode(moves, header=hdr, decimals=decimals, comments=comments, start_block=start,
+                           end_block=["M30"], after_spindle_on=cool_on, before_spindle_off=cool_off)
+    if tool is not None:
+        hdr = hdr + [f"load tool T{int(tool.number)} before running: GRBL has no tool change M6 and no G43"]
+    hdr = [piece for h in hdr for piece in textwrap.wrap(h, GRBL_LINE_MAX - 2)]
+    text = write_gcode(moves, header=hdr, decimals=decimals, comments=comments, start_block=start,
+                       end_block=["M30"], after_spindle_on=cool_on, before_spindle_off=cool_off, percent=False)
+    for n, line in enumerate(text.splitlines(), 1):
+        if len(line) > GRBL_LINE_MAX:
+            raise ValueError(f"grbl line {n} has {len(line)} characters (GRBL 1.1 reads at most "
+                             f"{GRBL_LINE_MAX}): {line[:40]}...")
+    return text
+
+
+def _check_rapids(path: ToolPath, clearance_z: float) -> None:
+    """Refuse a rapid below the clearance plane that is not straight up nor marked cleared."""
+    rapid = path.is_kind("rapid")
+    xyz = path.xyz
+    for k in np.flatnonzero(rapid)[np.flatnonzero(rapid) > 0]:
+        a, b = xyz[k - 1], xyz[k]
+        above = min(a[2], b[2]) >= clearance_z - _TOL
+        straight_up = b[2] >= a[2] and math.hypot(*(b[:2] - a[:2])) <= _TOL
+        if not (above or straight_up or path.cleared[k]):
+            raise ValueError(f"move {k}: rapid from z {a[2]:g} to z {b[2]:g} mm below the clearance plane "
+                             f"z {clearance_z:g} mm, not marked as inside cleared area (ToolPath.cleared)")
 
 
 @dataclasses.dataclass

@@ -16,7 +16,7 @@ The JSON job format (``data/jacso2021/*.json``, ``data/kim_yang2006/pocket_120x8
      "tool_diameter": 6, "teeth": 1, "corner_radius": 0,
      "theta_deg": 60, "a_p": 3, "depth": 3,              depth optional (default a_p)
      "v_c": 120 or "spindle_rpm": 6366, "f_z": 0.04 and/or "feed_mm_min": 255,
-     "link_feed": 1500, "v_fmax": 1000, "roll_radius": 1, "rapid_mm_min": 10000,
+     "link_feed": 1500, "entry_feed_mm_min": 127.5, "v_fmax": 1000, "roll_radius": 1, "rapid_mm_min": 10000,
      "clearance_z": 5, "top_z": 0, "description": "...", "_provenance": "..."}
 
 :func:`load_job` validates the file against :data:`JOB_SCHEMA` (jsonschema) and then the geometry;
@@ -132,6 +132,8 @@ JOB_SCHEMA = {
         "f_z": _pos("feed per tooth, mm"),
         "feed_mm_min": _pos("nominal cutting feed, mm/min"),
         "link_feed": _pos("linking feed, mm/min"),
+        "entry_feed_mm_min": _pos("helix/ramp entry feed, mm/min (default 0.5 x the cutting feed, "
+                                  "cnclab.nc.program.ENTRY_FEED_FRACTION)"),
         "rapid_links": {"type": "boolean", "description": "links at depth through cleared area as G0 "
                         "(default true; false on a controller whose rapids dog-leg: G1 at link_feed)"},
         "v_fmax": _pos("maximum feed of the feed control, mm/min"),
@@ -290,7 +292,8 @@ class Job:
     ``feed_mm_min`` (nominal cutting feed), ``spindle_rpm``, ``link_feed_mm_min``, ``rapid_mm_min``,
     ``clearance_z``, ``top_z``, ``v_fmax`` (feed-control cap), ``roll_radius`` (roll-in radius of the
     hybrid path), ``rapid_links`` (links at depth through cleared area written as G0; False: G1 at
-    ``link_feed_mm_min``), ``source`` (file name for messages), ``description``, the machine and tool
+    ``link_feed_mm_min``), ``entry_feed_mm_min`` (helix/ramp entry feed written by the program
+    writer; None: its default fraction of ``feed_mm_min``), ``source`` (file name for messages), ``description``, the machine and tool
     limits ``cutting_length`` (None: 3 D), ``spindle_rpm_max`` (rpm) and ``feed_max_mm_min`` (None: the
     rapid rate) that :meth:`from_dict` checks (:func:`plausibility`), and the ``warnings`` it gave.
     Build with :meth:`from_dict` / :func:`load_job` (validated).
@@ -313,6 +316,7 @@ class Job:
     v_fmax: float = 1000.0
     roll_radius: float = 1.0
     rapid_links: bool = True
+    entry_feed_mm_min: float | None = None
     source: str = "<dict>"
     description: str = ""
     cutting_length: float | None = None
@@ -498,7 +502,7 @@ class Job:
         a_p = float(d["a_p"])
         kw = {k: float(d[k]) for k in ("v_c", "f_z", "feed_mm_min", "spindle_rpm", "rapid_mm_min", "clearance_z",
                                         "top_z", "v_fmax", "roll_radius", "depth", "cutting_length",
-                                        "spindle_rpm_max", "feed_max_mm_min") if k in d}
+                                        "spindle_rpm_max", "feed_max_mm_min", "entry_feed_mm_min") if k in d}
         if "link_feed" in d:
             kw["link_feed_mm_min"] = float(d["link_feed"])
         if "rapid_links" in d:
@@ -526,7 +530,7 @@ class Job:
              "clearance_z": self.clearance_z, "top_z": self.top_z, "v_fmax": self.v_fmax,
              "roll_radius": self.roll_radius, "rapid_links": self.rapid_links,
              "spindle_rpm_max": self.spindle_rpm_max}
-        for key in ("cutting_length", "feed_max_mm_min"):
+        for key in ("cutting_length", "feed_max_mm_min", "entry_feed_mm_min"):
             if getattr(self, key) is not None:
                 d[key] = getattr(self, key)
         if p.interiors:

@@ -35,7 +35,7 @@ from .. import clihelp
 from ..fileio import atomic_write
 from ..nc.apt import read_apt
 from ..nc.cli_plan import planned_program
-from ..nc.program import write_program
+from ..nc.program import program_path, write_program
 from ..nc.spindle_control import to_gcode_moves as apt_to_moves
 from ..paths import build_dir, data_path
 from ..runtime import fast_mode, pick
@@ -72,7 +72,7 @@ def _ky(which):
         path = ky.program_path(which, entry="helix") if which != "ce" else kyce.ce_path()
         hdr = [f"Kim and Yang 2006 pocket 120 x 85 mm: {which} path, tool D{job.tool.diameter:g} flat"]
         text = write_program(path, job, header=hdr)
-        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path, "job": job}
+        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": program_path(path, job), "job": job}
     return make
 
 
@@ -82,14 +82,14 @@ def _jacso(job_file, strategy):
         path = plan(job, strategy, resolution_mm=pick(0.05, 0.1))
         hdr = [f"Jacso 2021 section 4: {strategy} on {job_file}, tool D{job.tool.diameter:g} flat"]
         text = write_program(path, job, header=hdr)
-        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path, "job": job}
+        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": program_path(path, job), "job": job}
     return make
 
 
 def _planned(job_file):
     def make():
         text, job, path, _ = planned_program(job_file)
-        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": path, "job": job,
+        return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": program_path(path, job), "job": job,
                       "strategy": path.info.get("strategy", "")}
     return make
 
@@ -138,7 +138,7 @@ def _mgherony(angle):
         on_part = path.xyz[(~path.is_kind("rapid")) & (path.xyz[:, 2] < 30.0), 2]
         top = float(on_part.max())   # the part's highest CL point: the stock top of a finishing path
         text = write_program(path, clearance_z=30.0, spindle_rpm=tp["n"], top_z=top, header=hdr)
-        return text, {"clearance_z": 30.0, "top_z": top, "path": path}
+        return text, {"clearance_z": 30.0, "top_z": top, "path": program_path(path, clearance_z=30.0, spindle_rpm=tp["n"])}
     return make
 
 
@@ -177,7 +177,7 @@ def write_programs(outdir=None, works=None, quiet=False) -> dict:
             if not quiet:
                 print(f"{key}: NOT WRITTEN: {exc}", file=sys.stderr)
             continue
-        path = meta.pop("path")
+        path = meta.pop("path")   # the path as written (program_path: entry feeds, fitted arcs)
         job = meta.pop("job", None)
         if job is not None:   # 2.5D pocket: the simulator proves entries and rapids (issue 12)
             # 0.1 mm in both modes: at 0.25 mm rows the dixel chord of a disc boundary leaves slivers of

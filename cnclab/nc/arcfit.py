@@ -1,0 +1,270 @@
+"""Arc fitting for the program writer: runs of short line moves become G2/G3 arcs (helical where z
+changes linearly with the angle) or longer G1 lines (runs of G0 moves: longer G0 lines, never arcs),
+within a stated tolerance of the planned path.
+
+:func:`fit_arcs` takes a :class:`~cnclab.toolpath.path.ToolPath` and returns the path the writer
+writes. Only consecutive **line moves of the same kind, feed, spindle, tag** (and any other
+per-move column the path carries, e.g. a ``cleared`` flag) are merged (G0 runs into G0 lines only:
+a line between two points at or above a plane stays above it); existing arcs and the first move are
+kept as they are, and a merged move keeps the attributes of the moves it replaces,
+so a cleared rapid, a link and a cut are never joined and nothing the safety checks read changes.
+
+Greedy fit, from each run start the longest next piece that passes (found by probing end points
+at doubling distances, then bisection): a line through the two end points, or an arc through them whose centre
+lies on their perpendicular bisector (one-parameter algebraic least squares, then snapped to the
+written grid so that the start and end radii *as written* agree within 1.5 units of the last digit).
+A piece is accepted only when, for every point and every chord of the replaced polyline,
+
+* the distance to the fitted line/arc (radial and z deviation together, chords bounded exactly: the
+  inward radial deviation of a chord is ``r`` minus the chord's distance to the centre) is at most
+  ``tol_mm - 10**-decimals`` (the last unit is left for the written rounding of end points and
+  centre), and
+* the points advance monotonically along it (projection parameter for lines; angle, each step
+  < 90 deg, total sweep <= 270 deg, for arcs): every point of the fitted piece is then within the
+  tolerance of the polyline too (Hausdorff distance <= ``tol_mm`` both ways, tested by dense sampling
+  in ``tests/test_arcfit.py``).
+
+Arcs have radius <= ``max_radius_mm`` (1 m; flatter runs are lines) and a chord of at least
+10 units of the last written digit.
+
+>>> import numpy as np
+>>> from cnclab.toolpath.path import ToolPath
+>>> a = np.linspace(0, np.pi, 200)
+>>> p = ToolPath.build(np.column_stack([10 * np.cos(a), 10 * np.sin(a), -a / np.pi]), feed=500)
+>>> q = fit_arcs(p)
+>>> len(p), len(q), q.arc.tolist()
+(200, 2, [0, 3])
+>>> [round(float(v), 4) + 0.0 for v in q.arc_center[1]]
+[0.0, 0.0]
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..toolpath.path import KINDS, ToolPath
+
+__all__ = ["fit_arcs", "cleared_mask", "DEFAULT_TOL_MM", "MAX_RADIUS_MM"]
+
+#: default fitting tolerance [mm] (stated in every program header)
+DEFAULT_TOL_MM = 0.005
+#: largest fitted arc radius [mm]; flatter runs are written as lines
+MAX_RADIUS_MM = 1000.0
+_MAX_SWEEP = 1.5 * math.pi     # at most 270 deg per arc block (centre well conditioned)
+_MAX_STEP = 0.5 * math.pi      # a point may advance at most 90 deg along the arc
+_RAPID = KINDS.index("rapid")
+_LINK = KINDS.index("link")
+_FIXED = ("xyz", "arc", "arc_center")
+
+
+def cleared_mask(path: ToolPath) -> np.ndarray:
+    """Moves the planner marks as inside cleared area: the path's boolean ``cleared`` column when it
+    has one, else a tag containing ``"cleared"``."""
+    col = getattr(path, "cleared", None)
+    if isinstance(col, np.ndarray) and col.shape == (len(path),):
+        return col.astype(bool)
+    return np.array(["cleared" in str(t or "") for t in path.tag], bool)
+
+
+def _columns(path: ToolPath) -> dict:
+    """Every per-move 1-D column of ``path`` (kind, tag, feed, spindle and any other), by field name."""
+    n = len(path)
+    out = {}
+    for f in dataclasses.fields(path):
+        v = getattr(path, f.name)
+        if f.name not in _FIXED and isinstance(v, np.ndarray) and v.shape == (n,):
+            out[f.name] = v
+    return out
+
+
+def _same_as_previous(cols: dict, n: int) -> np.ndarray:
+    """``same[k]``: move k has the same value as move k-1 in every column (NaN equal to NaN)."""
+    same = np.ones(n, bool)
+    same[0] = False
+    for v in cols.values():
+        if v.dtype.kind == "f":
+            a, b = v[1:], v[:-1]
+            same[1:] &= (a == b) | (np.isnan(a) & np.isnan(b))
+        else:
+            same[1:] &= np.array([x == y for x, y in zip(v[1:], v[:-1])], bool)
+    return same
+
+
+def _line_ok(P, i, j, tol):
+    A, B = P[i], P[j]
+    d = B - A
+    dd = float(d @ d)
+    if dd <= 1e-18:
+        return False
+    Q = P[i:j + 1] - A
+    t = Q @ d / dd
+    if np.any(np.diff(t) < -1e-12):
+        return False
+    perp = Q - t[:, None] * d
+    return bool(np.max(np.einsum("ij,ij->i", perp, perp)) <= tol * tol)
+
+
+def _arc_fit(P, i, j, tol, grid, max_radius):
+    """``(code, cx, cy)`` of the arc through P[i] and P[j] that fits P[i..j], or None."""
+    Q = P[i:j + 1]
+    A, B = Q[0], Q[-1]
+    scale = 10.0 ** round(-math.log10(grid))
+    Aw, Bw = np.round(A[:2] * scale) / scale, np.round(B[:2] * scale) / scale
+    ch = Bw - Aw
+    d = math.hypot(*ch)
+    if d < 10 * grid:
+        return None
+    n = np.array([-ch[1], ch[0]]) / d
+    Pr = Q[:, :2] - Aw
+    half = 0.5 * ch
+    a = np.einsum("ij,ij->i", Pr, Pr) - 2 * Pr @ half
+    b = 2 * Pr @ n
+    bb = float(b @ b)
+    if bb <= 1e-18:
+        return None                                       # collinear: a line, if anything
+    t = float(a @ b) / bb
+    if math.hypot(0.5 * d, t) > max_radius:
+        return None
+    c = np.round((Aw + half + t * n) * scale) / scale    # the centre as written
+    r0, r1 = math.hypot(*(Aw - c)), math.hypot(*(Bw - c))
+    if abs(r0 - r1) > 1.5 * grid:
+        return None
+    r = 0.5 * (r0 + r1)
+    V = Q[:, :2] - c
+    ang = np.arctan2(V[:, 1], V[:, 0])
+    dth = (np.diff(ang) + math.pi) % (2 * math.pi) - math.pi
+    sweep = float(dth.sum())
+    s = 1.0 if sweep > 0 else -1.0
+    if np.any(dth * s < -1e-12) or np.any(np.abs(dth) > _MAX_STEP) or not 1e-9 < abs(sweep) <= _MAX_SWEEP:
+        return None
+    cum = np.concatenate([[0.0], np.cumsum(dth)]) / sweep
+    dz = Q[:, 2] - (A[2] + (B[2] - A[2]) * cum)
+    dr = np.hypot(V[:, 0], V[:, 1]) - r
+    # chords: outward deviation is largest at an end point (|p - c| is convex along a chord), inward
+    # deviation is r minus the chord's distance to the centre; z at the chord's middle checked too
+    E = np.diff(V, axis=0)
+    ee = np.einsum("ij,ij->i", E, E)
+    u = np.clip(-np.einsum("ij,ij->i", V[:-1], E) / np.where(ee > 0, ee, 1.0), 0.0, 1.0)
+    near = V[:-1] + u[:, None] * E
+    inward = r - np.hypot(near[:, 0], near[:, 1])
+    rad = np.maximum(np.maximum(np.abs(dr[:-1]), np.abs(dr[1:])), inward)
+    zmid = 0.5 * (Q[:-1, 2] + Q[1:, 2]) - (A[2] + (B[2] - A[2]) * 0.5 * (cum[:-1] + cum[1:]))
+    zdev = np.maximum(np.maximum(np.abs(dz[:-1]), np.abs(dz[1:])), np.abs(zmid))
+    if float(np.max(rad * rad + zdev * zdev)) > tol * tol:
+        return None
+    return (3 if s > 0 else 2), float(c[0]), float(c[1])
+
+
+def _longest(ok, n, first, max_span=4096):
+    """A large ``j`` in [first, min(n, first + max_span)] with ``ok(j)`` truthy: every doubling
+    ``first - 1 + 2**k`` is probed (a short piece may fail where a longer one fits: an arc centre is
+    ill-determined over a short, noisy run), then bisection between the longest one that fits and the
+    next probe. Returns ``(j, ok(j))``, ``(first - 1, None)`` when no probe fits."""
+    last = min(n, first - 1 + max_span)
+    probes = []
+    step = 1
+    while first - 1 + step <= last:
+        probes.append(first - 1 + step)
+        step *= 2
+    if not probes or probes[-1] != last:
+        probes.append(last)
+    best, res, hi = first - 1, None, last + 1
+    for k in range(len(probes) - 1, -1, -1):
+        r = ok(probes[k])
+        if r:
+            best, res = probes[k], r
+            hi = probes[k + 1] if k + 1 < len(probes) else last + 1
+            break
+    lo = best
+    while best >= first and hi - lo > 1:
+        mid = (lo + hi) // 2
+        r = ok(mid)
+        if r:
+            lo, best, res = mid, mid, r
+        else:
+            hi = mid
+    return best, res
+
+
+def _fit_run(P, tol, grid, max_radius, arcs=True):
+    """Pieces ``[(end index in P, arc code 0/2/3, cx, cy), ...]`` covering the polyline ``P`` (lines
+    only unless ``arcs``)."""
+    n = len(P) - 1
+    out = []
+    i = 0
+    while i < n:
+        jl, _ = _longest(lambda j: _line_ok(P, i, j, tol), n, i + 1)
+        jl = max(jl, i + 1)
+        ja, arc = (i, None)
+        if arcs and n - i >= 2:
+            ja, arc = _longest(lambda j: _arc_fit(P, i, j, tol, grid, max_radius), n, i + 2)
+        if arc is not None and ja > jl:
+            out.append((ja, *arc))
+            i = ja
+        else:
+            out.append((jl, 0, math.nan, math.nan))
+            i = jl
+    return out
+
+
+def fit_arcs(path: ToolPath, tol_mm: float = DEFAULT_TOL_MM, decimals: int = 4,
+             max_radius_mm: float = MAX_RADIUS_MM, rapid_arc_feed_mm_min: float | None = None) -> ToolPath:
+    """``path`` with runs of line moves replaced by fewer lines and G2/G3 arcs (see the module
+    docstring) within ``tol_mm`` [mm] of the planned path, for a program written with ``decimals``
+    digits [mm]. ``rapid_arc_feed_mm_min`` (default None: off): a run of G0 moves inside cleared
+    area (:func:`cleared_mask`) may be fitted with arcs too; such an arc becomes a ``link`` move (a
+    feed move through cleared area) at this feed [mm/min] — the rapid rate keeps the program's time
+    — because G0 cannot describe an arc; G0 pieces fitted as lines stay G0. ``info["arcfit"]`` records the tolerance and the move counts;
+    ``info["arcfit_source"]`` the index of the original move each fitted move ends on.
+
+    Raises ``ValueError`` for a tolerance not larger than two units of the last written digit.
+    """
+    if not isinstance(decimals, int) or not 1 <= decimals <= 8:
+        raise ValueError(f"decimals must be an int in [1, 8], got {decimals!r}")
+    grid = 10.0 ** -decimals
+    if not (math.isfinite(tol_mm) and tol_mm > 2 * grid):
+        raise ValueError(f"arc fitting tolerance tol_mm must be a finite number > {2 * grid:g} mm "
+                         f"(two units of the last written digit), got {tol_mm!r}")
+    if not (math.isfinite(max_radius_mm) and max_radius_mm > 0):
+        raise ValueError(f"max_radius_mm must be a finite number > 0 mm, got {max_radius_mm!r}")
+    tol_fit = tol_mm - grid
+    N = len(path)
+    cols = _columns(path)
+    elig = path.arc == 0
+    if N:
+        elig[0] = False
+    same = _same_as_previous(cols, N)
+    if rapid_arc_feed_mm_min is not None and not (math.isfinite(rapid_arc_feed_mm_min) and rapid_arc_feed_mm_min > 0):
+        raise ValueError(f"rapid_arc_feed_mm_min must be a finite feed > 0 mm/min or None, got {rapid_arc_feed_mm_min!r}")
+    cleared = cleared_mask(path)
+    keep, arc, ctr, to_link = [], [], [], []
+    k = 0
+    while k < N:
+        if not elig[k]:
+            keep.append(k); arc.append(int(path.arc[k])); ctr.append(path.arc_center[k])
+            k += 1
+            continue
+        k2 = k
+        while k2 + 1 < N and elig[k2 + 1] and same[k2 + 1]:
+            k2 += 1
+        rapid = path.kind[k] == _RAPID     # G0 runs: G0 lines, arcs only as links in cleared area
+        arcs_ok = not rapid or (rapid_arc_feed_mm_min is not None and cleared[k])
+        for end, code, cx, cy in _fit_run(path.xyz[k - 1:k2 + 1], tol_fit, grid, max_radius_mm, arcs_ok):
+            keep.append(k - 1 + end); arc.append(code); ctr.append((cx, cy))
+            if rapid and code:
+                to_link.append(len(keep) - 1)
+        k = k2 + 1
+    idx = np.asarray(keep, int)
+    kw = {name: v[idx] for name, v in cols.items()}
+    if to_link:
+        kw["kind"][to_link] = _LINK
+        kw["feed"][to_link] = float(rapid_arc_feed_mm_min)
+    info = {key: v for key, v in path.info.items()
+            if not (isinstance(v, np.ndarray) and v.shape[:1] == (N,))}  # per-move info no longer aligned
+    info["arcfit"] = {"tol_mm": float(tol_mm), "moves_in": N, "moves_out": len(idx),
+                      "arcs": int(np.count_nonzero(np.asarray(arc) != 0))}
+    info["arcfit_source"] = idx
+    return dataclasses.replace(path, xyz=path.xyz[idx], arc=np.asarray(arc, np.int8),
+                               arc_center=np.asarray(ctr, float).reshape(-1, 2), info=info, **kw)
