@@ -83,14 +83,6 @@ def test_move_validation():
         Move("G5", 0, 0, 0)
 
 
-def test_save_is_atomic_and_refuses_input(tmp_path):
-    p = tmp_path / "a.nc"
-    gcode.save_gcode(_program(), p)
-    assert gcode.load_gcode(p)[2].x == 20
-    with pytest.raises(ValueError, match="refusing to overwrite"):
-        gcode.save_gcode(_program(), p, inputs=[p])
-
-
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.tuples(st.floats(-500, 500), st.floats(-500, 500), st.floats(-50, 50),
                           st.sampled_from(["G0", "G1"]), st.floats(1, 5000)), min_size=1, max_size=30))

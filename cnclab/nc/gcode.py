@@ -10,11 +10,11 @@ A program is a list of :class:`Move` records. Conventions (fixed, stated in ever
   speed ``spindle`` [rpm] (``None`` = spindle off / not set). A ``G2``/``G3`` move with a Z change is
   a helix.
 
-Writer — :func:`write_gcode` / :func:`save_gcode`: modal words (motion, F, S, unchanged axes) are
+Writer — :func:`write_gcode` (text; programs reach disk only through
+:func:`cnclab.nc.program.write_program`): modal words (motion, F, S, unchanged axes) are
 emitted only when they change; coordinates use fixed decimals (``decimals=4`` by default); the first
 motion always states X, Y and Z; ``S.. M3`` is written when a spindle speed first appears or changes,
-``M5`` when it goes to ``None``; the program ends with ``M5 M30``. ``save_gcode`` writes atomically
-(:func:`cnclab.fileio.atomic_write`) and never overwrites a file given in ``inputs``.
+``M5`` when it goes to ``None``; the program ends with ``M5 M30``.
 
 Reader — :func:`read_gcode` (:class:`GcodeProgram`), :func:`parse_gcode` (its moves),
 :func:`load_gcode` (a file), :func:`read_toolpath` (a :class:`ToolPath`). It reads the RS274/NGC
@@ -76,10 +76,9 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from ..fileio import atomic_write
 from ..toolpath.path import Move, Tool, ToolPath, arc_geometry, sample_arc
 
-__all__ = ["Move", "GcodeError", "GcodeProgram", "write_gcode", "write_gcode_linear", "save_gcode", "read_gcode", "parse_gcode",
+__all__ = ["Move", "GcodeError", "GcodeProgram", "write_gcode", "write_gcode_linear", "read_gcode", "parse_gcode",
            "load_gcode", "read_program_text", "read_toolpath", "program_time", "sample_move", "to_polyline", "path_lengths",
            "linear_moves", "gcode_roundtrip_error", "MM_PER_INCH"]
 
@@ -158,13 +157,9 @@ def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimal
         if not axes and mv.motion in ("G0", "G1"):
             continue  # zero-length move after rounding: nothing to say, modal state untouched
         sp = None if mv.spindle is None else _fmt(mv.spindle, 0)
-        if sp != spindle:
-            if sp is None:
-                lines += list(before_spindle_off) + ["M5"]
-            else:
-                lines.append(f"S{sp} M3")
-                if spindle is None:
-                    lines += list(after_spindle_on)
+        if sp != spindle:   # spindle off (coolant off first), on (coolant after) or a new speed
+            lines += list(before_spindle_off) + ["M5"] if sp is None else [f"S{sp} M3"] + (
+                list(after_spindle_on) if spindle is None else [])
             spindle = sp
         words = []
         if mv.motion != motion or mv.motion in ("G2", "G3"):
@@ -235,12 +230,6 @@ def write_gcode_linear(xyz, rapid, feed, spindle, header: str | Sequence[str] = 
             raise ValueError(f"header lines cannot contain parentheses, got {h!r}")
     head = "\n".join(["%", *(f"({h})" for h in hdr), "G21 G90 G17 G94"]) + "\n"
     return head + body.tobytes().decode("ascii") + ("M5\n" if on else "") + "M30\n%\n"
-
-
-def save_gcode(moves: Iterable[Move], path, header: str | Sequence[str] = "", decimals: int = 4,
-               inputs=()) -> Path:
-    """Write ``write_gcode(moves, ...)`` to ``path`` atomically; returns the path."""
-    return atomic_write(path, write_gcode(moves, header=header, decimals=decimals), inputs=inputs)
 
 
 # --------------------------------------------------------------------------------------------

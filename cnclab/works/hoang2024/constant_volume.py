@@ -106,7 +106,7 @@ def _table3_setup() -> dict:
     return json.loads(data_path("hoang2024", "table3_and_fig9.json").read_text(encoding="utf-8"))
 
 
-def table3_program(covering: bool = True, decimals: int = 3) -> tuple[list, str]:
+def table3_program(covering: bool = True, decimals: int = 3, out=None) -> tuple[list, str]:
     """The Table 3 zig-zag for Table 2 row 2 as G-code text, parsed back: ``(moves, text)``.
 
     ``covering=True``: passes until the last one lies at y ≥ 50 mm (52 passes, Fig. 9's
@@ -114,7 +114,8 @@ def table3_program(covering: bool = True, decimals: int = 3) -> tuple[list, str]
     Plunge (0,0,10)→(0,0,0) and retract at feed, rapid back to (0,0,10). Feed 500 mm/min and
     spindle :data:`TABLE3_SPINDLE_RPM` are placeholders (the paper gives none; lengths do not depend
     on them). Written by :func:`cnclab.nc.program.write_program` (start block, ``S.. M3`` before
-    cutting, ``M5 M30``); clearance plane z = 10 mm (the printed approach height).
+    cutting, ``M5 M30``); clearance plane z = 10 mm (the printed approach height). ``out``: also
+    write the program there (atomically).
     """
     s = _table3_setup()
     row = table2_recomputed().loc[f"r{s['table2_row_used']}"]
@@ -127,7 +128,8 @@ def table3_program(covering: bool = True, decimals: int = 3) -> tuple[list, str]
     path = zigzag.zigzag_path(pts, z_cut=0.0, z_clear=10.0, feed=500.0)
     path.tool = Tool(2 * rt, corner_radius=rt)
     text = write_program(path, clearance_z=10.0, spindle_rpm=TABLE3_SPINDLE_RPM, top_z=0.0,
-                         header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"], decimals=decimals)
+                         header=["Hoang 2024 Table 3 constant volume zig-zag, Table 2 row 2"], decimals=decimals,
+                         out=out)
     return gcode.parse_gcode(text, source="table3.nc"), text
 
 
