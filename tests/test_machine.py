@@ -71,3 +71,24 @@ def test_block_rate_limit_and_canonical_bound():
         from cnclab.nc.gcode import program_time
         canon = program_time(mv, rapid_mm_min=m.max_rate_mm_min[0])["total_s"]
         assert machine_time(mv, m)["time_machine_s"] >= canon - 1e-9
+
+
+def test_analyze_reports_time_machine_s(tmp_path):
+    """``analyze`` reports time_machine_s beside the length / feed time; a machine that accelerates
+    never beats the canonical time."""
+    import json
+
+    from cnclab.nc.cli_analyze import analyze
+    from cnclab.nc.program import write_program
+    from cnclab.toolpath.job import load_job
+    from cnclab.toolpath.planners import plan
+
+    jf = tmp_path / "job.json"
+    jf.write_text(json.dumps({"polygon": [[0, 0], [30, 0], [30, 20], [0, 20]], "tool_diameter": 6, "theta_deg": 60,
+                              "a_p": 1, "v_c": 120, "f_z": 0.04, "teeth": 2}))
+    job = load_job(jf)
+    prog = tmp_path / "p.ngc"
+    write_program(plan(job, "adaptive", 0.2), job, out=prog)
+    res = analyze(prog, jf, 0.2, outdir=tmp_path / "out", quiet=True)
+    rows = {r.split(",")[0]: r.split(",")[1] for r in (tmp_path / "out" / "summary.csv").read_text().splitlines()[1:]}
+    assert float(rows["time_machine_s"]) >= res["evaluation"].time_total_s - 1e-6 > 0

@@ -6,7 +6,9 @@ subset real posts write), taken as a :class:`~cnclab.toolpath.path.ToolPath` wit
 and evaluated by :func:`cnclab.toolpath.evaluate.evaluate` against the pocket of the job file
 (:func:`cnclab.toolpath.job.load_job`). Writes into OUTDIR (default ``build/analyze/<program>``):
 
-* ``summary.csv`` — one row per metric (metric, value, unit), also printed;
+* ``summary.csv`` — one row per metric (metric, value, unit), also printed; ``time_machine_s`` is
+  the program's time on the small-VMC machine model (:mod:`cnclab.nc.machine`: acceleration,
+  junction deviation) beside the evaluator's length / feed ``time_total_s``;
 * ``trace.csv`` — the evaluator's trace along the path (s, x, y, engagement, MRR, feed, kind, wall
   gouge, move index and program line of every sample);
 * ``events.csv`` — rapids and plunges into material and wall gouges, one row per block, with its
@@ -34,6 +36,7 @@ from .. import clihelp
 from ..fileio import atomic_write_many, check_outputs, cleanup_on_signals
 from ..paths import build_dir
 from .gcode import GcodeError, read_toolpath
+from .machine import SMALL_VMC, machine_time
 
 from ..toolpath.evaluate import POSITION_TOL_MM, evaluate
 from ..toolpath.job import load_job
@@ -233,6 +236,9 @@ def analyze(program, job_file, resolution_mm: float = 0.05, outdir=None, quiet: 
     ev = evaluate(path, job, resolution_mm, sampling="arc_length")
     notes = list(path.info.get("warnings", [])) + _bbox_warnings(path, job, ev, program, job_file)
     table = ev.summary_table()
+    # the program's time on a machine that accelerates (cnclab.nc.machine, small-VMC model)
+    table.loc[len(table)] = {"metric": "time_machine_s", "unit": "s",
+                             "value": machine_time(path.to_moves(), SMALL_VMC)["time_machine_s"]}
     trace = ev.trace
     blobs = {"summary.csv": table.to_csv(index=False, lineterminator="\n"), "trace.csv": _trace_csv(trace),
              "events.csv": ev.events.to_csv(index=False, float_format="%.6g", lineterminator="\n")}
