@@ -77,6 +77,7 @@ def main(argv=None):
         if a.fixtures_only:
             return None
     t_start = time.perf_counter()
+    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
     cc.warm()
     rows = sweep(cc.score_job, [(n, a.fast) for n in names])
     df = pd.DataFrame(rows).set_index("job")
@@ -85,7 +86,6 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     for fname, T in (("corpus_rows.csv", df), ("corpus_families.csv", fam), ("corpus_targets.csv", tg)):
         atomic_write(out / fname, T.to_csv())
-    commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
     run = {"commit": commit, "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "fast": bool(a.fast),
            "jobs": len(names), "freecad": "live-regenerated fixtures" if a.update_fixtures else "committed fixtures",
            "wall_s": round(time.perf_counter() - t_start, 1)}

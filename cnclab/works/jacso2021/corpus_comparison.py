@@ -82,8 +82,9 @@ def _freecad(name: str, jb: Job, h: float) -> dict:
         return {a + "_fc": math.nan for a in AXES} | {"note_fc": f"FreeCAD failed: {prov['error'][-120:]}"}
     try:
         fp = fx.freecad_path(name, jb.tool, FIXTURES)
-    except ValueError as exc:
-        return {a + "_fc": math.nan for a in AXES} | {"plan_time_s_fc": prov["plan_time_s"], "note_fc": str(exc)}
+    except ValueError:        # FreeCAD planned nothing: no axis to compare (its plan time is not a plan)
+        return {a + "_fc": math.nan for a in AXES} | {
+            "note_fc": f"FreeCAD wrote no cutting motion ({prov['plan_time_s']:.2f} s)"}
     r = fx.row(evaluate(fp, jb, h), float(prov["plan_time_s"]), jb=jb)
     return {a + "_fc": r[a] for a in AXES} | {"note_fc": ""}
 
@@ -108,7 +109,7 @@ def score_job(name: str, fast: bool | None = None) -> dict:
     out.update(_freecad(name, jb, h))
     th = jb.theta_deg
     out["ok_safe"] = bool(out["plunges_into_material"] == 0 and out["rapids_into_material"] == 0
-                          and out["wall_gouge_mm"] <= 1e-3)
+                          and out["wall_gouge_mm"] <= 1e-3) if out["note"][:5] != "Plann" else math.nan
     out["ok_engagement"] = bool(out["p95_deg"] <= th + 2 and out["max_deg"] <= th + 10 and out["share>θ+5_pct"] <= 0.5)
     return out
 
@@ -129,7 +130,8 @@ def family_table(df: pd.DataFrame) -> pd.DataFrame:
     d["lifts - FC"] = d["lifts"] - d["lifts_fc"]
     d["uncut - FC"] = d["uncut_beyond_mm2"] - d["uncut_beyond_mm2_fc"]
     g = d.groupby("family")
-    T = pd.DataFrame({"jobs": g.size(), "planned": g["max_deg"].count(), "unsafe": g["ok_safe"].apply(lambda s: int((~s).sum())),
+    T = pd.DataFrame({"jobs": g.size(), "planned": g["max_deg"].count(), "FC planned": g["max_deg_fc"].count(),
+                      "unsafe": g["ok_safe"].apply(lambda s: int((s == False).sum())),  # noqa: E712 -- NaN: not planned
                       "worst p95-θ": g["p95-θ"].max(), "worst max-θ": g["max-θ"].max(),
                       "worst share>θ+5 %": g["share>θ+5_pct"].max(), "worst program ratio": g["program ratio"].max(),
                       "median program ratio": g["program ratio"].median(), "worst plan ratio": g["plan ratio"].max(),
@@ -138,33 +140,41 @@ def family_table(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def targets(df: pd.DataFrame) -> pd.DataFrame:
-    """The issue-29 targets over the corpus: ``target``, ``measured``, ``met`` (a job the planner did
-    not plan counts against every target)."""
+    """The issue-29 targets over the corpus: ``target``, ``measured``, ``met``. A job the planner did
+    not plan counts against every target; the comparisons with FreeCAD are over the jobs FreeCAD
+    planned (the count is stated): where FreeCAD wrote no program there is nothing to compare."""
     n = len(df)
     planned = df["max_deg"].notna()
-    prog = _ratio(df, "program_time_min")
+    both = df[planned & df["max_deg_fc"].notna()]
+    nb = f"of {len(both)} jobs both planned"
+    prog = _ratio(both, "program_time_min")
+    lifts_ok = both["lifts"] <= both["lifts_fc"]
+    uncut_ok = both["uncut_beyond_mm2"] <= both["uncut_beyond_mm2_fc"] + 0.5
+    safe = df["ok_safe"] == True  # noqa: E712 -- NaN (not planned) is not safe-and-planned
     rows = [
         ("every job planned", f"{int(planned.sum())}/{n}", bool(planned.all())),
         ("0 plunges, 0 rapids into material, 0 wall/island gouge on every job",
-         f"{int(df['ok_safe'].sum())}/{n} jobs safe", bool(df["ok_safe"].all())),
+         f"{int(safe.sum())}/{n} planned and safe ({int(planned.sum())} planned)", bool(safe.all())),
         ("p95 <= θ+2, max <= θ+10, share>θ+5 <= 0.5 % on every job",
          f"{int(df['ok_engagement'].sum())}/{n}; worst max-θ {float((df['max_deg'] - df['theta_deg']).max()):.1f} deg",
          bool(df["ok_engagement"].all())),
-        ("program time <= FreeCAD's on >= 95 % of jobs", f"{float((prog <= 1.0).mean() * 100):.1f} %",
+        ("program time <= FreeCAD's on >= 95 % of jobs", f"{float((prog <= 1.0).mean() * 100):.1f} % {nb}",
          bool((prog <= 1.0).mean() >= 0.95)),
-        ("program time <= 1.05 x FreeCAD's on all jobs", f"worst {float(prog.max()):.3f}", bool((prog <= 1.05).all())),
-        ("lifts <= FreeCAD's on >= 95 %", f"{float((df['lifts'] <= df['lifts_fc']).mean() * 100):.1f} %",
-         bool((df["lifts"] <= df["lifts_fc"]).mean() >= 0.95)),
-        ("uncut <= FreeCAD's + 0.5 mm^2 on >= 95 %",
-         f"{float((df['uncut_beyond_mm2'] <= df['uncut_beyond_mm2_fc'] + 0.5).mean() * 100):.1f} %",
-         bool((df["uncut_beyond_mm2"] <= df["uncut_beyond_mm2_fc"] + 0.5).mean() >= 0.95)),
-        ("plan time <= FreeCAD's on the median job", f"median ratio {float(_ratio(df, 'plan_time_s').median()):.2f}",
-         bool(_ratio(df, "plan_time_s").median() <= 1.0)),
+        ("program time <= 1.05 x FreeCAD's on all jobs", f"worst {float(prog.max()):.3f} {nb}", bool((prog <= 1.05).all())),
+        ("lifts <= FreeCAD's on >= 95 %", f"{float(lifts_ok.mean() * 100):.1f} % {nb}", bool(lifts_ok.mean() >= 0.95)),
+        ("uncut <= FreeCAD's + 0.5 mm^2 on >= 95 %", f"{float(uncut_ok.mean() * 100):.1f} % {nb}",
+         bool(uncut_ok.mean() >= 0.95)),
+        ("plan time <= FreeCAD's on the median job", f"median ratio {float(_ratio(both, 'plan_time_s').median()):.2f} {nb}",
+         bool(_ratio(both, "plan_time_s").median() <= 1.0)),
     ]
-    ch = df[df["family"] == "channel_15d"]
-    rows.append(("1.5 D channels: lifts <= FreeCAD's + 1, program time <= FreeCAD's",
-                 f"{int(((ch['lifts'] <= ch['lifts_fc'] + 1) & (_ratio(ch, 'program_time_min') <= 1.0)).sum())}/{len(ch)}",
-                 bool(((ch["lifts"] <= ch["lifts_fc"] + 1) & (_ratio(ch, "program_time_min") <= 1.0)).all())))
+    for fam, label in (("channel_15d", "1.5 D channels"), ("tapered_channel", "tapered channels"),
+                       ("slot_bulbs", "slots with bulbs"), ("gear", "gear outlines")):
+        ch = df[df["family"] == fam]
+        cb = ch[ch["max_deg"].notna() & ch["max_deg_fc"].notna()]
+        ok = (cb["lifts"] <= cb["lifts_fc"] + 1) & (_ratio(cb, "program_time_min") <= 1.0)
+        rows.append((f"{label}: lifts <= FreeCAD's + 1 and program time <= FreeCAD's",
+                     f"{int(ok.sum())}/{len(cb)} (FreeCAD planned {len(cb)} of {len(ch)}; ours {int(ch['max_deg'].notna().sum())})",
+                     bool(len(cb) and ok.all())))
     return pd.DataFrame(rows, columns=["target", "measured", "met"]).set_index("target")
 
 
