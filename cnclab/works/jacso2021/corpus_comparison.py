@@ -199,9 +199,9 @@ def ratio_columns(df: pd.DataFrame) -> pd.DataFrame:
                          "p95 - θ (deg)": df["p95_deg"] - df["theta_deg"]})
 
 
-#: the panels of :func:`distribution_figure`: column of :func:`ratio_columns`, target line, log scale
-PANELS = [("program time / FC", 1.0, True), ("lifts - FC", 0.0, False), ("uncut - FC (mm²)", 0.5, False),
-          ("max - θ (deg)", 10.0, False), ("p95 - θ (deg)", 2.0, False), ("plan time / FC", 1.0, True)]
+#: the panels of :func:`distribution_figure`: column of :func:`ratio_columns`, target line, y scale
+PANELS = [("program time / FC", 1.0, "log"), ("lifts - FC", 0.0, "linear"), ("uncut - FC (mm²)", 0.5, "symlog"),
+          ("max - θ (deg)", 10.0, "linear"), ("p95 - θ (deg)", 2.0, "linear"), ("plan time / FC", 1.0, "log")]
 
 
 def distribution_figure(df: pd.DataFrame):
@@ -212,15 +212,14 @@ def distribution_figure(df: pd.DataFrame):
     R = ratio_columns(df)
     fams = sorted(R["family"].unique())
     fig, axs = plt.subplots(2, 3, figsize=(15, 7.5))
-    for ax, (col, target, log) in zip(axs.flat, PANELS):
+    for ax, (col, target, yscale) in zip(axs.flat, PANELS):
         for i, f in enumerate(fams):
             v = R.loc[R["family"] == f, col].dropna()
             ax.plot(i + np.linspace(-0.2, 0.2, len(v)) if len(v) > 1 else [i] * len(v), v, "o", ms=4, alpha=0.8)
         ax.axhline(target, ls="--", color="k", lw=0.8)
         ax.set_xticks(range(len(fams)), fams, rotation=60, ha="right", fontsize=8)
         ax.set_title(col, fontsize=10)
-        if log:
-            ax.set_yscale("log")
+        ax.set_yscale(yscale, **({"linthresh": 1.0} if yscale == "symlog" else {}))
     fig.tight_layout()
     return fig
 
