@@ -31,6 +31,8 @@ def main(argv=None) -> int:
         print("usage: python -m cnclab <command> [options]\n\ncommands:")
         for name, (_, hlp) in COMMANDS.items():
             print(f"  {name:<12} {hlp}")
+        print("\n`python -m cnclab COMMAND --help` explains a command: every option with its unit and default,\n"
+              "an example and the files it writes. Getting started: README.md; job files: docs/job-format.md.")
         if argv and argv[0] not in ("-h", "--help"):
             print(f"\nerror: unknown command {argv[0]!r}")
             return 2
