@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from ..path import ToolPath
+from ..path import ToolPath, ToolPathBuilder
 
 
 def positive(name, v):
@@ -15,17 +15,29 @@ def positive(name, v):
     return v
 
 
-def pattern_path(points, kinds, period, step, pattern, feed_mm_min, link_feed_mm_min=None) -> ToolPath:
-    """A planar pattern (z = 0) as a :class:`ToolPath`: ``kinds`` per point (cut / roll-in / roll-out
-    / link; the move ending at point i), ``period`` per point (tag ``"period k"`` or
-    ``"period k:roll-in"``), ``info`` with the step (mm) and the pattern name."""
-    K = np.asarray(kinds, dtype=object)
-    tags = np.array([f"period {int(k)}" + ("" if n in ("cut", "link") else f":{n}") for k, n in zip(period, K)],
+def pattern_builder(step, pattern: str) -> ToolPathBuilder:
+    """A :class:`ToolPathBuilder` for a planar pattern, ``info`` with the step (mm) and the pattern name."""
+    return ToolPathBuilder(info={"step": float(step), "pattern": pattern, "name": pattern})
+
+
+def add_piece(b: ToolPathBuilder, points, kinds, period, feed_mm_min, link_feed_mm_min=None) -> None:
+    """Append the planar points (m, 2) mm at z = 0: ``kinds`` (scalar or per point: cut / roll-in /
+    roll-out / link, the move ending at the point), ``period`` (scalar or per point; tag
+    ``"period k"`` or ``"period k:roll-in"``); links at ``link_feed_mm_min`` (default the feed)."""
+    P = np.asarray(points, float).reshape(-1, 2)
+    K = np.broadcast_to(np.asarray(kinds, dtype=object), (len(P),))
+    per = np.broadcast_to(np.asarray(period), (len(P),))
+    tags = np.array([f"period {int(k)}" + ("" if n in ("cut", "link") else f":{n}") for k, n in zip(per, K)],
                     dtype=object)
     lf = feed_mm_min if link_feed_mm_min is None else link_feed_mm_min
-    return ToolPath.build(np.asarray(points, float), kind=np.where(K == "link", "link", "cut"), tag=tags,
-                          feed=np.where(K == "link", lf, feed_mm_min),
-                          info={"step": float(step), "pattern": pattern, "name": pattern})
+    b.add(P, np.where(K == "link", "link", "cut"), np.where(K == "link", lf, feed_mm_min), tags, z=0.0)
+
+
+def pattern_path(points, kinds, period, step, pattern, feed_mm_min, link_feed_mm_min=None) -> ToolPath:
+    """A planar pattern (z = 0) as a :class:`ToolPath` from whole arrays (:func:`add_piece`)."""
+    b = pattern_builder(step, pattern)
+    add_piece(b, points, kinds, period, feed_mm_min, link_feed_mm_min)
+    return b.build()
 
 
 def largest_step(emax, theta_max_deg, lo, hi, tol_mm, grow_limit=None):

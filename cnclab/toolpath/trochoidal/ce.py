@@ -512,23 +512,17 @@ def _repeat_period(per: ToolPath, step, n_periods, resolution_mm, feed_mm_min=25
     along +x, joined by straight links (flagged link) through the cleared slot."""
     P0, K0 = per.xyz[:, :2], pattern_kinds(per)
     P0 = P0 - np.array([P0[:, 0].min(), 0.0])
-    pts, kinds, per_ix = [], [], []
+    b = _common.pattern_builder(step, "constant-engagement")
     for k in range(int(n_periods)):
         C = P0 + np.array([k * step, 0.0])
         if k > 0:
-            lk = _straight_link(pts[-1][-1], C[0], None, resolution_mm)
-            pts.append(lk[1:])
-            kinds.append(np.full(len(lk) - 1, "link", dtype=object))
-            per_ix.append(np.full(len(lk) - 1, k - 1))
+            lk = _straight_link(b.position[:2], C[0], None, resolution_mm)
+            _common.add_piece(b, lk[1:], "link", k - 1, feed_mm_min, link_feed_mm_min)
             C, KC = C[1:], K0[1:]
         else:
             KC = K0
-        pts.append(C)
-        kinds.append(KC)
-        per_ix.append(np.full(len(C), k))
-    kinds = np.concatenate(kinds)
-    return _common.pattern_path(np.vstack(pts), kinds, np.concatenate(per_ix), step, "constant-engagement", feed_mm_min,
-                    link_feed_mm_min)
+        _common.add_piece(b, C, KC, k, feed_mm_min, link_feed_mm_min)
+    return b.build()
 
 
 def ce_admissible_step(per: ToolPath, theta_max_deg, width, tool_radius, resolution_mm=0.05, n_periods=5,

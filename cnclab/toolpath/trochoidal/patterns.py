@@ -76,23 +76,15 @@ def circular_trochoid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05, feed
         raise ValueError(f"n_periods must be >= 1, got {n_periods!r}")
     m = max(int(math.ceil(2 * math.pi * R / ds)), 16)
     phi = math.pi + np.linspace(0.0, 2 * math.pi, m + 1)
-    pts, link, per = [], [], []
+    b = _common.pattern_builder(s, "circular")
     for k in range(n):
         cx = x0 + k * s
         circ = np.c_[cx + R * np.cos(phi), R * np.sin(phi)]
-        if k > 0:
-            circ = circ[1:]
-        pts.append(circ)
-        link.append(np.zeros(len(circ), bool))
-        per.append(np.full(len(circ), k))
+        _common.add_piece(b, circ[1:] if k > 0 else circ, "cut", k, feed_mm_min, link_feed_mm_min)
         ml = max(int(math.ceil(s / ds)), 1)
         line = np.c_[cx - R + np.linspace(0, s, ml + 1)[1:], np.zeros(ml)]
-        pts.append(line)
-        link.append(np.ones(ml, bool))
-        per.append(np.full(ml, k))
-    link = np.concatenate(link)
-    return _common.pattern_path(np.vstack(pts), np.where(link, "link", "cut"), np.concatenate(per), s, "circular",
-                    feed_mm_min, link_feed_mm_min)
+        _common.add_piece(b, line, "link", k, feed_mm_min, link_feed_mm_min)
+    return b.build()
 
 
 def cycloid(step, width, tool_radius, n_periods, x0=0.0, ds=0.05, feed_mm_min=255.0) -> ToolPath:
