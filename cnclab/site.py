@@ -20,6 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+from . import claims as claims_mod
 from . import clihelp
 from .fileio import atomic_write
 from .paths import WORK_IDS, build_dir
@@ -264,8 +265,24 @@ def _page(notebooks, figures, claim_cols, claims) -> str:
         out.append(f"</tbody></table><script>{_JS}</script>")
     else:
         out.append("<p>No claims report yet: run <code>make reproduce</code> (or <code>make claims</code>).</p>")
+    out += _qualitative_section()
     out.append("</body></html>")
     return "\n".join(out)
+
+
+def _qualitative_section() -> list[str]:
+    """The qualitative rows (``data/qualitative_claims.csv``): quote, verdict and what was measured; the
+    verdicts are the ones the tests assert (tests/test_claims_qualitative.py), the numbers are in
+    ``build/claims.md``."""
+    e = html.escape
+    rows = claims_mod.load_qualitative()
+    out = ["<h2 id='qualitative'>Qualitative claims (theses, conclusions, headline sentences)</h2>",
+           "<table id='qualitative-claims'><thead><tr><th>claim</th><th>work</th><th>location</th><th>quote</th>"
+           "<th>verdict</th><th>measure</th></tr></thead><tbody>"]
+    for q in rows:
+        out.append(f"<tr data-work='{e(q.work)}' data-verdict='{e(q.verdict)}'><td>{e(q.claim_id)}</td><td>{e(q.work)}</td>"
+                   f"<td>{e(q.location)}</td><td>{e(q.quote)}</td><td><b>{e(q.verdict)}</b></td><td>{e(q.measure)}</td></tr>")
+    return out + ["</tbody></table>"]
 
 
 def build_site(build: Path | None = None, out: Path | None = None) -> Path:

@@ -146,3 +146,13 @@ def test_views_render_offline_with_plotly_inlined(tmp_path, monkeypatch):
     assert rf.data[2].name == "jumps (2)"
     with pytest.raises(ValueError, match="xyz"):
         views3d.path_figure(mesh, P[:, :2], P[:, 0], "z", "mm")
+
+
+def test_site_lists_the_qualitative_rows(small_build):
+    from cnclab import claims
+
+    _, index = small_build
+    page = index.read_text(encoding="utf-8")
+    assert "id='qualitative-claims'" in page
+    for q in claims.load_qualitative():
+        assert q.claim_id in page
