@@ -9,8 +9,9 @@ show these figures call the same recipes, so the notebook and the paper figure c
 
 ``python -m cnclab figure NAME --width-mm 85 --format pdf -o DIR`` is the command line;
 ``python -m cnclab figure --list`` lists the covered figures. Covered so far: the figures whose
-plotting lives in the package or was moved here from its notebook (Jacsó Fig 3-1; Mgherony Fig 3-5,
-3-6/3-7/3-8, the three other ch. 3 figures, 5-6, 5-7, 5-8/5-9, 6-2, 6-3, 6-10); the other notebook figures still draw in their notebook cell
+plotting lives in the package or was moved here from its notebook (Jacsó Fig 3-1; Hoang Table 2;
+Mgherony Fig 3-5, 3-6/3-7/3-8, the three other ch. 3 figures, 4-1, 4-2/4-3, 5-6, 5-7, 5-8/5-9, 6-2, 6-3,
+6-10); the other notebook figures still draw in their notebook cell
 (``--list`` shows the state).
 
 >>> FIGURES["fig5-6_deff_vs_depth_of_cut"].work
@@ -26,12 +27,15 @@ from typing import Callable
 import numpy as np
 
 from . import clihelp
+from .cutting import scallop_volume as sv
 from .cutting.roughness import ideal_cusp_profile
 from .geometry import ball_end as be
 from .geometry import cusp
 from .geometry import engagement as eng
+from .geometry.cylinder_parts import MEASURING_POSITIONS_MM, CylinderPart
 from .paths import build_dir
 from .plotting import STYLE_PATH, WIDTH_PRESETS_MM, export_figure, figsize
+from .works.hoang2024 import constant_volume as cv
 from .works.mgherony2024 import ch3, ch4_5, ch6
 
 __all__ = ["FIGURES", "Recipe", "draw", "render", "main"]
@@ -222,6 +226,62 @@ def ch3_ideal_profile_share():
     axes[1].bar(idx + w / 2, ideal.Ra_share * 100, w, label="Ra ideal / measured")
     axes[1].set(xticks=idx, xticklabels=ideal.index, ylabel="explained by geometry [%]")
     axes[1].legend(fontsize=7)
+    return fig
+
+
+@_register("table2_fr_printed_vs_consistent", "hoang2024",
+           "Hoang (2024) Table 2: forward step F_r as printed and unit-consistent; curvature volume V_RT")
+def table2_fr_printed_vs_consistent():
+    import matplotlib.pyplot as plt
+
+    printed, re = cv.table2_printed(), cv.table2_recomputed()
+    fig, axs = plt.subplots(1, 2, figsize=figsize(1.5, 0.9))
+    x = np.arange(1, 9)
+    axs[0].semilogy(x, printed.Fr_mm, "o-", label="printed F_r (slip)")
+    axs[0].semilogy(x, re.Fr_consistent, "s-", label="unit-consistent F_r, eq. 7")
+    axs[0].semilogy(x, re.Fr_v2, "^--", label="F_r from V2, eq. 4")
+    axs[0].set(xlabel="Table 2 row", ylabel="forward step F_r [mm]")
+    axs[0].legend(fontsize=7)
+    th, R = re.theta_rad.to_numpy(), re.RT.to_numpy()
+    axs[1].bar(x - 0.2, 0.5 * R**2 * (3.14 * th / 180 - np.sin(th)), 0.4, label="V_RT with slip")
+    axs[1].bar(x + 0.2, sv.curvature_volume(th, R), 0.4, label="V_RT consistent")
+    axs[1].set(xlabel="Table 2 row", ylabel="V_RT [mm²]")
+    axs[1].legend(fontsize=7)
+    return fig
+
+
+@_register("fig4-1_cv_cx_sections", "mgherony2024",
+           "Mgherony (2024) Fig 4-1: sections of the concave (CV) and convex (CX) test parts, ball centres")
+def fig4_1_cv_cx_sections():
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=figsize(1.15, 0.8))
+    for kind in ("CV", "CX"):
+        part = CylinderPart(kind)
+        y, z = part.section()
+        ax.plot(y, z, label=f"{kind} surface")
+        Rt = part.tool_path_radius(10.0)
+        yc = part.contact_y(MEASURING_POSITIONS_MM)
+        centre = np.c_[MEASURING_POSITIONS_MM, part.z(yc) + 5.0 * part.normal(yc)[:, 2]]
+        ax.plot(*centre.T, "o", ms=3, label=f"{kind} ball centres (radius {Rt:g} mm)")
+    ax.set(xlabel="y [mm]", ylabel="z [mm]", aspect="equal", title="CV/CX sections (Fig 4-1, Table 4-2)")
+    ax.legend(fontsize=7, ncol=2)
+    return fig
+
+
+@_register("fig4-2_4-3_effective_diameter_cutting_speed", "mgherony2024",
+           "Mgherony (2024) Fig 4-2, 4-3: effective diameter and actual cutting speed along the CV/CX parts")
+def fig4_2_4_3_effective_diameter_cutting_speed():
+    import matplotlib.pyplot as plt
+
+    fig, axs = plt.subplots(1, 2, figsize=figsize(1.5, 0.85))
+    for kind, g in ch4_5.ch4_effective_diameters().groupby("part"):
+        axs[0].plot(g.y_mm, g.D_eff1_mm, "o-", label=kind)
+        axs[1].plot(g.y_mm, g.v_c_m_min, "o-", label=kind)
+    axs[0].set(xlabel="measuring position y [mm]", ylabel="effective diameter [mm]", title="Fig 4-2")
+    axs[1].set(xlabel="measuring position y [mm]", ylabel="actual v_c [m/min]", title="Fig 4-3 (n = 5100 rpm)")
+    for a in axs:
+        a.legend()
     return fig
 
 
