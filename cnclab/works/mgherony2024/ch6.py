@@ -736,3 +736,30 @@ def ann_seed_intervals() -> dict:
             v = t[col].astype(float)
             out[f"{model}.{col}"] = Interval(float(v.min()), float(v.max()), center=float(v.median()))
     return out
+
+
+@functools.cache
+def tangent_search_emulation(steps_deg=(5.0, 2.0, 1.0, 0.5, 0.25, 0.1, 0.05)) -> pd.DataFrame:
+    """What a numerical tangent search (§5.2 step 6) of finite resolution does to the r1 table: the
+    tangent point taken at the circle sample nearest to the exact one (``round``) or the last sample
+    before it (``floor``), samples every ``step`` degrees of the circle parameter; the r1 model refitted.
+    Columns: ``mode``, ``step_deg``, ``within_half_unit`` (how many of the 12 printed coefficients the
+    fit reproduces within half a printed unit), ``median_error_half_units``. Step 0 = the exact point."""
+    plan = full_factorial(LEVELS)
+    D, ap, AN2, Af = (plan[c].to_numpy(float) for c in INPUTS)
+    b, d = np.radians(AN2), np.radians(Af)
+    r, u0 = np.sqrt(ap * (D - ap)), (D / 2 - ap) * np.sin(b)
+    t_exact = np.arctan2(np.cos(d), np.cos(b) * np.sin(d))
+    printed = printed_r1_table()
+    text = pd.read_csv(data_path("mgherony2024", "ch6_eq6-4_r1_coefficients.csv"), comment="#", dtype=str)
+    half = pd.Series([0.5 * 10.0 ** -len(c.split(".")[1]) for c in text["coef"]], index=printed.index)
+    rows = []
+    for mode, fn in (("round", np.round), ("floor", np.floor)):
+        for step in (0.0, *steps_deg):
+            t = t_exact if step == 0 else fn(t_exact / np.radians(step)) * np.radians(step)
+            y = 2 * np.hypot(u0 + r * np.cos(b) * np.cos(t), r * np.sin(t))
+            fit = rs.fit_polynomial(plan.assign(y=y), "y", rs.R1_TERMS)
+            err = ((fit.params - printed["coef"]) / half).abs()
+            rows.append({"mode": mode, "step_deg": step, "within_half_unit": int((err <= 1 + 1e-9).sum()),
+                         "median_error_half_units": float(err.median())})
+    return pd.DataFrame(rows)
