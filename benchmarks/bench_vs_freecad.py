@@ -12,7 +12,9 @@ Columns: p95, max, share above theta+5 / +15 deg, entry max, retracts, plunges a
 material, uncut beyond the unreachable corners, program time (as written), plan time, wall gouge;
 then every row divided by FreeCAD's, measured in one run. Last, the written programs: motion blocks
 of adaptive_clearing's program as the one writer writes it (arcs fitted within 0.005 mm) against
-FreeCAD's program (issue 24 target: ours <= FreeCAD's on every pocket).
+FreeCAD's program, and both programs' time as length / feed and on the two machine models of
+:mod:`cnclab.nc.machine` (small VMC, GRBL router: acceleration, junction deviation, block rate)
+(issue 24 targets: blocks and machine time ours <= FreeCAD's on every pocket).
 
 FreeCAD is run live through its own Python (benchmarks/freecad_adaptive.py) when ``/usr/bin/python3``
 can import it (Debian: ``apt-get install -y --no-install-recommends freecad``); otherwise (or with
@@ -39,7 +41,8 @@ from freecad_adaptive import freecad_available, run_freecad  # noqa: E402
 
 from cnclab.fileio import atomic_write  # noqa: E402
 from cnclab.nc.arcfit import DEFAULT_TOL_MM  # noqa: E402
-from cnclab.nc.gcode import read_gcode, read_toolpath  # noqa: E402
+from cnclab.nc.gcode import program_time, read_gcode, read_toolpath  # noqa: E402
+from cnclab.nc.machine import MACHINES, machine_time  # noqa: E402
 from cnclab.nc.program import write_program  # noqa: E402
 from cnclab.works.jacso2021 import freecad_comparison as fx  # noqa: E402
 
@@ -109,8 +112,9 @@ def main(argv):
     with pd.option_context("display.width", 250, "display.max_columns", 20, "display.precision", 3):
         print(fx.summary(tables))
         print("\n== written programs: motion blocks (G0/G1/G2/G3 read back by cnclab's reader), "
-              f"ours with arcs fitted within {DEFAULT_TOL_MM} mm; FreeCAD's committed/live program")
-        print(pd.DataFrame(written).T)
+              f"ours with arcs fitted within {DEFAULT_TOL_MM} mm; FreeCAD's committed/live program; time as "
+              "length / feed (rapids at the job's rate) and on the machine models of cnclab.nc.machine")
+        print(pd.DataFrame(written).T.to_string(float_format=lambda v: f"{v:.3f}"))
     return tables
 
 
@@ -123,10 +127,20 @@ def written_programs(job, keep, fc_file) -> dict:
         moves = read_gcode(write_program(keep[label][0], job)).moves
         out["blocks ours"] = len(moves)
         out["arc blocks ours"] = sum(m.motion in ("G2", "G3") for m in moves)
+        out["feed time ours min"] = program_time(moves, job.rapid_mm_min)["total_s"] / 60
+        for key, m in MACHINES.items():
+            out[f"machine {key} ours min"] = machine_time(moves, m)["time_machine_s"] / 60
     if fc_file.is_file():
-        out["blocks FreeCAD"] = len(read_gcode(fc_file.read_text(encoding="utf-8"), source=str(fc_file)).moves)
+        fc = read_gcode(fc_file.read_text(encoding="utf-8"), source=str(fc_file)).moves
+        out["blocks FreeCAD"] = len(fc)
+        if fc:
+            out["feed time FreeCAD min"] = program_time(fc, job.rapid_mm_min)["total_s"] / 60
+            for key, m in MACHINES.items():
+                out[f"machine {key} FreeCAD min"] = machine_time(fc, m)["time_machine_s"] / 60
     if "blocks ours" in out and out.get("blocks FreeCAD"):
-        out["blocks ratio"] = round(out["blocks ours"] / out["blocks FreeCAD"], 3)
+        out["blocks ratio"] = out["blocks ours"] / out["blocks FreeCAD"]
+        for key in MACHINES:
+            out[f"machine {key} ratio"] = out[f"machine {key} ours min"] / out[f"machine {key} FreeCAD min"]
     return out
 
 

@@ -85,9 +85,8 @@ def adaptive_path() -> ToolPath:
 @functools.cache
 def ce_program() -> tuple:
     """``(moves parsed back, G-code text)`` of the constant-engagement path."""
-    text = gcode.write_gcode(ce_path().to_moves(),
-                             header=["Kim and Yang 2006 pocket: constant-engagement clearing",
-                                     "cnclab ce_clearing, Jacso Thesis III laps, tool D10 flat"], decimals=4)
+    text = ky.written_program(ce_path(), ["Kim and Yang 2006 pocket: constant-engagement clearing",
+                                          "cnclab ce_clearing, Jacso Thesis III laps, tool D10 flat"])
     return tuple(gcode.parse_gcode(text, source="kim_yang2006_ce.nc")), text
 
 

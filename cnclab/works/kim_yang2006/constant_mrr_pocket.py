@@ -18,6 +18,7 @@ from ...runtime import pick
 from ...simulation import dixel, pixel
 from ...toolpath import constant_mrr as cm
 from ...nc import gcode
+from ...nc.program import write_program
 from ...toolpath import offsets
 from ...toolpath.job import Job, load_job
 from ...toolpath.path import ToolPath
@@ -104,10 +105,18 @@ def program_path(which: str, entry: str = "plunge") -> ToolPath:
 
 def program(which: str) -> tuple:
     """``(moves parsed back, G-code text)`` of the ``"original"`` or ``"modified"`` path."""
-    moves = program_path(which).to_moves()
-    text = gcode.write_gcode(moves, header=[f"Kim and Yang 2006 {which} contour-parallel path",
-                                            "pocket 120 x 85 mm, cnclab design, tool D10 flat"], decimals=4)
+    text = written_program(program_path(which), [f"Kim and Yang 2006 {which} contour-parallel path",
+                                                 "pocket 120 x 85 mm, cnclab design, tool D10 flat"])
     return tuple(gcode.parse_gcode(text, source=f"kim_yang2006_{which}.nc")), text
+
+
+def written_program(path: ToolPath, header) -> str:
+    """``path`` through the one program writer (:func:`cnclab.nc.program.write_program`) with the
+    job's clearance plane, stock top, tool and spindle speed, every move as planned (no arc fitting,
+    the planned feeds): the paper's moves, with the writer's start block, tool change and end."""
+    j = job()
+    return write_program(path, clearance_z=j.clearance_z, top_z=j.top_z, tool=j.tool, spindle_rpm=j.spindle_rpm,
+                         arc_tol_mm=None, header=header)
 
 
 def cut_polylines(moves, max_segment):
