@@ -65,9 +65,12 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
     # with ``out`` the one writer checks the text and writes it atomically (nothing written on error)
     text = write_program(path, job, header=header, dialect=dialect, coolant=coolant, out=out, inputs=inputs)
     src = str(source or job_file.with_suffix(".ngc").name)
-    chk = check_program(text, clearance_z=job.clearance_z, top_z=getattr(job, "top_z", 0.0), source=src)
+    # the lines named are those of the planned text (nothing is written when it fails): never of a file
+    chk = check_program(text, clearance_z=job.clearance_z, top_z=getattr(job, "top_z", 0.0),
+                        source="<planned program>")
     if chk.errors:      # every planner tags its plunges into a start hole or cleared area 'cleared'
-        raise ValueError(f"{src}: the planned program fails the safety check: " + "; ".join(chk.errors[:5]))
+        raise ValueError(f"{src}: the planned program fails the safety check (nothing written): "
+                         + "; ".join(chk.errors[:5]))
     return text, job, path, chk
 
 

@@ -37,13 +37,21 @@ from . import adaptive_clearing   # the default; the other planners' modules are
 from . import coverage
 from .evaluate import evaluate
 from .job import Job
+from .levels import join_levels
 from .path import ToolPath
 
 __all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "MAX_LEVELS", "MIN_LEVEL_STEP_MM", "GOUGE_TOL_MM", "CE_PROMISE_DEG",
            "UncutError", "check_limits", "plan", "register"]
 
-#: name -> (planner(job, resolution_mm, **options) -> ToolPath for one level, one-line description)
+#: name -> (planner(job, resolution_mm, **options) -> ToolPath for one level, one-line description);
+#: ``resolution_mm`` None: the planner's own default
 STRATEGIES: dict = {}
+#: the planners' dixel / sampling step (mm) when :func:`plan` is given none (the adaptive planner: r/60)
+DEFAULT_RESOLUTION_MM = 0.1
+
+
+def _res(resolution_mm):
+    return DEFAULT_RESOLUTION_MM if resolution_mm is None else resolution_mm
 
 
 def register(name: str, description: str):
@@ -75,8 +83,8 @@ def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
         raise ValueError(f"{job.source}: the constant-engagement strategy (Thesis III laps) cannot hold the "
                          "engagement around islands (issue 28: 176-180 deg beside a hole near a wall); use the "
                          "adaptive strategy")
-    path = ce_clearing.clearing_path(job, resolution_mm=resolution_mm, **options)
-    ev = evaluate(path, job, max(resolution_mm, job.tool_radius / 10.0))
+    path = ce_clearing.clearing_path(job, resolution_mm=_res(resolution_mm), **options)
+    ev = evaluate(path, job, max(_res(resolution_mm), job.tool_radius / 10.0))
     if not ev.engagement_max_deg <= job.theta_deg + CE_PROMISE_DEG:
         raise ValueError(f"{job.source}: the constant-engagement strategy cannot keep this pocket's engagement: "
                          f"its laps reach {ev.engagement_max_deg:.0f} deg, beyond theta {job.theta_deg:g} + "
@@ -92,7 +100,7 @@ def _hybrid(job: Job, resolution_mm: float, **options) -> ToolPath:
         raise ValueError(f"{job.source}: the hybrid strategy plans one pocket outline around one start hole; "
                          "this job has several regions (use the adaptive strategy)")
     try:
-        return pocket.hybrid_path(job, resolution_mm, **options)
+        return pocket.hybrid_path(job, _res(resolution_mm), **options)
     except (IndexError, AttributeError, TypeError) as exc:   # its medial-axis arms need a pocket wide enough
         raise ValueError(f"{job.source}: the hybrid strategy cannot build its arms in this pocket "
                          f"({type(exc).__name__}: {exc}); use the adaptive strategy") from None
@@ -102,14 +110,14 @@ def _hybrid(job: Job, resolution_mm: float, **options) -> ToolPath:
 def _contour_parallel(job: Job, resolution_mm: float, **options) -> ToolPath:
     from . import pocket
 
-    return pocket.contour_parallel_path(job, resolution_mm=resolution_mm, **options)
+    return pocket.contour_parallel_path(job, resolution_mm=_res(resolution_mm), **options)
 
 
 @register("zig-zag", "zig-zag raster at a_e and a finishing lap")
 def _zigzag(job: Job, resolution_mm: float, **options) -> ToolPath:
     from . import pocket
 
-    return pocket.zigzag_path(job, resolution_mm=resolution_mm, **options)
+    return pocket.zigzag_path(job, resolution_mm=_res(resolution_mm), **options)
 
 
 #: arc-fit tolerance (mm) of the Kim & Yang strategies' programs: the paper's 0.02 mm lets an arc
@@ -161,7 +169,10 @@ def _snap_inside(passes, job: Job) -> list:
 
 @register("adaptive", "engagement-controlled clearing of the simulated stock, links at depth (adaptive_clearing)")
 def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
-    return adaptive_clearing.plan_job(job, **options)
+    # the planning pixel is at most r/30 (a coarser stock cannot resolve the engagement: the planner
+    # refuses it); a coarser resolution_mm is planned at r/30, recorded in info["resolution_mm"]
+    h = None if resolution_mm is None else min(float(resolution_mm), job.tool_radius / 30.0)
+    return adaptive_clearing.plan_job(job, resolution_mm=h, **options)
 
 
 #: the strategy :func:`plan` (and ``python -m cnclab plan``) uses when none is named
@@ -206,13 +217,20 @@ def _uncut_message(job: Job, strategy: str, rep: dict) -> str:
             f"{parts}")
 
 
-def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1, allow_uncut: bool = False,
+def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None = None, allow_uncut: bool = False,
          **options) -> ToolPath:
     """Plan ``job`` with ``strategy`` (a key of :data:`STRATEGIES`) level by level.
 
-    ``resolution_mm``: the planners' dixel row height / sampling step (mm); ``options`` go to the
-    planner. Returns one :class:`ToolPath`; ``info["levels"]`` holds the cutting z of each level,
-    ``info["strategy"]`` the name, ``info["uncut"]`` what the plan leaves by region
+    ``resolution_mm``: the planners' dixel row height / planning pixel / sampling step (mm), passed
+    to every strategy (None: each planner's own default, 0.1 mm, the adaptive planner's r/60; the
+    adaptive planner plans at most at r/30, see ``info["resolution_mm"]``); ``options`` go to the
+    planner. The levels (:meth:`Job.levels`, at most ``a_p`` each) are planned here, each as a
+    one-level job whose top is the floor above, and joined by
+    :func:`cnclab.toolpath.levels.join_levels`: a move through the levels above is marked cleared
+    only where their swept area proves it, else the level enters by a helix from the stock top.
+    Returns one :class:`ToolPath`; ``info["levels"]`` holds the cutting z of each level,
+    ``info["strategy"]`` the name, ``info["levels_extra_mm2"]`` the area each level's tool body meets
+    material the levels above left, ``info["uncut"]`` what the plan leaves by region
     (:func:`cnclab.toolpath.coverage.uncut_report`). A plan leaving more than the stated limit in a
     region raises :class:`UncutError`, unless ``allow_uncut`` (then ``info["warnings"]`` says it).
     A job beyond :data:`MAX_LEVELS` / :data:`MIN_LEVEL_STEP_MM` is refused before planning."""
@@ -220,9 +238,11 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1,
         raise ValueError(f"unknown strategy {strategy!r}: must be one of {sorted(STRATEGIES)}")
     if not isinstance(job, Job):
         raise TypeError(f"job must be a cnclab.toolpath.job.Job, got {type(job).__name__}")
-    if isinstance(resolution_mm, bool) or not isinstance(resolution_mm, (int, float, np.integer, np.floating)) \
-            or not (math.isfinite(resolution_mm) and resolution_mm > 0):
-        raise ValueError(f"resolution_mm must be a finite number > 0 mm, got {resolution_mm!r}")
+    if resolution_mm is not None and (isinstance(resolution_mm, bool)
+                                      or not isinstance(resolution_mm, (int, float, np.integer, np.floating))
+                                      or not (math.isfinite(resolution_mm) and resolution_mm > 0)):
+        raise ValueError(f"resolution_mm must be a finite number > 0 mm (or None: each planner's default), "
+                         f"got {resolution_mm!r}")
     check_limits(job)
     f = STRATEGIES[strategy][0]
     levels = job.levels()
@@ -231,7 +251,7 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float = 0.1,
     for top, z in zip(tops, levels):
         lv = job if len(levels) == 1 else dataclasses.replace(job, top_z=top, a_p=top - z, depth=top - z)
         paths.append(f(lv, resolution_mm, **options))
-    out = paths[0] if len(paths) == 1 else ToolPath.concat(paths)
+    out = join_levels(paths, tops, job)
     out.info.update(strategy=strategy, levels=levels)
     gouge, at = coverage.wall_gouge(out, job)
     if gouge > GOUGE_TOL_MM:

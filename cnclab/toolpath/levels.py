@@ -1,0 +1,204 @@
+"""Deep pockets: the levels of a job joined safely (:func:`join_levels`), for every planner.
+
+A planner of :data:`cnclab.toolpath.planners.STRATEGIES` cuts one level: it sees the level's top
+(the floor of the level above) as the stock top, so it may descend through the region above that
+top as through air — a rapid down to just above it tagged ``cleared``, a plunge onto it before its
+helix, a rapid over it. In the pocket these moves run through the levels above, which is safe only
+where those levels cleared the tool disc. :func:`join_levels` proves it with the exact swept area
+of the levels above and tags the moves accordingly, or re-enters by helix from the stock top where
+the proof fails.
+
+Model (units mm): the region a level cleared is the union of the tool discs (radius r) along its
+moves whose tip lies below the level's top (:func:`swept_region`, shapely buffers of the move
+polylines, arcs sampled by chords of at most ``r/8``: the inscribed buffer polygon underestimates
+the swept area, so the proof is conservative). Material left in the slabs above level k is
+``material - cleared_j`` for each j < k (``material`` = the pocket minus the pre-drilled hole).
+A move of level k whose tip is below the stock top and at or above the level's top is *proven* when
+its swept area meets at most ``tol_mm2`` of that material; it is then marked ``cleared`` (the
+:attr:`ToolPath.cleared` flag the writer and the evaluator read; its tag gains ``cleared: levels
+above`` for people). A move straight up needs no proof (the
+tool leaves along the column its body swept on the way down). A descent to the level top that
+cannot be proven is replaced by a plunge to the stock top (air) and a helix about the centre of the
+level's own following helix, at its pitch, down to the level top (an entry into material the level
+may cut). Any other unproven move is an error naming the level and the point.
+
+``info["levels_extra_mm2"]``: per level, the area where the level's tool body, below the stock top,
+meets material left in the levels above (it would cut more than ``a_p`` there; 0 when every level
+follows the same plan in x, y).
+
+>>> from shapely.geometry import box
+>>> from cnclab.toolpath.path import ToolPath
+>>> a = ToolPath.build([[5, 5, 5], [5, 5, -1], [15, 5, -1], [15, 5, 5]], kind=["rapid", "helix", "cut", "retract"], feed=100)
+>>> round(swept_region(a, 0.0, 2.0).area, 1)        # a 10 mm stroke of a 4 mm disc: 40 + pi 2^2
+52.5
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, Point
+
+from .path import KINDS, ToolPath
+
+__all__ = ["swept_region", "join_levels", "LevelError", "PROOF_TOL_MM2", "CLEARED_ABOVE"]
+
+#: material area (mm^2) a proven move may meet: a sliver 0.01 mm wide over 0.1 mm (the buffer
+#: polygons' chord error at r = 4 mm with 32 segments a quarter is 0.005 mm)
+PROOF_TOL_MM2 = 1e-3
+#: tag text added (for people) to a move proven to run inside the levels above
+CLEARED_ABOVE = "cleared: levels above"
+_K = {k: i for i, k in enumerate(KINDS)}
+_EPS = 1e-9
+
+
+class LevelError(ValueError):
+    """A level cannot be joined safely to the levels above (the message names level and point)."""
+
+
+def swept_region(path: ToolPath, below_z: float, r: float, moves=None):
+    """Union of the tool discs (radius ``r`` mm) along the moves of ``path`` whose tip lies below
+    ``below_z`` (mm) at both ends (``moves``: restrict to these move indices); a shapely geometry."""
+    pts, src = path.polyline(max(r / 8.0, 1e-3))
+    low = pts[:, 2] < below_z - _EPS
+    keep = low & (np.ones(len(pts), bool) if moves is None else np.isin(src, moves))
+    geoms = []
+    idx = np.flatnonzero(keep)
+    if idx.size:
+        brk = np.flatnonzero(np.diff(idx) > 1) + 1
+        for run in np.split(idx, brk):
+            xy = pts[run, :2]
+            g = Point(xy[0]) if len(xy) == 1 or np.ptp(xy, axis=0).max() == 0 else LineString(xy)
+            geoms.append(g.buffer(r, quad_segs=32))
+    return shapely.union_all(geoms) if geoms else shapely.Polygon()
+
+
+def _move_sweep(path, k, r):
+    a, b = path.xyz[k - 1], path.xyz[k]
+    if path.arc[k]:
+        piece = ToolPath(path.xyz[k - 1:k + 1], path.kind[k - 1:k + 1], path.tag[k - 1:k + 1],
+                         path.feed[k - 1:k + 1], path.spindle[k - 1:k + 1], path.arc[k - 1:k + 1],
+                         path.arc_center[k - 1:k + 1])
+        return swept_region(piece, math.inf, r)
+    if math.hypot(b[0] - a[0], b[1] - a[1]) <= _EPS:
+        return Point(b[:2]).buffer(r, quad_segs=32)
+    return LineString([a[:2], b[:2]]).buffer(r, quad_segs=32)
+
+
+def _helix_from_top(path, k, top_z, r):
+    """Moves (list of (xyz, kind, arc, centre, feed, tag)) replacing the unproven vertical descent
+    ``k`` of ``path`` (ending on the level top above a helix): a plunge to ``top_z`` (air) and a helix
+    about the following helix's centre, at its pitch, down to the descent's end."""
+    nxt = k + 1
+    if nxt >= len(path) or path.arc[nxt] == 0:
+        return None
+    end = path.xyz[k]
+    c = path.arc_center[nxt]
+    rad = math.hypot(end[0] - c[0], end[1] - c[1])
+    if rad <= 1e-6:
+        return None
+    # the following helix's pitch: its z drop over its swept angle (full turns when start = end)
+    p0, p1 = path.xyz[k], path.xyz[nxt]
+    a0, a1 = math.atan2(p0[1] - c[1], p0[0] - c[0]), math.atan2(p1[1] - c[1], p1[0] - c[0])
+    ccw = path.arc[nxt] == 3
+    sweep = (a1 - a0) % (2 * math.pi) if ccw else (a0 - a1) % (2 * math.pi)
+    sweep = sweep if sweep > 1e-9 else 2 * math.pi
+    drop = p0[2] - p1[2]
+    if not drop > 1e-9:
+        return None
+    turns = max(1, math.ceil((top_z - end[2]) / (drop * 2 * math.pi / sweep) - 1e-9))
+    feed = float(path.feed[nxt])
+    out = [((end[0], end[1], top_z), "plunge", 0, (np.nan, np.nan), feed, "entry: down to the stock top (air)")]
+    for t in range(1, turns + 1):
+        z = top_z - (top_z - end[2]) * t / turns
+        out.append(((end[0], end[1], z), "helix", int(path.arc[nxt]), (c[0], c[1]), feed,
+                    "entry: helix through the levels above"))
+    return out
+
+
+def _rebuild(path, replace):
+    """``path`` with moves ``k`` replaced by the lists ``replace[k]`` (see :func:`_helix_from_top`)."""
+    xyz, kind, arc, ctr, feed, tag, spin, clr = [], [], [], [], [], [], [], []
+    for k in range(len(path)):
+        if k in replace:
+            for p, kd, a, c, f, t in replace[k]:
+                xyz.append(p); kind.append(_K[kd]); arc.append(a); ctr.append(c); feed.append(f); tag.append(t)
+                spin.append(path.spindle[k]); clr.append(False)
+            continue
+        xyz.append(path.xyz[k]); kind.append(path.kind[k]); arc.append(path.arc[k]); ctr.append(path.arc_center[k])
+        feed.append(path.feed[k]); tag.append(path.tag[k]); spin.append(path.spindle[k]); clr.append(path.cleared[k])
+    return ToolPath(np.array(xyz, float), np.array(kind, np.int8), np.array(tag, dtype=object),
+                    np.array(feed, float), np.array(spin, float), np.array(arc, np.int8), np.array(ctr, float),
+                    path.tool, dict(path.info), np.array(clr, bool))
+
+
+def _with_tag(tag, extra):
+    t = str(tag or "")
+    return extra if not t else (t if extra in t else f"{t}; {extra}")
+
+
+def join_levels(paths, tops, job, tol_mm2: float = PROOF_TOL_MM2) -> ToolPath:
+    """Join the one-level ``paths`` (level k cuts from ``tops[k]`` down; ``tops[0]`` is the stock top
+    ``job.top_z``) into one safe path (see the module docstring). Raises :class:`LevelError` when a
+    move through the levels above is neither proven cleared nor re-entered by a helix."""
+    r = job.tool_radius
+    material = job.polygon.difference(job.start_hole_polygon())
+    top0 = job.top_z
+    left_above = shapely.Polygon()      # material left in the slabs above the current level
+    out, extra = [], []
+    for k, (p, top) in enumerate(zip(paths, tops)):
+        if k > 0:
+            p = _prove_level(p, k, top, top0, left_above, r, tol_mm2)
+            body = swept_region(p, top0, r)
+            extra.append(float(body.intersection(left_above).area))
+        else:
+            extra.append(0.0)
+        left_above = left_above.union(material.difference(swept_region(p, top, r)))
+        out.append(p)
+    joined = out[0] if len(out) == 1 else ToolPath.concat(out)
+    joined.info["levels_extra_mm2"] = extra
+    return joined
+
+
+def _prove_level(p, k, top, top0, left_above, r, tol_mm2):
+    """Tag (or re-enter) the moves of level ``k`` (path ``p``, top ``top``) that run through the levels
+    above (tip below ``top0``, at or above ``top``)."""
+    z = p.xyz[:, 2]
+    zprev = np.r_[np.inf, z[:-1]]
+    lo = np.minimum(z, zprev)
+    through = np.flatnonzero((lo < top0 - _EPS) & (np.maximum(z, zprev) > top + _EPS))
+    through = through[through > 0]
+    # straight up: the tool leaves along its own column, which its body swept on the way down
+    up = (z[through] > zprev[through]) & (np.hypot(*(p.xyz[through, :2] - p.xyz[through - 1, :2]).T) <= _EPS)
+    through = through[~up]
+    tags = p.tag.copy()
+    cleared = p.cleared.copy()
+    replace = {}
+    for i in through:
+        if i in replace:
+            continue
+        sweep = _move_sweep(p, i, r)
+        ok = left_above.is_empty or sweep.intersection(left_above).area <= tol_mm2
+        if ok:
+            tags[i] = _with_tag(tags[i], CLEARED_ABOVE)
+            cleared[i] = True
+            continue
+        vertical = math.hypot(*(p.xyz[i, :2] - p.xyz[i - 1, :2])) <= _EPS and z[i] < zprev[i]
+        # the descent ending on the level top (a rapid tagged cleared by the level's planner, or its
+        # plunge onto the top): re-entered by a helix from the stock top when a helix follows
+        j = i
+        while vertical and j + 1 < len(p) and p.arc[j + 1] == 0 and abs(z[j] - top) > 1e-6 \
+                and math.hypot(*(p.xyz[j + 1, :2] - p.xyz[j, :2])) <= _EPS and z[j + 1] < z[j]:
+            j += 1
+        new = _helix_from_top(p, j, top0, r) if vertical and abs(z[j] - top) <= 1e-6 else None
+        if new is None:
+            x, y = p.xyz[i, :2]
+            raise LevelError(f"level {k + 1} (top z {top:g} mm): move {i} at x {x:.3f} y {y:.3f} mm runs "
+                             f"through material the levels above left ({sweep.intersection(left_above).area:.3g} "
+                             "mm^2) and is no descent onto a helix that could enter from the stock top")
+        for m in range(i, j):
+            replace[m] = []                       # the vertical pieces before the descent's end
+        replace[j] = new
+    p = ToolPath(p.xyz, p.kind, tags, p.feed, p.spindle, p.arc, p.arc_center, p.tool, dict(p.info), cleared)
+    return _rebuild(p, replace) if replace else p

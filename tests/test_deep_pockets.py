@@ -1,0 +1,142 @@
+"""Deep pockets (issue 29 item 2): every registered strategy plans a pocket deeper than a_p, with or
+without a start hole, with or without an island, as a program that passes the static safety check
+(no plunge or rapid into material unless the planner proved the area cleared), the dixel simulator
+(0 plunges, 0 rapids into material) and, when LinuxCNC is installed, ``rs274``.
+
+The matrix: strategy x depth in {a_p, 2 a_p, 2.5 a_p} x start hole yes/no x island yes/no, on a
+small rectangular pocket (so that it runs in the test budget; the 60 x 40 mm, D8 case of the issue
+is checked by ``python -m cnclab plan`` in ``test_issue_pocket_through_the_cli``)."""
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+from shapely.geometry import box
+
+from cnclab.nc.program import check_program, write_program
+from cnclab.nc.rs274 import parse_canonical, rs274_available, run_rs274
+from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.job import Job
+from cnclab.toolpath.levels import CLEARED_ABOVE, LevelError, swept_region
+from cnclab.toolpath.path import Tool, ToolPath
+from cnclab.toolpath.planners import STRATEGIES, plan
+
+AP = 1.0        # mm: small levels keep the helices short
+D = 6.0         # mm tool
+RES = 0.1       # mm: the evaluator's dixel and the planners' resolution
+
+
+def _job(mult, hole, island):
+    poly = box(0, 0, 30, 22)
+    if island:
+        poly = poly.difference(box(14, 9, 18, 13))      # 2 D and more from every wall
+    sh = (6.0, 11.0, 7.0) if hole else None
+    return Job(poly, Tool(D, flutes=2), 60.0, AP, depth=AP * mult, start_hole=sh, v_c=120, f_z=0.04)
+
+
+@pytest.mark.parametrize("island", [False, True], ids=["plain", "island"])
+@pytest.mark.parametrize("hole", [False, True], ids=["no-hole", "hole"])
+@pytest.mark.parametrize("mult", [1, 2, 2.5])
+@pytest.mark.parametrize("name", sorted(STRATEGIES))
+def test_every_strategy_plans_every_depth_safely(name, mult, hole, island, tmp_path):
+    job = _job(mult, hole, island)
+    try:
+        p = plan(job, name, resolution_mm=RES)
+    except LevelError:
+        raise
+    except ValueError as exc:
+        # a strategy that cannot honour the job at all (the hybrid without a start hole or with islands)
+        # refuses it at any depth with the same message: never because the pocket is deep
+        if mult == 1:
+            assert name == "hybrid" and (island or not hole), exc
+        else:
+            with pytest.raises(ValueError) as one:
+                plan(_job(1, hole, island), name, resolution_mm=RES)
+            assert str(one.value) == str(exc)
+        return
+    levels = job.levels()
+    assert p.info["levels"] == levels and len(levels) == int(np.ceil(mult - 1e-9))
+    assert p.xyz[:, 2].min() == pytest.approx(levels[-1])
+    text = write_program(p, job)
+    chk = check_program(text, job.clearance_z, job.top_z)
+    assert chk.errors == [] and chk.plunges_into_material == 0 and chk.rapids_below_clearance == 0
+    ev = evaluate(p, job, RES)
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    # every level below the first cuts only under area the levels above cleared (same plan in x, y)
+    assert max(p.info["levels_extra_mm2"]) < 0.5
+    if rs274_available():
+        f = tmp_path / "deep.ngc"
+        f.write_text(text)
+        canon = parse_canonical(run_rs274(f), source=str(f))
+        assert canon.feed_mm > 0 and canon.spindle_on_before_feed
+
+
+def test_a_move_through_uncleared_levels_is_reentered_by_a_helix():
+    """A level whose entry lies where the level above left material: its descent (tagged cleared by
+    its one-level planner) is replaced by a plunge to the stock top and a helix from there."""
+    from cnclab.toolpath.levels import join_levels
+
+    job = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 1.0, depth=2.0, v_c=100, f_z=0.05, start_hole=(5, 10, 7))
+    c = (30.0, 10.0)
+    # level 1 cuts only a slot at x < 15 from the start hole; level 2 descends beside (30, 10) as if
+    # the floor there were clear
+    lv1 = ToolPath.build([[5, 10, 5], [5, 10, -1], [14, 10, -1], [14, 10, 5]],
+                         kind=["rapid", "plunge", "cut", "rapid"], feed=300, tag=["", "start hole", "", ""],
+                         cleared=[False, True, False, False])
+    lv2 = ToolPath.build([[c[0] + 1, c[1], 5], [c[0] + 1, c[1], -0.5], [c[0] + 1, c[1], -1],
+                          [c[0] + 1, c[1], -2], [c[0] + 1, c[1], 5]],
+                         kind=["rapid", "rapid", "plunge", "helix", "rapid"], feed=300,
+                         tag=["", "above the level", "air", "entry", ""], cleared=[False, True, False, False, False],
+                         arc=[0, 0, 0, 3, 0], arc_center=[[np.nan] * 2] * 3 + [list(c), [np.nan] * 2])
+    out = join_levels([lv1, lv2], [0.0, -1.0], job)
+    k2 = len(lv1)
+    assert out.kinds()[k2:].tolist() == ["rapid", "plunge", "helix", "helix", "rapid"]
+    assert out.xyz[k2 + 1, 2] == 0.0                        # the plunge ends on the stock top (air)
+    assert out.xyz[k2 + 2, 2] == pytest.approx(-1.0) and out.arc[k2 + 2] == 3
+    assert not out.cleared[k2:].any()
+    text = write_program(out, job)
+    assert check_program(text, job.clearance_z, job.top_z).errors == []
+
+
+def test_a_move_proven_by_the_level_above_is_tagged_cleared():
+    job = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 1.0, depth=2.0, v_c=100, f_z=0.05)
+    from cnclab.toolpath.levels import join_levels
+
+    lv1 = ToolPath.build([[5, 10, 5], [5, 10, 0], [5, 10, -1], [30, 10, -1], [30, 10, 5]],
+                         kind=["rapid", "plunge", "cut", "cut", "rapid"], feed=300)
+    lv2 = ToolPath.build([[10, 10, 5], [10, 10, -1], [10, 10, -2], [12, 10, -2], [12, 10, 5]],
+                         kind=["rapid", "plunge", "plunge", "cut", "rapid"], feed=300)
+    out = join_levels([lv1, lv2], [0.0, -1.0], job)
+    k2 = len(lv1)
+    assert out.cleared[k2 + 1] and CLEARED_ABOVE in out.tag[k2 + 1]   # down to the floor of level 1: proven
+    assert not out.cleared[k2 + 2]                          # into level 2's own material: its own claim
+    # swept area of a stroke: 2 r x length + pi r^2 (the buffer polygon within its chord error)
+    assert swept_region(lv1, 0.0, 3.0).area == pytest.approx(6 * 25 + np.pi * 9, rel=1e-3)
+
+
+def test_issue_pocket_through_the_cli(tmp_path):
+    """The issue's case: 60 x 40 mm, D8, a_p 3, depth 7.5, no start hole -> ``python -m cnclab plan``
+    writes a program that passes its own check (it refused it before)."""
+    from cnclab.nc.cli_plan import main
+
+    jf = tmp_path / "deep.json"
+    jf.write_text(json.dumps({"polygon": [[0, 0], [60, 0], [60, 40], [0, 40]], "tool_diameter": 8, "teeth": 2,
+                              "theta_deg": 60, "a_p": 3, "depth": 7.5, "v_c": 120, "f_z": 0.04}))
+    out = tmp_path / "deep.ngc"
+    assert main([str(jf), "-o", str(out), "--strategy", "contour-parallel"]) == 0
+    text = out.read_text()
+    assert check_program(text, 5.0, 0.0).errors == []
+    assert "Z-7.5000" in text
+
+
+def test_plan_passes_resolution_through():
+    job = _job(1, False, False)
+    a = plan(job, "adaptive", resolution_mm=0.08)
+    assert a.info["resolution_mm"] == pytest.approx(0.08)
+    b = plan(job, "adaptive")
+    assert b.info["resolution_mm"] == pytest.approx(job.tool_radius / 60)
+    c = plan(job, "adaptive", resolution_mm=0.5)        # coarser than r/30: planned at r/30
+    assert c.info["resolution_mm"] == pytest.approx(job.tool_radius / 30)
+    with pytest.raises(ValueError, match="resolution_mm"):
+        plan(job, "zig-zag", resolution_mm=0.0)
+    assert dataclasses.is_dataclass(job)
