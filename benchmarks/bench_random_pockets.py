@@ -1,5 +1,5 @@
 """Issue 16 on pockets that are not in the repository: the default planner
-(:func:`cnclab.toolpath.adaptive_clearing.adaptive_clearing`) on random pockets, scored by the
+(:func:`cnclab.toolpath.adaptive.adaptive_clearing`) on random pockets, scored by the
 package's one evaluator (dixel 0.05 mm; 0.1 mm above 2500 mm^2), one row per pocket and a summary.
 
 The pockets (seeded, reproducible): a random star (5-11 vertices, radii 12-30 mm), the largest part
@@ -33,7 +33,7 @@ from shapely.geometry import Point, Polygon, box
 from shapely.ops import unary_union
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from cnclab.toolpath.adaptive_clearing import PlanningError, adaptive_clearing  # noqa: E402
+from cnclab.toolpath.adaptive import PlanningError, adaptive_clearing  # noqa: E402
 from cnclab.toolpath.evaluate import evaluate  # noqa: E402
 from cnclab.toolpath.job import Job  # noqa: E402
 from cnclab.toolpath.path import Tool  # noqa: E402

@@ -17,7 +17,7 @@ from shapely.geometry import box
 
 from . import clihelp
 from .simulation import pixel
-from .toolpath.adaptive_clearing import adaptive_clearing
+from .toolpath.adaptive import adaptive_clearing
 from .toolpath.evaluate import evaluate
 from .toolpath.job import Job
 from .toolpath.path import Tool

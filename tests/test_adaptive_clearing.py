@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from shapely.geometry import Polygon, box
 from shapely.ops import unary_union
 
-from cnclab.toolpath.adaptive_clearing import PlanningError, adaptive_clearing
+from cnclab.toolpath.adaptive import PlanningError, adaptive_clearing
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import Job
 from cnclab.toolpath.path import Tool
@@ -181,7 +181,7 @@ def test_deterministic():
 def test_capsule_free_hand_case():
     # one material pixel centred at (1.025, 0.025) on a 0.05 mm grid; the segment (0,0)-(0,5)
     # passes 1.025 mm from it: free for a radius below that, not free above
-    from cnclab.toolpath.adaptive_clearing import _capsule_free
+    from cnclab.toolpath.adaptive.stock import _capsule_free
 
     M = np.zeros((200, 200), np.uint8)
     M[100, 120] = 1          # centre x = -5 + 120.5 * 0.05 = 1.025, y = -5 + 100.5 * 0.05 = 0.025

@@ -1,4 +1,4 @@
-"""Exactness tests of the compiled pieces behind the planner's speed (cnclab.toolpath.adaptive_clearing):
+"""Exactness tests of the compiled pieces behind the planner's speed (cnclab.toolpath.adaptive):
 each fast kernel against the plain computation it replaces, on random inputs.
 
 Tolerances: distances are exact up to floating-point rounding of one square root (1e-12 mm); masks and
@@ -13,8 +13,11 @@ from hypothesis import strategies as st
 from scipy import ndimage
 from shapely.geometry import Point, Polygon, box
 
-from cnclab.toolpath.adaptive_clearing import (_Grid, _capsule_free, _cut, _cut_both, _cut_path, _label8, _dist_window, _eng2, _frac, _max_filter, _raster,
-                                               _shortcut, _chord_free, _bow_runs, _rapid_legs)
+from cnclab.toolpath.adaptive.control import _eng2
+from cnclab.toolpath.adaptive.grid import _Grid
+from cnclab.toolpath.adaptive.links import _bow_runs, _chord_free, _rapid_legs, _shortcut
+from cnclab.toolpath.adaptive.stock import (_capsule_free, _cut, _cut_both, _cut_path, _dist_window, _frac, _label8,
+                                            _max_filter, _raster)
 
 _SET = dict(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
 

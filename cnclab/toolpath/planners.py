@@ -6,7 +6,7 @@ for a pocket deeper than a_p (:meth:`Job.levels`) and joins the levels (each end
 the clearance plane, the next starts with a rapid there). Units: mm, mm/min, deg.
 
 =======================  ===================================================================
-adaptive (default)       :func:`cnclab.toolpath.adaptive_clearing.plan_job` (engagement-controlled
+adaptive (default)       :func:`cnclab.toolpath.adaptive.plan_job` (engagement-controlled
                          clearing of the simulated stock, links at depth through cleared area;
                          issue 16: the planner ``python -m cnclab plan`` runs unless told otherwise)
 constant-engagement      :func:`cnclab.toolpath.ce_clearing.clearing_path` (Jacsó Thesis III laps)
@@ -33,7 +33,7 @@ import math
 import numpy as np
 import shapely
 
-from . import adaptive_clearing   # the default; the other planners' modules are imported when used
+from . import adaptive   # the default; the other planners' modules are imported when used
 from . import coverage
 from .evaluate import evaluate
 from .job import Job
@@ -172,7 +172,7 @@ def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
     # the planning pixel is at most r/30 (a coarser stock cannot resolve the engagement: the planner
     # refuses it); a coarser resolution_mm is planned at r/30, recorded in info["resolution_mm"]
     h = None if resolution_mm is None else min(float(resolution_mm), job.tool_radius / 30.0)
-    return adaptive_clearing.plan_job(job, resolution_mm=h, **options)
+    return adaptive.plan_job(job, resolution_mm=h, **options)
 
 
 #: the strategy :func:`plan` (and ``python -m cnclab plan``) uses when none is named

@@ -12,7 +12,7 @@ cleared four ways and every path is cut through the *same* dixel simulator
   entry in each part of the pocket, limited by the final contour within each lap, then a final
   contour pass) -- the collection's older clearing planner;
 * ``adaptive clearing`` -- the engagement-controlled clearing of issue 16,
-  ``cnclab.toolpath.planners.STRATEGIES["adaptive"]`` (:mod:`cnclab.toolpath.adaptive_clearing`: each step
+  ``cnclab.toolpath.planners.STRATEGIES["adaptive"]`` (:mod:`cnclab.toolpath.adaptive`: each step
   steered to theta on the simulated stock, links at depth through the cleared region, a wall-following
   finish); fast mode plans it on a coarser pixel stock (``resolution_mm()``) to keep the notebook short.
 
@@ -34,7 +34,7 @@ import pandas as pd
 from ...cache import cached
 from ...nc import gcode
 from ...runtime import fast_mode, pick
-from ...toolpath import adaptive_clearing
+from ...toolpath import adaptive
 from ...toolpath import ce_clearing as cc
 from ...toolpath import planners
 from ...toolpath.evaluate import Evaluation, evaluate
@@ -75,7 +75,7 @@ def adaptive_path() -> ToolPath:
     of r/30 (the planner's coarsest, instead of r/60). ``info["plan_time_s"]``: wall-clock plan time."""
     t0 = time.perf_counter()
     if fast_mode():     # the strategy's own function with a coarser planning stock (planners.plan has no such knob)
-        path = adaptive_clearing.plan_job(ky.job(), resolution_mm=min(resolution_mm(), ky.job().tool_radius / 30))
+        path = adaptive.plan_job(ky.job(), resolution_mm=min(resolution_mm(), ky.job().tool_radius / 30))
     else:
         path = planners.plan(ky.job(), "adaptive", resolution_mm())
     path.info["plan_time_s"] = time.perf_counter() - t0

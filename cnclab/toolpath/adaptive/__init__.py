@@ -1,0 +1,113 @@
+"""Engagement-controlled clearing of any 2.5D pocket (islands, necks, several regions): the tool
+follows the boundary of the cleared region, each step steered so that its engagement angle equals
+the target, and links at depth through the cleared region (issue 16).
+
+Units: lengths mm, angles deg at the API (rad inside the kernels), feeds mm/min; ``tool_radius`` is
+the radius of the flat end mill. The pocket is a shapely Polygon/MultiPolygon whose holes are islands.
+
+Design (the ideas and where they come from; the code is cnclab's own)
+--------------------------------------------------------------------
+* **The cleared region is the state** (Jacsó 2021, Thesis III: the constant-engagement path is the
+  offset of the *cleared boundary*, not of the pocket contour). It is kept as a pixel stock
+  (``h = r/60``, the tool-radius resolution of the evaluator) that the planner cuts as it goes.
+* **Step control by the engagement angle** (Thesis III's constant engagement, Adaptive2d's per-step
+  direction search): from the current point the next point is ``ds`` (default r/30) away; its
+  heading is searched between a hard left turn (away from the material, material on the right:
+  climb milling with an M3 spindle) and a hard right turn (or, where that would leave the
+  tool-centre region, the rightmost heading that stays in it: the pass slides along the wall) so
+  that the engagement measured
+  on the stock -- the material fraction of the front half of the tool circle, the quantity the
+  evaluator scores, on the 1/2 contour of the bilinear pixel stock with the crossings between the
+  arc samples interpolated -- equals ``theta``. Libarea's ``Adaptive2d`` does the same with the *area cut
+  per unit length* (its ``stepOverFactor``); at a constant step the two are equivalent to first
+  order, and the angle is what is promised, so the angle is controlled directly. The search starts
+  from the last step's turn rate, takes a Newton step with the last step's slope d(engagement)/
+  d(heading) and closes the bracket by false position (Illinois), stopping within ROOT_TOL (1 deg)
+  below the target: 2-3 arc evaluations a step. Air steps turn hard right at once. Disks are cut
+  into the planning stock with the evaluator's lag (the last ``2 sqrt(2 r h) + 2 h`` mm not yet
+  cut) so the planner measures what the evaluator will measure.
+* **Sliver guard**: where the tool circle runs nearly tangent to a cut boundary -- re-entering a
+  corner another pass left, a pass start beside a crescent -- the engagement angle jumps although
+  the chip is thin, and the 1/2 contour can miss a sub-pixel crescent. Every step is therefore also
+  measured with any material counted (bilinear fraction >= ``GUARD_LEVEL``); where that exceeds
+  ``theta + guard_deg`` (5 deg) the heading turns left until it holds, or the pass ends.
+  Consequence: the tool centre stops short of a concave corner of the tool-centre region (reaching
+  it means touching the unreachable corner over ~180 deg minus the corner angle): a wedge about as
+  large as the unreachable corner itself stays (less than FreeCAD Adaptive leaves, see
+  ``benchmarks/bench_vs_freecad.py``).
+* **A pass ends** when the next point would leave the tool-centre region (pocket shrunk by r), when
+  even the hardest left turn cannot bring the engagement down to the target, or when the tool has
+  run ``1.5 r`` through air (that air tail is dropped; a pass that met no material at all in a band
+  narrower than the tool is tried once more with ``3.5 r``, kept if it removes 0.2 a_e per mm: the
+  way to the face of a neck is a loop mostly through air). Kim & Yang's insertion idea -- insert a path only where the regular
+  pass would leave material -- becomes the start rule: every pass starts at the cleared-region
+  point *nearest through cleared area* to where the tool is whose disk just touches material
+  (distance to the nearest material = r), heading along the material boundary; the controller
+  then turns into the material and settles at ``theta`` (no perpendicular approach: no slotting).
+  Where the tool-centre region is narrower than the turning circle and a pass runs straight into
+  air, it is started once the other way round (the face at the end of a band lies behind it).
+* **Links** (Adaptive2d's ``keepToolDown`` linking through cleared area): the start of the next
+  pass is found by a Dijkstra search over the cells whose tool disk is free of material (distance
+  field of the stock on a coarse grid, capped just above r and recomputed only in the window the
+  last change of the stock can reach) inside the tool-centre region, starting where the tool is;
+  the cell route is shortened to straight chords that stay in that free set and written as rapids
+  at depth tagged ``cleared`` (FreeCAD writes its keep-tool-down links as G0 too; the evaluator
+  counts any rapid that removes material) or, with ``rapid_links=False``, as feed moves (``link``,
+  link feed). Only when no free route exists (a disjoint region, material
+  closing the way) does the tool retract, rapid at clearance and enter again.
+* **Remnants**: where no border cell can be reached through cleared area but a free-standing remnant
+  of material is left (a pillar the passes around it could not take), one straight feed move from a
+  free point to where the tool disc holds the whole remnant takes it, if the remnant lies within
+  r sin(theta/2) of its centre (the move then meets it over at most theta) and the move meets no
+  other material; otherwise the tool enters there by helix. A place entered before is banned.
+* **Entries**: a pre-drilled start hole is used as it is (plunge into the hole, air); otherwise a
+  helix (G3 turns, 5 deg ramp like FreeCAD's default) at the point of the tool-centre region
+  farthest from its boundary (the centre of the largest inscribed circle), radius
+  ``min(0.75 r, 0.9 x inscribed radius - h)`` (FreeCAD's is 0.75 r too), then a floor circle;
+  each entry's engagement is reported apart by the evaluator. A place that allows less than
+  ``0.1 r`` (a helix of a few hundredths of a mm is a plunge) is banned unless its part of the
+  tool-centre region is that narrow everywhere.
+* **Finish**: one contour pass along every ring of the tool-centre region (outer rings
+  counter-clockwise, islands clockwise: climb milling), started where the ring is already free of
+  material, takes the thin rests the passes left against the walls (thinner than ``a_e`` where the
+  passes reached the walls); it runs under the same engagement control with the target raised by
+  ``finish_margin_deg`` (6 deg: the simulator measures up to ~3 deg more than the planning stock on
+  the thin wall rests, and theta + 10 deg is the bound) so that the corner wedges are peeled instead
+  of refused; the lap starts at the free ring point nearest the tool. Points planned within 2 h of
+  the wall are snapped onto the nearest wall point (1 um inside
+  the 64-segment tool-centre limit); the lap is replayed on the stock (chords the snap made longer
+  than 1.5 ds sampled along their length) and a snapped point whose engagement would exceed theta +
+  2 deg, at the 1/2 level or with slivers counted, keeps its planned place. Each part of the
+  tool-centre region is finished before the tool leaves it (no extra lift). Up to ``clean_rounds``
+  further rounds of passes and finishing take material the bans left (only while some lies deeper
+  than 2 coarse cells inside the tool's reach).
+* **Lifts** are G0 straight up (as FreeCAD's); links at depth are G0 only where no material pixel
+  lies within r + h/sqrt(2) of the chord (``rapid_links``) on the *rapid stock*: the same discs cut
+  with radius r - h/sqrt(2), so that the tool disc of such a chord is truly swept (sub-pixel cusps
+  between passes, which the planning stock cannot show, never meet a rapid). A chord on the line of
+  the wall-following pass that left the wall skin is tangent to it and never proven: an air run
+  along it is moved 2 h to its left (away from the material on the pass's right) with feed legs
+  off and back on the line, and a link from or to a wall point gets a feed leg of 2 h or 4 h, where
+  that makes the rest provable (:func:`_bow_runs`, :func:`_rapid_legs`).
+* **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
+  than the resolution) raises ValueError naming the job source and the reason.
+
+Package layout (one role per module)
+-----------------------------------
+``stock`` pixel-stock kernels; ``control`` the engagement controller (heading search, guard, a
+pass); ``links`` links at depth and the rapid proofs; ``grid`` the per-level state (stocks, masks,
+free field); ``planner`` entries, passes, links, remnants and the finish on each level.
+
+>>> import numpy as np
+>>> from shapely.geometry import box
+>>> tp = adaptive_clearing(box(0, 0, 24, 18), tool_radius=3, theta_deg=60, a_p=1, feed_mm_min=255)
+>>> sorted(set(tp.kinds()))
+['cut', 'helix', 'link', 'plunge', 'rapid']
+>>> bool(np.all(tp.xyz[tp.is_kind("plunge"), 2] >= 0.0))   # the only plunge ends on the stock top (air)
+True
+"""
+from __future__ import annotations
+
+from .planner import PlanningError, adaptive_clearing, plan_job
+
+__all__ = ["adaptive_clearing", "plan_job", "PlanningError"]

@@ -1,0 +1,159 @@
+"""The planner's state at one level (:class:`_Grid`): the planning stock, the rapid stock, the
+tool-centre mask and the coarse free-distance field kept up to date incrementally (see the
+package docstring). Units: mm.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .control import GUARD_LEVEL, _pass, _replay
+from .links import _dijkstra_nb
+from .stock import _coarse_any, _cut, _cut_path, _dist_window, _max_filter, _raster
+
+
+class _Grid:
+    """The planning stock ``M`` (pixels of ``h`` mm), the tool-centre mask ``A`` and, on a coarse grid
+    (cells of ``hc = k h``), the distance from each cell centre to the nearest material, kept up to date
+    incrementally: every change of ``M`` goes through a method that marks the changed box, and
+    :meth:`free_field` recomputes the coarse field only in the window the change can affect. The field
+    is capped at ``cap`` (mm): the planner only compares it with thresholds below ``cap``."""
+
+    def __init__(self, pocket, allowed, r, h, hole):
+        self.r, self.h = r, h
+        x0, y0, x1, y1 = pocket.bounds
+        m = 2 * h
+        self.x0, self.y0 = x0 - m, y0 - m
+        self.nx = int(math.ceil((x1 - x0 + 2 * m) / h))
+        self.ny = int(math.ceil((y1 - y0 + 2 * m) / h))
+        self.M = _raster(pocket, self.x0, self.y0, h, self.nx, self.ny)
+        # tool-centre region shrunk by h/sqrt(2): every point of a pixel whose centre it holds (what
+        # _inside accepts) is inside the true region (a further 1e-6: centres exactly on the shrunk
+        # boundary, e.g. of axis-parallel walls, are outside)
+        self.A = _raster(allowed.buffer(-h / math.sqrt(2.0) * (1 + 1e-6)), self.x0, self.y0, h, self.nx, self.ny)
+        # the rapid stock: the same discs cut with radius r - h/sqrt(2). A pixel centre it shows as
+        # clear is within r - h/sqrt(2) of a disc centre, so every point within h/sqrt(2) of it (its
+        # pixel) is truly swept: a chord with no material pixel of it within r + h/sqrt(2) is
+        # clear in the exact geometry too, sub-pixel cusps between passes included
+        self.r_rapid = r - h / math.sqrt(2.0)
+        self.r_capsule = r + h / math.sqrt(2.0) * (1 + 1e-9)
+        self.Mr = self.M.copy()
+        if hole is not None:
+            _cut(self.M, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2], np.nan, np.nan)
+            _cut(self.Mr, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2] - h / math.sqrt(2.0), np.nan, np.nan)
+        # coarse grid for the free-space search
+        self.k = max(1, int(round(0.2 / h))) if r >= 2 else 1
+        self.hc = self.k * h
+        self.Ac = self.coarse(self.A).min(axis=(1, 3)) > 0
+        # each cell's distance to the region's boundary (mm: to the nearest cell outside it)
+        nJ, nI = self.Ac.shape
+        self.dA = np.empty(self.Ac.shape)
+        _dist_window(~self.Ac, 0, nJ, 0, nI, 0, nJ, 0, nI, self.hc, np.inf, self.dA)
+        # half-width of the tool-centre region around each cell: the largest dA within r
+        c = int(math.ceil(r / self.hc))
+        self.half_width = _max_filter(self.dA, c)
+        self.cap = r + 4.0 * self.hc + r / 30.0   # > the air test of _pass at the default step r/30
+        self.mat = np.zeros(self.Ac.shape, bool)
+        self.D = np.empty(self.Ac.shape)
+        self._dirty = (-np.inf, -np.inf, np.inf, np.inf)
+        n = self.Ac.size            # Dijkstra buffers, reset after each search
+        self._dist = np.full(n, np.inf)
+        self._prev = -np.ones(n, np.int64)
+        self._hk = np.empty(8 * n + 8)
+        self._hv = np.empty(8 * n + 8, np.int64)
+        self._touched = np.empty(n, np.int64)
+
+    def coarse(self, a):
+        k = self.k
+        ny, nx = (a.shape[0] // k) * k, (a.shape[1] // k) * k
+        return a[:ny, :nx].reshape(ny // k, k, nx // k, k)
+
+    # -- every change of M goes through these -------------------------------------------------
+    def touch(self, P, rad):
+        """Mark the box of the points P (n, 2) grown by ``rad`` mm as changed."""
+        P = np.asarray(P, float).reshape(-1, 2)
+        lo = P.min(axis=0) - rad
+        hi = P.max(axis=0) + rad
+        d = self._dirty
+        self._dirty = (lo[0], lo[1], hi[0], hi[1]) if d is None else \
+            (min(d[0], lo[0]), min(d[1], lo[1]), max(d[2], hi[0]), max(d[3], hi[1]))
+
+    def _cut_rapid(self, P):
+        _cut_path(self.Mr, self.x0, self.y0, self.h, np.ascontiguousarray(P, float), self.r_rapid)
+
+    def snapshot(self):
+        """Copies of the stocks, for :meth:`restore`."""
+        return self.M.copy(), self.Mr.copy()
+
+    def run_pass(self, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
+                 guard, air_eng=0.0, check_rapids=False):
+        """:func:`_pass` on these stocks (every argument given: numba's fast dispatch); ``check_rapids``:
+        mark the air steps whose chord is clear on the rapid stock."""
+        P, removed, reason, E, F = _pass(self.M, self.A, float(self.x0), float(self.y0), float(self.h), float(self.r),
+                                         float(sx), float(sy), float(heading), float(target), float(ds), float(lag),
+                                         int(max_steps), int(n_samp), float(air_stop), float(turn), float(turn_right),
+                                         float(max_len), float(guard), float(GUARD_LEVEL), self.free_field()[0],
+                                         float(self.hc), self.Mr, float(self.r_rapid),
+                                         float(self.r_capsule) if check_rapids else 0.0, float(air_eng))
+        self.touch(P, self.r + self.h)
+        return P, removed, reason, E, F
+
+    def cut_path(self, P):
+        _cut_path(self.M, self.x0, self.y0, self.h, P, self.r)
+        self._cut_rapid(P)
+        self.touch(P, self.r + self.h)
+
+    def replay(self, P, lag, n_samp):
+        E = _replay(self.M, self.x0, self.y0, self.h, self.r, P, float(lag), int(n_samp), GUARD_LEVEL)[0]
+        self._cut_rapid(P)
+        self.touch(P, self.r + self.h)
+        return E
+
+    def restore(self, snap):
+        """Set the stocks back to a :meth:`snapshot`."""
+        self.M[:] = snap[0]
+        self.Mr[:] = snap[1]
+        self._dirty = (-np.inf, -np.inf, np.inf, np.inf)
+
+    def free_field(self):
+        """(distance from each coarse cell centre to the nearest material, mm, capped at ``cap``;
+        coarse tool-centre mask). Read-only views: copy before changing them."""
+        d = self._dirty
+        if d is not None:
+            hc, cap = self.hc, self.cap
+            nJ, nI = self.mat.shape
+            c = int(math.ceil(cap / hc)) + 1
+            J0 = max(int(math.floor((d[1] - self.y0) / hc)) - 1, 0) if np.isfinite(d[1]) else 0
+            I0 = max(int(math.floor((d[0] - self.x0) / hc)) - 1, 0) if np.isfinite(d[0]) else 0
+            J1 = min(int(math.ceil((d[3] - self.y0) / hc)) + 1, nJ) if np.isfinite(d[3]) else nJ
+            I1 = min(int(math.ceil((d[2] - self.x0) / hc)) + 1, nI) if np.isfinite(d[2]) else nI
+            if J0 < J1 and I0 < I1:
+                _coarse_any(self.M, self.k, self.mat, J0, J1, I0, I1)
+                # the cells within cap of the change, from the material within cap of those cells
+                wj0, wj1, wi0, wi1 = max(J0 - c, 0), min(J1 + c, nJ), max(I0 - c, 0), min(I1 + c, nI)
+                ej0, ej1, ei0, ei1 = max(wj0 - c, 0), min(wj1 + c, nJ), max(wi0 - c, 0), min(wi1 + c, nI)
+                _dist_window(self.mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, self.D)
+            self._dirty = None
+        return self.D, self.Ac
+
+    def cell(self, x, y):
+        return (int((y - self.y0) // self.hc), int((x - self.x0) // self.hc))
+
+    def centre(self, j, i):
+        return (self.x0 + (i + 0.5) * self.hc, self.y0 + (j + 0.5) * self.hc)
+
+    def route(self, cur, r_free, band_hi=-np.inf, banned=None, cell=(-1, -1)):
+        """Shortest 8-neighbour route (cells) from the cell of ``cur`` through free cells (in the
+        tool-centre region, D >= r_free; ``cell`` counts as free) to the nearest goal cell (free with
+        D < band_hi and not banned, or ``cell``); starting off the free set, first to the nearest free
+        cell within 2 r. None when no goal is reachable."""
+        D, Ac = self.free_field()
+        if banned is None:
+            banned = np.zeros((1, 1), bool)
+        route = _dijkstra_nb(D, Ac, banned, float(r_free), float(band_hi), int(cell[0]), int(cell[1]), float(cur[0]),
+                             float(cur[1]), float(self.x0), float(self.y0), float(self.hc), 2.0 * self.r, self._dist,
+                             self._prev, self._hk, self._hv, self._touched, self.A, float(self.h))
+        if len(route) == 1 and route[0, 0] < 0:
+            return "off"        # no free cell within 2 r that a straight chord inside the region reaches
+        return None if len(route) == 0 else route

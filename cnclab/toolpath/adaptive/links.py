@@ -1,0 +1,275 @@
+"""Links at depth and the proofs that let them be rapids (see the package docstring, "Links"):
+the Dijkstra search over the coarse free cells (:func:`_dijkstra_nb`), the chord shortcut through
+the free set (:func:`_shortcut`, :func:`_chord_free`), the rapid proofs on the rapid stock
+(:func:`_mark_free`, :func:`_chain_clear`, :func:`_bow_runs`: an air run is a G0 only where no
+material pixel lies within r + h/sqrt(2) of its chord) and the feed legs off a wall
+(:func:`_rapid_legs`). Units: mm.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .stock import _capsule_free, _segment_inside
+
+
+@njit(cache=True)
+def _mark_free(Mr, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule):
+    """F[k] = the chord P[k-1] -> P[k] has no pixel of ``Mr`` within ``r_capsule``, for the air steps
+    (E[k] < air_eng) k0 <= k < k1."""
+    for k in range(max(k0, 1), k1):
+        if E[k] < air_eng:
+            F[k] = _capsule_free(Mr, x0, y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], r_capsule)
+
+
+@njit(cache=True)
+def _chain_clear(Mr, Amask, x0, y0, h, Q, r_capsule):
+    """Every chord of the polyline Q (m, 2) has no pixel of ``Mr`` within ``r_capsule`` and every
+    point of it, sampled every h/2, lies in the tool-centre mask (:func:`_segment_inside`)."""
+    for k in range(1, Q.shape[0]):
+        ax = Q[k - 1, 0]
+        ay = Q[k - 1, 1]
+        bx = Q[k, 0]
+        by = Q[k, 1]
+        if not _segment_inside(Amask, x0, y0, h, ax, ay, bx, by, 0.0):
+            return False
+        if not _capsule_free(Mr, x0, y0, h, ax, ay, bx, by, r_capsule):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, min_steps):
+    """For the air steps k0 <= k < k1 (engagement < ``air_eng``) not proven free one by one: a run of
+    at least ``min_steps`` of them (steps a..b, from P[a-1] to P[b]) that slides along the last
+    cut boundary (a wall-following pass left its skin there: the rapid stock keeps a band of it
+    within r + h/sqrt(2) of the same line, so no chord on that line is ever proven) is moved
+    ``delta`` mm to its left, away from the material on the pass's right: P[a..b-1] shifted. When
+    every chord of the shifted points and the end points is proven as in :func:`_mark_free` and
+    inside the mask, its inner steps become G0 (``F``) and the first and last steps stay feed links
+    (the legs of ``delta`` off the line and back). Called before the run's discs are cut: the rapid
+    stock holds what each step meets; the shifted discs remove nothing (proven), the discs at the
+    shifted points that the pass cuts later remove nothing either."""
+    k = max(k0, 1)
+    while k < k1:
+        if not (E[k] < air_eng) or F[k]:
+            k += 1
+            continue
+        a = k
+        while k < k1 and E[k] < air_eng and not F[k]:
+            k += 1
+        b = k - 1
+        if b - a + 1 < min_steps:
+            continue
+        m = b - a                      # points P[a..b-1] shifted
+        Q = np.empty((m + 2, 2))
+        Q[0, 0] = P[a - 1, 0]
+        Q[0, 1] = P[a - 1, 1]
+        Q[m + 1, 0] = P[b, 0]
+        Q[m + 1, 1] = P[b, 1]
+        for q in range(m):
+            i = a + q
+            tx = P[i + 1, 0] - P[i - 1, 0]
+            ty = P[i + 1, 1] - P[i - 1, 1]
+            L = math.hypot(tx, ty)
+            if L == 0.0:
+                return
+            Q[q + 1, 0] = P[i, 0] - delta * ty / L
+            Q[q + 1, 1] = P[i, 1] + delta * tx / L
+        if _chain_clear(Mr, Amask, x0, y0, h, Q[1:m + 1], r_capsule):
+            for q in range(m):
+                P[a + q, 0] = Q[q + 1, 0]
+                P[a + q, 1] = Q[q + 1, 1]
+            for q in range(a + 1, b):
+                F[q] = True
+
+
+@njit(cache=True)
+def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, dist, prev, hk, hv, touched,
+                 A, h):
+    """8-neighbour Dijkstra (binary heap, lazy deletion) over the free cells (Ac and D >= r_free, or
+    (gj, gi)) from the cell of (cx, cy) (off the free set: from the nearest free cell centre within
+    ``reach`` mm that a straight chord from (cx, cy) inside the fine tool-centre mask ``A`` (pixels of
+    ``h``, origin x0, y0) reaches; none: [[-1, -1]]) to the nearest goal cell (free, and D < band_hi and
+    not banned, or (gj, gi));
+    the route as (n, 2) cell indices (empty when none). ``dist``/``prev`` are all inf/-1 on entry
+    and are left so (the cells touched are reset)."""
+    ny, nx = D.shape
+    nb = banned.shape[0] > 1
+    j0 = min(max(int((cy - y0) // hc), 0), ny - 1)
+    i0 = min(max(int((cx - x0) // hc), 0), nx - 1)
+    if not ((Ac[j0, i0] and D[j0, i0] >= r_free) or (j0 == gj and i0 == gi)):
+        # step off the material: the nearest free cell (first in row order among equals) within reach
+        # whose centre a straight chord inside the tool-centre mask reaches
+        jlo = max(int(math.floor((cy - reach - y0) / hc)) - 1, 0)
+        jhi = min(int(math.ceil((cy + reach - y0) / hc)) + 1, ny - 1)
+        size = max(jhi - jlo + 1, 0) * nx
+        cand = np.empty(size)
+        cj = np.empty(size, np.int64)
+        ci = np.empty(size, np.int64)
+        m = 0
+        for j in range(jlo, jhi + 1):
+            ycc = y0 + (j + 0.5) * hc
+            for i in range(nx):
+                if (Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi):
+                    xcc = x0 + (i + 0.5) * hc
+                    d2 = (xcc - cx) ** 2 + (ycc - cy) ** 2
+                    if d2 <= reach * reach:
+                        cand[m] = d2
+                        cj[m] = j
+                        ci[m] = i
+                        m += 1
+        cand = cand[:m]
+        bj = -1
+        bi = -1
+        for q in np.argsort(cand, kind="mergesort"):
+            xcc = x0 + (ci[q] + 0.5) * hc
+            ycc = y0 + (cj[q] + 0.5) * hc
+            if _segment_inside(A, x0, y0, h, cx, cy, xcc, ycc, 2.0 * h):
+                bj = cj[q]
+                bi = ci[q]
+                break
+        if bj < 0:
+            return np.full((1, 2), -1, np.int64)     # no free cell reachable by a straight chord
+        j0 = bj
+        i0 = bi
+    s0 = j0 * nx + i0
+    dist[s0] = 0.0
+    touched[0] = s0
+    nt = 1
+    hk[0] = 0.0
+    hv[0] = s0
+    n = 1
+    dj = (-1, -1, -1, 0, 0, 1, 1, 1)
+    di = (-1, 0, 1, -1, 1, -1, 0, 1)
+    ww = (1.4142, 1.0, 1.4142, 1.0, 1.0, 1.4142, 1.0, 1.4142)
+    found = -1
+    while n > 0:
+        d = hk[0]
+        v = hv[0]
+        n -= 1
+        hk[0] = hk[n]
+        hv[0] = hv[n]
+        p = 0
+        while True:
+            c = 2 * p + 1
+            if c >= n:
+                break
+            if c + 1 < n and hk[c + 1] < hk[c]:
+                c += 1
+            if hk[c] < hk[p]:
+                hk[c], hk[p] = hk[p], hk[c]
+                hv[c], hv[p] = hv[p], hv[c]
+                p = c
+            else:
+                break
+        if d > dist[v]:
+            continue
+        j = v // nx
+        i = v % nx
+        if (j == gj and i == gi) or (D[j, i] < band_hi and not (nb and banned[j, i])):
+            found = v
+            break
+        for q in range(8):
+            jj = j + dj[q]
+            ii = i + di[q]
+            if 0 <= jj < ny and 0 <= ii < nx and ((Ac[jj, ii] and D[jj, ii] >= r_free) or (jj == gj and ii == gi)):
+                u = jj * nx + ii
+                nd = d + ww[q]
+                if nd < dist[u]:
+                    if dist[u] == np.inf:
+                        touched[nt] = u
+                        nt += 1
+                    dist[u] = nd
+                    prev[u] = v
+                    hk[n] = nd
+                    hv[n] = u
+                    c = n
+                    n += 1
+                    while c > 0:
+                        p = (c - 1) // 2
+                        if hk[c] < hk[p]:
+                            hk[c], hk[p] = hk[p], hk[c]
+                            hv[c], hv[p] = hv[p], hv[c]
+                            c = p
+                        else:
+                            break
+    if found < 0:
+        out = np.empty((0, 2), np.int64)
+    else:
+        m = 0
+        v = found
+        while v >= 0:
+            m += 1
+            v = prev[v]
+        out = np.empty((m, 2), np.int64)
+        v = found
+        for k in range(m - 1, -1, -1):
+            out[k, 0] = v // nx
+            out[k, 1] = v % nx
+            v = prev[v]
+    for t in range(nt):
+        dist[touched[t]] = np.inf
+        prev[touched[t]] = -1
+    return out
+
+
+@njit(cache=True)
+def _chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, ax, ay, bx, by):
+    """True when the chord a-b stays in free coarse cells (Ac and D >= r_free, or (gj, gi)): sampled
+    every hc/2, its interior samples in free cells and no sample off the grid."""
+    ny, nx = D.shape
+    n = max(2, int(math.ceil(math.hypot(bx - ax, by - ay) / (0.5 * hc))) + 1)
+    dt = 1.0 / (n - 1)
+    for k in range(n):
+        t = 1.0 if k == n - 1 else k * dt
+        j = int(math.floor((ay + t * (by - ay) - y0) / hc))
+        i = int(math.floor((ax + t * (bx - ax) - x0) / hc))
+        if j < 0 or i < 0 or j >= ny or i >= nx:
+            return False
+        if 0 < k < n - 1 and not ((Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi)):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
+    """Indices of the points of ``pts`` (m, 2) kept by greedy straight chords that stay free
+    (:func:`_chord_free`): from each kept point the farthest reachable one (a binary search while
+    the gap is over 8 points)."""
+    m = pts.shape[0]
+    out = np.empty(m, np.int64)
+    out[0] = 0
+    n = 1
+    i = 0
+    while i < m - 1:
+        j = m - 1
+        while j > i + 1 and not _chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1]):
+            j = max(i + 1, (i + j) // 2) if j - i > 8 else j - 1
+        out[n] = j
+        n += 1
+        i = j
+    return out[:n]
+
+
+def _rapid_legs(g, p, q):
+    """A G0 for the chord p -> q at depth: ``(None, q)`` when the chord is proven clear on the rapid
+    stock (:func:`_capsule_free`); else ``(p', q')`` with feed legs p -> p' and q' -> q of 2 h or 4 h
+    along the chord at either end or both (``p'`` None: no leg at the start) when the shortened chord
+    is proven; None when no G0 is proven."""
+    h = g.h
+    if _capsule_free(g.Mr, g.x0, g.y0, h, p[0], p[1], q[0], q[1], g.r_capsule):
+        return None, q
+    L = math.hypot(q[0] - p[0], q[1] - p[1])
+    ux, uy = (q[0] - p[0]) / L, (q[1] - p[1]) / L
+    for leg in (2.0 * h, 4.0 * h):
+        if L < 4.0 * leg:
+            break
+        a = (p[0] + leg * ux, p[1] + leg * uy)
+        b = (q[0] - leg * ux, q[1] - leg * uy)
+        for s, e in ((a, q), (p, b), (a, b)):
+            if _capsule_free(g.Mr, g.x0, g.y0, h, s[0], s[1], e[0], e[1], g.r_capsule):
+                return (None if s is p else s), e
+    return None
