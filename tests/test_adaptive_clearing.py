@@ -181,14 +181,14 @@ def test_deterministic():
 def test_capsule_free_hand_case():
     # one material pixel centred at (1.025, 0.025) on a 0.05 mm grid; the segment (0,0)-(0,5)
     # passes 1.025 mm from it: free for a radius below that, not free above
-    from cnclab.toolpath.adaptive.stock import _capsule_free
+    from cnclab.toolpath.adaptive.stock import capsule_free
 
     M = np.zeros((200, 200), np.uint8)
     M[100, 120] = 1          # centre x = -5 + 120.5 * 0.05 = 1.025, y = -5 + 100.5 * 0.05 = 0.025
     args = (M, -5.0, -5.0, 0.05, 0.0, 0.0, 0.0, 5.0)
-    assert _capsule_free(*args, 1.0)
-    assert not _capsule_free(*args, 1.05)
-    assert _capsule_free(M, -5.0, -5.0, 0.05, 0.0, 0.1, 0.0, 5.0, 1.025)    # the pixel is past the segment's end
+    assert capsule_free(*args, 1.0)
+    assert not capsule_free(*args, 1.05)
+    assert capsule_free(M, -5.0, -5.0, 0.05, 0.0, 0.1, 0.0, 5.0, 1.025)    # the pixel is past the segment's end
 
 
 def test_rapid_links_switch():

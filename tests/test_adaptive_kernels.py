@@ -13,11 +13,11 @@ from hypothesis import strategies as st
 from scipy import ndimage
 from shapely.geometry import Point, Polygon, box
 
-from cnclab.toolpath.adaptive.control import _eng2
-from cnclab.toolpath.adaptive.grid import _Grid
-from cnclab.toolpath.adaptive.links import _bow_runs, _chord_free, _rapid_legs, _shortcut
-from cnclab.toolpath.adaptive.stock import (_capsule_free, _cut, _cut_both, _cut_path, _dist_window, _frac, _label8,
-                                            _max_filter, _raster)
+from cnclab.toolpath.adaptive.control import engagement2
+from cnclab.toolpath.adaptive.grid import Grid
+from cnclab.toolpath.adaptive.links import bow_runs, chord_free, rapid_legs, shortcut
+from cnclab.toolpath.adaptive.stock import (capsule_free, cut_disc, cut_disc_both, cut_path, dist_window, material_fraction, label8,
+                                            max_filter, raster)
 
 _SET = dict(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
 
@@ -30,14 +30,14 @@ def test_distance_window_equals_scipy_edt(ny, nx, p, cap, seed):
     mat = rng.random((ny, nx)) < p
     hc = 0.2
     D = np.full((ny, nx), -1.0)
-    _dist_window(mat, 0, ny, 0, nx, 0, ny, 0, nx, hc, cap, D)
+    dist_window(mat, 0, ny, 0, nx, 0, ny, 0, nx, hc, cap, D)
     ref = np.minimum(ndimage.distance_transform_edt(~mat) * hc, cap) if mat.any() else np.full((ny, nx), cap)
     np.testing.assert_allclose(D, ref, rtol=0, atol=1e-12)
     # a sub-window is filled with the same values and nothing else is touched
     j0, i0 = int(rng.integers(0, ny)), int(rng.integers(0, nx))
     j1, i1 = int(rng.integers(j0 + 1, ny + 1)), int(rng.integers(i0 + 1, nx + 1))
     D2 = np.full((ny, nx), -1.0)
-    _dist_window(mat, 0, ny, 0, nx, j0, j1, i0, i1, hc, cap, D2)
+    dist_window(mat, 0, ny, 0, nx, j0, j1, i0, i1, hc, cap, D2)
     np.testing.assert_allclose(D2[j0:j1, i0:i1], ref[j0:j1, i0:i1], rtol=0, atol=1e-12)
     D2[j0:j1, i0:i1] = -1.0
     assert (D2 == -1.0).all()
@@ -66,7 +66,7 @@ def test_raster_equals_point_in_polygon(poly, h):
     nx, ny = int(math.ceil((x1 - x0) / h)) + 2, int(math.ceil((y1 - y0) / h)) + 2
     X, Y = np.meshgrid(x0 + (np.arange(nx) + 0.5) * h, y0 + (np.arange(ny) + 0.5) * h)
     ref = shapely.contains_xy(poly, X, Y)
-    got = _raster(poly, x0, y0, h, nx, ny).astype(bool)
+    got = raster(poly, x0, y0, h, nx, ny).astype(bool)
     diff = got != ref
     if diff.any():
         d = shapely.distance(poly.boundary, shapely.points(X[diff], Y[diff]))
@@ -83,8 +83,8 @@ def test_cut_skipping_the_previous_disc_is_exact(seed, r, step):
     M1 = (rng.random((300, 300)) < 0.9).astype(np.uint8)
     M2 = M1.copy()
     P = np.cumsum(rng.normal(0, step, (40, 2)), axis=0) + 7.5
-    a1 = sum(_cut(M1, 0.0, 0.0, h, x, y, r, np.nan, np.nan) for x, y in P)
-    a2 = _cut_path(M2, 0.0, 0.0, h, P, r)
+    a1 = sum(cut_disc(M1, 0.0, 0.0, h, x, y, r, np.nan, np.nan) for x, y in P)
+    a2 = cut_path(M2, 0.0, 0.0, h, P, r)
     assert np.array_equal(M1, M2) and a1 == a2
 
 
@@ -98,7 +98,7 @@ def test_rapid_stock_chords_are_truly_swept(seed):
     rng = np.random.default_rng(seed)
     r, h = 3.0, 0.05
     pocket = box(0, 0, 20, 20)
-    g = _Grid(pocket, pocket.buffer(-r), r, h, None)
+    g = Grid(pocket, pocket.buffer(-r), r, h, None)
     # a random zig-zag of passes leaving cusps between them
     P = np.vstack([np.c_[np.linspace(3, 17, 60), np.full(60, y) + rng.normal(0, 0.05, 60)]
                    for y in np.arange(3, 17.5, rng.uniform(2.0, 3.5))])
@@ -108,27 +108,27 @@ def test_rapid_stock_chords_are_truly_swept(seed):
     checked = 0
     for _ in range(40):
         a, b = rng.uniform(3, 17, 2), rng.uniform(3, 17, 2)
-        if _capsule_free(g.Mr, g.x0, g.y0, h, a[0], a[1], b[0], b[1], g.r_capsule):
+        if capsule_free(g.Mr, g.x0, g.y0, h, a[0], a[1], b[0], b[1], g.r_capsule):
             cap = shapely.LineString([a, b]).buffer(r, quad_segs=64).intersection(pocket)
             assert cap.difference(swept).area <= tol, cap.difference(swept).area
             checked += 1
     # not vacuous: a chord along a middle pass, well inside the swept band (passes closer than 2 r), passes
     ys = np.unique(np.round(P[::60, 1]))
     y = float(np.median(P[:, 1]))
-    assert _capsule_free(g.Mr, g.x0, g.y0, h, 6.0, y, 14.0, y, g.r_capsule) or len(ys) < 3
+    assert capsule_free(g.Mr, g.x0, g.y0, h, 6.0, y, 14.0, y, g.r_capsule) or len(ys) < 3
 
 
 @settings(**_SET)
 @given(st.floats(0.0, 0.02), st.floats(0.0, 0.3), st.sampled_from([0.03, 0.05]))
 def test_air_run_along_a_wall_moved_off_it_is_truly_swept(gap, wobble, h):
     """An air run along the line of the wall-following pass that left the wall skin is never proven
-    there (the skin is tangent to its discs); :func:`_bow_runs` moves it 2 h to its left and marks its
-    inner steps G0 only when that is proven, and :func:`_rapid_legs` proves a link leaving the wall
+    there (the skin is tangent to its discs); :func:`bow_runs` moves it 2 h to its left and marks its
+    inner steps G0 only when that is proven, and :func:`rapid_legs` proves a link leaving the wall
     after a feed leg. Every accepted G0 has its tool disc inside the exact swept area or outside the
     pocket (shapely, 256 segments a circle; tolerance as in the test above)."""
     r = 3.0
     pocket = box(0, 0, 20, 20)
-    g = _Grid(pocket, pocket.buffer(-r), r, h, None)
+    g = Grid(pocket, pocket.buffer(-r), r, h, None)
     y0 = r + h / math.sqrt(2.0) + 1e-3 + gap          # the wall-following pass, just inside the mask
     xs = np.arange(3.5, 16.5, 0.1)
     passes = [np.c_[xs, np.full(len(xs), y0)], np.c_[xs, np.full(len(xs), y0 + 1.5 + wobble)],
@@ -143,16 +143,16 @@ def test_air_run_along_a_wall_moved_off_it_is_truly_swept(gap, wobble, h):
         return cap.difference(swept).area <= tol
 
     run = np.ascontiguousarray(np.c_[np.arange(6.0, 12.0, 0.1), np.full(60, y0)])
-    assert not _capsule_free(g.Mr, g.x0, g.y0, h, 6.0, y0, 11.9, y0, g.r_capsule)   # on the line: never
+    assert not capsule_free(g.Mr, g.x0, g.y0, h, 6.0, y0, 11.9, y0, g.r_capsule)   # on the line: never
     E, F = np.zeros(len(run)), np.zeros(len(run), np.bool_)
     P = run.copy()
-    _bow_runs(g.Mr, g.A, g.x0, g.y0, h, P, E, F, 1, len(P), 1e-3, g.r_capsule, 2 * h, 4)
+    bow_runs(g.Mr, g.A, g.x0, g.y0, h, P, E, F, 1, len(P), 1e-3, g.r_capsule, 2 * h, 4)
     assert F[2:-1].all() and not F[1] and not F[-1]          # not vacuous: the inner steps are G0
     np.testing.assert_array_equal(P[[0, -1]], run[[0, -1]])
     np.testing.assert_allclose(P[1:-1, 1], y0 + 2 * h)       # moved left of the heading (+x): +y
     for k in np.flatnonzero(F):
         assert truly_swept(P[k - 1], P[k])
-    legs = _rapid_legs(g, (9.0, y0), (9.0, y0 + 2.5))         # a link leaving the wall
+    legs = rapid_legs(g, (9.0, y0), (9.0, y0 + 2.5))         # a link leaving the wall
     assert legs is not None and legs[0] is not None
     assert truly_swept(legs[0], legs[1])
 
@@ -163,7 +163,7 @@ def test_incremental_free_field_equals_full_recompute():
     rng = np.random.default_rng(3)
     r, h = 3.0, 0.05
     pocket = box(0, 0, 30, 20).difference(Point(15, 10).buffer(2))
-    g = _Grid(pocket, pocket.buffer(-r), r, h, None)
+    g = Grid(pocket, pocket.buffer(-r), r, h, None)
     g.free_field()
     snap = g.snapshot()
     for k in range(12):
@@ -189,21 +189,21 @@ def test_shortcut_keeps_only_free_chords():
     hc = 1.0
     route = [(3, i) for i in range(3, 17)] + [(j, 16) for j in range(4, 17)]
     pts = np.array([(i + 0.5, j + 0.5) for j, i in route])
-    keep = _shortcut(pts, D, Ac, 5.0, -1, -1, 0.0, 0.0, hc)
+    keep = shortcut(pts, D, Ac, 5.0, -1, -1, 0.0, 0.0, hc)
     assert keep[0] == 0 and keep[-1] == len(pts) - 1 and len(keep) == 3
     for a, b in zip(keep[:-1], keep[1:]):
-        assert _chord_free(D, Ac, 5.0, -1, -1, 0.0, 0.0, hc, *pts[a], *pts[b])
-    assert not _chord_free(D, Ac, 5.0, -1, -1, 0.0, 0.0, hc, *pts[0], *pts[-1])
+        assert chord_free(D, Ac, 5.0, -1, -1, 0.0, 0.0, hc, *pts[a], *pts[b])
+    assert not chord_free(D, Ac, 5.0, -1, -1, 0.0, 0.0, hc, *pts[0], *pts[-1])
 
 
 def _eng2_reference(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
-    """Plain twin of _eng2: every sample through the bounds-checked _frac."""
+    """Plain twin of engagement2: every sample through the bounds-checked material_fraction."""
     tot = tot2 = 0.0
     da = math.pi / n
     fa = ga = 0.0
     for k in range(n + 1):
         a = psi - 0.5 * math.pi + k * da
-        f = _frac(M, x0, y0, h, cx + r * math.cos(a), cy + r * math.sin(a))
+        f = material_fraction(M, x0, y0, h, cx + r * math.cos(a), cy + r * math.sin(a))
         fb, gb = f - level, f - level2
         if k > 0:
             for (p, q), acc in (((fa, fb), 0), ((ga, gb), 1)):
@@ -224,7 +224,7 @@ def test_engagement_fast_stencil_equals_checked_lookup(seed, cx, cy, psi):
     h or multiplying by 1/h: rounding); arcs leaving the grid take the checked path."""
     rng = np.random.default_rng(seed)
     M = (rng.random((170, 250)) < 0.5).astype(np.uint8)
-    got = _eng2(M, 0.0, 0.0, 0.05, cx, cy, 1.5, psi, 90, 0.5, 0.1)
+    got = engagement2(M, 0.0, 0.0, 0.05, cx, cy, 1.5, psi, 90, 0.5, 0.1)
     ref = _eng2_reference(M, 0.0, 0.0, 0.05, cx, cy, 1.5, psi, 90, 0.5, 0.1)
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9)
 
@@ -233,7 +233,7 @@ def test_engagement_fast_stencil_equals_checked_lookup(seed, cx, cy, psi):
 @given(st.integers(1, 30), st.integers(1, 30), st.integers(0, 6), st.integers(0, 2 ** 31 - 1))
 def test_max_filter_equals_scipy(ny, nx, c, seed):
     a = np.random.default_rng(seed).random((ny, nx))
-    np.testing.assert_array_equal(_max_filter(a, c), ndimage.maximum_filter(a, size=2 * c + 1))
+    np.testing.assert_array_equal(max_filter(a, c), ndimage.maximum_filter(a, size=2 * c + 1))
 
 
 @settings(**_SET)
@@ -247,11 +247,11 @@ def test_cut_both_equals_two_full_cuts(seed, r, step):
     R1 = M1.copy()
     M2, R2 = M1.copy(), M1.copy()
     P = np.cumsum(rng.normal(0, step, (40, 2)), axis=0) + 7.5
-    a1 = sum(_cut(M1, 0.0, 0.0, h, x, y, r, np.nan, np.nan) for x, y in P)
+    a1 = sum(cut_disc(M1, 0.0, 0.0, h, x, y, r, np.nan, np.nan) for x, y in P)
     for x, y in P:
-        _cut(R1, 0.0, 0.0, h, x, y, rr, np.nan, np.nan)
+        cut_disc(R1, 0.0, 0.0, h, x, y, rr, np.nan, np.nan)
     span, rows = np.empty((300, 4), np.int64), np.array([1, 0], np.int64)
-    a2 = sum(_cut_both(M2, R2, 0.0, 0.0, h, x, y, r, rr, span, rows) for x, y in P)
+    a2 = sum(cut_disc_both(M2, R2, 0.0, 0.0, h, x, y, r, rr, span, rows) for x, y in P)
     assert np.array_equal(M1, M2) and np.array_equal(R1, R2) and a1 == a2
 
 
@@ -259,6 +259,6 @@ def test_cut_both_equals_two_full_cuts(seed, r, step):
 @given(st.integers(1, 40), st.integers(1, 40), st.sampled_from([0.2, 0.4, 0.6]), st.integers(0, 2 ** 31 - 1))
 def test_label8_equals_scipy(ny, nx, p, seed):
     M = (np.random.default_rng(seed).random((ny, nx)) < p).astype(np.uint8)
-    got, n = _label8(M)
+    got, n = label8(M)
     ref, m = ndimage.label(M, structure=np.ones((3, 3)))
     assert n == m and np.array_equal(got, ref)     # both number components in row order of their first pixel

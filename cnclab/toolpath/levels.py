@@ -50,6 +50,7 @@ PROOF_TOL_MM2 = 1e-3
 #: tag text added (for people) to a move proven to run inside the levels above
 CLEARED_ABOVE = "cleared: levels above"
 _K = {k: i for i, k in enumerate(KINDS)}
+_CHUNK = 200
 _EPS = 1e-9
 
 
@@ -69,8 +70,12 @@ def swept_region(path: ToolPath, below_z: float, r: float, moves=None):
         brk = np.flatnonzero(np.diff(idx) > 1) + 1
         for run in np.split(idx, brk):
             xy = pts[run, :2]
-            g = Point(xy[0]) if len(xy) == 1 or np.ptp(xy, axis=0).max() == 0 else LineString(xy)
-            geoms.append(g.buffer(r, quad_segs=32))
+            # pieces of at most _CHUNK points buffered apart, then united (GEOS buffers a long
+            # self-overlapping polyline several times slower than its pieces)
+            for k in range(0, max(len(xy) - 1, 1), _CHUNK):
+                q = xy[k:k + _CHUNK + 1]
+                g = Point(q[0]) if len(q) == 1 or np.ptp(q, axis=0).max() == 0 else LineString(q)
+                geoms.append(g.buffer(r, quad_segs=32))
     return shapely.union_all(geoms) if geoms else shapely.Polygon()
 
 

@@ -88,7 +88,7 @@ Design (the ideas and where they come from; the code is cnclab's own)
   the wall-following pass that left the wall skin is tangent to it and never proven: an air run
   along it is moved 2 h to its left (away from the material on the pass's right) with feed legs
   off and back on the line, and a link from or to a wall point gets a feed leg of 2 h or 4 h, where
-  that makes the rest provable (:func:`_bow_runs`, :func:`_rapid_legs`).
+  that makes the rest provable (:func:`bow_runs`, :func:`rapid_legs`).
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 

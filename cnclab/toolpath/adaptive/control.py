@@ -1,8 +1,8 @@
 """The engagement controller (see the package docstring, "Step control" and "Sliver guard"): the
-engagement of a tool circle on the pixel stock at two material levels (:func:`_eng2`), the heading
-search for the target (:func:`_heading`: Newton step from the last slope, Illinois false position
-:func:`_root`), the wall-limited heading (:func:`_wall_heading`), one clearing pass
-(:func:`_pass`) and the replay of a fixed polyline on the stock (:func:`_replay`). Units: mm, rad.
+engagement of a tool circle on the pixel stock at two material levels (:func:`engagement2`), the heading
+search for the target (:func:`search_heading`: Newton step from the last slope, Illinois false position
+:func:`root_bracket`), the wall-limited heading (:func:`wall_heading`), one clearing pass
+(:func:`pass_kernel`) and the replay of a fixed polyline on the stock (:func:`replay`). Units: mm, rad.
 """
 from __future__ import annotations
 
@@ -11,17 +11,17 @@ import math
 import numpy as np
 from numba import njit
 
-from .links import _bow_runs, _mark_free
-from .stock import _cut, _cut_both, _frac, _inside
+from .links import bow_runs, mark_free
+from .stock import cut_disc, cut_disc_both, material_fraction, inside_mask
 
 
-#: material level of the sliver guard (see _pass): a bilinear fraction of 0.1 counts crescents
+#: material level of the sliver guard (see pass_kernel): a bilinear fraction of 0.1 counts crescents
 #: down to ~ h/20 thick (the evaluator's dixel rows resolve them along the arc)
 GUARD_LEVEL = 0.1
 
 
 @njit(cache=True)
-def _arc_inside(fa, fb, da):
+def arc_inside(fa, fb, da):
     """The part of an arc step of ``da`` rad whose (linearly interpolated) level function f - level
     is >= 0, from its values fa, fb at the two ends."""
     if fa >= 0.0 and fb >= 0.0:
@@ -34,12 +34,12 @@ def _arc_inside(fa, fb, da):
 
 
 @njit(cache=True)
-def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
+def engagement2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
     """Engagement (rad) of the front half circle (heading psi) with the material, at two material
     levels from the same arc samples: ``(engagement at level, engagement at level2)``.
 
     Where the whole arc lies in the grid, the bilinear stencil is read without bounds checks (pixel
-    coordinates, the multiplication by 1/h: equal to :func:`_frac` up to rounding).
+    coordinates, the multiplication by 1/h: equal to :func:`material_fraction` up to rounding).
 
     The material is the region where the bilinear pixel fraction is >= ``level`` (1/2: its boundary
     passes half-way between a material and an empty pixel centre, on the wall for pixel-aligned
@@ -77,23 +77,23 @@ def _eng2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
             f = ((M[j, i] * (1.0 - tx) + M[j, i + 1] * tx) * (1.0 - ty)
                  + (M[j + 1, i] * (1.0 - tx) + M[j + 1, i + 1] * tx) * ty)
         else:
-            f = _frac(M, x0, y0, h, cx + r * c, cy + r * s)
+            f = material_fraction(M, x0, y0, h, cx + r * c, cy + r * s)
         fb = f - level
         gb = f - level2
         if k > 0:
-            tot += _arc_inside(fa, fb, da)
-            tot2 += _arc_inside(ga, gb, da)
+            tot += arc_inside(fa, fb, da)
+            tot2 += arc_inside(ga, gb, da)
         fa = fb
         ga = gb
     return tot, tot2
 
 
-#: heading root finding (_root): stop once the engagement is within this (rad) below its bound
+#: heading root finding (root_bracket): stop once the engagement is within this (rad) below its bound
 ROOT_TOL = math.radians(1.0)
 
 
 @njit(cache=True)
-def _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g_a, bound, which):
+def root_bracket(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g_a, bound, which):
     """Heading between ``a`` (engagement <= bound: f(a) = fa <= 0, engagements e_a at the 1/2 level
     and g_a at the guard level) and ``b`` (f(b) = fb > 0) of the step of length ``ds`` from (px, py)
     whose engagement -- the 1/2 level (``which`` 0) or the guard level (1) -- is at most ``bound``
@@ -109,7 +109,7 @@ def _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g
         m = (a * fb - b * fa) / (fb - fa)
         if not (min(a, b) < m < max(a, b)):
             m = 0.5 * (a + b)
-        e, g = _eng2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+        e, g = engagement2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
         fm = (e if which == 0 else g) - bound
         if fm > 0.0:
             b = m
@@ -130,25 +130,25 @@ def _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g
     return a, e_a, g_a, (tb - ta) / (b - a) if b != a else 0.0
 
 
-#: a slide along the wall (see _pass) may exceed the target engagement by this much (rad)
+#: a slide along the wall (see pass_kernel) may exceed the target engagement by this much (rad)
 SLIDE_MARGIN = math.radians(1.0)
 
 
-#: first bracketing step (rad) of :func:`_heading`; doubled until the root is bracketed
+#: first bracketing step (rad) of :func:`search_heading`; doubled until the root is bracketed
 BRACKET_STEP = math.radians(2.0)
 
 
 @njit(cache=True)
-def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound, which, slope):
+def search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound, which, slope):
     """Heading of the step of length ``ds`` from (px, py) whose engagement (1/2 level: ``which`` 0;
     guard level: 1) is at most ``bound`` and within ROOT_TOL of it, searched in [hi, lo] (rad; ``lo``
     the hard left turn, least engagement; ``hi`` the hard right turn or the wall) from the guess
     ``m0``: a Newton step with ``slope`` (d engagement / d heading of the last step, < 0), then
-    bracketing steps (doubling) and :func:`_root`. Returns (status, heading, engagement at 1/2, at
+    bracketing steps (doubling) and :func:`root_bracket`. Returns (status, heading, engagement at 1/2, at
     the guard level, slope): status 0 found (or the right end ``hi`` already holds: taken), 1 even
     the hard left exceeds ``bound`` (stuck)."""
     m0 = min(max(m0, hi), lo)
-    e0, g0 = _eng2(M, x0, y0, h, px + ds * math.cos(m0), py + ds * math.sin(m0), r, m0, n_samp, 0.5, guard_level)
+    e0, g0 = engagement2(M, x0, y0, h, px + ds * math.cos(m0), py + ds * math.sin(m0), r, m0, n_samp, 0.5, guard_level)
     f0 = (e0 if which == 0 else g0) - bound
     if -ROOT_TOL <= f0 <= 0.0:
         return 0, m0, e0, g0, slope
@@ -164,7 +164,7 @@ def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound
         m1 = min(max(m0 + (BRACKET_STEP if f0 > 0.0 else -BRACKET_STEP), hi), lo)
         if m1 == m0:                     # a zero-width search interval
             return (0 if f0 <= 0.0 else 1), m0, e0, g0, slope
-    e1, g1 = _eng2(M, x0, y0, h, px + ds * math.cos(m1), py + ds * math.sin(m1), r, m1, n_samp, 0.5, guard_level)
+    e1, g1 = engagement2(M, x0, y0, h, px + ds * math.cos(m1), py + ds * math.sin(m1), r, m1, n_samp, 0.5, guard_level)
     f1 = (e1 if which == 0 else g1) - bound
     if (f1 - f0) / (m1 - m0) < 0.0:
         slope = (f1 - f0) / (m1 - m0)
@@ -182,7 +182,7 @@ def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound
             if a <= hi:
                 return 0, a, ea, ga, slope
             m = max(a - st, hi)
-            e, g = _eng2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+            e, g = engagement2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
             f = (e if which == 0 else g) - bound
             if f > 0.0:
                 b, fb = m, f
@@ -198,30 +198,30 @@ def _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound
             if b >= lo:
                 return 1, b, e1, g1, slope
             m = min(b + st, lo)
-            e, g = _eng2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+            e, g = engagement2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
             f = (e if which == 0 else g) - bound
             if f <= 0.0:
                 a, fa, ea, ga = m, f, e, g
                 break
             b, fb = m, f
             st *= 2.0
-    psi, e, g, sl = _root(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, ea, ga, bound, which)
+    psi, e, g, sl = root_bracket(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, ea, ga, bound, which)
     if sl < 0.0:
         slope = sl
     return 0, psi, e, g, slope
 
 
 @njit(cache=True)
-def _wall_heading(Amask, x0, y0, h, px, py, ds, lo, b):
+def wall_heading(Amask, x0, y0, h, px, py, ds, lo, b):
     """The rightmost heading between ``lo`` (hard left; must stay in the mask) and ``b`` (leaves it)
     whose step of ``ds`` from (px, py) stays in the tool-centre mask (14 bisections: the pass slides
     along the wall); NaN when even ``lo`` leaves it."""
-    if not _inside(Amask, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo)):
+    if not inside_mask(Amask, x0, y0, h, px + ds * math.cos(lo), py + ds * math.sin(lo)):
         return np.nan
     a = lo
     for _ in range(14):
         m = 0.5 * (a + b)
-        if _inside(Amask, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m)):
+        if inside_mask(Amask, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m)):
             a = m
         else:
             b = m
@@ -229,7 +229,7 @@ def _wall_heading(Amask, x0, y0, h, px, py, ds, lo, b):
 
 
 @njit(cache=True)
-def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
+def pass_kernel(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
           guard, guard_level, D, hc, Mr, r_rapid, r_capsule, air_eng):
     """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end) and the
     rapid stock ``Mr`` (the same discs, radius ``r_rapid``) in step with it.
@@ -265,7 +265,7 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
     # no material pixel centre within r + ds + h of any arc sample point: the coarse cell centre may be
     # hc/sqrt(2) from the point, the material pixel hc/sqrt(2) from its cell's centre
     air_reach = r + ds + h + math.sqrt(2.0) * hc
-    span = np.empty((M.shape[0], 4), np.int64)   # the last disc's row spans (see _cut_both)
+    span = np.empty((M.shape[0], 4), np.int64)   # the last disc's row spans (see cut_disc_both)
     rows = np.array([1, 0], np.int64)
     for step in range(max_steps):
         if s[n - 1] >= max_len:
@@ -276,14 +276,14 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         # (air stop), and the stock must hold exactly what the emitted path removes
         k_hold = n_air_start if air > 0.0 else n
         while k_cut < k_hold and s[n - 1] - s[k_cut] > lag:
-            removed += _cut_both(M, Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, r_rapid, span, rows)
+            removed += cut_disc_both(M, Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, r_rapid, span, rows)
             k_cut += 1
         lo = phi + turn          # hard left: least engagement
         hi = phi - turn_right    # hard right (curvature limited): most engagement
         # the right end of the search: the hard right turn, or where it would leave the tool-centre
         # region, the rightmost heading that stays inside (the pass slides along the wall)
-        if not _inside(Amask, x0, y0, h, px + ds * math.cos(hi), py + ds * math.sin(hi)):
-            hi = _wall_heading(Amask, x0, y0, h, px, py, ds, lo, hi)
+        if not inside_mask(Amask, x0, y0, h, px + ds * math.cos(hi), py + ds * math.sin(hi)):
+            hi = wall_heading(Amask, x0, y0, h, px, py, ds, lo, hi)
             if hi != hi:
                 reason = 0
                 break
@@ -295,7 +295,7 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             eg = 0.0
         else:
             m0 = hi if was_air else phi + dpsi
-            st, psi, e, eg, slope = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, target, 0,
+            st, psi, e, eg, slope = search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, target, 0,
                                              slope)
             if st == 1:
                 reason = 1
@@ -305,33 +305,33 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
             # within ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests,
             # crescents between passes) the 1/2 level can miss a few degrees of thin slivers: turn left
             # until it holds
-            st, psi, e, eg, slope_g = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi, guard, 1,
+            st, psi, e, eg, slope_g = search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi, guard, 1,
                                                slope_g)
             if st == 1:
                 reason = 1
                 break
         qx = px + ds * math.cos(psi)
         qy = py + ds * math.sin(psi)
-        if not _inside(Amask, x0, y0, h, qx, qy):
+        if not inside_mask(Amask, x0, y0, h, qx, qy):
             # the headings that stay inside need not be contiguous (a corner of the region between the
             # wall-limited right end and the hard left): slide to the inside boundary between the hard
             # left and psi, where the engagement may exceed the target by at most 1 deg, else stop
-            psi = _wall_heading(Amask, x0, y0, h, px, py, ds, lo, psi)
+            psi = wall_heading(Amask, x0, y0, h, px, py, ds, lo, psi)
             if psi != psi:
                 reason = 0
                 break
             qx = px + ds * math.cos(psi)
             qy = py + ds * math.sin(psi)
-            e, eg = _eng2(M, x0, y0, h, qx, qy, r, psi, n_samp, 0.5, guard_level)
+            e, eg = engagement2(M, x0, y0, h, qx, qy, r, psi, n_samp, 0.5, guard_level)
             if e > target + SLIDE_MARGIN:
                 reason = 1
                 break
             if eg > guard:
-                st, psi, e, eg, slope_g = _heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi,
+                st, psi, e, eg, slope_g = search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi,
                                                    guard, 1, slope_g)
                 qx = px + ds * math.cos(psi)
                 qy = py + ds * math.sin(psi)
-                if st == 1 or not _inside(Amask, x0, y0, h, qx, qy):
+                if st == 1 or not inside_mask(Amask, x0, y0, h, qx, qy):
                     reason = 1
                     break
         was_air = eg == 0.0
@@ -345,8 +345,8 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
                 break
         else:
             if air > 0.0 and r_capsule > 0.0:
-                _mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
-                _bow_runs(Mr, Amask, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
+                mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
+                bow_runs(Mr, Amask, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
             air = 0.0
         P[n, 0] = qx
         P[n, 1] = qy
@@ -356,18 +356,18 @@ def _pass(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n
         dpsi = psi - phi
         phi = psi
     if air > 0.0 and reason != 2 and r_capsule > 0.0:
-        _mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
-        _bow_runs(Mr, Amask, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
+        mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
+        bow_runs(Mr, Amask, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
     while k_cut < n:
-        removed += _cut_both(M, Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, r_rapid, span, rows)
+        removed += cut_disc_both(M, Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, r_rapid, span, rows)
         k_cut += 1
     return P[:n].copy(), removed, reason, E[:n].copy(), F[:n].copy()
 
 
 @njit(cache=True)
-def _replay(M, x0, y0, h, r, P, lag, n_samp, level2):
+def replay(M, x0, y0, h, r, P, lag, n_samp, level2):
     """Cut the fixed points P (n, 2) into M in order, the disks of the last ``lag`` mm held back as
-    in :func:`_pass`; the engagement (rad) measured at each point (heading: the chord from the point
+    in :func:`pass_kernel`; the engagement (rad) measured at each point (heading: the chord from the point
     before; 0 at P[0]) at the 1/2 material level and at ``level2``: two arrays (n,)."""
     n = P.shape[0]
     E = np.zeros(n)
@@ -381,14 +381,14 @@ def _replay(M, x0, y0, h, r, P, lag, n_samp, level2):
         dy = P[i, 1] - P[i - 1, 1]
         s[i] = s[i - 1] + math.hypot(dx, dy)
         while k_cut < i and s[i] - s[k_cut] > lag + 1e-12:
-            _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
+            cut_disc(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
             pcx = P[k_cut, 0]
             pcy = P[k_cut, 1]
             k_cut += 1
         if dx != 0.0 or dy != 0.0:
-            E[i], G[i] = _eng2(M, x0, y0, h, P[i, 0], P[i, 1], r, math.atan2(dy, dx), n_samp, 0.5, level2)
+            E[i], G[i] = engagement2(M, x0, y0, h, P[i, 0], P[i, 1], r, math.atan2(dy, dx), n_samp, 0.5, level2)
     while k_cut < n:
-        _cut(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
+        cut_disc(M, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, pcx, pcy)
         pcx = P[k_cut, 0]
         pcy = P[k_cut, 1]
         k_cut += 1

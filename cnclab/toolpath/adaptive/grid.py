@@ -1,4 +1,4 @@
-"""The planner's state at one level (:class:`_Grid`): the planning stock, the rapid stock, the
+"""The planner's state at one level (:class:`Grid`): the planning stock, the rapid stock, the
 tool-centre mask and the coarse free-distance field kept up to date incrementally (see the
 package docstring). Units: mm.
 """
@@ -8,12 +8,12 @@ import math
 
 import numpy as np
 
-from .control import GUARD_LEVEL, _pass, _replay
-from .links import _dijkstra_nb
-from .stock import _coarse_any, _cut, _cut_path, _dist_window, _max_filter, _raster
+from .control import GUARD_LEVEL, pass_kernel, replay
+from .links import dijkstra
+from .stock import coarse_any, cut_disc, cut_path, dist_window, max_filter, raster
 
 
-class _Grid:
+class Grid:
     """The planning stock ``M`` (pixels of ``h`` mm), the tool-centre mask ``A`` and, on a coarse grid
     (cells of ``hc = k h``), the distance from each cell centre to the nearest material, kept up to date
     incrementally: every change of ``M`` goes through a method that marks the changed box, and
@@ -27,11 +27,11 @@ class _Grid:
         self.x0, self.y0 = x0 - m, y0 - m
         self.nx = int(math.ceil((x1 - x0 + 2 * m) / h))
         self.ny = int(math.ceil((y1 - y0 + 2 * m) / h))
-        self.M = _raster(pocket, self.x0, self.y0, h, self.nx, self.ny)
+        self.M = raster(pocket, self.x0, self.y0, h, self.nx, self.ny)
         # tool-centre region shrunk by h/sqrt(2): every point of a pixel whose centre it holds (what
-        # _inside accepts) is inside the true region (a further 1e-6: centres exactly on the shrunk
+        # inside_mask accepts) is inside the true region (a further 1e-6: centres exactly on the shrunk
         # boundary, e.g. of axis-parallel walls, are outside)
-        self.A = _raster(allowed.buffer(-h / math.sqrt(2.0) * (1 + 1e-6)), self.x0, self.y0, h, self.nx, self.ny)
+        self.A = raster(allowed.buffer(-h / math.sqrt(2.0) * (1 + 1e-6)), self.x0, self.y0, h, self.nx, self.ny)
         # the rapid stock: the same discs cut with radius r - h/sqrt(2). A pixel centre it shows as
         # clear is within r - h/sqrt(2) of a disc centre, so every point within h/sqrt(2) of it (its
         # pixel) is truly swept: a chord with no material pixel of it within r + h/sqrt(2) is
@@ -40,8 +40,8 @@ class _Grid:
         self.r_capsule = r + h / math.sqrt(2.0) * (1 + 1e-9)
         self.Mr = self.M.copy()
         if hole is not None:
-            _cut(self.M, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2], np.nan, np.nan)
-            _cut(self.Mr, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2] - h / math.sqrt(2.0), np.nan, np.nan)
+            cut_disc(self.M, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2], np.nan, np.nan)
+            cut_disc(self.Mr, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2] - h / math.sqrt(2.0), np.nan, np.nan)
         # coarse grid for the free-space search
         self.k = max(1, int(round(0.2 / h))) if r >= 2 else 1
         self.hc = self.k * h
@@ -49,11 +49,11 @@ class _Grid:
         # each cell's distance to the region's boundary (mm: to the nearest cell outside it)
         nJ, nI = self.Ac.shape
         self.dA = np.empty(self.Ac.shape)
-        _dist_window(~self.Ac, 0, nJ, 0, nI, 0, nJ, 0, nI, self.hc, np.inf, self.dA)
+        dist_window(~self.Ac, 0, nJ, 0, nI, 0, nJ, 0, nI, self.hc, np.inf, self.dA)
         # half-width of the tool-centre region around each cell: the largest dA within r
         c = int(math.ceil(r / self.hc))
-        self.half_width = _max_filter(self.dA, c)
-        self.cap = r + 4.0 * self.hc + r / 30.0   # > the air test of _pass at the default step r/30
+        self.half_width = max_filter(self.dA, c)
+        self.cap = r + 4.0 * self.hc + r / 30.0   # > the air test of pass_kernel at the default step r/30
         self.mat = np.zeros(self.Ac.shape, bool)
         self.D = np.empty(self.Ac.shape)
         self._dirty = (-np.inf, -np.inf, np.inf, np.inf)
@@ -80,7 +80,7 @@ class _Grid:
             (min(d[0], lo[0]), min(d[1], lo[1]), max(d[2], hi[0]), max(d[3], hi[1]))
 
     def _cut_rapid(self, P):
-        _cut_path(self.Mr, self.x0, self.y0, self.h, np.ascontiguousarray(P, float), self.r_rapid)
+        cut_path(self.Mr, self.x0, self.y0, self.h, np.ascontiguousarray(P, float), self.r_rapid)
 
     def snapshot(self):
         """Copies of the stocks, for :meth:`restore`."""
@@ -88,9 +88,9 @@ class _Grid:
 
     def run_pass(self, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
                  guard, air_eng=0.0, check_rapids=False):
-        """:func:`_pass` on these stocks (every argument given: numba's fast dispatch); ``check_rapids``:
+        """:func:`pass_kernel` on these stocks (every argument given: numba's fast dispatch); ``check_rapids``:
         mark the air steps whose chord is clear on the rapid stock."""
-        P, removed, reason, E, F = _pass(self.M, self.A, float(self.x0), float(self.y0), float(self.h), float(self.r),
+        P, removed, reason, E, F = pass_kernel(self.M, self.A, float(self.x0), float(self.y0), float(self.h), float(self.r),
                                          float(sx), float(sy), float(heading), float(target), float(ds), float(lag),
                                          int(max_steps), int(n_samp), float(air_stop), float(turn), float(turn_right),
                                          float(max_len), float(guard), float(GUARD_LEVEL), self.free_field()[0],
@@ -100,12 +100,12 @@ class _Grid:
         return P, removed, reason, E, F
 
     def cut_path(self, P):
-        _cut_path(self.M, self.x0, self.y0, self.h, P, self.r)
+        cut_path(self.M, self.x0, self.y0, self.h, P, self.r)
         self._cut_rapid(P)
         self.touch(P, self.r + self.h)
 
     def replay(self, P, lag, n_samp):
-        E = _replay(self.M, self.x0, self.y0, self.h, self.r, P, float(lag), int(n_samp), GUARD_LEVEL)[0]
+        E = replay(self.M, self.x0, self.y0, self.h, self.r, P, float(lag), int(n_samp), GUARD_LEVEL)[0]
         self._cut_rapid(P)
         self.touch(P, self.r + self.h)
         return E
@@ -129,11 +129,11 @@ class _Grid:
             J1 = min(int(math.ceil((d[3] - self.y0) / hc)) + 1, nJ) if np.isfinite(d[3]) else nJ
             I1 = min(int(math.ceil((d[2] - self.x0) / hc)) + 1, nI) if np.isfinite(d[2]) else nI
             if J0 < J1 and I0 < I1:
-                _coarse_any(self.M, self.k, self.mat, J0, J1, I0, I1)
+                coarse_any(self.M, self.k, self.mat, J0, J1, I0, I1)
                 # the cells within cap of the change, from the material within cap of those cells
                 wj0, wj1, wi0, wi1 = max(J0 - c, 0), min(J1 + c, nJ), max(I0 - c, 0), min(I1 + c, nI)
                 ej0, ej1, ei0, ei1 = max(wj0 - c, 0), min(wj1 + c, nJ), max(wi0 - c, 0), min(wi1 + c, nI)
-                _dist_window(self.mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, self.D)
+                dist_window(self.mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, self.D)
             self._dirty = None
         return self.D, self.Ac
 
@@ -151,7 +151,7 @@ class _Grid:
         D, Ac = self.free_field()
         if banned is None:
             banned = np.zeros((1, 1), bool)
-        route = _dijkstra_nb(D, Ac, banned, float(r_free), float(band_hi), int(cell[0]), int(cell[1]), float(cur[0]),
+        route = dijkstra(D, Ac, banned, float(r_free), float(band_hi), int(cell[0]), int(cell[1]), float(cur[0]),
                              float(cur[1]), float(self.x0), float(self.y0), float(self.hc), 2.0 * self.r, self._dist,
                              self._prev, self._hk, self._hv, self._touched, self.A, float(self.h))
         if len(route) == 1 and route[0, 0] < 0:

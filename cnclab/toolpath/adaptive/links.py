@@ -1,9 +1,9 @@
 """Links at depth and the proofs that let them be rapids (see the package docstring, "Links"):
-the Dijkstra search over the coarse free cells (:func:`_dijkstra_nb`), the chord shortcut through
-the free set (:func:`_shortcut`, :func:`_chord_free`), the rapid proofs on the rapid stock
-(:func:`_mark_free`, :func:`_chain_clear`, :func:`_bow_runs`: an air run is a G0 only where no
+the Dijkstra search over the coarse free cells (:func:`dijkstra`), the chord shortcut through
+the free set (:func:`shortcut`, :func:`chord_free`), the rapid proofs on the rapid stock
+(:func:`mark_free`, :func:`chain_clear`, :func:`bow_runs`: an air run is a G0 only where no
 material pixel lies within r + h/sqrt(2) of its chord) and the feed legs off a wall
-(:func:`_rapid_legs`). Units: mm.
+(:func:`rapid_legs`). Units: mm.
 """
 from __future__ import annotations
 
@@ -12,42 +12,42 @@ import math
 import numpy as np
 from numba import njit
 
-from .stock import _capsule_free, _segment_inside
+from .stock import capsule_free, segment_inside
 
 
 @njit(cache=True)
-def _mark_free(Mr, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule):
+def mark_free(Mr, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule):
     """F[k] = the chord P[k-1] -> P[k] has no pixel of ``Mr`` within ``r_capsule``, for the air steps
     (E[k] < air_eng) k0 <= k < k1."""
     for k in range(max(k0, 1), k1):
         if E[k] < air_eng:
-            F[k] = _capsule_free(Mr, x0, y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], r_capsule)
+            F[k] = capsule_free(Mr, x0, y0, h, P[k - 1, 0], P[k - 1, 1], P[k, 0], P[k, 1], r_capsule)
 
 
 @njit(cache=True)
-def _chain_clear(Mr, Amask, x0, y0, h, Q, r_capsule):
+def chain_clear(Mr, Amask, x0, y0, h, Q, r_capsule):
     """Every chord of the polyline Q (m, 2) has no pixel of ``Mr`` within ``r_capsule`` and every
-    point of it, sampled every h/2, lies in the tool-centre mask (:func:`_segment_inside`)."""
+    point of it, sampled every h/2, lies in the tool-centre mask (:func:`segment_inside`)."""
     for k in range(1, Q.shape[0]):
         ax = Q[k - 1, 0]
         ay = Q[k - 1, 1]
         bx = Q[k, 0]
         by = Q[k, 1]
-        if not _segment_inside(Amask, x0, y0, h, ax, ay, bx, by, 0.0):
+        if not segment_inside(Amask, x0, y0, h, ax, ay, bx, by, 0.0):
             return False
-        if not _capsule_free(Mr, x0, y0, h, ax, ay, bx, by, r_capsule):
+        if not capsule_free(Mr, x0, y0, h, ax, ay, bx, by, r_capsule):
             return False
     return True
 
 
 @njit(cache=True)
-def _bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, min_steps):
+def bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, min_steps):
     """For the air steps k0 <= k < k1 (engagement < ``air_eng``) not proven free one by one: a run of
     at least ``min_steps`` of them (steps a..b, from P[a-1] to P[b]) that slides along the last
     cut boundary (a wall-following pass left its skin there: the rapid stock keeps a band of it
     within r + h/sqrt(2) of the same line, so no chord on that line is ever proven) is moved
     ``delta`` mm to its left, away from the material on the pass's right: P[a..b-1] shifted. When
-    every chord of the shifted points and the end points is proven as in :func:`_mark_free` and
+    every chord of the shifted points and the end points is proven as in :func:`mark_free` and
     inside the mask, its inner steps become G0 (``F``) and the first and last steps stay feed links
     (the legs of ``delta`` off the line and back). Called before the run's discs are cut: the rapid
     stock holds what each step meets; the shifted discs remove nothing (proven), the discs at the
@@ -78,7 +78,7 @@ def _bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, 
                 return
             Q[q + 1, 0] = P[i, 0] - delta * ty / L
             Q[q + 1, 1] = P[i, 1] + delta * tx / L
-        if _chain_clear(Mr, Amask, x0, y0, h, Q[1:m + 1], r_capsule):
+        if chain_clear(Mr, Amask, x0, y0, h, Q[1:m + 1], r_capsule):
             for q in range(m):
                 P[a + q, 0] = Q[q + 1, 0]
                 P[a + q, 1] = Q[q + 1, 1]
@@ -87,7 +87,7 @@ def _bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, 
 
 
 @njit(cache=True)
-def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, dist, prev, hk, hv, touched,
+def dijkstra(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, dist, prev, hk, hv, touched,
                  A, h):
     """8-neighbour Dijkstra (binary heap, lazy deletion) over the free cells (Ac and D >= r_free, or
     (gj, gi)) from the cell of (cx, cy) (off the free set: from the nearest free cell centre within
@@ -127,7 +127,7 @@ def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, rea
         for q in np.argsort(cand, kind="mergesort"):
             xcc = x0 + (ci[q] + 0.5) * hc
             ycc = y0 + (cj[q] + 0.5) * hc
-            if _segment_inside(A, x0, y0, h, cx, cy, xcc, ycc, 2.0 * h):
+            if segment_inside(A, x0, y0, h, cx, cy, xcc, ycc, 2.0 * h):
                 bj = cj[q]
                 bi = ci[q]
                 break
@@ -217,7 +217,7 @@ def _dijkstra_nb(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, rea
 
 
 @njit(cache=True)
-def _chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, ax, ay, bx, by):
+def chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, ax, ay, bx, by):
     """True when the chord a-b stays in free coarse cells (Ac and D >= r_free, or (gj, gi)): sampled
     every hc/2, its interior samples in free cells and no sample off the grid."""
     ny, nx = D.shape
@@ -235,9 +235,9 @@ def _chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, ax, ay, bx, by):
 
 
 @njit(cache=True)
-def _shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
+def shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
     """Indices of the points of ``pts`` (m, 2) kept by greedy straight chords that stay free
-    (:func:`_chord_free`): from each kept point the farthest reachable one (a binary search while
+    (:func:`chord_free`): from each kept point the farthest reachable one (a binary search while
     the gap is over 8 points)."""
     m = pts.shape[0]
     out = np.empty(m, np.int64)
@@ -246,7 +246,7 @@ def _shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
     i = 0
     while i < m - 1:
         j = m - 1
-        while j > i + 1 and not _chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1]):
+        while j > i + 1 and not chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1]):
             j = max(i + 1, (i + j) // 2) if j - i > 8 else j - 1
         out[n] = j
         n += 1
@@ -254,13 +254,13 @@ def _shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
     return out[:n]
 
 
-def _rapid_legs(g, p, q):
+def rapid_legs(g, p, q):
     """A G0 for the chord p -> q at depth: ``(None, q)`` when the chord is proven clear on the rapid
-    stock (:func:`_capsule_free`); else ``(p', q')`` with feed legs p -> p' and q' -> q of 2 h or 4 h
+    stock (:func:`capsule_free`); else ``(p', q')`` with feed legs p -> p' and q' -> q of 2 h or 4 h
     along the chord at either end or both (``p'`` None: no leg at the start) when the shortened chord
     is proven; None when no G0 is proven."""
     h = g.h
-    if _capsule_free(g.Mr, g.x0, g.y0, h, p[0], p[1], q[0], q[1], g.r_capsule):
+    if capsule_free(g.Mr, g.x0, g.y0, h, p[0], p[1], q[0], q[1], g.r_capsule):
         return None, q
     L = math.hypot(q[0] - p[0], q[1] - p[1])
     ux, uy = (q[0] - p[0]) / L, (q[1] - p[1]) / L
@@ -270,6 +270,6 @@ def _rapid_legs(g, p, q):
         a = (p[0] + leg * ux, p[1] + leg * uy)
         b = (q[0] - leg * ux, q[1] - leg * uy)
         for s, e in ((a, q), (p, b), (a, b)):
-            if _capsule_free(g.Mr, g.x0, g.y0, h, s[0], s[1], e[0], e[1], g.r_capsule):
+            if capsule_free(g.Mr, g.x0, g.y0, h, s[0], s[1], e[0], e[1], g.r_capsule):
                 return (None if s is p else s), e
     return None

@@ -14,10 +14,10 @@ from shapely.geometry.polygon import orient
 
 from ..path import Tool, ToolPath
 
-from .control import GUARD_LEVEL, _replay
-from .grid import _Grid
-from .links import _rapid_legs, _shortcut
-from .stock import _capsule_free, _component_discs, _densify, _label8, _resample, _segment_inside
+from .control import GUARD_LEVEL, replay
+from .grid import Grid
+from .links import rapid_legs, shortcut
+from .stock import capsule_free, component_discs, densify, label8, resample, segment_inside
 
 
 class PlanningError(ValueError):
@@ -42,6 +42,419 @@ NARROW_AIR_STOP = 3.5
 NARROW_MIN_YIELD = 0.2
 
 
+class _Level:
+    """One level of the plan: the state the loop shares (the grid, the tool position ``cur``, the
+    entries made, the parts still to finish) and the steps of the loop as methods (see the package
+    docstring). ``cfg``: the planner's settings and move lists (:func:`adaptive_clearing`)."""
+
+    def __init__(self, cfg, lev, z, z_prev, g):
+        self.__dict__.update(cfg)
+        self.lev, self.z, self.z_prev, self.g = lev, z, z_prev, g
+        self.cur = None   # current xy at depth (None: at clearance)
+        self.entered = set()   # coarse cells of the entries at this level
+        self.todo_parts = []
+        self.r_free = np.nan
+
+    def add(self, p, kind, feed=np.nan, tag="", arc=0, ctr=(np.nan, np.nan)):
+        self.pts.append(p); self.kinds.append(kind); self.feeds.append(feed); self.tags.append(tag); self.arcs.append(arc); self.ctrs.append(ctr)
+
+    def add_line_moves(self, Q, z, kind, feed, tag):
+        """Straight moves at height z to the points Q (m, 2); kind, feed, tag: arrays (m,) or scalars."""
+        m = len(Q)
+        self.pts.extend(zip(Q[:, 0].tolist(), Q[:, 1].tolist(), [z] * m))
+        for lst, v in ((self.kinds, kind), (self.feeds, feed), (self.tags, tag)):
+            lst.extend(v.tolist() if isinstance(v, np.ndarray) else [v] * m)
+        self.arcs.extend([0] * m)
+        self.ctrs.extend([(np.nan, np.nan)] * m)
+
+    def retract(self):
+        if self.cur is not None:
+            # straight up out of the tool's own cut: G0 (as FreeCAD lifts); the writer and the
+            # static check accept a rapid only so below the clearance plane
+            self.add((self.cur[0], self.cur[1], self.clearance_z), "rapid")
+            self.stats["retracts"] += 1
+            self.cur = None
+
+    def enter(self, banned=None):
+        """Entry where the tool-centre region still has material within reach: True; False if
+        none; None when the only place left is too narrow for a helix (it is then banned)."""
+        D, Ac = self.g.free_field()
+        need = Ac & (D < self.r)       # tool disk touches material there
+        if banned is not None:
+            need &= ~banned
+        if not need.any():
+            return False
+        # the farthest point from the tool-centre region's boundary among those cells
+        dA = self.g.dA
+        j, i = np.unravel_index(np.argmax(np.where(need, dA, -1)), need.shape)
+        c = np.array(self.g.centre(j, i))
+        k_part = next((k for k, p in enumerate(self.allowed_parts) if p.buffer(1e-6).contains(Point(*c))), None)
+        comp = [] if k_part is None else [self.allowed_parts[k_part]]
+        rho_max = comp[0].exterior.distance(Point(*c)) if comp else dA[j, i]
+        if comp:
+            rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
+        rho = max(min(HELIX_RADIUS_FRAC * self.r, 0.9 * rho_max - self.h), 0.0)
+        # the smallest helix accepted here: HELIX_MIN_FRAC r, or half what the widest place of this
+        # part of the tool-centre region allows (a part narrow everywhere is entered by a small
+        # helix; the entry point is a coarse cell centre, up to hc/sqrt(2) off the widest place)
+        rho_min = 0.02
+        if comp and banned is not None:
+            if k_part not in self.part_wide:
+                self.part_wide[k_part] = shapely.maximum_inscribed_circle(comp[0], 0.1 * self.h).length
+            wide = self.part_wide[k_part]
+            rho_min = max(0.02, min(HELIX_MIN_FRAC * self.r, 0.5 * (0.9 * wide - self.h)))
+        # a place entered before (its passes made no room) or too narrow for a helix is banned: no
+        # endless re-entry at one spot
+        again = (int(j), int(i)) in self.entered
+        self.entered.add((int(j), int(i)))
+        if (rho < rho_min or again) and banned is not None and not (self.hole is not None and self.lev == 0 and self.stats["entries"] == 0):
+            rad = int(math.ceil(2 * self.r / self.g.hc))
+            banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+            return None
+        self.retract()
+        if self.hole is not None and self.lev == 0 and self.stats["entries"] == 0:
+            c = np.array(self.hole[:2])
+            rho = 0.0
+            self.add((c[0], c[1], self.clearance_z), "rapid")
+            self.add((c[0], c[1], self.z), "plunge", self.feed_mm_min, "cleared: pre-drilled start hole")
+        elif rho < rho_min:
+            raise PlanningError(f"{source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
+                                "the region is too narrow for the tool")
+        else:
+            p0 = (c[0] + rho, c[1])
+            self.add((p0[0], p0[1], self.clearance_z), "rapid")
+            # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
+            # the previous level cleared (tagged: the program writer allows a rapid there only so)
+            self.add((p0[0], p0[1], self.z_prev + 0.5), "rapid", np.nan, "cleared: above the level")
+            self.add((p0[0], p0[1], self.z_prev), "plunge", self.feed_mm_min, "air")
+            drop = 2 * math.pi * rho * math.tan(math.radians(self.helix_angle_deg))
+            # the helix ends where it reaches z (the last turn partial); at least one full turn, so
+            # that the floor circle after it cuts in the helix's own groove
+            turns = max((self.z_prev - self.z) / drop, 1.0)
+            drop = (self.z_prev - self.z) / turns
+            zz = self.z_prev
+            for _ in range(int(math.floor(turns + 1e-9))):
+                zz -= drop
+                self.add((p0[0], p0[1], max(zz, self.z)), "helix", self.feed_mm_min, "entry", 3, (c[0], c[1]))
+            phi = 2 * math.pi * (turns - math.floor(turns + 1e-9))
+            pe = (c[0] + rho * math.cos(phi), c[1] + rho * math.sin(phi)) if phi > 1e-6 else p0
+            if phi > 1e-6:
+                self.add((pe[0], pe[1], self.z), "helix", self.feed_mm_min, "entry", 3, (c[0], c[1]))
+            self.add((pe[0], pe[1], self.z), "cut", self.feed_mm_min, "entry-floor", 3, (c[0], c[1]))
+            circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
+            self.g.cut_path(circ)
+            self.stats["entries"] += 1
+            self.cur = (float(pe[0]), float(pe[1]))
+            return True
+        self.stats["entries"] += 1
+        self.cur = (c[0] + rho, c[1])
+        return True
+
+    def clearing_pass(self, heading, a_stop):
+        """A clearing pass from the tool's point (:meth:`Grid.run_pass`) with ``a_stop`` mm of air."""
+        return self.g.run_pass(self.cur[0], self.cur[1], heading, self.target, self.ds, self.lag, 20000, self.n_samp, a_stop, self.turn,
+                          min(self.turn, self.ds / self.turn_radius), 1e18, self.guard_pass, self.air_rad, self.rapid_links)
+
+    def link_to(self, r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None):
+        """Link at depth through free cells to the nearest goal cell (:meth:`Grid.route`); its
+        cell or None. ``end_xy``: the exact end point (in ``cell``, which need not lie inside the
+        tool-centre region: its centre is never a point of the link)."""
+        route = self.g.route(self.cur, r_free, band_hi, banned, cell)
+        if isinstance(route, str):
+            # no straight chord from here reaches a free cell inside the region (an island corner in
+            # the way): retrace the tool's own path at this depth (inside the region, its material
+            # removed) to the last point from which one does, as feed links
+            n_back = 0
+            while n_back < len(self.pts) - 1 and self.pts[-2 - n_back][2] == self.z and self.kinds[-1 - n_back] != "plunge"\
+                    and n_back < 200:
+                n_back += 1
+            for k in range(5, n_back + 1, 5):
+                p = self.pts[-1 - k]
+                route = self.g.route((p[0], p[1]), r_free, band_hi, banned, cell)
+                if not isinstance(route, str):
+                    back = [self.pts[-1 - q] for q in range(1, k + 1)]
+                    break
+            if isinstance(route, str) or route is None:
+                return None
+            for p in back:
+                self.add((p[0], p[1], self.z), "link", self.link_feed_mm_min)
+            self.cur = (float(back[-1][0]), float(back[-1][1]))
+        if route is None:
+            return None
+        D, Ac = self.g.free_field()
+        R = np.asarray(route, float)
+        cells = np.c_[self.g.x0 + (R[:, 1] + 0.5) * self.g.hc, self.g.y0 + (R[:, 0] + 0.5) * self.g.hc]
+        pts_r = np.vstack([np.array([self.cur], float), cells[1:] if len(R) > 1 else cells[:1]])
+        if end_xy is not None:
+            pts_r[-1] = end_xy
+
+        chords = pts_r[shortcut(np.ascontiguousarray(pts_r, float), D, Ac, float(r_free), int(cell[0]), int(cell[1]),
+                                 float(self.g.x0), float(self.g.y0), float(self.g.hc))]
+        for q in chords[1:]:
+            if math.hypot(q[0] - self.cur[0], q[1] - self.cur[1]) > 1e-9:
+                legs = rapid_legs(self.g, self.cur, q) if self.rapid_links else None
+                if legs is None:
+                    self.add((q[0], q[1], self.z), "link", self.link_feed_mm_min)
+                else:
+                    # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
+                    # chord's tool disc is truly swept (see Grid), sub-pixel slivers included; a
+                    # chord starting or ending on a cut boundary (a pass ends at the wall: its skin
+                    # is tangent there) gets a short feed leg off it
+                    a, b = legs
+                    if a is not None:
+                        self.add((a[0], a[1], self.z), "link", self.link_feed_mm_min)
+                    self.add((b[0], b[1], self.z), "rapid", np.nan, "cleared: link through cleared area")
+                    if b[0] != q[0] or b[1] != q[1]:
+                        self.add((q[0], q[1], self.z), "link", self.link_feed_mm_min)
+                self.cur = (float(q[0]), float(q[1]))
+        self.stats["links"] += 1
+        return route[-1]
+
+    def finish_part(self, part):
+        """The wall-following finish laps along every ring of one part of the tool-centre region."""
+        # the tool-centre limit (as the evaluator and Job.allowed() draw it: 64 segments a quarter circle),
+        # 1 um inside it: the chords of its arcs never put the tool centre past the true limit
+        wall = shapely.boundary(self.allowed.buffer(-1e-3))
+        for ring in [part.exterior, *part.interiors]:
+            R = np.asarray(ring.coords)[:-1]
+            if len(R) < 3:
+                continue
+            Rs = resample(np.vstack([R, R[:1]]), self.ds)[:-1]
+            for lap in range(self.finish_laps):   # repeated while the corner wedges are peeled
+                D, Ac = self.g.free_field()
+                jj = np.clip(((Rs[:, 1] - self.g.y0) // self.g.hc).astype(int), 0, D.shape[0] - 1)
+                ii = np.clip(((Rs[:, 0] - self.g.x0) // self.g.hc).astype(int), 0, D.shape[1] - 1)
+                dm = D[jj, ii]
+                if dm.min() > (self.r + self.g.hc if lap == 0 else self.r - max(0.3, 0.25 * self.a_e)):
+                    break                # nothing (more) to take along this ring
+                # start where the ring is free of material (the farthest from it, the field being
+                # capped: any point at the cap), the nearest such point to the tool
+                free_k = np.flatnonzero(dm >= min(dm.max(), self.r_free + self.g.hc))
+                if self.cur is not None and len(free_k) > 1:
+                    k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - self.cur[0], Rs[free_k, 1] - self.cur[1]))])
+                else:
+                    k0 = int(free_k[0])
+                Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
+                if self.cur is not None:
+                    e = self.link_to(self.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
+                else:
+                    e = None
+                if e is None:
+                    self.retract()
+                    self.add((Rl[0, 0], Rl[0, 1], self.clearance_z), "rapid")
+                    if dm[k0] >= self.r:          # free of material under the tool: feed down into cleared area
+                        self.add((Rl[0, 0], Rl[0, 1], self.z), "plunge", self.feed_mm_min, "cleared")
+                    else:
+                        ins = shapely.maximum_inscribed_circle(part)
+                        raise PlanningError(
+                            f"{source}: a part of the tool-centre region (area {part.area:.2f} mm^2, inscribed "
+                            f"radius {ins.length:.2f} mm near ({ins.coords[0][0]:.2f}, {ins.coords[0][1]:.2f})) "
+                            "is too narrow to be cleared under engagement control: no cleared place to start "
+                            "its finishing pass (the pocket is too narrow for the tool)")
+                elif math.hypot(Rl[0, 0] - self.cur[0], Rl[0, 1] - self.cur[1]) > 1e-9:
+                    self.add((Rl[0, 0], Rl[0, 1], self.z), "link", self.link_feed_mm_min)
+                    self.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
+                # the wall-following pass: the same engagement control, sliding along the wall;
+                # it ends 2 r past the last ring point that still has material within reach
+                sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
+                dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
+                mat = np.flatnonzero(dml < self.r + self.g.hc)
+                L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * self.r)
+                hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
+                snap = self.g.snapshot()
+                M_before = snap[0]
+                P, _, _, E, _ = self.g.run_pass(Rl[0, 0], Rl[0, 1], hd, self.target_finish, self.ds, self.lag,
+                                           int(2 * L_ring / self.ds) + 100, self.n_samp, 1e18, self.turn,
+                                           min(self.turn, self.ds / self.turn_radius), 1.02 * L_ring + self.ds, self.guard_finish)
+                # points the grid kept within 2 h of the wall go onto the exact wall
+                # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
+                pp = shapely.points(P)
+                near = shapely.distance(wall, pp) < 2.0 * self.h
+                if near.any():
+                    # the nearest wall point (not locate + interpolate along the multi-ring wall: a
+                    # point nearest to a ring's closing vertex would land on the next ring's start)
+                    snapped = shapely.get_coordinates(shapely.shortest_line(pp[near], wall))[1::2]
+                    Q = P.copy()
+                    Q[near] = snapped
+                    # the snap moves points up to 2 h outwards: near a concave corner that can
+                    # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
+                    # on the stock as it was before this lap, a snapped point whose engagement
+                    # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
+                    # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
+                    # into a corner)
+                    for _ in range(6):       # a reverted point changes the stock the later ones meet
+                        Qd, seg = densify(Q, 1.5 * self.ds)
+                        Es, Eg = replay(M_before.copy(), self.g.x0, self.g.y0, self.h, self.r, Qd, self.lag, self.n_samp, GUARD_LEVEL)
+                        bad = np.zeros(len(Q), bool)
+                        bad[seg[(Es > self.cap_finish) | (Eg > self.cap_finish)]] = True
+                        bad[:-1] |= bad[1:]          # a chord over the bound: both its ends
+                        over = near & bad & np.any(Q != P, axis=1)
+                        if not over.any():
+                            break
+                        Q[over] = P[over]
+                    self.g.restore(snap)
+                    E = self.g.replay(Q, self.lag, self.n_samp)
+                    P = Q
+                ai = E[1:] < self.air_rad
+                self.add_line_moves(P[1:], self.z, np.where(ai, "link", "cut").astype(object),
+                               np.where(ai, self.link_feed_mm_min, self.feed_mm_min), "finish")
+                self.cur = (float(P[-1, 0]), float(P[-1, 1]))
+
+    def sweep_remnant(self):
+        """A free-standing remnant of material (a pillar the passes around it could not take: every
+        border cell around it banned) small enough that a straight cut towards its centre meets it
+        over at most theta -- within radius r sin(theta/2) of its centre -- is cut by one straight
+        feed move from a free point, reached through cleared area, to where the tool disc holds all
+        of it; True if one was cut."""
+        if self.cur is None:
+            return False
+        lbl, nlab = label8(self.g.M)
+        if nlab == 0:
+            return False
+        rho_max = self.r * math.sin(0.5 * self.target)
+        CX, CY, RAD = component_discs(lbl, nlab, self.g.x0, self.g.y0, self.h)
+        for lab in np.flatnonzero(RAD + self.h / math.sqrt(2.0) <= rho_max):
+            c = np.array([CX[lab], CY[lab]])
+            rho_b = float(RAD[lab]) + self.h / math.sqrt(2.0)
+            others = None
+            D, Ac = self.g.free_field()
+            for ang in np.arange(8) * (math.pi / 4):
+                u = np.array([math.cos(ang), math.sin(ang)])
+                # from a free point before the remnant to where the tool disc holds all of it
+                S, E = c - (self.r + rho_b + self.g.hc) * u, c - (self.r - rho_b - self.h) * u
+                jS, iS = self.g.cell(*S)
+                if not (0 <= jS < D.shape[0] and 0 <= iS < D.shape[1] and Ac[jS, iS] and D[jS, iS] >= self.r_free):
+                    continue
+                if not segment_inside(self.g.A, self.g.x0, self.g.y0, self.h, S[0], S[1], E[0], E[1], 2.0 * self.h):
+                    continue
+                if others is None:
+                    others = np.where(lbl == lab, 0, self.g.M).astype(np.uint8)
+                if not capsule_free(others, self.g.x0, self.g.y0, self.h, S[0], S[1], E[0], E[1], self.r + self.h):
+                    continue                       # the sweep would meet other material too
+                if self.link_to(self.r_free, cell=(jS, iS), end_xy=(S[0], S[1])) is None:
+                    continue
+                Q = resample(np.vstack([S, E]), self.ds)
+                self.add_line_moves(Q[1:], self.z, "cut", self.feed_mm_min, "remnant sweep")
+                self.g.cut_path(np.ascontiguousarray(Q))
+                self.cur = (float(E[0]), float(E[1]))
+                self.stats["remnant_sweeps"] += 1
+                return True
+        return False
+
+    def finish_if_done(self, D, Ac, banned):
+        """Before the tool leaves its part of the tool-centre region (a retract and a new entry),
+        finish that part if its clearing is done (no material within reach of its free cells)."""
+        if self.cur is None or not self.todo_parts:
+            return
+        dd = [q.distance(Point(*self.cur)) for q in self.todo_parts]
+        kk = int(np.argmin(dd))
+        if dd[kk] > 2 * self.g.hc:
+            return
+        J, I = np.nonzero(Ac & (D < self.r) & ~banned)
+        if len(J) and shapely.contains_xy(self.todo_parts[kk].buffer(2 * self.g.hc), self.g.x0 + (I + 0.5) * self.g.hc,
+                                          self.g.y0 + (J + 0.5) * self.g.hc).any():
+            return
+        self.finish_part(self.todo_parts.pop(kk))
+
+    def run(self):
+        """Plan the level: enter, clear (passes, links, remnants), finish; up to clean_rounds more rounds."""
+        self.todo_parts = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
+        if not self.enter():
+            return
+        self.r_free = self.r + 0.75 * self.g.hc      # coarse cell centre to material, with the cell half-diagonal margin
+        for rnd in range(self.clean_rounds + 1):
+            # round 0 clears and finishes; a clean-up round takes what the sliver guard and the bans left
+            # (a pass refused where its first steps would graze a crescent), then finishes again
+            if rnd > 0:
+                D, Ac = self.g.free_field()
+                if not (Ac & (D < self.r - 2 * self.g.hc)).any():
+                    break
+                self.todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
+                saved = (len(self.pts), self.g.snapshot(), self.cur, dict(self.stats))
+            banned = np.zeros((self.g.ny // self.g.k, self.g.nx // self.g.k), bool)
+            for _ in range(self.max_passes):
+                D, Ac = self.g.free_field()
+                end = self.link_to(self.r_free, self.r_free + 1.5 * self.g.hc, banned)
+                if end is None:
+                    D, Ac = self.g.free_field()
+                    if not (Ac & (D < self.r) & ~banned).any():
+                        break
+                    if self.sweep_remnant():
+                        continue
+                    self.finish_if_done(D, Ac, banned)
+                    if self.enter(banned) is False:
+                        break
+                    continue
+                # heading: along the material boundary, material on the right
+                j, i = end
+                gy = D[min(j + 1, D.shape[0] - 1), i] - D[max(j - 1, 0), i]
+                gx = D[j, min(i + 1, D.shape[1] - 1)] - D[j, max(i - 1, 0)]
+                if not (np.isfinite(gx) and np.isfinite(gy)) or gx == gy == 0:
+                    banned[j, i] = True
+                    continue
+                heading = math.atan2(gy, gx) - 0.5 * math.pi
+                P, removed, reason, E, free = self.clearing_pass(heading, self.air_stop)
+                self.stats["passes"] += 1
+                if len(P) < 2 and self.g.half_width[j, i] < self.turn_radius:
+                    # nothing emitted (the pass ran into air and was dropped: the stock is unchanged). In a band
+                    # narrower than the turning circle, where the material lies behind the start heading (the
+                    # face at the end of the band) the hard right turn through air slides away along the
+                    # wall: start the other way round once
+                    P, removed, reason, E, free = self.clearing_pass(heading + math.pi, self.air_stop)
+                    self.stats["passes"] += 1
+                if len(P) < 2 and reason == 2 and self.g.half_width[j, i] < self.r:
+                    # nothing emitted (the stock is unchanged): the pass ran its whole air allowance
+                    # without meeting material. In a band narrower than the tool (a neck between
+                    # islands) the way to the face is a loop mostly through air (the turning circle is
+                    # 1.57 r round): once more with 3.5 r of air before the place is banned -- else
+                    # the face is taken by one helix entry after another (two_islands_neck: 5 lifts -> 2).
+                    # Kept only where it removes NARROW_MIN_YIELD a_e per mm of its length
+                    snap_try = self.g.snapshot()
+                    P, removed, reason, E, free = self.clearing_pass(heading, NARROW_AIR_STOP * self.r)
+                    self.stats["passes"] += 1
+                    if len(P) >= 2 and removed < NARROW_MIN_YIELD * self.a_e * self.ds * (len(P) - 1):
+                        self.g.restore(snap_try)        # not worth its air: the place is banned after all
+                        P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
+                if removed < 0.2 * self.r * self.h or len(P) < 2:
+                    rad = int(math.ceil(self.r / self.g.hc))
+                    banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+                air = E < self.air_rad                # nothing in front of the tool: a link at the link feed, or
+                                                 # a G0 where the chord is proven clear (``free``, see pass_kernel)
+                fr, ai = free[1:], air[1:]
+                self.add_line_moves(P[1:], self.z, np.where(fr, "rapid", np.where(ai, "link", "cut")).astype(object),
+                               np.where(fr, np.nan, np.where(ai, self.link_feed_mm_min, self.feed_mm_min)),
+                               np.where(fr, "cleared: air inside cleared area", "").astype(object))
+                self.cur = (float(P[-1, 0]), float(P[-1, 1]))
+            if self.finish:
+                # every part of the tool-centre region is finished once, the nearest to the tool first (a part
+                # is also finished as soon as its clearing is done, before the tool leaves it: no extra lift)
+                while self.todo_parts:
+                    kk = 0
+                    if self.cur is not None:
+                        dd = [q.distance(Point(*self.cur)) for q in self.todo_parts]
+                        kk = int(np.argmin(dd))
+                    self.finish_part(self.todo_parts.pop(kk))
+            if rnd > 0:
+                # keep the clean-up round only when it pays: the area it removed is at least 10 % of what
+                # the nominal cut (a_e wide at the cutting feed) removes in the feed time the round adds
+                # (its rapids not counted); else roll it back
+                n0, snap0, cur0, st0 = saved
+                took = float(snap0[0].sum() - self.g.M.sum()) * self.h * self.h
+                P3 = np.asarray(self.pts[n0 - 1:], float)
+                F3 = np.asarray(self.feeds[n0:], float)
+                L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
+                t_feed = float(np.sum(np.where(np.isfinite(F3) & (F3 > 0), L3 / np.where(F3 > 0, F3, 1.0), 0.0)))
+                if took < 0.1 * self.a_e * self.feed_mm_min * t_feed or took <= 0.0:
+                    for lst in (self.pts, self.kinds, self.tags, self.feeds, self.arcs, self.ctrs):
+                        del lst[n0:]
+                    self.g.restore(snap0)
+                    self.cur = cur0
+                    self.stats.clear(); self.stats.update(st0)
+                    break
+                self.stats["clean_rounds"] += 1
+        self.retract()
+
+
 # ------------------------------------------------------------------------------------------------
 # the planner
 # ------------------------------------------------------------------------------------------------
@@ -63,7 +476,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     names the job in error messages; ``finish_laps``: at most so many wall-following laps per ring,
     a further lap only while material deeper than max(0.3 mm, a_e/4) is left along the ring;
     ``rapid_links``: the links at depth between passes (chords proven free of material on the rapid
-    stock: no pixel of it within r + h/sqrt(2) of the chord, see _Grid) are written as G0 tagged
+    stock: no pixel of it within r + h/sqrt(2) of the chord, see Grid) are written as G0 tagged
     ``cleared`` (as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
     G0 is a straight line on LinuxCNC (and on any controller with interpolated rapids); on a
     controller whose rapids dog-leg, set it False (job key ``"rapid_links": false``).
@@ -104,7 +517,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     # rest or into the crescent an earlier pass left beside it (measured on random pockets at theta =
     # 40 deg, r = 2 mm: 52.2 deg with the sliver level held to theta + 7, 46.8 with theta + 2)
     cap_finish = math.radians(theta_deg + 2.0)
-    # the sliver guard (see _pass): theta + guard_deg for the clearing passes, theta + 7 deg for the finish
+    # the sliver guard (see pass_kernel): theta + guard_deg for the clearing passes, theta + 7 deg for the finish
     guard_pass = math.radians(theta_deg + guard_deg)
     guard_finish = math.radians(theta_deg + max(guard_deg, 7.0))
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
@@ -115,426 +528,23 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     spindle = np.nan if spindle_rpm is None else float(spindle_rpm)
     zlev = [top_z - min(depth, a_p * (k + 1)) for k in range(int(math.ceil(depth / a_p - 1e-9)))]
 
-    # move list
+    # move list (shared with the level planners: _Level.add, add_line_moves)
     pts, kinds, tags, feeds, arcs, ctrs = [], [], [], [], [], []
-
-    def add(p, kind, feed=np.nan, tag="", arc=0, ctr=(np.nan, np.nan)):
-        pts.append(p); kinds.append(kind); feeds.append(feed); tags.append(tag); arcs.append(arc); ctrs.append(ctr)
-
-    def add_line_moves(Q, z, kind, feed, tag):
-        """Straight moves at height z to the points Q (m, 2); kind, feed, tag: arrays (m,) or scalars."""
-        m = len(Q)
-        pts.extend(zip(Q[:, 0].tolist(), Q[:, 1].tolist(), [z] * m))
-        for lst, v in ((kinds, kind), (feeds, feed), (tags, tag)):
-            lst.extend(v.tolist() if isinstance(v, np.ndarray) else [v] * m)
-        arcs.extend([0] * m)
-        ctrs.extend([(np.nan, np.nan)] * m)
-
     stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0}
     allowed_parts = list(shapely.get_parts(allowed))
     part_wide = {}        # part index -> inscribed radius of that part of the tool-centre region (mm)
     hole = None if start_hole is None else tuple(float(v) for v in start_hole)
     if hole is not None and not pocket.buffer(1e-9).contains(Point(hole[0], hole[1]).buffer(0.5 * hole[2] - 1e-6)):
         raise PlanningError(f"{source}: the start hole is not inside the pocket")
+    cfg = {k: v for k, v in locals().items() if k not in ("lev", "z", "z_prev", "g")}
     for lev, z in enumerate(zlev):
         z_prev = top_z if lev == 0 else zlev[lev - 1]
-        g = _Grid(pocket, allowed, r, h, hole)
+        g = Grid(pocket, allowed, r, h, hole)
         if not g.A.any():
             raise PlanningError(f"{source}: the tool-centre region is thinner than the planning resolution "
                                 f"{h:g} mm: the pocket is too narrow for the tool")
-        cur = None   # current xy at depth (None: at clearance)
-        entered = set()   # coarse cells of the entries at this level
 
-        def retract():
-            nonlocal cur
-            if cur is not None:
-                # straight up out of the tool's own cut: G0 (as FreeCAD lifts); the writer and the
-                # static check accept a rapid only so below the clearance plane
-                add((cur[0], cur[1], clearance_z), "rapid")
-                stats["retracts"] += 1
-                cur = None
-
-        def enter(banned=None):
-            """Entry where the tool-centre region still has material within reach: True; False if
-            none; None when the only place left is too narrow for a helix (it is then banned)."""
-            nonlocal cur
-            D, Ac = g.free_field()
-            need = Ac & (D < r)       # tool disk touches material there
-            if banned is not None:
-                need &= ~banned
-            if not need.any():
-                return False
-            # the farthest point from the tool-centre region's boundary among those cells
-            dA = g.dA
-            j, i = np.unravel_index(np.argmax(np.where(need, dA, -1)), need.shape)
-            c = np.array(g.centre(j, i))
-            k_part = next((k for k, p in enumerate(allowed_parts) if p.buffer(1e-6).contains(Point(*c))), None)
-            comp = [] if k_part is None else [allowed_parts[k_part]]
-            rho_max = comp[0].exterior.distance(Point(*c)) if comp else dA[j, i]
-            if comp:
-                rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
-            rho = max(min(HELIX_RADIUS_FRAC * r, 0.9 * rho_max - h), 0.0)
-            # the smallest helix accepted here: HELIX_MIN_FRAC r, or half what the widest place of this
-            # part of the tool-centre region allows (a part narrow everywhere is entered by a small
-            # helix; the entry point is a coarse cell centre, up to hc/sqrt(2) off the widest place)
-            rho_min = 0.02
-            if comp and banned is not None:
-                if k_part not in part_wide:
-                    part_wide[k_part] = shapely.maximum_inscribed_circle(comp[0], 0.1 * h).length
-                wide = part_wide[k_part]
-                rho_min = max(0.02, min(HELIX_MIN_FRAC * r, 0.5 * (0.9 * wide - h)))
-            # a place entered before (its passes made no room) or too narrow for a helix is banned: no
-            # endless re-entry at one spot
-            again = (int(j), int(i)) in entered
-            entered.add((int(j), int(i)))
-            if (rho < rho_min or again) and banned is not None and not (hole is not None and lev == 0 and stats["entries"] == 0):
-                rad = int(math.ceil(2 * r / g.hc))
-                banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
-                return None
-            retract()
-            if hole is not None and lev == 0 and stats["entries"] == 0:
-                c = np.array(hole[:2])
-                rho = 0.0
-                add((c[0], c[1], clearance_z), "rapid")
-                add((c[0], c[1], z), "plunge", feed_mm_min, "cleared: pre-drilled start hole")
-            elif rho < rho_min:
-                raise PlanningError(f"{source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
-                                    "the region is too narrow for the tool")
-            else:
-                p0 = (c[0] + rho, c[1])
-                add((p0[0], p0[1], clearance_z), "rapid")
-                # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
-                # the previous level cleared (tagged: the program writer allows a rapid there only so)
-                add((p0[0], p0[1], z_prev + 0.5), "rapid", np.nan, "cleared: above the level")
-                add((p0[0], p0[1], z_prev), "plunge", feed_mm_min, "air")
-                drop = 2 * math.pi * rho * math.tan(math.radians(helix_angle_deg))
-                # the helix ends where it reaches z (the last turn partial); at least one full turn, so
-                # that the floor circle after it cuts in the helix's own groove
-                turns = max((z_prev - z) / drop, 1.0)
-                drop = (z_prev - z) / turns
-                zz = z_prev
-                for _ in range(int(math.floor(turns + 1e-9))):
-                    zz -= drop
-                    add((p0[0], p0[1], max(zz, z)), "helix", feed_mm_min, "entry", 3, (c[0], c[1]))
-                phi = 2 * math.pi * (turns - math.floor(turns + 1e-9))
-                pe = (c[0] + rho * math.cos(phi), c[1] + rho * math.sin(phi)) if phi > 1e-6 else p0
-                if phi > 1e-6:
-                    add((pe[0], pe[1], z), "helix", feed_mm_min, "entry", 3, (c[0], c[1]))
-                add((pe[0], pe[1], z), "cut", feed_mm_min, "entry-floor", 3, (c[0], c[1]))
-                circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
-                g.cut_path(circ)
-                stats["entries"] += 1
-                cur = (float(pe[0]), float(pe[1]))
-                return True
-            stats["entries"] += 1
-            cur = (c[0] + rho, c[1])
-            return True
-
-        def clearing_pass(heading, a_stop):
-            """A clearing pass from the tool's point (:meth:`_Grid.run_pass`) with ``a_stop`` mm of air."""
-            return g.run_pass(cur[0], cur[1], heading, target, ds, lag, 20000, n_samp, a_stop, turn,
-                              min(turn, ds / turn_radius), 1e18, guard_pass, air_rad, rapid_links)
-
-        def link_to(r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None):
-            """Link at depth through free cells to the nearest goal cell (:meth:`_Grid.route`); its
-            cell or None. ``end_xy``: the exact end point (in ``cell``, which need not lie inside the
-            tool-centre region: its centre is never a point of the link)."""
-            nonlocal cur
-            route = g.route(cur, r_free, band_hi, banned, cell)
-            if isinstance(route, str):
-                # no straight chord from here reaches a free cell inside the region (an island corner in
-                # the way): retrace the tool's own path at this depth (inside the region, its material
-                # removed) to the last point from which one does, as feed links
-                n_back = 0
-                while n_back < len(pts) - 1 and pts[-2 - n_back][2] == z and kinds[-1 - n_back] != "plunge" \
-                        and n_back < 200:
-                    n_back += 1
-                for k in range(5, n_back + 1, 5):
-                    p = pts[-1 - k]
-                    route = g.route((p[0], p[1]), r_free, band_hi, banned, cell)
-                    if not isinstance(route, str):
-                        back = [pts[-1 - q] for q in range(1, k + 1)]
-                        break
-                if isinstance(route, str) or route is None:
-                    return None
-                for p in back:
-                    add((p[0], p[1], z), "link", link_feed_mm_min)
-                cur = (float(back[-1][0]), float(back[-1][1]))
-            if route is None:
-                return None
-            D, Ac = g.free_field()
-            R = np.asarray(route, float)
-            cells = np.c_[g.x0 + (R[:, 1] + 0.5) * g.hc, g.y0 + (R[:, 0] + 0.5) * g.hc]
-            pts_r = np.vstack([np.array([cur], float), cells[1:] if len(R) > 1 else cells[:1]])
-            if end_xy is not None:
-                pts_r[-1] = end_xy
-
-            chords = pts_r[_shortcut(np.ascontiguousarray(pts_r, float), D, Ac, float(r_free), int(cell[0]), int(cell[1]),
-                                     float(g.x0), float(g.y0), float(g.hc))]
-            for q in chords[1:]:
-                if math.hypot(q[0] - cur[0], q[1] - cur[1]) > 1e-9:
-                    legs = _rapid_legs(g, cur, q) if rapid_links else None
-                    if legs is None:
-                        add((q[0], q[1], z), "link", link_feed_mm_min)
-                    else:
-                        # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
-                        # chord's tool disc is truly swept (see _Grid), sub-pixel slivers included; a
-                        # chord starting or ending on a cut boundary (a pass ends at the wall: its skin
-                        # is tangent there) gets a short feed leg off it
-                        a, b = legs
-                        if a is not None:
-                            add((a[0], a[1], z), "link", link_feed_mm_min)
-                        add((b[0], b[1], z), "rapid", np.nan, "cleared: link through cleared area")
-                        if b[0] != q[0] or b[1] != q[1]:
-                            add((q[0], q[1], z), "link", link_feed_mm_min)
-                    cur = (float(q[0]), float(q[1]))
-            stats["links"] += 1
-            return route[-1]
-
-        def finish_part(part):
-            """The wall-following finish laps along every ring of one part of the tool-centre region."""
-            nonlocal cur
-            # the tool-centre limit (as the evaluator and Job.allowed() draw it: 64 segments a quarter circle),
-            # 1 um inside it: the chords of its arcs never put the tool centre past the true limit
-            wall = shapely.boundary(allowed.buffer(-1e-3))
-            for ring in [part.exterior, *part.interiors]:
-                R = np.asarray(ring.coords)[:-1]
-                if len(R) < 3:
-                    continue
-                Rs = _resample(np.vstack([R, R[:1]]), ds)[:-1]
-                for lap in range(finish_laps):   # repeated while the corner wedges are peeled
-                    D, Ac = g.free_field()
-                    jj = np.clip(((Rs[:, 1] - g.y0) // g.hc).astype(int), 0, D.shape[0] - 1)
-                    ii = np.clip(((Rs[:, 0] - g.x0) // g.hc).astype(int), 0, D.shape[1] - 1)
-                    dm = D[jj, ii]
-                    if dm.min() > (r + g.hc if lap == 0 else r - max(0.3, 0.25 * a_e)):
-                        break                # nothing (more) to take along this ring
-                    # start where the ring is free of material (the farthest from it, the field being
-                    # capped: any point at the cap), the nearest such point to the tool
-                    free_k = np.flatnonzero(dm >= min(dm.max(), r_free + g.hc))
-                    if cur is not None and len(free_k) > 1:
-                        k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - cur[0], Rs[free_k, 1] - cur[1]))])
-                    else:
-                        k0 = int(free_k[0])
-                    Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
-                    if cur is not None:
-                        e = link_to(r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
-                    else:
-                        e = None
-                    if e is None:
-                        retract()
-                        add((Rl[0, 0], Rl[0, 1], clearance_z), "rapid")
-                        if dm[k0] >= r:          # free of material under the tool: feed down into cleared area
-                            add((Rl[0, 0], Rl[0, 1], z), "plunge", feed_mm_min, "cleared")
-                        else:
-                            ins = shapely.maximum_inscribed_circle(part)
-                            raise PlanningError(
-                                f"{source}: a part of the tool-centre region (area {part.area:.2f} mm^2, inscribed "
-                                f"radius {ins.length:.2f} mm near ({ins.coords[0][0]:.2f}, {ins.coords[0][1]:.2f})) "
-                                "is too narrow to be cleared under engagement control: no cleared place to start "
-                                "its finishing pass (the pocket is too narrow for the tool)")
-                    elif math.hypot(Rl[0, 0] - cur[0], Rl[0, 1] - cur[1]) > 1e-9:
-                        add((Rl[0, 0], Rl[0, 1], z), "link", link_feed_mm_min)
-                        cur = (float(Rl[0, 0]), float(Rl[0, 1]))
-                    # the wall-following pass: the same engagement control, sliding along the wall;
-                    # it ends 2 r past the last ring point that still has material within reach
-                    sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
-                    dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
-                    mat = np.flatnonzero(dml < r + g.hc)
-                    L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * r)
-                    hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
-                    snap = g.snapshot()
-                    M_before = snap[0]
-                    P, _, _, E, _ = g.run_pass(Rl[0, 0], Rl[0, 1], hd, target_finish, ds, lag,
-                                               int(2 * L_ring / ds) + 100, n_samp, 1e18, turn,
-                                               min(turn, ds / turn_radius), 1.02 * L_ring + ds, guard_finish)
-                    # points the grid kept within 2 h of the wall go onto the exact wall
-                    # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
-                    pp = shapely.points(P)
-                    near = shapely.distance(wall, pp) < 2.0 * h
-                    if near.any():
-                        # the nearest wall point (not locate + interpolate along the multi-ring wall: a
-                        # point nearest to a ring's closing vertex would land on the next ring's start)
-                        snapped = shapely.get_coordinates(shapely.shortest_line(pp[near], wall))[1::2]
-                        Q = P.copy()
-                        Q[near] = snapped
-                        # the snap moves points up to 2 h outwards: near a concave corner that can
-                        # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
-                        # on the stock as it was before this lap, a snapped point whose engagement
-                        # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
-                        # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
-                        # into a corner)
-                        for _ in range(6):       # a reverted point changes the stock the later ones meet
-                            Qd, seg = _densify(Q, 1.5 * ds)
-                            Es, Eg = _replay(M_before.copy(), g.x0, g.y0, h, r, Qd, lag, n_samp, GUARD_LEVEL)
-                            bad = np.zeros(len(Q), bool)
-                            bad[seg[(Es > cap_finish) | (Eg > cap_finish)]] = True
-                            bad[:-1] |= bad[1:]          # a chord over the bound: both its ends
-                            over = near & bad & np.any(Q != P, axis=1)
-                            if not over.any():
-                                break
-                            Q[over] = P[over]
-                        g.restore(snap)
-                        E = g.replay(Q, lag, n_samp)
-                        P = Q
-                    ai = E[1:] < air_rad
-                    add_line_moves(P[1:], z, np.where(ai, "link", "cut").astype(object),
-                                   np.where(ai, link_feed_mm_min, feed_mm_min), "finish")
-                    cur = (float(P[-1, 0]), float(P[-1, 1]))
-
-        todo_parts = [orient(q, 1.0) for q in shapely.get_parts(allowed.buffer(-1.5 * h))] if finish else []
-
-        def sweep_remnant():
-            """A free-standing remnant of material (a pillar the passes around it could not take: every
-            border cell around it banned) small enough that a straight cut towards its centre meets it
-            over at most theta -- within radius r sin(theta/2) of its centre -- is cut by one straight
-            feed move from a free point, reached through cleared area, to where the tool disc holds all
-            of it; True if one was cut."""
-            nonlocal cur
-            if cur is None:
-                return False
-            lbl, nlab = _label8(g.M)
-            if nlab == 0:
-                return False
-            rho_max = r * math.sin(0.5 * target)
-            CX, CY, RAD = _component_discs(lbl, nlab, g.x0, g.y0, h)
-            for lab in np.flatnonzero(RAD + h / math.sqrt(2.0) <= rho_max):
-                c = np.array([CX[lab], CY[lab]])
-                rho_b = float(RAD[lab]) + h / math.sqrt(2.0)
-                others = None
-                D, Ac = g.free_field()
-                for ang in np.arange(8) * (math.pi / 4):
-                    u = np.array([math.cos(ang), math.sin(ang)])
-                    # from a free point before the remnant to where the tool disc holds all of it
-                    S, E = c - (r + rho_b + g.hc) * u, c - (r - rho_b - h) * u
-                    jS, iS = g.cell(*S)
-                    if not (0 <= jS < D.shape[0] and 0 <= iS < D.shape[1] and Ac[jS, iS] and D[jS, iS] >= r_free):
-                        continue
-                    if not _segment_inside(g.A, g.x0, g.y0, h, S[0], S[1], E[0], E[1], 2.0 * h):
-                        continue
-                    if others is None:
-                        others = np.where(lbl == lab, 0, g.M).astype(np.uint8)
-                    if not _capsule_free(others, g.x0, g.y0, h, S[0], S[1], E[0], E[1], r + h):
-                        continue                       # the sweep would meet other material too
-                    if link_to(r_free, cell=(jS, iS), end_xy=(S[0], S[1])) is None:
-                        continue
-                    Q = _resample(np.vstack([S, E]), ds)
-                    add_line_moves(Q[1:], z, "cut", feed_mm_min, "remnant sweep")
-                    g.cut_path(np.ascontiguousarray(Q))
-                    cur = (float(E[0]), float(E[1]))
-                    stats["remnant_sweeps"] += 1
-                    return True
-            return False
-
-        def finish_if_done(D, Ac, banned):
-            """Before the tool leaves its part of the tool-centre region (a retract and a new entry),
-            finish that part if its clearing is done (no material within reach of its free cells)."""
-            if cur is None or not todo_parts:
-                return
-            dd = [q.distance(Point(*cur)) for q in todo_parts]
-            kk = int(np.argmin(dd))
-            if dd[kk] > 2 * g.hc:
-                return
-            J, I = np.nonzero(Ac & (D < r) & ~banned)
-            if len(J) and shapely.contains_xy(todo_parts[kk].buffer(2 * g.hc), g.x0 + (I + 0.5) * g.hc,
-                                              g.y0 + (J + 0.5) * g.hc).any():
-                return
-            finish_part(todo_parts.pop(kk))
-
-        if not enter():
-            continue
-        r_free = r + 0.75 * g.hc      # coarse cell centre to material, with the cell half-diagonal margin
-        for rnd in range(clean_rounds + 1):
-            # round 0 clears and finishes; a clean-up round takes what the sliver guard and the bans left
-            # (a pass refused where its first steps would graze a crescent), then finishes again
-            if rnd > 0:
-                D, Ac = g.free_field()
-                if not (Ac & (D < r - 2 * g.hc)).any():
-                    break
-                todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(allowed.buffer(-1.5 * h))] if finish else []
-                saved = (len(pts), g.snapshot(), cur, dict(stats))
-            banned = np.zeros((g.ny // g.k, g.nx // g.k), bool)
-            for _ in range(max_passes):
-                D, Ac = g.free_field()
-                end = link_to(r_free, r_free + 1.5 * g.hc, banned)
-                if end is None:
-                    D, Ac = g.free_field()
-                    if not (Ac & (D < r) & ~banned).any():
-                        break
-                    if sweep_remnant():
-                        continue
-                    finish_if_done(D, Ac, banned)
-                    if enter(banned) is False:
-                        break
-                    continue
-                # heading: along the material boundary, material on the right
-                j, i = end
-                gy = D[min(j + 1, D.shape[0] - 1), i] - D[max(j - 1, 0), i]
-                gx = D[j, min(i + 1, D.shape[1] - 1)] - D[j, max(i - 1, 0)]
-                if not (np.isfinite(gx) and np.isfinite(gy)) or gx == gy == 0:
-                    banned[j, i] = True
-                    continue
-                heading = math.atan2(gy, gx) - 0.5 * math.pi
-                P, removed, reason, E, free = clearing_pass(heading, air_stop)
-                stats["passes"] += 1
-                if len(P) < 2 and g.half_width[j, i] < turn_radius:
-                    # nothing emitted (the pass ran into air and was dropped: the stock is unchanged). In a band
-                    # narrower than the turning circle, where the material lies behind the start heading (the
-                    # face at the end of the band) the hard right turn through air slides away along the
-                    # wall: start the other way round once
-                    P, removed, reason, E, free = clearing_pass(heading + math.pi, air_stop)
-                    stats["passes"] += 1
-                if len(P) < 2 and reason == 2 and g.half_width[j, i] < r:
-                    # nothing emitted (the stock is unchanged): the pass ran its whole air allowance
-                    # without meeting material. In a band narrower than the tool (a neck between
-                    # islands) the way to the face is a loop mostly through air (the turning circle is
-                    # 1.57 r round): once more with 3.5 r of air before the place is banned -- else
-                    # the face is taken by one helix entry after another (two_islands_neck: 5 lifts -> 2).
-                    # Kept only where it removes NARROW_MIN_YIELD a_e per mm of its length
-                    snap_try = g.snapshot()
-                    P, removed, reason, E, free = clearing_pass(heading, NARROW_AIR_STOP * r)
-                    stats["passes"] += 1
-                    if len(P) >= 2 and removed < NARROW_MIN_YIELD * a_e * ds * (len(P) - 1):
-                        g.restore(snap_try)        # not worth its air: the place is banned after all
-                        P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
-                if removed < 0.2 * r * h or len(P) < 2:
-                    rad = int(math.ceil(r / g.hc))
-                    banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
-                air = E < air_rad                # nothing in front of the tool: a link at the link feed, or
-                                                 # a G0 where the chord is proven clear (``free``, see _pass)
-                fr, ai = free[1:], air[1:]
-                add_line_moves(P[1:], z, np.where(fr, "rapid", np.where(ai, "link", "cut")).astype(object),
-                               np.where(fr, np.nan, np.where(ai, link_feed_mm_min, feed_mm_min)),
-                               np.where(fr, "cleared: air inside cleared area", "").astype(object))
-                cur = (float(P[-1, 0]), float(P[-1, 1]))
-            if finish:
-                # every part of the tool-centre region is finished once, the nearest to the tool first (a part
-                # is also finished as soon as its clearing is done, before the tool leaves it: no extra lift)
-                while todo_parts:
-                    kk = 0
-                    if cur is not None:
-                        dd = [q.distance(Point(*cur)) for q in todo_parts]
-                        kk = int(np.argmin(dd))
-                    finish_part(todo_parts.pop(kk))
-            if rnd > 0:
-                # keep the clean-up round only when it pays: the area it removed is at least 10 % of what
-                # the nominal cut (a_e wide at the cutting feed) removes in the feed time the round adds
-                # (its rapids not counted); else roll it back
-                n0, snap0, cur0, st0 = saved
-                took = float(snap0[0].sum() - g.M.sum()) * h * h
-                P3 = np.asarray(pts[n0 - 1:], float)
-                F3 = np.asarray(feeds[n0:], float)
-                L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
-                t_feed = float(np.sum(np.where(np.isfinite(F3) & (F3 > 0), L3 / np.where(F3 > 0, F3, 1.0), 0.0)))
-                if took < 0.1 * a_e * feed_mm_min * t_feed or took <= 0.0:
-                    for lst in (pts, kinds, tags, feeds, arcs, ctrs):
-                        del lst[n0:]
-                    g.restore(snap0)
-                    cur = cur0
-                    stats.clear(); stats.update(st0)
-                    break
-                stats["clean_rounds"] += 1
-        retract()
+        _Level(cfg, lev, z, z_prev, g).run()
     if not pts:
         raise PlanningError(f"{source}: nothing to machine")
     kinds[0] = "rapid"

@@ -1,10 +1,10 @@
 """The planning stock's compiled kernels (pixels of ``h`` mm: ``M[j, i] = 1`` material, pixel centre
-``x0 + (i + 0.5) h, y0 + (j + 0.5) h``): disc cuts (:func:`_cut`, :func:`_cut_both` into the planning
-and the rapid stock at once, :func:`_cut_path`), the bilinear material fraction (:func:`_frac`),
-capsule and segment tests (:func:`_capsule_free`, :func:`_segment_inside`), rasterisation of the
-pocket and of the tool-centre region (:func:`_raster`), the coarse distance field to the material
-(:func:`_coarse_any`, :func:`_dist_window`), 8-connected labels of remnants (:func:`_label8`,
-:func:`_component_discs`) and polyline resampling. Units: mm.
+``x0 + (i + 0.5) h, y0 + (j + 0.5) h``): disc cuts (:func:`cut_disc`, :func:`cut_disc_both` into the planning
+and the rapid stock at once, :func:`cut_path`), the bilinear material fraction (:func:`material_fraction`),
+capsule and segment tests (:func:`capsule_free`, :func:`segment_inside`), rasterisation of the
+pocket and of the tool-centre region (:func:`raster`), the coarse distance field to the material
+(:func:`coarse_any`, :func:`dist_window`), 8-connected labels of remnants (:func:`label8`,
+:func:`component_discs`) and polyline resampling. Units: mm.
 """
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ from numba import njit
 # compiled kernels (pixel stock: M[j, i] = 1 material, pixel centre x0 + (i + 0.5) h, y0 + (j + 0.5) h)
 # ------------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _cut(M, x0, y0, h, cx, cy, r, pcx, pcy):
+def cut_disc(M, x0, y0, h, cx, cy, r, pcx, pcy):
     """Clear the pixels whose centre lies within ``r`` of (cx, cy); the area removed (mm^2).
 
     (pcx, pcy): the centre of the disc cut just before on the same path (NaN: none; always given: an
@@ -65,8 +65,8 @@ def _cut(M, x0, y0, h, cx, cy, r, pcx, pcy):
 
 
 @njit(cache=True)
-def _cut_both(M, Mr, x0, y0, h, cx, cy, r, rr, span, rows):
-    """:func:`_cut` of the disc (cx, cy, r) into M and of (cx, cy, rr) into Mr (rr <= r) in one pass over
+def cut_disc_both(M, Mr, x0, y0, h, cx, cy, r, rr, span, rows):
+    """:func:`cut_disc` of the disc (cx, cy, r) into M and of (cx, cy, rr) into Mr (rr <= r) in one pass over
     the rows, each row scanning only what lies outside the previous disc's span there. ``span`` (ny, 4)
     int64 holds each row's spans of the previous disc (M then Mr; empty: 1, 0) and ``rows`` (2,) its
     row range (empty: 1, 0); both are updated to this disc. The area removed from M (mm^2)."""
@@ -122,7 +122,7 @@ def _cut_both(M, Mr, x0, y0, h, cx, cy, r, rr, span, rows):
 
 
 @njit(cache=True)
-def _frac(M, x0, y0, h, x, y):
+def material_fraction(M, x0, y0, h, x, y):
     """Bilinear material fraction at (x, y) (outside the grid: no material)."""
     ny, nx = M.shape
     fx = (x - x0) / h - 0.5
@@ -142,7 +142,7 @@ def _frac(M, x0, y0, h, x, y):
 
 
 @njit(cache=True)
-def _capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
+def capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
     """True when no material pixel centre lies within ``rr`` of the segment (a, b): the tool disc
     (radius < rr - h/sqrt(2)) swept along it removes nothing."""
     ny, nx = M.shape
@@ -168,19 +168,19 @@ def _capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
 
 
 @njit(cache=True)
-def _cut_path(M, x0, y0, h, P, r):
+def cut_path(M, x0, y0, h, P, r):
     rem = 0.0
     pcx = np.nan
     pcy = np.nan
     for k in range(P.shape[0]):
-        rem += _cut(M, x0, y0, h, P[k, 0], P[k, 1], r, pcx, pcy)
+        rem += cut_disc(M, x0, y0, h, P[k, 0], P[k, 1], r, pcx, pcy)
         pcx = P[k, 0]
         pcy = P[k, 1]
     return rem
 
 
 @njit(cache=True)
-def _raster_edges(E, x0, y0, h, nx, ny):
+def raster_edges(E, x0, y0, h, nx, ny):
     """Pixel mask (ny, nx) uint8 of the polygon with edges E (m, 4: x1, y1, x2, y2, every ring of
     every part): pixel centres x0 + (i + 1/2) h, y0 + (j + 1/2) h inside by the even-odd rule (a
     scanline fill: the same pixels as a point-in-polygon test of the centres, up to centres exactly
@@ -207,18 +207,18 @@ def _raster_edges(E, x0, y0, h, nx, ny):
     return out
 
 
-def _raster(poly, x0, y0, h, nx, ny):
-    """:func:`_raster_edges` of a shapely Polygon/MultiPolygon."""
+def raster(poly, x0, y0, h, nx, ny):
+    """:func:`raster_edges` of a shapely Polygon/MultiPolygon."""
     rings = []
     for part in shapely.get_parts(poly):
         rings += [part.exterior, *part.interiors]
     E = np.concatenate([np.c_[c[:-1], c[1:]] for c in (np.asarray(r.coords)[:, :2] for r in rings)]) if rings \
         else np.zeros((0, 4))
-    return _raster_edges(np.ascontiguousarray(E, float), float(x0), float(y0), float(h), int(nx), int(ny))
+    return raster_edges(np.ascontiguousarray(E, float), float(x0), float(y0), float(h), int(nx), int(ny))
 
 
 @njit(cache=True)
-def _coarse_any(M, k, mat, J0, J1, I0, I1):
+def coarse_any(M, k, mat, J0, J1, I0, I1):
     """mat[J, I] = any material pixel in coarse cell (J, I) (k x k pixels), for J0 <= J < J1, I0 <= I < I1."""
     for J in range(J0, J1):
         for I in range(I0, I1):
@@ -234,7 +234,7 @@ def _coarse_any(M, k, mat, J0, J1, I0, I1):
 
 
 @njit(cache=True)
-def _dist_window(mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, D):
+def dist_window(mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, D):
     """D[j, i] = min(cap, hc x the Euclidean distance (cells) from cell (j, i) to the nearest True
     cell of ``mat`` inside the window rows ej0:ej1, columns ei0:ei1), for the cells of the window
     wj0:wj1, wi0:wi1 (inside the first). Exact: a column scan, then the lower envelope of parabolas
@@ -302,7 +302,7 @@ def _dist_window(mat, ej0, ej1, ei0, ei1, wj0, wj1, wi0, wi1, hc, cap, D):
 
 
 @njit(cache=True)
-def _label8(M):
+def label8(M):
     """Connected components of the nonzero pixels of M (8-neighbourhood): (labels (ny, nx) int32, 0 for
     empty pixels and 1..n for the components in row order of their first pixel, n)."""
     ny, nx = M.shape
@@ -335,7 +335,7 @@ def _label8(M):
 
 
 @njit(cache=True)
-def _component_discs(lab, n, x0, y0, h):
+def component_discs(lab, n, x0, y0, h):
     """For components 1..n of a label image (pixels of h mm, origin x0, y0): the centroid of their pixel
     centres and the largest distance of a pixel centre from it (mm); arrays (n + 1,), index 0 unused
     (radius inf)."""
@@ -364,7 +364,7 @@ def _component_discs(lab, n, x0, y0, h):
     return cx, cy, rad
 
 
-def _max_filter(a, c):
+def max_filter(a, c):
     """The largest value of ``a`` (2-D) within c cells along each axis (a (2c+1)^2 window clipped at the
     edges; scipy.ndimage.maximum_filter's result, without importing scipy)."""
     from numpy.lib.stride_tricks import sliding_window_view
@@ -377,7 +377,7 @@ def _max_filter(a, c):
 
 
 @njit(cache=True)
-def _inside(Amask, x0, y0, h, x, y):
+def inside_mask(Amask, x0, y0, h, x, y):
     ny, nx = Amask.shape
     i = int(math.floor((x - x0) / h))
     j = int(math.floor((y - y0) / h))
@@ -387,7 +387,7 @@ def _inside(Amask, x0, y0, h, x, y):
 
 
 @njit(cache=True)
-def _segment_inside(A, x0, y0, h, ax, ay, bx, by, skip):
+def segment_inside(A, x0, y0, h, ax, ay, bx, by, skip):
     """True when every point of the segment a-b sampled every h/2 lies in a pixel of the mask ``A``,
     but for the first ``skip`` mm (2 h where the start may lie on the true wall -- a finishing lap ends
     there -- outside the mask, which is the region shrunk by h/sqrt(2))."""
@@ -397,7 +397,7 @@ def _segment_inside(A, x0, y0, h, ax, ay, bx, by, skip):
         t = k / (n - 1)
         if t * L < skip:
             continue
-        if not _inside(A, x0, y0, h, ax + t * (bx - ax), ay + t * (by - ay)):
+        if not inside_mask(A, x0, y0, h, ax + t * (bx - ax), ay + t * (by - ay)):
             return False
     return True
 
@@ -405,7 +405,7 @@ def _segment_inside(A, x0, y0, h, ax, ay, bx, by, skip):
 # ------------------------------------------------------------------------------------------------
 # helpers
 # ------------------------------------------------------------------------------------------------
-def _resample(P, step):
+def resample(P, step):
     P = np.asarray(P, float)
     if len(P) < 2:
         return P
@@ -418,7 +418,7 @@ def _resample(P, step):
     return np.c_[np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])]
 
 
-def _densify(Q, step):
+def densify(Q, step):
     """The polyline Q (n, 2) with points inserted so that no chord is longer than ``step`` mm, and for
     each of its points the index k of the chord Q[k-1] -> Q[k] it ends on (0 for Q[0])."""
     L = np.hypot(*np.diff(Q, axis=0).T)
