@@ -30,7 +30,7 @@ follows the same plan in x, y).
 >>> from cnclab.toolpath.path import ToolPath
 >>> a = ToolPath.build([[5, 5, 5], [5, 5, -1], [15, 5, -1], [15, 5, 5]], kind=["rapid", "helix", "cut", "retract"], feed=100)
 >>> round(swept_region(a, 0.0, 2.0).area, 1)        # a 10 mm stroke of a 4 mm disc: 40 + pi 2^2
-52.5
+52.6
 """
 from __future__ import annotations
 

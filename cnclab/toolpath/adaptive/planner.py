@@ -118,7 +118,7 @@ class _Level:
             self.add((c[0], c[1], self.clearance_z), "rapid")
             self.add((c[0], c[1], self.z), "plunge", self.feed_mm_min, "cleared: pre-drilled start hole")
         elif rho < rho_min:
-            raise PlanningError(f"{source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
+            raise PlanningError(f"{self.source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
                                 "the region is too narrow for the tool")
         else:
             p0 = (c[0] + rho, c[1])
@@ -247,7 +247,7 @@ class _Level:
                     else:
                         ins = shapely.maximum_inscribed_circle(part)
                         raise PlanningError(
-                            f"{source}: a part of the tool-centre region (area {part.area:.2f} mm^2, inscribed "
+                            f"{self.source}: a part of the tool-centre region (area {part.area:.2f} mm^2, inscribed "
                             f"radius {ins.length:.2f} mm near ({ins.coords[0][0]:.2f}, {ins.coords[0][1]:.2f})) "
                             "is too narrow to be cleared under engagement control: no cleared place to start "
                             "its finishing pass (the pocket is too narrow for the tool)")
