@@ -119,41 +119,60 @@ def _scored(poly, theta):
     return tp, evaluate(tp, _job(poly, theta), H)
 
 
-#: of the _SETTINGS["max_examples"] random pockets of each property test, at least so many must be
-#: planned (the others refused with the reason checked in _scored): a test whose pockets are all
-#: refused would pass without checking anything
-MIN_PLANNED = 3
-
-
-def _run_planned(check):
-    """Run the property ``check(poly, theta, tp, s)`` over the random pockets; the number planned."""
-    planned = []
-
-    @settings(**_SETTINGS)
-    @given(pockets(), st.sampled_from([45.0, 60.0]))
-    def prop(poly, theta):
-        tp, s = _scored(poly, theta)
-        if tp is not None:
-            check(poly, theta, tp, s)
-            planned.append(poly.area)
-
-    prop()
-    return len(planned)
-
-
-def test_random_pockets_are_safe_and_covered():
+@settings(**_SETTINGS)
+@given(pockets(), st.sampled_from([45.0, 60.0]))
+def test_random_pockets_are_safe_and_covered(poly, theta):
     """Zero plunges into material, zero rapids through material (rapids below the top only as links
-    marked cleared), full coverage beyond the unreachable corners up to the stated discretisation
+    tagged cleared), full coverage beyond the unreachable corners up to the stated discretisation
     tolerance and one more unreachable-corner area per convex corner (:func:`_corner_allowance_mm2`)."""
-    def check(poly, theta, tp, s):
-        assert s.plunges_into_material == 0
-        assert s.rapids_into_material == 0
-        assert s.uncut_beyond_unreachable_mm2 <= 0.01 * poly.area + 1.0 + _corner_allowance_mm2(poly)
-        K = tp.kinds()
-        assert np.all((K != "rapid") | (tp.xyz[:, 2] >= 0.0) | tp.cleared)   # below the top: proven links only
-        assert _wall_gouge(tp, poly) <= 1e-3
+    tp, s = _scored(poly, theta)
+    if tp is None:
+        return
+    assert s.plunges_into_material == 0
+    assert s.rapids_into_material == 0
+    assert s.uncut_beyond_unreachable_mm2 <= 0.01 * poly.area + 1.0 + _corner_allowance_mm2(poly)
+    K = tp.kinds()
+    cleared = np.array(["cleared" in str(t) for t in tp.tag])
+    assert np.all((K != "rapid") | (tp.xyz[:, 2] >= 0.0) | cleared)   # below the top: proven links only
+    assert _wall_gouge(tp, poly) <= 1e-3
 
-    assert _run_planned(check) >= MIN_PLANNED
+
+#: seeded pockets of the two families (the property tests' shapes) that must all be planned and safe:
+#: the hypothesis tests above may meet a pocket the planner refuses (its reason checked in _scored);
+#: this one cannot pass by refusing (issue 29 item 6)
+SEEDED = 5
+
+
+def _seeded_pockets(n=SEEDED, seed=29):
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(n):
+        if k % 2 == 0:                                   # a star of 5-8 rays, radii 5.5..8 mm
+            m = int(rng.integers(5, 9))
+            ang = np.sort(rng.uniform(0, 2 * math.pi, m))
+            rad = rng.uniform(5.5, 8.0, m)
+            out.append(Polygon(np.c_[np.cos(ang) * rad, np.sin(ang) * rad]).buffer(0))
+        else:                                            # two overlapping rectangles, an island
+            a = box(0, 0, rng.uniform(10, 14), rng.uniform(7, 10))
+            b = box(4, 3, 4 + rng.uniform(8, 12), 3 + rng.uniform(7, 10))
+            u = unary_union([a, b])
+            c = u.buffer(-3 * R).representative_point()
+            out.append(u.difference(box(c.x - 0.8, c.y - 0.8, c.x + 0.8, c.y + 0.8)))
+    return out
+
+
+def test_seeded_pockets_are_all_planned_and_safe():
+    planned = 0
+    for poly in _seeded_pockets():
+        # the planner must plan these (a refusal fails here: they are wide enough for the tool)
+        assert min(shapely.maximum_inscribed_circle(q).length
+                   for q in shapely.get_parts(poly.buffer(-R, 64))) > R
+        tp = _plan(poly, 60.0)
+        s = evaluate(tp, _job(poly, 60.0), H)
+        assert s.plunges_into_material == 0 and s.rapids_into_material == 0
+        assert _wall_gouge(tp, poly) <= 1e-3
+        planned += 1
+    assert planned == SEEDED
 
 
 def _wall_gouge(tp, poly) -> float:
@@ -181,11 +200,13 @@ def test_finish_snap_stays_on_its_ring():
     assert _wall_gouge(tp, poly) <= 1e-3
 
 
-def test_random_pockets_engagement_bounded():
-    def check(poly, theta, tp, s):
-        assert s.engagement_max_deg <= theta + 10 + 2 * math.degrees(H / (R * math.sin(math.radians(theta))))
-
-    assert _run_planned(check) >= MIN_PLANNED
+@settings(**_SETTINGS)
+@given(pockets(), st.sampled_from([45.0, 60.0]))
+def test_random_pockets_engagement_bounded(poly, theta):
+    tp, s = _scored(poly, theta)
+    if tp is None:
+        return
+    assert s.engagement_max_deg <= theta + 10 + 2 * math.degrees(H / (R * math.sin(math.radians(theta))))
 
 
 def test_refuses_pocket_narrower_than_the_tool():

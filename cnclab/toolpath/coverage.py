@@ -81,7 +81,8 @@ def _left_mm2(region, centres, r: float) -> float:
 
 def uncut_report(path: ToolPath, job: Job) -> dict:
     """Uncut area beyond the unreachable corners, by region of ``job.polygon`` (largest first as
-    shapely lists them), summed over the levels: ``{"uncut_mm2": [..], "reach_mm2": [..],
+    shapely lists them), summed over the levels (the limit too: :func:`uncut_limit_mm2` per level):
+    ``{"uncut_mm2": [..], "reach_mm2": [..],
     "limit_mm2": [..], "over": [region indices above their limit], "levels": [z ..]}``."""
     r = job.tool_radius
     regions = list(shapely.get_parts(job.polygon))
@@ -94,7 +95,9 @@ def uncut_report(path: ToolPath, job: Job) -> dict:
             x0, y0, x1, y1 = R.bounds if not R.is_empty else (0, 0, 0, 0)
             near = c[(c[:, 0] > x0 - r) & (c[:, 0] < x1 + r) & (c[:, 1] > y0 - r) & (c[:, 1] < y1 + r)]
             uncut[k] += _left_mm2(R, near, r)
-    lim = [uncut_limit_mm2(R.area) for R in reach]
+    # the limit holds per level: the sum over n levels may reach n times it (a deep pocket repeats
+    # the one-level plan; the sum of three levels of a plan accepted at one level is no worse)
+    lim = [uncut_limit_mm2(R.area) * len(levels) for R in reach]
     return {"uncut_mm2": uncut.round(3).tolist(), "reach_mm2": [round(R.area, 3) for R in reach],
             "limit_mm2": [round(v, 3) for v in lim], "over": [k for k in range(len(regions)) if uncut[k] > lim[k]],
             "levels": levels}
