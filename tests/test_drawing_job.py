@@ -312,3 +312,23 @@ def test_cli_job_from_drawing_hostile_arguments(tmp_path, capsys):
     (tmp_path / "adir").mkdir()
     assert cli_drawing.main([dw, "--cutting", str(CUT), "--layer", "POCKET", "-o", str(tmp_path / "adir")]) == 2
     assert "adir" in capsys.readouterr().err
+
+
+def test_feeds_beyond_the_dialect_machine_model_warned(tmp_path, capsys):
+    """A link feed of 6000 mm/min is within the job's limit (rapid 10000) and the small VMC's 15 m/min,
+    but above the 5 m/min X/Y rate of the GRBL router model: planned for grbl, the warning names
+    $.link_feed on stderr and in the header; for linuxcnc, none."""
+    job = _job(link_feed=6000)
+    assert cli_plan.with_machine_warnings(job, "linuxcnc") is job
+    (w,) = cli_plan.with_machine_warnings(job, "grbl").warnings
+    assert w == ("j.json: $.link_feed: 6000 mm/min is above the X/Y rate 5000 mm/min of the GRBL router machine "
+                 "model of --dialect grbl: the controller will cap it")
+    svg, cut, out = tmp_path / "r.svg", tmp_path / "c.json", tmp_path / "r.nc"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="40mm" height="30mm" viewBox="0 0 40 30">'
+                   '<rect x="0" y="0" width="30" height="20"/></svg>')
+    cut.write_text(json.dumps(dict(BASE, tool_diameter=6.0, link_feed=6000)))
+    assert cli_plan.main([str(svg), "--cutting", str(cut), "-o", str(out), "--dialect", "grbl",
+                          "--strategy", "zig-zag"]) == 0
+    assert "warning: " in capsys.readouterr().err
+    comments = " ".join(re.findall(r"^\((.*)\)$", out.read_text(), re.M))
+    assert "$.link_feed: 6000 mm/min is above the X/Y rate 5000 mm/min" in comments

@@ -15,6 +15,7 @@ job key (:mod:`cnclab.toolpath.from_drawing`).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -29,7 +30,19 @@ from ..toolpath.from_drawing import load_job_input
 from ..toolpath.job import load_job
 from ..toolpath.planners import DEFAULT_STRATEGY, STRATEGIES, plan
 
-__all__ = ["main", "plan_program", "planned_program"]
+__all__ = ["main", "plan_program", "planned_program", "with_machine_warnings"]
+
+
+def with_machine_warnings(job, dialect: str):
+    """``job`` with a warning (naming the key) for each feed above the X/Y rate of the dialect's machine
+    model (:func:`cnclab.nc.machine.machine_for_dialect`: an assumed machine, so a warning -- the
+    controller caps the feed -- where the job's own ``feed_max_mm_min`` is an error)."""
+    m = machine_for_dialect(dialect)
+    vmax = min(m.max_rate_mm_min[:2])
+    feeds = (("feed_mm_min", job.feed_mm_min), ("link_feed", job.link_feed_mm_min), ("v_fmax", job.v_fmax))
+    warns = [f"{job.source}: $.{key}: {v:g} mm/min is above the X/Y rate {vmax:g} mm/min of the {m.name} machine "
+             f"model of --dialect {dialect}: the controller will cap it" for key, v in feeds if v > vmax * (1 + 1e-9)]
+    return dataclasses.replace(job, warnings=tuple(job.warnings) + tuple(warns)) if warns else job
 
 
 def planned_program(job_file, strategy: str | None = None, source: str | None = None, *, cutting=None,
@@ -50,6 +63,7 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
                            f"(issue 12, toolpath-core), not available: {_MISSING}")
     job_file = Path(job_file)
     job = load_job_input(job_file, cutting=cutting, layer=layer, tolerance=tolerance, units=units)
+    job = with_machine_warnings(job, dialect)
     path = plan(job, strategy or DEFAULT_STRATEGY, allow_uncut=allow_uncut)
     name = strategy or path.info.get("strategy", "default")
     rep = path.info["uncut"]
