@@ -170,7 +170,7 @@ def test_cutting_file_must_not_hold_geometry(tmp_path):
 def test_cutting_key_errors_name_both_files(tmp_path):
     c = tmp_path / "c.json"
     c.write_text(json.dumps(dict(BASE, a_p=40)))
-    with pytest.raises(ValueError, match=r"c.json \(geometry from .*done_when.dxf\): \$\.a_p: a_p = 40 mm"):
+    with pytest.raises(ValueError, match=r"done_when.dxf \+ .*c.json: \$\.a_p: a_p = 40 mm"):
         job_from_drawing(FIX / "done_when.dxf", c, layer="POCKET")
 
 

@@ -109,7 +109,8 @@ def job_from_drawing(drawing_path, cutting, layer: str | None = None, tolerance:
     d = job_dict_from_drawing(drawing, cut)
     warns = _drawing_warnings(drawing)
     try:
-        job = Job.from_dict(d, source=f"{name} (geometry from {drawing_path})")
+        # 'DRAWING + CUTTING' names both inputs in messages (and its last path part is the cutting file)
+        job = Job.from_dict(d, source=f"{drawing_path} + {name}")
     except ValueError as exc:
         if not warns:
             raise
