@@ -204,7 +204,7 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/toolpath/adaptive/grid.py", "Grid.run_pass"): (15, "the pass kernel's settings passed through; to take the planner's parameters object"),
     ("lines", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (127, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (20, _ADAPTIVE),
-    ("params", "cnclab/toolpath/adaptive/planner.py", "adaptive_clearing"): (23, _ADAPTIVE_MAIN),
+    ("params", "cnclab/toolpath/adaptive/planner.py", "adaptive_clearing"): (17, _ADAPTIVE_MAIN),
     ("lines", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (185, "the old clearing planner, to be retired (issue 29 item 1)"),
     ("params", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (22, "the old clearing planner, to be retired (issue 29 item 1)"),
     ("params", "cnclab/toolpath/constant_engagement.py", "multi_pass"): (13, "Thesis II/III integration settings; to take a Job"),

@@ -108,6 +108,7 @@ True
 """
 from __future__ import annotations
 
+from .params import AdaptiveParams
 from .planner import PlanningError, adaptive_clearing, plan_job
 
-__all__ = ["adaptive_clearing", "plan_job", "PlanningError"]
+__all__ = ["adaptive_clearing", "plan_job", "PlanningError", "AdaptiveParams"]

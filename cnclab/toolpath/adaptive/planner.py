@@ -15,6 +15,7 @@ from shapely.geometry.polygon import orient
 from ..path import Tool, ToolPath
 
 from .control import GUARD_LEVEL, replay
+from .params import AdaptiveParams
 from .grid import Grid
 from .links import rapid_legs, shortcut
 from .stock import capsule_free, component_discs, densify, label8, resample, segment_inside
@@ -24,22 +25,6 @@ class PlanningError(ValueError):
     """The pocket cannot be machined safely with this tool (the message says why)."""
 
 
-#: entry helix radius (fraction of the tool radius r; FreeCAD Adaptive's helix is 0.75 r too), and the
-#: smallest accepted where the part of the tool-centre region is wider: a helix of a few hundredths of
-#: a mm is a plunge (a place that narrow is banned; the passes reach it from elsewhere)
-HELIX_RADIUS_FRAC = 0.75
-
-
-HELIX_MIN_FRAC = 0.1
-
-
-#: air allowance (in r) of the second try of a pass that met no material in a band narrower than r, and
-#: the area it must remove per mm of its length (in a_e) to be kept (else the place is banned as before;
-#: random pockets: 9 % fewer entries for 1 % more program time)
-NARROW_AIR_STOP = 3.5
-
-
-NARROW_MIN_YIELD = 0.2
 
 
 class _Level:
@@ -93,8 +78,8 @@ class _Level:
         rho_max = comp[0].exterior.distance(Point(*c)) if comp else dA[j, i]
         if comp:
             rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
-        rho = max(min(HELIX_RADIUS_FRAC * self.r, 0.9 * rho_max - self.h), 0.0)
-        # the smallest helix accepted here: HELIX_MIN_FRAC r, or half what the widest place of this
+        rho = max(min(self.prm.helix_radius_frac * self.r, 0.9 * rho_max - self.h), 0.0)
+        # the smallest helix accepted here: helix_min_frac r, or half what the widest place of this
         # part of the tool-centre region allows (a part narrow everywhere is entered by a small
         # helix; the entry point is a coarse cell centre, up to hc/sqrt(2) off the widest place)
         rho_min = 0.02
@@ -102,7 +87,7 @@ class _Level:
             if k_part not in self.part_wide:
                 self.part_wide[k_part] = shapely.maximum_inscribed_circle(comp[0], 0.1 * self.h).length
             wide = self.part_wide[k_part]
-            rho_min = max(0.02, min(HELIX_MIN_FRAC * self.r, 0.5 * (0.9 * wide - self.h)))
+            rho_min = max(0.02, min(self.prm.helix_min_frac * self.r, 0.5 * (0.9 * wide - self.h)))
         # a place entered before (its passes made no room) or too narrow for a helix is banned: no
         # endless re-entry at one spot
         again = (int(j), int(i)) in self.entered
@@ -408,11 +393,11 @@ class _Level:
                     # islands) the way to the face is a loop mostly through air (the turning circle is
                     # 1.57 r round): once more with 3.5 r of air before the place is banned -- else
                     # the face is taken by one helix entry after another (two_islands_neck: 5 lifts -> 2).
-                    # Kept only where it removes NARROW_MIN_YIELD a_e per mm of its length
+                    # Kept only where it removes narrow_min_yield a_e per mm of its length
                     snap_try = self.g.snapshot()
-                    P, removed, reason, E, free = self.clearing_pass(heading, NARROW_AIR_STOP * self.r)
+                    P, removed, reason, E, free = self.clearing_pass(heading, self.prm.narrow_air_stop_frac * self.r)
                     self.stats["passes"] += 1
-                    if len(P) >= 2 and removed < NARROW_MIN_YIELD * self.a_e * self.ds * (len(P) - 1):
+                    if len(P) >= 2 and removed < self.prm.narrow_min_yield * self.a_e * self.ds * (len(P) - 1):
                         self.g.restore(snap_try)        # not worth its air: the place is banned after all
                         P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
                 if removed < 0.2 * self.r * self.h or len(P) < 2:
@@ -444,7 +429,7 @@ class _Level:
                 F3 = np.asarray(self.feeds[n0:], float)
                 L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
                 t_feed = float(np.sum(np.where(np.isfinite(F3) & (F3 > 0), L3 / np.where(F3 > 0, F3, 1.0), 0.0)))
-                if took < 0.1 * self.a_e * self.feed_mm_min * t_feed or took <= 0.0:
+                if took < self.prm.clean_round_min_yield * self.a_e * self.feed_mm_min * t_feed or took <= 0.0:
                     for lst in (self.pts, self.kinds, self.tags, self.feeds, self.arcs, self.ctrs):
                         del lst[n0:]
                     self.g.restore(snap0)
@@ -460,21 +445,18 @@ class _Level:
 # ------------------------------------------------------------------------------------------------
 def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, feed_mm_min: float,
                       depth: float | None = None, start_hole=None, link_feed_mm_min: float = 1500.0,
-                      rapid_links: bool = True, guard_deg: float = 5.0, clean_rounds: int = 2,
-                      clearance_z: float = 5.0, top_z: float = 0.0, spindle_rpm: float | None = None,
-                      tool: Tool | None = None, resolution_mm: float | None = None, step_mm: float | None = None,
-                      helix_angle_deg: float = 5.0, finish: bool = True, finish_margin_deg: float = 6.0, finish_laps: int = 3, source: str = "<pocket>",
-                      max_passes: int = 5000) -> ToolPath:
+                      rapid_links: bool = True, clearance_z: float = 5.0, top_z: float = 0.0,
+                      spindle_rpm: float | None = None, tool: Tool | None = None, resolution_mm: float | None = None,
+                      step_mm: float | None = None, source: str = "<pocket>",
+                      params: AdaptiveParams = AdaptiveParams()) -> ToolPath:
     """Engagement-controlled clearing of ``pocket`` (see the module docstring); a :class:`ToolPath`.
 
     Parameters: ``tool_radius`` mm; ``theta_deg`` target engagement (deg); ``a_p`` axial depth per
     level (mm); ``depth`` total depth (mm, default ``a_p``; levels of at most ``a_p``);
     ``start_hole`` None or (x, y, diameter) mm of a pre-drilled hole; feeds mm/min; z in mm
     (stock top ``top_z``); ``resolution_mm`` planning pixel (default r/60); ``step_mm`` path step
-    (default r/30); ``finish_margin_deg``: the wall-following finish is held at ``theta +
-    finish_margin_deg`` (it takes the wedges the passes could not reach at ``theta``); ``source``
-    names the job in error messages; ``finish_laps``: at most so many wall-following laps per ring,
-    a further lap only while material deeper than max(0.3 mm, a_e/4) is left along the ring;
+    (default r/30); ``source`` names the job in error messages; ``params``: the tuning constants
+    (:class:`AdaptiveParams`, each field with its unit and reason);
     ``rapid_links``: the links at depth between passes (chords proven free of material on the rapid
     stock: no pixel of it within r + h/sqrt(2) of the chord, see Grid) are written as G0 tagged
     ``cleared`` (as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
@@ -482,6 +464,9 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     controller whose rapids dog-leg, set it False (job key ``"rapid_links": false``).
     """
     t_start = time.perf_counter()
+    prm = params
+    guard_deg, clean_rounds, helix_angle_deg = prm.guard_deg, prm.clean_rounds, prm.helix_angle_deg
+    finish, finish_margin_deg, finish_laps, max_passes = prm.finish, prm.finish_margin_deg, prm.finish_laps, prm.max_passes
     if not isinstance(pocket, (Polygon, MultiPolygon)) or pocket.is_empty or not pocket.is_valid:
         raise PlanningError(f"{source}: the pocket must be a valid, non-empty polygon")
     r = float(tool_radius)
@@ -508,7 +493,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
             raise PlanningError(f"{source}: a region of the pocket (area {part.area:.1f} mm^2) is narrower "
                                 f"than the tool (diameter {2 * r:g} mm)")
     target = math.radians(theta_deg)
-    air_rad = math.radians(0.5)   # a step whose front half meets less than 0.5 deg of material is air
+    air_rad = math.radians(prm.air_deg)   # a step whose front half meets less material is air
     a_e = r * (1 - math.cos(target))
     target_finish = math.radians(theta_deg + finish_margin_deg)
     # a point of a finishing lap snapped onto the wall keeps the snap only while the engagement there stays
@@ -516,15 +501,15 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     # measures up to ~14 deg more than the planning stock where a snap pushes the tool into a corner
     # rest or into the crescent an earlier pass left beside it (measured on random pockets at theta =
     # 40 deg, r = 2 mm: 52.2 deg with the sliver level held to theta + 7, 46.8 with theta + 2)
-    cap_finish = math.radians(theta_deg + 2.0)
+    cap_finish = math.radians(theta_deg + prm.finish_snap_deg)
     # the sliver guard (see pass_kernel): theta + guard_deg for the clearing passes, theta + 7 deg for the finish
     guard_pass = math.radians(theta_deg + guard_deg)
-    guard_finish = math.radians(theta_deg + max(guard_deg, 7.0))
+    guard_finish = math.radians(theta_deg + max(guard_deg, prm.finish_guard_deg))
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
-    n_samp = 90
-    turn = math.radians(90.0)
-    turn_radius = 0.25 * r        # the tightest right turn (the curvature limit of the passes), mm
-    air_stop = 1.5 * r            # a pass ends after so much air (its air tail is dropped)
+    n_samp = prm.n_samples
+    turn = math.radians(prm.max_turn_deg)
+    turn_radius = prm.turn_radius_frac * r    # the tightest right turn (the curvature limit of the passes), mm
+    air_stop = prm.air_stop_frac * r          # a pass ends after so much air (its air tail is dropped)
     spindle = np.nan if spindle_rpm is None else float(spindle_rpm)
     zlev = [top_z - min(depth, a_p * (k + 1)) for k in range(int(math.ceil(depth / a_p - 1e-9)))]
 

@@ -1,0 +1,67 @@
+"""The adaptive planner's tuning constants as one documented object (:class:`AdaptiveParams`).
+
+Every field states its unit and why it has its value; the defaults are the values the planner was
+measured with (``benchmarks/bench_vs_freecad.py``, ``benchmarks/bench_random_pockets.py``): changing one
+changes the programs.
+
+>>> AdaptiveParams().helix_radius_frac, AdaptiveParams(clean_rounds=0).clean_rounds
+(0.75, 0)
+"""
+from __future__ import annotations
+
+import dataclasses
+
+__all__ = ["AdaptiveParams"]
+
+
+@dataclasses.dataclass(frozen=True)
+class AdaptiveParams:
+    """Tuning constants of :func:`cnclab.toolpath.adaptive.adaptive_clearing` (units in each comment)."""
+
+    #: deg: the sliver guard of the clearing passes holds the engagement with any material counted
+    #: within theta + guard_deg (a crescent the 1/2-level contour misses; the bound promised is +10)
+    guard_deg: float = 5.0
+    #: deg: the finishing laps' guard, at least this over theta (the laps peel corner wedges)
+    finish_guard_deg: float = 7.0
+    #: rounds: further rounds of passes and finishing for what the guard and the bans left
+    #: (each kept only when it pays, see ``clean_round_min_yield``)
+    clean_rounds: int = 2
+    #: fraction: a clean-up round is kept when it removes at least this share of what the nominal
+    #: cut (a_e wide at the cutting feed) removes in the feed time it adds
+    clean_round_min_yield: float = 0.1
+    #: deg: helix ramp angle of an entry (FreeCAD Adaptive's default 5 deg)
+    helix_angle_deg: float = 5.0
+    #: fraction of r: entry helix radius (FreeCAD Adaptive's 0.75 r)
+    helix_radius_frac: float = 0.75
+    #: fraction of r: the smallest helix accepted where the part of the tool-centre region is wider (a
+    #: helix of a few hundredths of a mm is a plunge: such a place is banned, reached from elsewhere)
+    helix_min_frac: float = 0.1
+    #: whether the wall-following finish laps run (off: roughing only)
+    finish: bool = True
+    #: deg: the finish is held at theta + finish_margin_deg (the simulator measures up to ~3 deg more
+    #: than the planning stock on thin wall rests; theta + 10 is the bound)
+    finish_margin_deg: float = 6.0
+    #: deg: a finishing point snapped onto the wall keeps the snap only while its engagement stays
+    #: within theta + this (random pockets, theta 40, r 2 mm: max 52.2 deg at +7, 46.8 at +2)
+    finish_snap_deg: float = 2.0
+    #: laps: at most so many wall-following laps per ring (a further lap only while material deeper
+    #: than max(0.3 mm, a_e/4) is left along the ring)
+    finish_laps: int = 3
+    #: passes: the most clearing passes per round (a bound against endless re-entry)
+    max_passes: int = 5000
+    #: deg: a step whose front half meets less material than this is air
+    air_deg: float = 0.5
+    #: samples: arc samples of the front half-circle per engagement evaluation
+    n_samples: int = 90
+    #: deg: the hardest turn of the heading search per step (left away from the material, right into it)
+    max_turn_deg: float = 90.0
+    #: fraction of r: the tightest right-turn radius (the curvature limit of the passes)
+    turn_radius_frac: float = 0.25
+    #: fraction of r: a pass ends after so much air (its air tail is dropped)
+    air_stop_frac: float = 1.5
+    #: fraction of r: the air allowance of the second try of a pass that met no material in a band
+    #: narrower than r (the way to the face of a neck is a loop mostly through air)
+    narrow_air_stop_frac: float = 3.5
+    #: fraction of a_e: that second try is kept only where it removes this much per mm of its length
+    #: (random pockets: 9 % fewer entries for 1 % more program time)
+    narrow_min_yield: float = 0.2
