@@ -230,6 +230,30 @@ def test_block_reference_expanded_with_its_scale_and_layer(tmp_path):
     assert "in INSERT" in d.regions[0].shell.entities[0]
 
 
+def test_nested_block_references_expanded(tmp_path):
+    """A block inserting another block (scale 2 inside scale 3): the square of side 1 becomes 6 x 6;
+    the inner entities on layer 0 take the outer INSERT's layer."""
+    def build(m):
+        inner = m.doc.blocks.new("INNER")
+        inner.add_lwpolyline([(0, 0), (1, 0), (1, 1), (0, 1)], close=True)
+        outer = m.doc.blocks.new("OUTER")
+        outer.add_blockref("INNER", (0, 0), dxfattribs={"xscale": 2, "yscale": 2})
+        m.add_blockref("OUTER", (10, 0), dxfattribs={"layer": "POCKET", "xscale": 3, "yscale": 3})
+    d = read_drawing(_save(tmp_path, build), layer="POCKET")
+    assert d.polygon().area == pytest.approx(36) and d.polygon().bounds == pytest.approx((10, 0, 16, 6))
+    assert d.regions[0].shell.entities[0].startswith("LWPOLYLINE in INSERT #")
+
+
+def test_self_inserting_block_refused(tmp_path):
+    def build(m):
+        blk = m.doc.blocks.new("LOOP")
+        blk.add_circle((0, 0), 1)
+        blk.add_blockref("LOOP", (5, 0))
+        m.add_blockref("LOOP", (0, 0))
+    with pytest.raises(ValueError, match=r"INSERT .*(nested deeper than 16|cannot be expanded)"):
+        read_drawing(_save(tmp_path, build))
+
+
 def test_mirrored_extrusion_arcs_in_world_coordinates(tmp_path):
     """An ARC/CIRCLE with extrusion (0, 0, -1) (mirrored in CAD) is placed at its WCS position (x -> -x)."""
     def build(m):

@@ -389,20 +389,29 @@ def _dxf_entity(e, name: str, tol: float, source: str):
     raise AssertionError(t)
 
 
-def _dxf_entities(msp, layer: str | None):
-    """(entity, name, layer) of the model space, block references expanded (layer 0 inherits)."""
-    for e in msp:
-        if e.dxftype() == "INSERT":
-            try:
-                subs = list(e.virtual_entities())
-            except Exception as exc:          # ezdxf raises various errors on broken blocks
-                yield (None, f"INSERT #{e.dxf.handle} ({exc})", e.dxf.layer)
-                continue
-            for k, s in enumerate(subs):
-                lay = e.dxf.layer if s.dxf.layer == "0" else s.dxf.layer
-                yield (s, f"{s.dxftype()} in INSERT #{e.dxf.handle} ({e.dxf.name}) item {k}", lay)
-        else:
-            yield (e, f"{e.dxftype()} #{e.dxf.handle}", e.dxf.layer)
+#: block references nested deeper than this are refused (a block that inserts itself loops forever)
+MAX_BLOCK_DEPTH = 16
+
+
+def _dxf_entities(entities, parent: str = "", parent_layer: str | None = None, depth: int = 0):
+    """(entity, name, layer) of ``entities`` (the model space), block references expanded recursively
+    (an entity on layer ``0`` inside a block takes the layer of its INSERT)."""
+    for k, e in enumerate(entities):
+        lay = e.dxf.layer if parent_layer is None or e.dxf.layer != "0" else parent_layer
+        name = f"{e.dxftype()} #{e.dxf.handle}" if not parent else f"{e.dxftype()} in {parent} item {k}"
+        if e.dxftype() != "INSERT":
+            yield (e, name, lay)
+            continue
+        if depth >= MAX_BLOCK_DEPTH:
+            yield (None, f"{name} (block references nested deeper than {MAX_BLOCK_DEPTH})", lay)
+            continue
+        try:
+            subs = list(e.virtual_entities())
+        except Exception as exc:          # ezdxf raises various errors on broken blocks
+            yield (None, f"{name} ({exc})", lay)
+            continue
+        here = f"INSERT #{e.dxf.handle} ({e.dxf.name})" if not parent else f"{parent} item {k} ({e.dxf.name})"
+        yield from _dxf_entities(subs, here, lay, depth + 1)
 
 
 def _recover_dxf(src: str, first: Exception):
@@ -458,13 +467,15 @@ def read_dxf(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
     tol_du = tolerance / scale
     closed, pieces, skipped, layers = [], [], {}, {}
     want = None if layer is None else layer.casefold()
-    for e, name, lay in _dxf_entities(doc.modelspace(), layer):
+    for e, name, lay in _dxf_entities(doc.modelspace()):
         t = "INSERT" if e is None else e.dxftype()
         if t in _CURVES:
             layers[lay] = layers.get(lay, 0) + 1
         if want is not None and lay.casefold() != want:
             continue
-        if e is None or t not in _CURVES:
+        if e is None:
+            raise ValueError(f"{src}: {name}: the block reference cannot be expanded")
+        if t not in _CURVES:
             skipped[t] = skipped.get(t, 0) + 1
             continue
         try:
