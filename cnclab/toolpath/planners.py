@@ -218,6 +218,18 @@ def _uncut_message(job: Job, strategy: str, rep: dict) -> str:
             f"{parts}")
 
 
+def _run_strategy(f, strategy: str, job: Job, resolution_mm: float, options: dict) -> ToolPath:
+    """``f(job, resolution_mm, **options)``; a planner's internal failure on a job it cannot handle
+    (an empty medial axis, a region too thin for its seeds...) becomes a refusal naming the job."""
+    try:
+        return f(job, resolution_mm, **options)
+    except (ValueError, IndexError, AttributeError, ZeroDivisionError, shapely.errors.GEOSException) as exc:
+        if isinstance(exc, ValueError) and str(job.source) in str(exc):
+            raise
+        raise ValueError(f"{job.source}: strategy {strategy} cannot plan this job "
+                         f"({type(exc).__name__}: {exc}); try the adaptive strategy") from exc
+
+
 def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None = None, allow_uncut: bool = False,
          **options) -> ToolPath:
     """Plan ``job`` with ``strategy`` (a key of :data:`STRATEGIES`) level by level.
@@ -251,7 +263,7 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     paths = []
     for top, z in zip(tops, levels):
         lv = job if len(levels) == 1 else dataclasses.replace(job, top_z=top, a_p=top - z, depth=top - z)
-        paths.append(f(lv, resolution_mm, **options))
+        paths.append(_run_strategy(f, strategy, lv, resolution_mm, options))
     out = join_levels(paths, tops, job)
     out.info.update(strategy=strategy, levels=levels)
     gouge, at = coverage.wall_gouge(out, job)
