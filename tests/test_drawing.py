@@ -327,6 +327,7 @@ def test_svg_paths_layers_and_units():
     assert cm.polygon().area == pytest.approx(100 * d.polygon().area, rel=1e-4)
     notes = read_drawing(path, layer="NOTES")
     assert notes.polygon().area == pytest.approx(138 * 68)                           # the frame; text skipped
+    assert any("skipped (not outlines): 1 Text" in n for n in notes.notes)
 
 
 def test_unreadable_inputs_name_the_file(tmp_path):

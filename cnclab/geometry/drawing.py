@@ -13,7 +13,9 @@ with islands, in mm, flattened to a stated chord tolerance.
 * SVG: every path and basic shape (path, rect, circle, ellipse, polygon, polyline, line), transforms
   applied; a "layer" is an ancestor group's ``inkscape:label`` or ``id``. Lengths follow the document's
   ``width``/``height`` and ``viewBox`` (user units without a physical size are CSS px, 96 per inch);
-  the y axis is flipped (SVG's y points down) so the part is read as drawn.
+  the y axis is flipped (SVG's y points down) so the part is read as drawn. Text and images are
+  skipped and counted in the notes; every path counts as an outline whatever its fill or fill rule
+  (nesting is by containment).
 
 Open chains (an end that meets no other end within ``join_tol``) are refused naming the entity (DXF
 handle ``#2F`` or SVG id) and the gap to the nearest other end; ends where three or more pieces meet,
@@ -530,6 +532,8 @@ def _svg_walk(node, groups):
             yield from _svg_walk(child, groups + names)
         elif isinstance(child, se.Shape):
             yield child, groups
+        elif isinstance(child, (se.Text, se.SVGImage)):
+            yield type(child).__name__, groups            # not an outline: counted in the notes
 
 
 def _svg_circle(shape, scale: float, height: float):
@@ -620,10 +624,13 @@ def read_svg(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
     notes.append(f"SVG lengths: {unit}; y flipped (SVG's y points down)")
     tol_px = tolerance / scale
     height = float(svg.height) if getattr(svg, "height", None) else 0.0
-    closed, pieces, n_shapes, names = [], [], 0, set()
+    closed, pieces, n_shapes, names, skipped = [], [], 0, set(), {}
     for k, (shape, groups) in enumerate(_svg_walk(svg, [])):
         names.update(groups)
         if layer is not None and layer not in groups:
+            continue
+        if isinstance(shape, str):
+            skipped[shape] = skipped.get(shape, 0) + 1
             continue
         sid = shape.values.get("id") or f"#{k}"
         kind = type(shape).__name__.lower()
@@ -644,6 +651,8 @@ def read_svg(path, layer: str | None = None, tolerance: float = CHORD_TOL_MM, un
     if n_shapes == 0:
         where = "in the drawing" if layer is None else f"in a group with id or inkscape:label {layer!r}"
         raise ValueError(f"{src}: no path or shape {where}; groups: {', '.join(sorted(names)) or 'none'}")
+    if skipped:
+        notes.append("skipped (not outlines): " + ", ".join(f"{v} {k}" for k, v in sorted(skipped.items())))
     rings = closed + _chain(pieces, join_tol, src)
     notes.append(f"flattened to a chord error of {tolerance:g} mm; ends joined within {join_tol:g} mm")
     return Drawing(_nest(rings, src), src, layer, unit, scale, float(tolerance), float(join_tol), tuple(notes))
