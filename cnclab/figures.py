@@ -9,7 +9,7 @@ show these figures call the same recipes, so the notebook and the paper figure c
 
 ``python -m cnclab figure NAME --width-mm 85 --format pdf -o DIR`` is the command line;
 ``python -m cnclab figure --list`` lists the covered figures. Covered so far: the figures whose
-plotting lives in the package or was moved here from its notebook (Jacsó Fig 3-1; Hoang Table 2;
+plotting lives in the package or was moved here from its notebook (Jacsó Fig 3-1; Hoang Table 2; Kim & Yang Fig 2;
 Mgherony Fig 3-5, 3-6/3-7/3-8, the three other ch. 3 figures, 4-1, 4-2/4-3, 5-6, 5-7, 5-8/5-9, 6-2, 6-3,
 6-10); the other notebook figures still draw in their notebook cell
 (``--list`` shows the state).
@@ -36,6 +36,7 @@ from .geometry.cylinder_parts import MEASURING_POSITIONS_MM, CylinderPart
 from .paths import build_dir
 from .plotting import STYLE_PATH, WIDTH_PRESETS_MM, export_figure, figsize
 from .works.hoang2024 import constant_volume as cv
+from .works.kim_yang2006 import constant_mrr_pocket as ky
 from .works.mgherony2024 import ch3, ch4_5, ch6
 
 __all__ = ["FIGURES", "Recipe", "draw", "render", "main"]
@@ -282,6 +283,24 @@ def fig4_2_4_3_effective_diameter_cutting_speed():
     axs[1].set(xlabel="measuring position y [mm]", ylabel="actual v_c [m/min]", title="Fig 4-3 (n = 5100 rpm)")
     for a in axs:
         a.legend()
+    return fig
+
+
+@_register("fig2_offsets_pocket_120x85", "kim_yang2006",
+           "Kim & Yang (2006) Fig 2: the offset levels of the 120 x 85 mm pocket")
+def fig2_offsets_pocket_120x85():
+    import matplotlib.pyplot as plt
+
+    levels, pocket = ky.offset_levels(), ky.pocket()
+    fig, ax = plt.subplots(figsize=figsize(1.1, 1.2))
+    ax.fill(*pocket.exterior.xy, color="0.9")
+    for ring in pocket.interiors:
+        ax.fill(*ring.xy, color="white")
+    for k, loops in enumerate(levels):
+        for lp in loops:
+            ax.plot(lp[:, 0], lp[:, 1], color=plt.cm.viridis(k / len(levels)), lw=1)
+    ax.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]",
+           title=f"{len(levels)} offset levels, loops per level {[len(lv) for lv in levels]}")
     return fig
 
 
