@@ -308,7 +308,8 @@ def _header(path: ToolPath, job, setup: _Setup, dialect: str, moves, notes, extr
     if tool is not None:
         shape = "ball end" if tool.corner_radius >= 0.5 * tool.diameter else (
             f"corner radius {tool.corner_radius:g} mm" if tool.corner_radius else "flat end")
-        hdr.append(f"tool T{tool.number}: D{tool.diameter:g} mm {shape} mill, {tool.flutes} teeth")
+        teeth = "tooth" if tool.flutes == 1 else "teeth"
+        hdr.append(f"tool T{tool.number}: D{tool.diameter:g} mm {shape} mill, {tool.flutes} {teeth}")
     if job is not None and getattr(job, "polygon", None) is not None:
         x0, y0, x1, y1 = job.polygon.bounds
         hdr.append(f"stock: pocket X{x0:.3f}..{x1:.3f} Y{y0:.3f}..{y1:.3f} mm, depth {job.depth:g} mm below "

@@ -1,7 +1,8 @@
 """``python -m cnclab programs [-o build/gcode] [--work W]``: every NC program the collection produces.
 
-Writes one RS274/NGC file per program to ``build/gcode/<work>/<name>.ngc``, all through the one
-safe writer :func:`cnclab.nc.program.write_program` (start block, tool change, ``S.. M3`` before the
+Writes one RS274/NGC file per program to ``build/gcode/<work>/<name>.ngc``, each written to disk by
+the one safe writer :func:`cnclab.nc.program.write_program` (``out=``: the static check passes first;
+arcs fitted within 0.005 mm, entries at the entry feed; start block, tool change, ``S.. M3`` before the
 first cut, rapids only at the clearance plane or straight up, ``M5 M30``), and a
 ``build/gcode/manifest.json`` with, per program, the clearance plane, stock top, rapid rate and the
 path's own time (:meth:`ToolPath.time_s`) that ``make gcode-check`` compares with LinuxCNC's
@@ -58,37 +59,37 @@ LAST = ("kim_yang2006/constant_engagement",)
 
 
 def _hoang(covering):
-    def make():
-        moves, text = cv.table3_program(covering=covering, decimals=3)
+    def make(out):
+        moves, text = cv.table3_program(covering=covering, decimals=3, out=out)
         return text, {"clearance_z": 10.0, "top_z": 0.0, "path": ToolPath.from_moves(moves)}
     return make
 
 
 def _ky(which):
-    def make():
+    def make(out):
         job = ky.job()
         # the paper's passes, entered by a helix (the paper plunges; the reproduction keeps that in
         # ky.program, the program for a machine does not)
         path = ky.program_path(which, entry="helix") if which != "ce" else kyce.ce_path()
         hdr = [f"Kim and Yang 2006 pocket 120 x 85 mm: {which} path, tool D{job.tool.diameter:g} flat"]
-        text = write_program(path, job, header=hdr)
+        text = write_program(path, job, header=hdr, out=out)
         return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": program_path(path, job), "job": job}
     return make
 
 
 def _jacso(job_file, strategy):
-    def make():
+    def make(out):
         job = load_job(data_path("jacso2021", job_file))
         path = plan(job, strategy, resolution_mm=pick(0.05, 0.1))
         hdr = [f"Jacso 2021 section 4: {strategy} on {job_file}, tool D{job.tool.diameter:g} flat"]
-        text = write_program(path, job, header=hdr)
+        text = write_program(path, job, header=hdr, out=out)
         return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": program_path(path, job), "job": job}
     return make
 
 
 def _planned(job_file):
-    def make():
-        text, job, path, _ = planned_program(job_file)
+    def make(out):
+        text, job, path, _ = planned_program(job_file, out=out)
         return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": program_path(path, job), "job": job,
                       "strategy": path.info.get("strategy", "")}
     return make
@@ -129,7 +130,7 @@ def _tag_drop_cut_descents(path: ToolPath) -> ToolPath:
 
 
 def _mgherony(angle):
-    def make():
+    def make(out):
         tp = ch7_9.parameters()["table7_1"]
         moves = apt_to_moves(read_apt(ch7_9.zigzag_apt(angle)))
         path = ToolPath.from_moves(moves, tool=Tool(tp["D"], corner_radius=0.5 * tp["D"], flutes=tp["teeth"]))
@@ -137,7 +138,7 @@ def _mgherony(angle):
         hdr = [f"Mgherony 2024 ch. 8 drop-cut zig-zag finishing, A_f = {angle:g} deg, D{tp['D']:g} ball"]
         on_part = path.xyz[(~path.is_kind("rapid")) & (path.xyz[:, 2] < 30.0), 2]
         top = float(on_part.max())   # the part's highest CL point: the stock top of a finishing path
-        text = write_program(path, clearance_z=30.0, spindle_rpm=tp["n"], top_z=top, header=hdr)
+        text = write_program(path, clearance_z=30.0, spindle_rpm=tp["n"], top_z=top, header=hdr, out=out)
         return text, {"clearance_z": 30.0, "top_z": top, "path": program_path(path, clearance_z=30.0, spindle_rpm=tp["n"])}
     return make
 
@@ -170,8 +171,9 @@ def write_programs(outdir=None, works=None, quiet=False) -> dict:
     for work, name, make in todo:
         key = f"{work}/{name}"
         t0 = time.perf_counter()
+        f = outdir / work / f"{name}.ngc"
         try:
-            text, meta = make()
+            text, meta = make(f)       # written by the one writer (write_program(out=...)), checked first
         except ValueError as exc:
             manifest["programs"][key] = {"error": str(exc)}
             if not quiet:
@@ -186,7 +188,6 @@ def write_programs(outdir=None, works=None, quiet=False) -> dict:
             ev = evaluate(path, job, resolution_mm=0.1)
             meta.update(sim_resolution_mm=ev.resolution_mm, sim_plunges_into_material=ev.plunges_into_material,
                         sim_rapids_into_material=ev.rapids_into_material)
-        f = atomic_write(outdir / work / f"{name}.ngc", text)
         t = path.time_s(RAPID_MM_MIN)
         L = path.lengths()
         manifest["programs"][key] = {"file": str(f.relative_to(outdir)), **meta,
