@@ -142,3 +142,19 @@ def test_planned_pocket_figures_unchanged_by_fitting():
     assert b.engagement_p95_deg == pytest.approx(a.engagement_p95_deg, abs=0.5)
     assert b.engagement_max_deg == pytest.approx(a.engagement_max_deg, abs=3.0)
     assert b.time_total_s == pytest.approx(a.time_total_s, rel=1e-3)
+
+
+@pytest.mark.parametrize("name", ["star", "two_regions"])
+def test_bench_pocket_programs_have_arcs_and_fewer_blocks_than_freecad(name):
+    """Issue 24 target on two bench pockets (the planner's resolution of the current mode): the
+    program the one writer writes has G2/G3 blocks and no more motion blocks than FreeCAD Adaptive's
+    committed program (tests/fixtures/freecad/<pocket>.ngc; benchmarks/bench_vs_freecad.py reports
+    all eight pockets)."""
+    from cnclab.toolpath.planners import plan
+    from cnclab.works.jacso2021 import freecad_comparison as fx
+
+    job = fx.job(name)
+    moves = read_gcode(write_program(plan(job, "adaptive", fx.resolution_mm(name)), job)).moves
+    fc = read_gcode((fx.FIXTURES / f"{name}.ngc").read_text(encoding="utf-8")).moves
+    assert any(m.motion in ("G2", "G3") for m in moves)
+    assert len(moves) <= len(fc)
