@@ -30,7 +30,7 @@ def main(argv=None) -> int:
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
         print("usage: python -m cnclab <command> [options]\n\ncommands:")
         for name, (_, hlp) in COMMANDS.items():
-            print(f"  {name:<12} {hlp}")
+            print(f"  {name:<{max(map(len, COMMANDS))}} {hlp}")
         print("\n`python -m cnclab COMMAND --help` explains a command: every option with its unit and default,\n"
               "an example and the files it writes. Getting started: README.md; job files: docs/job-format.md.")
         if argv and argv[0] not in ("-h", "--help"):
