@@ -103,7 +103,7 @@ def test_getting_started_blocks_run(tmp_path):
     res = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
     assert res.returncode == 0, f"README Getting started failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}"
     start = tmp_path / "build" / "start"
-    for f in ("my_pocket.ngc", "my_pocket_cp.ngc", "two_regions.ngc", "ch8_vc63.apt", "ch8_limited.apt",
+    for f in ("my_pocket.ngc", "my_pocket_cp.ngc", "from_drawing.ngc", "two_regions.ngc", "ch8_vc63.apt", "ch8_limited.apt",
               "ch8_limited.ngc", "ch8_af0.apt", "part_af45.apt", "part_af45_vc63.ngc", "freecad_two_regions/summary.csv"):
         assert (start / f).stat().st_size > 0, f
     assert (tmp_path / "build" / "analyze" / "my_pocket" / "engagement_map.png").is_file()
