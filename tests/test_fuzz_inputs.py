@@ -656,7 +656,7 @@ def _api_cases():
         # issue 28 item 6: the vague ones
         "kim_yang R nan": (lambda: engagement.theta_kim_yang(1, np.nan, 3), r"^R \(corner radius\) must be in"),
         "kim_yang R str": (lambda: engagement.theta_kim_yang(1, "x", 3), r"^R \(corner radius\) must be a number"),
-        "plan resolution 0": (lambda: _plan(resolution_mm=0), r"^resolution_mm must be a finite number > 0 mm, got 0"),
+        "plan resolution 0": (lambda: _plan(resolution_mm=0), r"^resolution_mm must be a finite number > 0 mm \(or None: each planner.s default\), got 0$"),
         "plan resolution nan": (lambda: _plan(resolution_mm=np.nan), r"^resolution_mm must be a finite number > 0 mm"),
         "plan resolution inf": (lambda: _plan(resolution_mm=inf), r"^resolution_mm must be a finite number > 0 mm"),
         "plan resolution str": (lambda: _plan(resolution_mm="0.1"), r"^resolution_mm must be a finite number > 0 mm"),
