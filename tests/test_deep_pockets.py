@@ -97,9 +97,15 @@ def test_a_move_through_uncleared_levels_is_reentered_by_a_helix():
                          arc=[0, 0, 0, 3, 0], arc_center=[[np.nan] * 2] * 3 + [list(c), [np.nan] * 2])
     out = join_levels([lv1, lv2], [0.0, -1.0], job)
     k2 = len(lv1)
-    assert out.kinds()[k2:].tolist() == ["rapid", "plunge", "helix", "helix", "rapid"]
+    K = out.kinds()[k2:]
+    assert K[:2].tolist() == ["rapid", "plunge"] and K[-1] == "rapid"
+    assert set(K[2:-1]) == {"helix"} and len(K) - 4 >= 16     # one turn of at least 16 chords (one helix generator)
+    assert out.arc[-2] == 3 and out.xyz[-2, 2] == -2.0      # then the level's own helix, as planned
     assert out.xyz[k2 + 1, 2] == 0.0                        # the plunge ends on the stock top (air)
-    assert out.xyz[k2 + 2, 2] == pytest.approx(-1.0) and out.arc[k2 + 2] == 3
+    hx = out.xyz[k2 + 2:-2]
+    assert hx[-1, 2] == pytest.approx(-1.0) and np.all(np.diff(np.r_[0.0, hx[:, 2]]) < 0)
+    assert np.allclose(np.hypot(hx[:, 0] - c[0], hx[:, 1] - c[1]), 1.0)      # about the level's helix centre
+    assert np.allclose(hx[-1, :2], [c[0] + 1, c[1]])        # back where the level's own helix starts
     assert not out.cleared[k2:].any()
     text = write_program(out, job)
     assert check_program(text, job.clearance_z, job.top_z).errors == []

@@ -40,7 +40,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, Point
 
-from .path import KINDS, ToolPath
+from .path import KINDS, ToolPath, ToolPathBuilder, helix_ring
 
 __all__ = ["swept_region", "join_levels", "LevelError", "PROOF_TOL_MM2", "CLEARED_ABOVE"]
 
@@ -51,6 +51,8 @@ PROOF_TOL_MM2 = 1e-3
 CLEARED_ABOVE = "cleared: levels above"
 _K = {k: i for i, k in enumerate(KINDS)}
 _CHUNK = 200
+#: mm: chord error of the re-entry helix's polyline (the program's 4th decimal x 100)
+HELIX_CHORD_MM = 0.01
 _EPS = 1e-9
 
 
@@ -94,7 +96,9 @@ def _move_sweep(path, k, r):
 def _helix_from_top(path, k, top_z, r):
     """Moves (list of (xyz, kind, arc, centre, feed, tag)) replacing the unproven vertical descent
     ``k`` of ``path`` (ending on the level top above a helix): a plunge to ``top_z`` (air) and a helix
-    about the following helix's centre, at its pitch, down to the descent's end."""
+    about the following helix's centre, in its sense and at no more than its pitch, down to the
+    descent's end, by the package's one helix generator (:meth:`ToolPathBuilder.helix` on a
+    :func:`helix_ring` of chord error <= ``HELIX_CHORD_MM``)."""
     nxt = k + 1
     if nxt >= len(path) or path.arc[nxt] == 0:
         return None
@@ -114,12 +118,20 @@ def _helix_from_top(path, k, top_z, r):
         return None
     turns = max(1, math.ceil((top_z - end[2]) / (drop * 2 * math.pi / sweep) - 1e-9))
     feed = float(path.feed[nxt])
-    out = [((end[0], end[1], top_z), "plunge", 0, (np.nan, np.nan), feed, "entry: down to the stock top (air)")]
-    for t in range(1, turns + 1):
-        z = top_z - (top_z - end[2]) * t / turns
-        out.append(((end[0], end[1], z), "helix", int(path.arc[nxt]), (c[0], c[1]), feed,
-                    "entry: helix through the levels above"))
-    return out
+    n = max(16, math.ceil(math.pi / math.acos(max(1.0 - HELIX_CHORD_MM / rad, -1.0))))
+    ring = helix_ring((0.0, 0.0), rad, n)                       # counter-clockwise from angle 0
+    if not ccw:
+        ring[:, 1] = -ring[:, 1]
+    rot = np.array([[math.cos(a0), -math.sin(a0)], [math.sin(a0), math.cos(a0)]])
+    ring = ring @ rot.T + c
+    ring[0] = ring[-1] = end[:2]                                # exactly where the tool is
+    b = ToolPathBuilder()
+    b.add(np.array([[end[0], end[1], top_z]]), "plunge", feed, "entry: down to the stock top (air)")
+    b.helix(np.vstack([ring] + [ring[1:]] * (turns - 1)), top_z, float(end[2]), feed,
+            tag="entry: helix through the levels above", equal_steps=True)
+    h = b.build()
+    return [(tuple(h.xyz[m]), KINDS[h.kind[m]], int(h.arc[m]), tuple(h.arc_center[m]), float(h.feed[m]), h.tag[m])
+            for m in range(len(h))]
 
 
 def _rebuild(path, replace):
