@@ -4,8 +4,9 @@ without a start hole, with or without an island, as a program that passes the st
 (0 plunges, 0 rapids into material) and, when LinuxCNC is installed, ``rs274``.
 
 The matrix: strategy x depth in {a_p, 2 a_p, 2.5 a_p} x start hole yes/no x island yes/no (the two
-slowest planners without the 2 a_p cells, see :data:`SLOW`), on a small rectangular pocket (so that it runs in the test budget; the 60 x 40 mm, D8 case of the issue
-is checked by ``python -m cnclab plan`` in ``test_issue_pocket_through_the_cli``)."""
+slowest planners without the 2 a_p cells, see :data:`SLOW`), on a small rectangular pocket (so that
+it runs in the test budget; the 60 x 40 mm, D8 case of the issue is checked by ``python -m cnclab
+plan`` in ``test_issue_pocket_through_the_cli``)."""
 import dataclasses
 import json
 
