@@ -96,7 +96,25 @@ Package layout (one role per module)
 -----------------------------------
 ``stock`` pixel-stock kernels; ``control`` the engagement controller (heading search, guard, a
 pass); ``links`` links at depth and the rapid proofs; ``grid`` the per-level state (stocks, masks,
-free field); ``planner`` entries, passes, links, remnants and the finish on each level.
+free field); ``entries`` the entry choice, helix and bans; ``finish`` the wall-following laps;
+``params`` :class:`AdaptiveParams` (every tuning constant with its unit and reason); ``planner`` the
+level planner object (``_Level``) whose ``run`` is the loop below, and :func:`adaptive_clearing`.
+
+The loop of one level (``_Level.run``)::
+
+    enter()                                   # helix at the widest place with material in reach
+    for each round (0, then up to clean_rounds clean-up rounds, each kept only if it pays):
+        repeat:
+            link_to(next border cell)         # Dijkstra through free cells, chords as G0 where proven
+            if no border cell is reachable:
+                sweep_remnant() or finish_if_done() and enter() again, or stop
+            else:
+                clearing_pass()               # steps at theta until the wall, air or the guard ends it
+        finish_part(each part)                # wall-following laps at theta + finish margin
+    retract()
+
+Levels (a pocket deeper than ``a_p``) are planned one by one by
+:func:`cnclab.toolpath.planners.plan` and joined by :func:`cnclab.toolpath.levels.join_levels`.
 
 >>> import numpy as np
 >>> from shapely.geometry import box

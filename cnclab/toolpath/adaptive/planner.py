@@ -9,22 +9,16 @@ import time
 
 import numpy as np
 import shapely
-from shapely.geometry import LineString, MultiPolygon, Point, Polygon
+from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
 from ..path import Tool, ToolPath
-
-from .control import GUARD_LEVEL, replay
-from .params import AdaptiveParams
+from . import entries, finish
+from .entries import PlanningError
 from .grid import Grid
+from .params import AdaptiveParams
 from .links import rapid_legs, shortcut
-from .stock import capsule_free, component_discs, densify, label8, resample, segment_inside
-
-
-class PlanningError(ValueError):
-    """The pocket cannot be machined safely with this tool (the message says why)."""
-
-
+from .stock import capsule_free, component_discs, label8, resample, segment_inside
 
 
 class _Level:
@@ -61,79 +55,8 @@ class _Level:
             self.cur = None
 
     def enter(self, banned=None):
-        """Entry where the tool-centre region still has material within reach: True; False if
-        none; None when the only place left is too narrow for a helix (it is then banned)."""
-        D, Ac = self.g.free_field()
-        need = Ac & (D < self.r)       # tool disk touches material there
-        if banned is not None:
-            need &= ~banned
-        if not need.any():
-            return False
-        # the farthest point from the tool-centre region's boundary among those cells
-        dA = self.g.dA
-        j, i = np.unravel_index(np.argmax(np.where(need, dA, -1)), need.shape)
-        c = np.array(self.g.centre(j, i))
-        k_part = next((k for k, p in enumerate(self.allowed_parts) if p.buffer(1e-6).contains(Point(*c))), None)
-        comp = [] if k_part is None else [self.allowed_parts[k_part]]
-        rho_max = comp[0].exterior.distance(Point(*c)) if comp else dA[j, i]
-        if comp:
-            rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
-        rho = max(min(self.prm.helix_radius_frac * self.r, 0.9 * rho_max - self.h), 0.0)
-        # the smallest helix accepted here: helix_min_frac r, or half what the widest place of this
-        # part of the tool-centre region allows (a part narrow everywhere is entered by a small
-        # helix; the entry point is a coarse cell centre, up to hc/sqrt(2) off the widest place)
-        rho_min = 0.02
-        if comp and banned is not None:
-            if k_part not in self.part_wide:
-                self.part_wide[k_part] = shapely.maximum_inscribed_circle(comp[0], 0.1 * self.h).length
-            wide = self.part_wide[k_part]
-            rho_min = max(0.02, min(self.prm.helix_min_frac * self.r, 0.5 * (0.9 * wide - self.h)))
-        # a place entered before (its passes made no room) or too narrow for a helix is banned: no
-        # endless re-entry at one spot
-        again = (int(j), int(i)) in self.entered
-        self.entered.add((int(j), int(i)))
-        if (rho < rho_min or again) and banned is not None and not (self.hole is not None and self.lev == 0 and self.stats["entries"] == 0):
-            rad = int(math.ceil(2 * self.r / self.g.hc))
-            banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
-            return None
-        self.retract()
-        if self.hole is not None and self.lev == 0 and self.stats["entries"] == 0:
-            c = np.array(self.hole[:2])
-            rho = 0.0
-            self.add((c[0], c[1], self.clearance_z), "rapid")
-            self.add((c[0], c[1], self.z), "plunge", self.feed_mm_min, "cleared: pre-drilled start hole")
-        elif rho < rho_min:
-            raise PlanningError(f"{self.source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
-                                "the region is too narrow for the tool")
-        else:
-            p0 = (c[0] + rho, c[1])
-            self.add((p0[0], p0[1], self.clearance_z), "rapid")
-            # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
-            # the previous level cleared (tagged: the program writer allows a rapid there only so)
-            self.add((p0[0], p0[1], self.z_prev + 0.5), "rapid", np.nan, "cleared: above the level")
-            self.add((p0[0], p0[1], self.z_prev), "plunge", self.feed_mm_min, "air")
-            drop = 2 * math.pi * rho * math.tan(math.radians(self.helix_angle_deg))
-            # the helix ends where it reaches z (the last turn partial); at least one full turn, so
-            # that the floor circle after it cuts in the helix's own groove
-            turns = max((self.z_prev - self.z) / drop, 1.0)
-            drop = (self.z_prev - self.z) / turns
-            zz = self.z_prev
-            for _ in range(int(math.floor(turns + 1e-9))):
-                zz -= drop
-                self.add((p0[0], p0[1], max(zz, self.z)), "helix", self.feed_mm_min, "entry", 3, (c[0], c[1]))
-            phi = 2 * math.pi * (turns - math.floor(turns + 1e-9))
-            pe = (c[0] + rho * math.cos(phi), c[1] + rho * math.sin(phi)) if phi > 1e-6 else p0
-            if phi > 1e-6:
-                self.add((pe[0], pe[1], self.z), "helix", self.feed_mm_min, "entry", 3, (c[0], c[1]))
-            self.add((pe[0], pe[1], self.z), "cut", self.feed_mm_min, "entry-floor", 3, (c[0], c[1]))
-            circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
-            self.g.cut_path(circ)
-            self.stats["entries"] += 1
-            self.cur = (float(pe[0]), float(pe[1]))
-            return True
-        self.stats["entries"] += 1
-        self.cur = (c[0] + rho, c[1])
-        return True
+        """An entry (:func:`.entries.enter`): True; False if none is left; None when banned."""
+        return entries.enter(self, banned)
 
     def clearing_pass(self, heading, a_stop):
         """A clearing pass from the tool's point (:meth:`Grid.run_pass`) with ``a_stop`` mm of air."""
@@ -196,94 +119,8 @@ class _Level:
         return route[-1]
 
     def finish_part(self, part):
-        """The wall-following finish laps along every ring of one part of the tool-centre region."""
-        # the tool-centre limit (as the evaluator and Job.allowed() draw it: 64 segments a quarter circle),
-        # 1 um inside it: the chords of its arcs never put the tool centre past the true limit
-        wall = shapely.boundary(self.allowed.buffer(-1e-3))
-        for ring in [part.exterior, *part.interiors]:
-            R = np.asarray(ring.coords)[:-1]
-            if len(R) < 3:
-                continue
-            Rs = resample(np.vstack([R, R[:1]]), self.ds)[:-1]
-            for lap in range(self.finish_laps):   # repeated while the corner wedges are peeled
-                D, Ac = self.g.free_field()
-                jj = np.clip(((Rs[:, 1] - self.g.y0) // self.g.hc).astype(int), 0, D.shape[0] - 1)
-                ii = np.clip(((Rs[:, 0] - self.g.x0) // self.g.hc).astype(int), 0, D.shape[1] - 1)
-                dm = D[jj, ii]
-                if dm.min() > (self.r + self.g.hc if lap == 0 else self.r - max(0.3, 0.25 * self.a_e)):
-                    break                # nothing (more) to take along this ring
-                # start where the ring is free of material (the farthest from it, the field being
-                # capped: any point at the cap), the nearest such point to the tool
-                free_k = np.flatnonzero(dm >= min(dm.max(), self.r_free + self.g.hc))
-                if self.cur is not None and len(free_k) > 1:
-                    k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - self.cur[0], Rs[free_k, 1] - self.cur[1]))])
-                else:
-                    k0 = int(free_k[0])
-                Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
-                if self.cur is not None:
-                    e = self.link_to(self.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
-                else:
-                    e = None
-                if e is None:
-                    self.retract()
-                    self.add((Rl[0, 0], Rl[0, 1], self.clearance_z), "rapid")
-                    if dm[k0] >= self.r:          # free of material under the tool: feed down into cleared area
-                        self.add((Rl[0, 0], Rl[0, 1], self.z), "plunge", self.feed_mm_min, "cleared")
-                    else:
-                        ins = shapely.maximum_inscribed_circle(part)
-                        raise PlanningError(
-                            f"{self.source}: a part of the tool-centre region (area {part.area:.2f} mm^2, inscribed "
-                            f"radius {ins.length:.2f} mm near ({ins.coords[0][0]:.2f}, {ins.coords[0][1]:.2f})) "
-                            "is too narrow to be cleared under engagement control: no cleared place to start "
-                            "its finishing pass (the pocket is too narrow for the tool)")
-                elif math.hypot(Rl[0, 0] - self.cur[0], Rl[0, 1] - self.cur[1]) > 1e-9:
-                    self.add((Rl[0, 0], Rl[0, 1], self.z), "link", self.link_feed_mm_min)
-                    self.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
-                # the wall-following pass: the same engagement control, sliding along the wall;
-                # it ends 2 r past the last ring point that still has material within reach
-                sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
-                dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
-                mat = np.flatnonzero(dml < self.r + self.g.hc)
-                L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * self.r)
-                hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
-                snap = self.g.snapshot()
-                M_before = snap[0]
-                P, _, _, E, _ = self.g.run_pass(Rl[0, 0], Rl[0, 1], hd, self.target_finish, self.ds, self.lag,
-                                           int(2 * L_ring / self.ds) + 100, self.n_samp, 1e18, self.turn,
-                                           min(self.turn, self.ds / self.turn_radius), 1.02 * L_ring + self.ds, self.guard_finish)
-                # points the grid kept within 2 h of the wall go onto the exact wall
-                # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
-                pp = shapely.points(P)
-                near = shapely.distance(wall, pp) < 2.0 * self.h
-                if near.any():
-                    # the nearest wall point (not locate + interpolate along the multi-ring wall: a
-                    # point nearest to a ring's closing vertex would land on the next ring's start)
-                    snapped = shapely.get_coordinates(shapely.shortest_line(pp[near], wall))[1::2]
-                    Q = P.copy()
-                    Q[near] = snapped
-                    # the snap moves points up to 2 h outwards: near a concave corner that can
-                    # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
-                    # on the stock as it was before this lap, a snapped point whose engagement
-                    # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
-                    # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
-                    # into a corner)
-                    for _ in range(6):       # a reverted point changes the stock the later ones meet
-                        Qd, seg = densify(Q, 1.5 * self.ds)
-                        Es, Eg = replay(M_before.copy(), self.g.x0, self.g.y0, self.h, self.r, Qd, self.lag, self.n_samp, GUARD_LEVEL)
-                        bad = np.zeros(len(Q), bool)
-                        bad[seg[(Es > self.cap_finish) | (Eg > self.cap_finish)]] = True
-                        bad[:-1] |= bad[1:]          # a chord over the bound: both its ends
-                        over = near & bad & np.any(Q != P, axis=1)
-                        if not over.any():
-                            break
-                        Q[over] = P[over]
-                    self.g.restore(snap)
-                    E = self.g.replay(Q, self.lag, self.n_samp)
-                    P = Q
-                ai = E[1:] < self.air_rad
-                self.add_line_moves(P[1:], self.z, np.where(ai, "link", "cut").astype(object),
-                               np.where(ai, self.link_feed_mm_min, self.feed_mm_min), "finish")
-                self.cur = (float(P[-1, 0]), float(P[-1, 1]))
+        """The wall-following finish laps of one part (:func:`.finish.finish_part`)."""
+        return finish.finish_part(self, part)
 
     def sweep_remnant(self):
         """A free-standing remnant of material (a pillar the passes around it could not take: every

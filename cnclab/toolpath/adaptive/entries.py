@@ -1,0 +1,95 @@
+"""Entries (see the package docstring, "Entries"): where the next entry goes (the point of the
+tool-centre region farthest from its boundary among the cells whose tool disc still meets material),
+the helix radius allowed there and the bans of places too narrow or entered before, the pre-drilled
+start hole, and the helix itself. Functions of the level planner ``lv``
+(:class:`cnclab.toolpath.adaptive.planner._Level`). Units: mm.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from shapely.geometry import Point, Polygon
+
+__all__ = ["PlanningError", "enter"]
+
+
+class PlanningError(ValueError):
+    """The pocket cannot be machined safely with this tool (the message says why)."""
+
+
+def enter(lv, banned=None):
+    """Entry where the tool-centre region still has material within reach: True; False if
+    none; None when the only place left is too narrow for a helix (it is then banned)."""
+    D, Ac = lv.g.free_field()
+    need = Ac & (D < lv.r)       # tool disk touches material there
+    if banned is not None:
+        need &= ~banned
+    if not need.any():
+        return False
+    # the farthest point from the tool-centre region's boundary among those cells
+    dA = lv.g.dA
+    j, i = np.unravel_index(np.argmax(np.where(need, dA, -1)), need.shape)
+    c = np.array(lv.g.centre(j, i))
+    k_part = next((k for k, p in enumerate(lv.allowed_parts) if p.buffer(1e-6).contains(Point(*c))), None)
+    comp = [] if k_part is None else [lv.allowed_parts[k_part]]
+    rho_max = comp[0].exterior.distance(Point(*c)) if comp else dA[j, i]
+    if comp:
+        rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
+    rho = max(min(lv.prm.helix_radius_frac * lv.r, 0.9 * rho_max - lv.h), 0.0)
+    # the smallest helix accepted here: helix_min_frac r, or half what the widest place of this
+    # part of the tool-centre region allows (a part narrow everywhere is entered by a small
+    # helix; the entry point is a coarse cell centre, up to hc/sqrt(2) off the widest place)
+    rho_min = 0.02
+    if comp and banned is not None:
+        if k_part not in lv.part_wide:
+            lv.part_wide[k_part] = shapely.maximum_inscribed_circle(comp[0], 0.1 * lv.h).length
+        wide = lv.part_wide[k_part]
+        rho_min = max(0.02, min(lv.prm.helix_min_frac * lv.r, 0.5 * (0.9 * wide - lv.h)))
+    # a place entered before (its passes made no room) or too narrow for a helix is banned: no
+    # endless re-entry at one spot
+    again = (int(j), int(i)) in lv.entered
+    lv.entered.add((int(j), int(i)))
+    if (rho < rho_min or again) and banned is not None and not (lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0):
+        rad = int(math.ceil(2 * lv.r / lv.g.hc))
+        banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+        return None
+    lv.retract()
+    if lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0:
+        c = np.array(lv.hole[:2])
+        rho = 0.0
+        lv.add((c[0], c[1], lv.clearance_z), "rapid")
+        lv.add((c[0], c[1], lv.z), "plunge", lv.feed_mm_min, "cleared: pre-drilled start hole")
+    elif rho < rho_min:
+        raise PlanningError(f"{lv.source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
+                            "the region is too narrow for the tool")
+    else:
+        p0 = (c[0] + rho, c[1])
+        lv.add((p0[0], p0[1], lv.clearance_z), "rapid")
+        # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
+        # the previous level cleared (tagged: the program writer allows a rapid there only so)
+        lv.add((p0[0], p0[1], lv.z_prev + 0.5), "rapid", np.nan, "cleared: above the level")
+        lv.add((p0[0], p0[1], lv.z_prev), "plunge", lv.feed_mm_min, "air")
+        drop = 2 * math.pi * rho * math.tan(math.radians(lv.helix_angle_deg))
+        # the helix ends where it reaches z (the last turn partial); at least one full turn, so
+        # that the floor circle after it cuts in the helix's own groove
+        turns = max((lv.z_prev - lv.z) / drop, 1.0)
+        drop = (lv.z_prev - lv.z) / turns
+        zz = lv.z_prev
+        for _ in range(int(math.floor(turns + 1e-9))):
+            zz -= drop
+            lv.add((p0[0], p0[1], max(zz, lv.z)), "helix", lv.feed_mm_min, "entry", 3, (c[0], c[1]))
+        phi = 2 * math.pi * (turns - math.floor(turns + 1e-9))
+        pe = (c[0] + rho * math.cos(phi), c[1] + rho * math.sin(phi)) if phi > 1e-6 else p0
+        if phi > 1e-6:
+            lv.add((pe[0], pe[1], lv.z), "helix", lv.feed_mm_min, "entry", 3, (c[0], c[1]))
+        lv.add((pe[0], pe[1], lv.z), "cut", lv.feed_mm_min, "entry-floor", 3, (c[0], c[1]))
+        circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
+        lv.g.cut_path(circ)
+        lv.stats["entries"] += 1
+        lv.cur = (float(pe[0]), float(pe[1]))
+        return True
+    lv.stats["entries"] += 1
+    lv.cur = (c[0] + rho, c[1])
+    return True

@@ -1,0 +1,109 @@
+"""The wall-following finish (see the package docstring, "Finish"): laps along every ring of one part
+of the tool-centre region under the engagement control at theta + finish_margin_deg, started where
+the ring is free of material, points near the wall snapped onto it and replayed on the stock (a snap
+that would raise the engagement beyond theta + finish_snap_deg keeps its planned place). A function
+of the level planner ``lv`` (:class:`cnclab.toolpath.adaptive.planner._Level`). Units: mm, rad.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+
+from .control import GUARD_LEVEL, replay
+from .entries import PlanningError
+from .stock import densify, resample
+
+__all__ = ["finish_part"]
+
+
+def finish_part(lv, part):
+    """The wall-following finish laps along every ring of one part of the tool-centre region."""
+    # the tool-centre limit (as the evaluator and Job.allowed() draw it: 64 segments a quarter circle),
+    # 1 um inside it: the chords of its arcs never put the tool centre past the true limit
+    wall = shapely.boundary(lv.allowed.buffer(-1e-3))
+    for ring in [part.exterior, *part.interiors]:
+        R = np.asarray(ring.coords)[:-1]
+        if len(R) < 3:
+            continue
+        Rs = resample(np.vstack([R, R[:1]]), lv.ds)[:-1]
+        for lap in range(lv.finish_laps):   # repeated while the corner wedges are peeled
+            D, Ac = lv.g.free_field()
+            jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
+            ii = np.clip(((Rs[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
+            dm = D[jj, ii]
+            if dm.min() > (lv.r + lv.g.hc if lap == 0 else lv.r - max(0.3, 0.25 * lv.a_e)):
+                break                # nothing (more) to take along this ring
+            # start where the ring is free of material (the farthest from it, the field being
+            # capped: any point at the cap), the nearest such point to the tool
+            free_k = np.flatnonzero(dm >= min(dm.max(), lv.r_free + lv.g.hc))
+            if lv.cur is not None and len(free_k) > 1:
+                k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - lv.cur[0], Rs[free_k, 1] - lv.cur[1]))])
+            else:
+                k0 = int(free_k[0])
+            Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
+            if lv.cur is not None:
+                e = lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
+            else:
+                e = None
+            if e is None:
+                lv.retract()
+                lv.add((Rl[0, 0], Rl[0, 1], lv.clearance_z), "rapid")
+                if dm[k0] >= lv.r:          # free of material under the tool: feed down into cleared area
+                    lv.add((Rl[0, 0], Rl[0, 1], lv.z), "plunge", lv.feed_mm_min, "cleared")
+                else:
+                    ins = shapely.maximum_inscribed_circle(part)
+                    raise PlanningError(
+                        f"{lv.source}: a part of the tool-centre region (area {part.area:.2f} mm^2, inscribed "
+                        f"radius {ins.length:.2f} mm near ({ins.coords[0][0]:.2f}, {ins.coords[0][1]:.2f})) "
+                        "is too narrow to be cleared under engagement control: no cleared place to start "
+                        "its finishing pass (the pocket is too narrow for the tool)")
+            elif math.hypot(Rl[0, 0] - lv.cur[0], Rl[0, 1] - lv.cur[1]) > 1e-9:
+                lv.add((Rl[0, 0], Rl[0, 1], lv.z), "link", lv.link_feed_mm_min)
+                lv.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
+            # the wall-following pass: the same engagement control, sliding along the wall;
+            # it ends 2 r past the last ring point that still has material within reach
+            sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
+            dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
+            mat = np.flatnonzero(dml < lv.r + lv.g.hc)
+            L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * lv.r)
+            hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
+            snap = lv.g.snapshot()
+            M_before = snap[0]
+            P, _, _, E, _ = lv.g.run_pass(Rl[0, 0], Rl[0, 1], hd, lv.target_finish, lv.ds, lv.lag,
+                                       int(2 * L_ring / lv.ds) + 100, lv.n_samp, 1e18, lv.turn,
+                                       min(lv.turn, lv.ds / lv.turn_radius), 1.02 * L_ring + lv.ds, lv.guard_finish)
+            # points the grid kept within 2 h of the wall go onto the exact wall
+            # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
+            pp = shapely.points(P)
+            near = shapely.distance(wall, pp) < 2.0 * lv.h
+            if near.any():
+                # the nearest wall point (not locate + interpolate along the multi-ring wall: a
+                # point nearest to a ring's closing vertex would land on the next ring's start)
+                snapped = shapely.get_coordinates(shapely.shortest_line(pp[near], wall))[1::2]
+                Q = P.copy()
+                Q[near] = snapped
+                # the snap moves points up to 2 h outwards: near a concave corner that can
+                # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
+                # on the stock as it was before this lap, a snapped point whose engagement
+                # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
+                # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
+                # into a corner)
+                for _ in range(6):       # a reverted point changes the stock the later ones meet
+                    Qd, seg = densify(Q, 1.5 * lv.ds)
+                    Es, Eg = replay(M_before.copy(), lv.g.x0, lv.g.y0, lv.h, lv.r, Qd, lv.lag, lv.n_samp, GUARD_LEVEL)
+                    bad = np.zeros(len(Q), bool)
+                    bad[seg[(Es > lv.cap_finish) | (Eg > lv.cap_finish)]] = True
+                    bad[:-1] |= bad[1:]          # a chord over the bound: both its ends
+                    over = near & bad & np.any(Q != P, axis=1)
+                    if not over.any():
+                        break
+                    Q[over] = P[over]
+                lv.g.restore(snap)
+                E = lv.g.replay(Q, lv.lag, lv.n_samp)
+                P = Q
+            ai = E[1:] < lv.air_rad
+            lv.add_line_moves(P[1:], lv.z, np.where(ai, "link", "cut").astype(object),
+                           np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min), "finish")
+            lv.cur = (float(P[-1, 0]), float(P[-1, 1]))
