@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from cnclab.fileio import atomic_write
-from cnclab.nc.gcode import write_gcode
+from cnclab.nc.program import write_moves
 from cnclab.nc.spindle_control import (gcode_text, insert_spindle_records, read_inputs, spindle_schedule,
                                       to_gcode_moves)
 from cnclab.geometry.freeform_part import FreeformPart, freeform_part_mesh
@@ -90,7 +90,7 @@ def main(argv):
                  f"concurrent {t_read:.2f} s"))
     t0 = time.perf_counter()
     c0 = time.process_time()
-    old_text = write_gcode(to_gcode_moves(new), header="bench")
+    old_text = write_moves(to_gcode_moves(new), header="bench")
     t_old = time.perf_counter() - t0
     c_old = time.process_time() - c0
     assert old_text == (tmp / "out.ngc").read_text()

@@ -13,6 +13,7 @@ from shapely.geometry import box
 from cnclab.simulation import pixel
 from cnclab.toolpath import constant_mrr as cm
 from cnclab.nc import gcode
+from cnclab.nc.program import write_moves
 
 
 def _time(fn, repeat=3):
@@ -43,8 +44,8 @@ def main():
 
     pts = np.column_stack([np.linspace(0, 100, 20001), np.sin(np.linspace(0, 60, 20001))])
     moves = gcode.linear_moves(pts, feed=500, spindle=2000, z=-0.5)
-    text = gcode.write_gcode(moves)
-    t_w = _time(lambda: gcode.write_gcode(moves))
+    text = write_moves(moves)
+    t_w = _time(lambda: write_moves(moves))
     t_p = _time(lambda: gcode.parse_gcode(text))
     rows.append(("20k G1 moves: write vs parse", t_w, t_p))
 

@@ -9,6 +9,7 @@ from scipy.spatial import cKDTree
 from shapely.geometry import box
 
 from cnclab.nc import gcode
+from cnclab.nc.program import write_moves
 from cnclab.toolpath import ce_clearing as cc
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import Job
@@ -99,7 +100,7 @@ def test_straight_cut_evaluates_to_nominal():
 def test_gcode_round_trip():
     _, path, _ = _run("island")
     moves = path.to_moves()
-    text = gcode.write_gcode(moves, header="ce test", decimals=4)
+    text = write_moves(moves, header="ce test", decimals=4)
     back = gcode.parse_gcode(text)
     P = np.array([m.xyz for m in back])
     d, _ = cKDTree(path.xyz).query(P)

@@ -514,7 +514,8 @@ def test_bom_does_not_change_the_program():
 
 def test_circle_is_an_arc_through_to_gcode():
     """CIRCLE: arc length in the schedule, G3/G2 in the G-code, SPINDL/FEDRAT never inside the pair."""
-    from cnclab.nc.gcode import parse_gcode, write_gcode
+    from cnclab.nc.gcode import parse_gcode
+    from cnclab.nc.program import write_moves
     prog = apt.parse_apt(VALID_APT, "c.apt")
     cl = prog.cl_points()
     k = int(np.flatnonzero(cl.arc)[0])
@@ -530,7 +531,7 @@ def test_circle_is_an_arc_through_to_gcode():
     assert words[i + 1] == "GOTO" and words[i - 1] in ("SPINDL", "FEDRAT")
     back = apt.parse_apt(new.to_text(), "n.apt").cl_points()           # still a valid program
     assert np.count_nonzero(back.arc) == 1
-    moves = parse_gcode(write_gcode(sc.to_gcode_moves(new)), "x.ngc")
+    moves = parse_gcode(write_moves(sc.to_gcode_moves(new)), "x.ngc")
     arcs = [m for m in moves if m.motion in ("G2", "G3")]
     assert len(arcs) == 1 and arcs[0].motion == "G3" and np.isclose(arcs[0].i, -10) and np.isclose(arcs[0].j, 0)
     cw = apt.parse_apt(VALID_APT.replace("0.000, 0.000, 1.000, 10.000", "0.000, 0.000, -1.000, 10.000"), "c")

@@ -8,7 +8,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from cnclab.nc import gcode, rs274
-from cnclab.nc.gcode import GcodeError, Move, parse_gcode, program_time, read_gcode, read_toolpath, write_gcode
+from cnclab.nc.gcode import GcodeError, Move, parse_gcode, program_time, read_gcode, read_toolpath
+from cnclab.nc.program import write_moves
 from cnclab.toolpath.path import ToolPath
 
 FIX = Path(__file__).parent / "fixtures"
@@ -77,7 +78,7 @@ def test_handwritten_fixture_hand_computed_lengths():
 
 # ---------------------------------------------------------------- units, modes, arcs
 def _ij_program(moves):
-    return write_gcode(moves, decimals=6, feed_decimals=4)
+    return write_moves(moves, decimals=6, feed_decimals=4)
 
 
 @given(st.lists(st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-5, 0)), min_size=2, max_size=8))
@@ -200,7 +201,7 @@ def test_load_gcode_error_names_the_file(tmp_path):
 ])
 def test_writer_refuses_bad_numbers(mv, fragment):
     with pytest.raises(ValueError, match=fragment):
-        write_gcode([Move("G0", 0, 0, 0), mv])
+        write_moves([Move("G0", 0, 0, 0), mv])
 
 
 def test_writer_arc_check_uses_the_written_precision():
@@ -210,7 +211,7 @@ def test_writer_arc_check_uses_the_written_precision():
     a1 = 2.0
     mv = [Move("G0", r, 0, 0), Move("G3", r * math.cos(a1), r * math.sin(a1), 0, i=-r, j=0, feed=100)]
     for d in (2, 3, 4, 6):
-        back = parse_gcode(write_gcode(mv, decimals=d))
+        back = parse_gcode(write_moves(mv, decimals=d))
         assert back[-1].motion == "G3"
 
 

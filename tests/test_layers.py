@@ -44,7 +44,7 @@ LOCAL_IMPORT_ALLOWED = {
     # numba laziness: the compiled kernels (numba import + JIT) load only when the numba backend runs
     ("cnclab.simulation.dixel", "cnclab.simulation"): "numba laziness (_kernels)",
     ("cnclab.simulation.pixel", "cnclab.simulation"): "numba laziness (_kernels)",
-    ("cnclab.nc.gcode", "cnclab.nc.numfmt"): "numba laziness (compiled number formatter)",
+    ("cnclab.nc.program", "cnclab.nc.numfmt"): "numba laziness (compiled number formatter)",
     # plan-CLI start-up: the registry imports a non-default planner's module only when it is chosen
     ("cnclab.toolpath.planners", "cnclab.toolpath"): "planner registry: import the chosen strategy's module only",
     # matplotlib laziness: runtime is imported by every module; the plot style loads only in notebooks
@@ -184,7 +184,6 @@ _NJIT = "numba nopython kernel: arrays and scalars passed positionally (no datac
 BUDGET_ALLOWED = {
     ("params", "cnclab/analysis/mlp.py", "train_mlp"): (15, "the thesis' training settings as keywords; to become a TrainConfig"),
     ("module", "cnclab/nc/apt.py", ""): (940, "APT reader (bulk + careful parser) and writer: to split reader / writer"),
-    ("module", "cnclab/nc/gcode.py", ""): (805, "G-code reader and writer: the writer goes into nc/program.py (issue 27 item 4)"),
     ("lines", "cnclab/nc/gcode.py", "read_gcode"): (183, "the reader's one-pass word state machine: to split per word group"),
     ("params", "cnclab/nc/spindle_control.py", "spindle_schedule"): (17, "the post-processor's options mirror the CLI flags; to become one options object"),
     ("params", "cnclab/nc/spindle_control.py", "postprocess_files"): (16, "the post-processor's options mirror the CLI flags; to become one options object"),

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cnclab.nc import apt
-from cnclab.nc.gcode import write_gcode, write_gcode_linear
+from cnclab.nc.program import write_linear_moves, write_moves
 from cnclab.nc.numfmt import fixed, python_fixed, scaled_ints
 from cnclab.nc.spindle_control import gcode_text, insert_spindle_records, spindle_schedule, to_gcode_moves
 from cnclab.geometry.mesh import read_stl
@@ -57,10 +57,10 @@ def test_gcode_linear_matches_move_writer(seed):
              Move("G1", *p, feed=f, spindle=None if np.isnan(s) else s)
              for p, r, f, s in zip(xyz.tolist(), rapid, feed.tolist(), spindle.tolist())]
     for dec in (3, 4):
-        assert write_gcode_linear(xyz, rapid, feed, spindle, header="t\nu", decimals=dec) == \
-            write_gcode(moves, header="t\nu", decimals=dec)
+        assert write_linear_moves(xyz, rapid, feed, spindle, header="t\nu", decimals=dec) == \
+            write_moves(moves, header="t\nu", decimals=dec)
     with pytest.raises(ValueError, match="no feed"):
-        write_gcode_linear(xyz, np.zeros(len(xyz), bool), np.full(len(xyz), np.nan), spindle)
+        write_linear_moves(xyz, np.zeros(len(xyz), bool), np.full(len(xyz), np.nan), spindle)
 
 
 def test_postprocessed_program_gcode_identical():
@@ -70,4 +70,4 @@ def test_postprocessed_program_gcode_identical():
     s = spindle_schedule(mesh, cl, tool_diameter=10, a_p=0.3, v_c=63, f_z=0.125, teeth=2, feed_direction_deg=0)
     new, _ = insert_spindle_records(prog, cl, s)
     for p in (prog, new):
-        assert gcode_text(p, header="h") == write_gcode(to_gcode_moves(p), header="h")
+        assert gcode_text(p, header="h") == write_moves(to_gcode_moves(p), header="h")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import shapely
 
-from cnclab.nc.gcode import gcode_roundtrip_error
+from cnclab.nc.program import gcode_roundtrip_error
 from cnclab.toolpath import pocket as pk
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.works.jacso2021.studies import design_star

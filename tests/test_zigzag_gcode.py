@@ -6,7 +6,8 @@ import pytest
 from hypothesis import example, given, settings, strategies as st
 
 from cnclab.nc import gcode
-from cnclab.nc.gcode import GcodeError, Move, parse_gcode, path_lengths, write_gcode
+from cnclab.nc.gcode import GcodeError, Move, parse_gcode, path_lengths
+from cnclab.nc.program import write_moves
 from cnclab.nc.program import check_program
 
 
@@ -19,10 +20,10 @@ def _program():
 
 
 def test_round_trip_exact_and_modal():
-    text = write_gcode(_program(), header=["cnclab test", "second line"])
+    text = write_moves(_program(), header=["cnclab test", "second line"])
     moves = parse_gcode(text)
     assert len(moves) == 6
-    assert write_gcode(moves, header=["cnclab test", "second line"]) == text
+    assert write_moves(moves, header=["cnclab test", "second line"]) == text
     # modal: F500 written once, S2000 once, motion word G1 once for the two linear moves
     assert text.count("F500.0") == 1 and text.count("S2000") == 1
     assert moves[3].i == 0 and moves[3].j == -10 and moves[3].feed == 500
@@ -89,9 +90,9 @@ def test_move_validation():
 @example([(0.0, 0.0, 0.0005, "G0", 1.0)])     # a rounding tie: written as 0.001, np.round gives 0.0
 def test_round_trip_property(pts):
     moves = [Move(m, x, y, z, feed=None if m == "G0" else f) for x, y, z, m, f in pts]
-    text = write_gcode(moves, decimals=3)
+    text = write_moves(moves, decimals=3)
     again = parse_gcode(text)
-    assert write_gcode(again, decimals=3) == text
+    assert write_moves(again, decimals=3) == text
     # every parsed point is within half a unit of the last digit of an original point (the writer's
     # decimal formatting and np.round may break ties like 0.0005 differently, so compare distances)
     orig = np.array([mv.xyz for mv in moves], dtype=float)

@@ -1,4 +1,4 @@
-"""RS274/NGC (G-code) writer and parser for 3-axis milling programs.
+"""RS274/NGC (G-code) reader for 3-axis milling programs, and the program model the writer uses.
 
 A program is a list of :class:`Move` records. Conventions (fixed, stated in every written file):
 
@@ -10,11 +10,11 @@ A program is a list of :class:`Move` records. Conventions (fixed, stated in ever
   speed ``spindle`` [rpm] (``None`` = spindle off / not set). A ``G2``/``G3`` move with a Z change is
   a helix.
 
-Writer — :func:`write_gcode` (text; programs reach disk only through
-:func:`cnclab.nc.program.write_program`): modal words (motion, F, S, unchanged axes) are
-emitted only when they change; coordinates use fixed decimals (``decimals=4`` by default); the first
-motion always states X, Y and Z; ``S.. M3`` is written when a spindle speed first appears or changes,
-``M5`` when it goes to ``None``; the program ends with ``M5 M30``.
+Writer — none here: every program text is written by :mod:`cnclab.nc.program`
+(:func:`~cnclab.nc.program.write_program` for a planned :class:`ToolPath`,
+:func:`~cnclab.nc.program.write_moves` / :func:`~cnclab.nc.program.write_linear_moves` for a motion
+program given move by move, e.g. the spindle post-processor's); :data:`MAX_COORD_MM`,
+:data:`MAX_FEED_MM_MIN` and :data:`MAX_SPINDLE_RPM` bound the numbers it writes.
 
 Reader — :func:`read_gcode` (:class:`GcodeProgram`), :func:`parse_gcode` (its moves),
 :func:`load_gcode` (a file), :func:`read_toolpath` (a :class:`ToolPath`). It reads the RS274/NGC
@@ -39,7 +39,7 @@ subset real post-processors (FreeCAD's LinuxCNC and GRBL posts) and hand-written
 and helices exact) — the same model as :meth:`ToolPath.time_s` and rs274's canonical totals
 (:mod:`cnclab.nc.rs274`).
 
-Round trip: ``write_gcode(parse_gcode(write_gcode(m)))`` equals ``write_gcode(m)`` exactly.
+Round trip: ``write_moves(parse_gcode(write_moves(m)))`` equals ``write_moves(m)`` exactly.
 
 Helpers: :func:`sample_move` (a move → points; arcs by :func:`cnclab.toolpath.path.sample_arc`),
 :func:`to_polyline` (a whole program → points with a rapid/feed flag), :func:`path_lengths` (feed vs
@@ -48,7 +48,8 @@ rapid length, arcs exact), :func:`linear_moves` (polyline → ``G1`` moves).
 >>> moves = [Move("G0", 0, 0, 10), Move("G1", 0, 0, 0, feed=500, spindle=2000),
 ...          Move("G1", 10, 0, 0, feed=500, spindle=2000),
 ...          Move("G3", 10, 10, 0, i=0, j=5, feed=500, spindle=2000)]
->>> text = write_gcode(moves, header="demo", decimals=3)
+>>> from cnclab.nc.program import write_moves
+>>> text = write_moves(moves, header="demo", decimals=3)
 >>> print(text)   # doctest: +NORMALIZE_WHITESPACE
 %
 (demo)
@@ -63,7 +64,7 @@ M30
 %
 >>> parse_gcode(text)[3]
 Move(motion='G3', x=10.0, y=10.0, z=0.0, i=0.0, j=5.0, feed=500.0, spindle=2000.0)
->>> write_gcode(parse_gcode(text), header="demo", decimals=3) == text
+>>> write_moves(parse_gcode(text), header="demo", decimals=3) == text
 True
 """
 from __future__ import annotations
@@ -72,25 +73,19 @@ import dataclasses
 import math
 import re
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Sequence
 
 import numpy as np
 
 from ..toolpath.path import Move, Tool, ToolPath, arc_geometry, sample_arc
 
-__all__ = ["Move", "GcodeError", "GcodeProgram", "write_gcode", "write_gcode_linear", "read_gcode", "parse_gcode",
+__all__ = ["Move", "GcodeError", "GcodeProgram", "read_gcode", "parse_gcode",
            "load_gcode", "read_program_text", "read_toolpath", "program_time", "sample_move", "to_polyline", "path_lengths",
-           "linear_moves", "gcode_roundtrip_error", "MM_PER_INCH"]
+           "linear_moves", "MM_PER_INCH",
+           "MAX_COORD_MM", "MAX_FEED_MM_MIN", "MAX_SPINDLE_RPM"]
 
 class GcodeError(ValueError):
     """Malformed G-code; the message starts with ``source:line``."""
-
-
-def _fmt(v: float, decimals: int) -> str:
-    s = f"{v:.{decimals}f}"
-    if s.startswith("-") and float(s) == 0.0:
-        s = s[1:]
-    return s
 
 
 #: bounds of written numbers: coordinates [mm], feeds [mm/min], spindle speeds [rpm]. A value beyond
@@ -98,138 +93,6 @@ def _fmt(v: float, decimals: int) -> str:
 MAX_COORD_MM = 1.0e4
 MAX_FEED_MM_MIN = 1.0e6
 MAX_SPINDLE_RPM = 1.0e6
-
-
-def _check_value(k: int, word: str, v, bound: float, positive: bool = False) -> float:
-    if v is None or not math.isfinite(float(v)):
-        raise ValueError(f"move {k}: word {word} must be a finite number, got {word}{v!r}")
-    v = float(v)
-    if abs(v) > bound or (positive and v <= 0):
-        rng = f"(0, {bound:g}]" if positive else f"[-{bound:g}, {bound:g}]"
-        raise ValueError(f"move {k}: word {word}{v:g} out of range {rng}")
-    return v
-
-
-def write_gcode(moves: Iterable[Move], header: str | Sequence[str] = "", decimals: int = 4,
-                feed_decimals: int = 1, comments: Sequence[str] | None = None,
-                start_block: Sequence[str] = ("G21 G90 G17 G94",), end_block: Sequence[str] = ("M30",),
-                after_spindle_on: Sequence[str] = (), before_spindle_off: Sequence[str] = (),
-                percent: bool = True) -> str:
-    """RS274/NGC text of ``moves`` (see module docstring for the conventions).
-
-    ``header``: comment text (a string with newlines or a list of lines), written as ``( ... )``;
-    ``decimals``: digits after the point for X Y Z I J [mm]; ``feed_decimals`` for F [mm/min] and S
-    [rpm]; ``comments``: optional text per move, appended to its block as ``( ... )``;
-    ``start_block``/``end_block``: lines written before the first/after the last move (``M5`` is
-    written before the end block whenever the spindle is on); ``after_spindle_on`` lines follow every
-    ``S.. M3`` that starts the spindle, ``before_spindle_off`` lines precede every ``M5`` (coolant
-    M8/M9); ``percent``: the ``%`` first and last lines (False for controllers that do not read them).
-
-    Refuses (``ValueError`` naming the move index and word) a non-finite or out-of-range number
-    (:data:`MAX_COORD_MM`, :data:`MAX_FEED_MM_MIN`, :data:`MAX_SPINDLE_RPM`) and an arc whose start and
-    end radii, computed from the *written* numbers, differ by more than 2·10^-decimals mm (then the
-    file would not describe the arc the path means; a reader would refuse or distort it).
-    """
-    if not isinstance(decimals, int) or not 0 <= decimals <= 8:
-        raise ValueError(f"decimals must be an int in [0, 8], got {decimals!r}")
-    lines = ["%"] if percent else []
-    hdr = header.splitlines() if isinstance(header, str) else list(header)
-    for h in hdr:
-        if "(" in h or ")" in h:
-            raise ValueError(f"header lines cannot contain parentheses, got {h!r}")
-        lines.append(f"({h})")
-    lines += list(start_block)
-    cur = {"X": None, "Y": None, "Z": None}
-    motion = feed = spindle = None
-    arc_tol = 2.0 * 10.0 ** -decimals
-    for k, mv in enumerate(moves):
-        if not isinstance(mv, Move):
-            raise ValueError(f"moves[{k}] must be a Move, got {type(mv).__name__}")
-        for ax, v in (("X", mv.x), ("Y", mv.y), ("Z", mv.z)):
-            _check_value(k, ax, v, MAX_COORD_MM)
-        if mv.motion != "G0":
-            _check_value(k, "F", mv.feed, MAX_FEED_MM_MIN, positive=True)
-        if mv.spindle is not None:
-            _check_value(k, "S", mv.spindle, MAX_SPINDLE_RPM)
-        start_w = dict(cur)
-        axes = [(ax, _fmt(v, decimals)) for ax, v in (("X", mv.x), ("Y", mv.y), ("Z", mv.z))]
-        axes = [(ax, s) for ax, s in axes if s != cur[ax]]
-        if not axes and mv.motion in ("G0", "G1"):
-            continue  # zero-length move after rounding: nothing to say, modal state untouched
-        sp = None if mv.spindle is None else _fmt(mv.spindle, 0)
-        if sp != spindle:   # spindle off (coolant off first), on (coolant after) or a new speed
-            lines += list(before_spindle_off) + ["M5"] if sp is None else [f"S{sp} M3"] + (
-                list(after_spindle_on) if spindle is None else [])
-            spindle = sp
-        words = []
-        if mv.motion != motion or mv.motion in ("G2", "G3"):
-            words.append(mv.motion)
-            motion = mv.motion
-        for ax, s in axes:
-            words.append(ax + s)
-            cur[ax] = s
-        if mv.motion in ("G2", "G3"):
-            iw, jw = _fmt(_check_value(k, "I", mv.i, MAX_COORD_MM), decimals), \
-                _fmt(_check_value(k, "J", mv.j, MAX_COORD_MM), decimals)
-            if start_w["X"] is None or start_w["Y"] is None:
-                raise ValueError(f"move {k}: word {mv.motion}: an arc cannot be the first move (start unknown)")
-            sx, sy = float(start_w["X"]), float(start_w["Y"])
-            r0 = math.hypot(float(iw), float(jw))
-            r1 = math.hypot(float(cur["X"]) - sx - float(iw), float(cur["Y"]) - sy - float(jw))
-            if r0 == 0 or abs(r0 - r1) > arc_tol:
-                raise ValueError(f"move {k}: word {mv.motion}: written arc start radius {r0:.6g} and end radius "
-                                 f"{r1:.6g} mm differ by more than {arc_tol:g} mm (2 units of the last "
-                                 "written digit)")
-            words += ["I" + iw, "J" + jw]
-        if mv.motion != "G0":
-            f = _fmt(mv.feed, feed_decimals)
-            if f != feed:
-                words.append("F" + f)
-                feed = f
-        line = " ".join(words)
-        if comments is not None and comments[k]:
-            c = str(comments[k])
-            if "(" in c or ")" in c:
-                raise ValueError(f"move {k}: comment cannot contain parentheses, got {c!r}")
-            line += f" ({c})"
-        lines.append(line)
-    if spindle is not None:
-        lines += list(before_spindle_off) + ["M5"]
-    lines += list(end_block) + (["%"] if percent else [])
-    return "\n".join(lines) + "\n"
-
-
-def write_gcode_linear(xyz, rapid, feed, spindle, header: str | Sequence[str] = "", decimals: int = 4,
-                       feed_decimals: int = 1) -> str:
-    """:func:`write_gcode` of linear moves given as arrays, byte-identical and ~50x faster.
-
-    ``xyz`` (n, 3) end points [mm]; ``rapid`` (n,) bool (G0 vs G1); ``feed`` (n,) [mm/min] (NaN
-    allowed for G0 only); ``spindle`` (n,) [rpm], NaN = off. Numbers are formatted exactly as
-    ``f"{v:.{d}f}"`` by :mod:`cnclab.nc.numfmt`.
-    """
-    from .numfmt import gcode_linear_body, scaled_ints
-
-    if not isinstance(decimals, int) or not 0 <= decimals <= 8:
-        raise ValueError(f"decimals must be an int in [0, 8], got {decimals!r}")
-    xyz = np.asarray(xyz, float).reshape(-1, 3)
-    rapid = np.asarray(rapid, bool).reshape(-1)
-    feed = np.asarray(feed, float).reshape(-1)
-    spindle = np.asarray(spindle, float).reshape(-1)
-    if not (len(rapid) == len(feed) == len(spindle) == len(xyz)):
-        raise ValueError("xyz, rapid, feed and spindle must have the same length")
-    if np.isnan(feed[~rapid]).any():
-        raise ValueError("write_gcode_linear: a G1 move has no feed")
-    has_s = ~np.isnan(spindle)
-    body, on = gcode_linear_body(scaled_ints(xyz[:, 0], decimals), scaled_ints(xyz[:, 1], decimals),
-                                 scaled_ints(xyz[:, 2], decimals), rapid,
-                                 scaled_ints(np.where(rapid, 0.0, feed), feed_decimals),
-                                 scaled_ints(np.where(has_s, spindle, 0.0), 0), has_s, decimals, feed_decimals)
-    hdr = header.splitlines() if isinstance(header, str) else list(header)
-    for h in hdr:
-        if "(" in h or ")" in h:
-            raise ValueError(f"header lines cannot contain parentheses, got {h!r}")
-    head = "\n".join(["%", *(f"({h})" for h in hdr), "G21 G90 G17 G94"]) + "\n"
-    return head + body.tobytes().decode("ascii") + ("M5\n" if on else "") + "M30\n%\n"
 
 
 # --------------------------------------------------------------------------------------------
@@ -784,20 +647,3 @@ def linear_moves(points, feed: float, spindle: float | None = None, z: float | N
             raise ValueError("z (mm) is required for 2-D points")
         p = np.column_stack([p, np.full(len(p), float(z))])
     return [Move("G1", *row, feed=feed, spindle=spindle) for row in p]
-
-
-def gcode_roundtrip_error(path, job=None, feeds=None, decimals=4):
-    """Write a :class:`~cnclab.toolpath.path.ToolPath` as G-code (:meth:`ToolPath.to_moves`), parse it
-    back and compare: (max distance mm of the parsed end points from the path points, feed-length
-    difference mm, text) — the parsed program must reproduce the path within the written decimals.
-    ``job`` and ``feeds`` are not used (kept for the call signature)."""
-    name = str(path.info.get("name", "path"))
-    moves = path.to_moves()
-    text = write_gcode(moves, header="cnclab " + name.replace("(", "").replace(")", ""), decimals=decimals)
-    back = parse_gcode(text, source=name)
-    P = np.array([m.xyz for m in back])
-    from scipy.spatial import cKDTree      # imported here: the writers and readers do not need scipy
-
-    d, _ = cKDTree(path.xyz).query(P)
-    dl = abs(path_lengths(back)["feed"] - path_lengths(moves)["feed"])
-    return float(d.max()), float(dl), text

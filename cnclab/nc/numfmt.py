@@ -122,7 +122,7 @@ def _put_fixed(buf, pos, k, decimals):
 
 @njit(cache=True)
 def gcode_linear_body(kx, ky, kz, rapid, kf, ks, has_s, decimals, feed_decimals):
-    """RS274 lines (bytes) of linear moves, modal rules of :func:`cnclab.nc.gcode.write_gcode`.
+    """RS274 lines (bytes) of linear moves, modal rules of :func:`cnclab.nc.program.write_moves`.
 
     ``kx, ky, kz``: scaled coordinates (:func:`scaled_ints`, ``decimals``); ``rapid``: G0 vs G1;
     ``kf``: scaled feeds (``feed_decimals``, ignored for G0); ``ks``/``has_s``: spindle (0 decimals,

@@ -40,7 +40,7 @@ from ..geometry.mesh import FacetLocator, TriMesh, closest_point_on_triangles, m
 from ..toolpath.path import Move, ToolPath
 from .apt import AptProgram, AptRecord, CLPoints, GotoRun, fedrat, read_apt, spindl
 from .numfmt import fixed, scaled_ints
-from .gcode import write_gcode, write_gcode_linear
+from .program import write_linear_moves, write_moves
 
 __all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
            "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files", "read_inputs",
@@ -428,11 +428,11 @@ def _finite(name, v, lo=None, lo_open=True, hi=None, optional=False):
 
 
 def gcode_text(program: AptProgram, header: str = "") -> str:
-    """``write_gcode(to_gcode_moves(program), header)`` without building one Move per point: the
-    program's points, rapid flags, F and S in force go to :func:`cnclab.nc.gcode.write_gcode_linear`
-    as arrays (same bytes)."""
+    """``write_moves(to_gcode_moves(program), header)`` (:func:`cnclab.nc.program.write_moves`, the one
+    writer) without building one Move per point: the program's points, rapid flags, F and S in force
+    go to :func:`cnclab.nc.program.write_linear_moves` as arrays (same bytes)."""
     if any(getattr(r, "word", None) == "CIRCLE" for r in program.items()):
-        return write_gcode(to_gcode_moves(program), header=header)   # arcs: G2/G3 through the Move writer
+        return write_moves(to_gcode_moves(program), header=header)   # arcs: G2/G3 through the Move writer
     xyz, lens, rap0, fe, sp = [], [], [], [], []
     for pts, rapid, f, s, _, _, _ in _motion_blocks(program):
         xyz.append(pts)
@@ -441,15 +441,15 @@ def gcode_text(program: AptProgram, header: str = "") -> str:
         fe.append(np.nan if f is None else f)
         sp.append(np.nan if s is None else s)
     if not xyz:
-        return write_gcode([], header=header)
+        return write_moves([], header=header)
     lens_a = np.asarray(lens, np.int64)
     rap_a = np.zeros(int(lens_a.sum()), bool)
     rap_a[np.concatenate([[0], np.cumsum(lens_a)[:-1]])] = rap0       # only a block's first point is a rapid
     fe_a = np.repeat(np.asarray(fe, float), lens_a)
     sp = np.repeat(np.asarray(sp, float), lens_a)
     if np.isnan(fe_a[~rap_a]).any():   # a feed move without FEDRAT: let the Move writer report it
-        return write_gcode(to_gcode_moves(program), header=header)
-    return write_gcode_linear(np.vstack(xyz), rap_a, fe_a, sp, header=header)
+        return write_moves(to_gcode_moves(program), header=header)
+    return write_linear_moves(np.vstack(xyz), rap_a, fe_a, sp, header=header)
 
 
 def _join_uninterrupted(thread) -> None:
