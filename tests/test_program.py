@@ -176,3 +176,22 @@ def test_drop_cut_descent_tagged_cleared_only_when_vertical():
     assert p.cleared.tolist() == [False, True, False, False, True]
     chk = check_program(write_program(p, clearance_z=30, spindle_rpm=2000, top_z=10), clearance_z=30, top_z=10)
     assert chk.plunges_into_material == 0 and chk.entries == {"helix": 0, "ramp": 1, "plunge": 2}
+
+
+def test_write_moves_writes_its_text_atomically_and_never_over_an_input(tmp_path):
+    """The move-by-move entry of the one writer (the spindle post-processor's): ``out`` gets exactly
+    the returned text; an ``out`` that is one of the ``inputs`` is refused and the input unchanged."""
+    from cnclab.nc.gcode import Move
+    from cnclab.nc.program import write_linear_moves, write_moves
+
+    moves = [Move("G0", 0, 0, 5), Move("G1", 1.25, 0, -1, feed=200, spindle=3000), Move("G0", 1.25, 0, 5)]
+    out = tmp_path / "m.ngc"
+    text = write_moves(moves, header="t", out=out)
+    assert out.read_text() == text and parse_gcode(text) == [
+        Move("G0", 0, 0, 5), Move("G1", 1.25, 0, -1, feed=200.0, spindle=3000.0), Move("G0", 1.25, 0, 5)]   # M5 before it
+    src = tmp_path / "in.apt"
+    src.write_text("input\n")
+    with pytest.raises(ValueError):
+        write_linear_moves([[0, 0, 5], [1, 0, -1]], [True, False], [np.nan, 200], [np.nan, 3000], out=src,
+                           inputs=[src])
+    assert src.read_text() == "input\n"
