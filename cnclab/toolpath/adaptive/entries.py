@@ -37,22 +37,22 @@ def enter(lv, banned=None):
     rho_max = comp[0].exterior.distance(Point(*c)) if comp else dA[j, i]
     if comp:
         rho_max = min([rho_max] + [Polygon(hh).exterior.distance(Point(*c)) for hh in comp[0].interiors])
-    rho = max(min(lv.prm.helix_radius_frac * lv.r, 0.9 * rho_max - lv.h), 0.0)
+    rho = max(min(lv.prm.helix_radius_frac * lv.r, lv.prm.helix_room_frac * rho_max - lv.h), 0.0)
     # the smallest helix accepted here: helix_min_frac r, or half what the widest place of this
     # part of the tool-centre region allows (a part narrow everywhere is entered by a small
     # helix; the entry point is a coarse cell centre, up to hc/sqrt(2) off the widest place)
-    rho_min = 0.02
+    rho_min = lv.prm.helix_min_mm
     if comp and banned is not None:
         if k_part not in lv.part_wide:
             lv.part_wide[k_part] = shapely.maximum_inscribed_circle(comp[0], 0.1 * lv.h).length
         wide = lv.part_wide[k_part]
-        rho_min = max(0.02, min(lv.prm.helix_min_frac * lv.r, 0.5 * (0.9 * wide - lv.h)))
+        rho_min = max(lv.prm.helix_min_mm, min(lv.prm.helix_min_frac * lv.r, 0.5 * (lv.prm.helix_room_frac * wide - lv.h)))
     # a place entered before (its passes made no room) or too narrow for a helix is banned: no
     # endless re-entry at one spot
     again = (int(j), int(i)) in lv.entered
     lv.entered.add((int(j), int(i)))
     if (rho < rho_min or again) and banned is not None and not (lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0):
-        rad = int(math.ceil(2 * lv.r / lv.g.hc))
+        rad = int(math.ceil(lv.prm.entry_ban_frac * lv.r / lv.g.hc))
         banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
         return None
     lv.retract()
@@ -69,7 +69,7 @@ def enter(lv, banned=None):
         lv.add((p0[0], p0[1], lv.clearance_z), "rapid")
         # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
         # the previous level cleared (tagged: the program writer allows a rapid there only so)
-        lv.add((p0[0], p0[1], lv.z_prev + 0.5), "rapid", np.nan, "cleared: above the level")
+        lv.add((p0[0], p0[1], lv.z_prev + lv.prm.approach_above_mm), "rapid", np.nan, "cleared: above the level")
         lv.add((p0[0], p0[1], lv.z_prev), "plunge", lv.feed_mm_min, "air")
         drop = 2 * math.pi * rho * math.tan(math.radians(lv.helix_angle_deg))
         # the helix ends where it reaches z (the last turn partial); at least one full turn, so

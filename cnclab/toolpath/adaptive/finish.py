@@ -33,7 +33,7 @@ def finish_part(lv, part):
             jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
             ii = np.clip(((Rs[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
             dm = D[jj, ii]
-            if dm.min() > (lv.r + lv.g.hc if lap == 0 else lv.r - max(0.3, 0.25 * lv.a_e)):
+            if dm.min() > (lv.r + lv.g.hc if lap == 0 else lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e)):
                 break                # nothing (more) to take along this ring
             # start where the ring is free of material (the farthest from it, the field being
             # capped: any point at the cap), the nearest such point to the tool
@@ -67,7 +67,7 @@ def finish_part(lv, part):
             sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
             dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
             mat = np.flatnonzero(dml < lv.r + lv.g.hc)
-            L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + 2 * lv.r)
+            L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + lv.prm.finish_run_on_frac * lv.r)
             hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
             snap = lv.g.snapshot()
             M_before = snap[0]
@@ -77,7 +77,7 @@ def finish_part(lv, part):
             # points the grid kept within 2 h of the wall go onto the exact wall
             # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
             pp = shapely.points(P)
-            near = shapely.distance(wall, pp) < 2.0 * lv.h
+            near = shapely.distance(wall, pp) < lv.prm.finish_snap_band_h * lv.h
             if near.any():
                 # the nearest wall point (not locate + interpolate along the multi-ring wall: a
                 # point nearest to a ring's closing vertex would land on the next ring's start)
@@ -90,7 +90,7 @@ def finish_part(lv, part):
                 # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
                 # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
                 # into a corner)
-                for _ in range(6):       # a reverted point changes the stock the later ones meet
+                for _ in range(lv.prm.finish_replay_rounds):       # a reverted point changes the stock the later ones meet
                     Qd, seg = densify(Q, 1.5 * lv.ds)
                     Es, Eg = replay(M_before.copy(), lv.g.x0, lv.g.y0, lv.h, lv.r, Qd, lv.lag, lv.n_samp, GUARD_LEVEL)
                     bad = np.zeros(len(Q), bool)

@@ -65,3 +65,35 @@ class AdaptiveParams:
     #: fraction of a_e: that second try is kept only where it removes this much per mm of its length
     #: (random pockets: 9 % fewer entries for 1 % more program time)
     narrow_min_yield: float = 0.2
+    #: fraction: the entry helix radius is at most this share of the room at the entry point, less h
+    #: (the helix disc stays clear of the walls by a tenth of the room)
+    helix_room_frac: float = 0.9
+    #: mm: the smallest helix radius ever accepted (below it the helix is a plunge)
+    helix_min_mm: float = 0.02
+    #: fraction of r: a place too narrow for a helix, or entered before, bans the cells within this
+    #: radius (no endless re-entry at one spot)
+    entry_ban_frac: float = 2.0
+    #: mm: an entry rapids down to this height above the level's top before its feed descent
+    approach_above_mm: float = 0.5
+    #: mm and fraction of a_e: a further finishing lap runs only while material deeper than
+    #: max(finish_rest_min_mm, finish_rest_frac_ae a_e) is left along the ring
+    finish_rest_min_mm: float = 0.3
+    finish_rest_frac_ae: float = 0.25
+    #: fraction of r: a finishing lap runs on this far past the last ring point with material in reach
+    finish_run_on_frac: float = 2.0
+    #: pixels (h): finishing points planned within this distance of the wall are snapped onto it
+    finish_snap_band_h: float = 2.0
+    #: rounds: replays of the snapped lap (a point kept at its planned place changes what the later
+    #: points meet)
+    finish_replay_rounds: int = 6
+    #: steps: the most steps of one clearing pass
+    pass_max_steps: int = 20000
+    #: moves and stride: a link with no straight chord out retraces at most so many of the tool's own
+    #: moves, trying every ``retrace_stride``-th point
+    retrace_max_moves: int = 200
+    retrace_stride: int = 5
+    #: r h (mm^2): a pass removing less than this bans its start cell
+    pass_min_removed_rh: float = 0.2
+    #: coarse cells: a cell is free when its distance to material is at least r + this many cells
+    #: (the cell half-diagonal margin of the coarse grid)
+    free_margin_hc: float = 0.75

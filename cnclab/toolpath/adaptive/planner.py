@@ -60,7 +60,7 @@ class _Level:
 
     def clearing_pass(self, heading, a_stop):
         """A clearing pass from the tool's point (:meth:`Grid.run_pass`) with ``a_stop`` mm of air."""
-        return self.g.run_pass(self.cur[0], self.cur[1], heading, self.target, self.ds, self.lag, 20000, self.n_samp, a_stop, self.turn,
+        return self.g.run_pass(self.cur[0], self.cur[1], heading, self.target, self.ds, self.lag, self.prm.pass_max_steps, self.n_samp, a_stop, self.turn,
                           min(self.turn, self.ds / self.turn_radius), 1e18, self.guard_pass, self.air_rad, self.rapid_links)
 
     def link_to(self, r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None):
@@ -74,9 +74,9 @@ class _Level:
             # removed) to the last point from which one does, as feed links
             n_back = 0
             while n_back < len(self.pts) - 1 and self.pts[-2 - n_back][2] == self.z and self.kinds[-1 - n_back] != "plunge"\
-                    and n_back < 200:
+                    and n_back < self.prm.retrace_max_moves:
                 n_back += 1
-            for k in range(5, n_back + 1, 5):
+            for k in range(self.prm.retrace_stride, n_back + 1, self.prm.retrace_stride):
                 p = self.pts[-1 - k]
                 route = self.g.route((p[0], p[1]), r_free, band_hi, banned, cell)
                 if not isinstance(route, str):
@@ -183,7 +183,7 @@ class _Level:
         self.todo_parts = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
         if not self.enter():
             return
-        self.r_free = self.r + 0.75 * self.g.hc      # coarse cell centre to material, with the cell half-diagonal margin
+        self.r_free = self.r + self.prm.free_margin_hc * self.g.hc      # coarse cell centre to material, with the cell half-diagonal margin
         for rnd in range(self.clean_rounds + 1):
             # round 0 clears and finishes; a clean-up round takes what the sliver guard and the bans left
             # (a pass refused where its first steps would graze a crescent), then finishes again
@@ -237,7 +237,7 @@ class _Level:
                     if len(P) >= 2 and removed < self.prm.narrow_min_yield * self.a_e * self.ds * (len(P) - 1):
                         self.g.restore(snap_try)        # not worth its air: the place is banned after all
                         P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
-                if removed < 0.2 * self.r * self.h or len(P) < 2:
+                if removed < self.prm.pass_min_removed_rh * self.r * self.h or len(P) < 2:
                     rad = int(math.ceil(self.r / self.g.hc))
                     banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
                 air = E < self.air_rad                # nothing in front of the tool: a link at the link feed, or
