@@ -104,7 +104,7 @@ def test_moves_of_different_kind_feed_or_tag_are_never_merged():
     a = np.linspace(0, math.pi, 60)
     C = np.column_stack([3 * np.cos(a), 3 * np.sin(a), np.full_like(a, -1.0)])
     for tags, feed, arcs in ((["cleared"] * 60, None, 0), (["cleared"] * 60, 9000.0, 1), ([""] * 60, 9000.0, 0)):
-        p = ToolPath.build(C, kind="rapid", tag=tags)
+        p = ToolPath.build(C, kind="rapid", tag=tags, cleared=[t == "cleared" for t in tags])
         f = fit_arcs(p, rapid_arc_feed_mm_min=feed)
         assert int(np.count_nonzero(f.arc)) == arcs * (len(f) - 1) if arcs else not f.arc.any()
         if arcs:

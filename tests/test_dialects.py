@@ -30,7 +30,7 @@ def _path(job=None):
     kind = ["rapid"] + ["helix"] * 161 + ["cut", "cut", "rapid", "retract"]
     tag = [""] * 164 + ["cleared"] + [""]
     return ToolPath.build(pts, kind=kind, tag=tag, feed=500.0, tool=Tool(6, flutes=2, number=7),
-                          info={"strategy": "test"})
+                          info={"strategy": "test"}, cleared=[t == "cleared" for t in tag])
 
 
 def _grbl_words():
@@ -140,7 +140,8 @@ def test_tool_number_range_per_dialect():
 def test_depth_rounding_to_the_stock_top_names_a_p():
     job = _job(a_p=1e-6)
     p = ToolPath.build([[5, 5, 5], [5, 5, -1e-6], [30, 5, -1e-6], [30, 5, 5]],
-                       kind=["rapid", "plunge", "cut", "retract"], tag=["", "cleared", "", ""], feed=300.0)
+                       kind=["rapid", "plunge", "cut", "retract"], tag=["", "cleared", "", ""], feed=300.0,
+                       cleared=[False, True, False, False])
     with pytest.raises(ValueError, match="a_p = 1e-06 mm"):
         write_program(p, job)
 

@@ -256,7 +256,7 @@ def test_gcode_check_fails_an_unmarked_plunge_below_the_stock_top(tmp_path, monk
 
     for tag, ok_expected in (("cleared", True), ("", False)):
         p = ToolPath.build([[0, 0, 5], [0, 0, -1], [10, 0, -1]], kind=["rapid", "plunge", "cut"], tag=["", tag, ""],
-                           feed=300)
+                           feed=300, cleared=[False, tag == "cleared", False])
         text = write_program(p, clearance_z=5, spindle_rpm=6000)
         prog = tmp_path / "w" / "p.ngc"
         prog.parent.mkdir(exist_ok=True)

@@ -60,12 +60,9 @@ _FIXED = ("xyz", "arc", "arc_center")
 
 
 def cleared_mask(path: ToolPath) -> np.ndarray:
-    """Moves the planner marks as inside cleared area: the path's boolean ``cleared`` column when it
-    has one, else a tag containing ``"cleared"``."""
-    col = getattr(path, "cleared", None)
-    if isinstance(col, np.ndarray) and col.shape == (len(path),):
-        return col.astype(bool)
-    return np.array(["cleared" in str(t or "") for t in path.tag], bool)
+    """Moves the planner marks as inside cleared area: the path's boolean ``cleared`` column (its
+    proof of air; tags are never read)."""
+    return np.asarray(path.cleared, bool).copy()
 
 
 def _columns(path: ToolPath) -> dict:

@@ -242,9 +242,8 @@ class ToolPath:
               tool: Tool | None = None, info: dict | None = None, cleared=None) -> "ToolPath":
         """A path from points (N, 3) or (N, 2) (z = 0) and per-point or scalar attributes; ``kind``
         is a name of :data:`KINDS` or a sequence of names. Rapids get NaN feed. ``cleared`` (bool,
-        scalar or per point): the planner's proof of air (see the class docstring); None (legacy,
-        until every planner passes it): True where the tag starts a word ``cleared`` — the one
-        place a tag is read, kept for planners that still state the proof in the tag only."""
+        scalar or per point): the planner's proof of air (see the class docstring); None: False
+        everywhere (no proof). Tags are free text for people: no decision reads them."""
         P = np.asarray(points, float)
         if P.ndim != 2 or P.shape[1] not in (2, 3):
             raise ValueError(f"points must be (N, 2) or (N, 3) mm, got shape {P.shape}")
@@ -257,8 +256,6 @@ class ToolPath:
         k = _kind_indices(names)
         f = _col(feed, n, np.nan, float, "feed")
         f[k == _KIND_INDEX["rapid"]] = np.nan
-        if cleared is None:
-            cleared = _legacy_cleared(_col(tag, n, "", object, "tag"))
         return cls(P, k, tag, f, spindle, arc, arc_center, tool, dict(info or {}), cleared)
 
     @classmethod
@@ -515,11 +512,6 @@ def classify_moves(xyz, rapid, arc, z_tol: float = 1e-6) -> np.ndarray:
     k[0] = "cut"
     k[rapid] = "rapid"
     return k
-
-def _legacy_cleared(tags) -> np.ndarray:
-    """Legacy default of ``ToolPath.build(cleared=None)``: the proof stated in the tag text only."""
-    return np.array(["cleared" in str(t) for t in tags], bool)
-
 
 def helix_ring(center_xy, radius: float, n_segments: int) -> np.ndarray:
     """The xy trace (n_segments + 1, 2) mm of one counter-clockwise turn of radius ``radius`` mm about

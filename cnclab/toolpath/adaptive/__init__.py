@@ -51,7 +51,7 @@ Design (the ideas and where they come from; the code is cnclab's own)
   field of the stock on a coarse grid, capped just above r and recomputed only in the window the
   last change of the stock can reach) inside the tool-centre region, starting where the tool is;
   the cell route is shortened to straight chords that stay in that free set and written as rapids
-  at depth tagged ``cleared`` (FreeCAD writes its keep-tool-down links as G0 too; the evaluator
+  at depth marked ``cleared`` (the ToolPath's proof column; FreeCAD writes its keep-tool-down links as G0 too; the evaluator
   counts any rapid that removes material) or, with ``rapid_links=False``, as feed moves (``link``,
   link feed). Only when no free route exists (a disjoint region, material
   closing the way) does the tool retract, rapid at clearance and enter again.

@@ -60,7 +60,7 @@ def enter(lv, banned=None):
         c = np.array(lv.hole[:2])
         rho = 0.0
         lv.add((c[0], c[1], lv.clearance_z), "rapid")
-        lv.add((c[0], c[1], lv.z), "plunge", lv.feed_mm_min, "cleared: pre-drilled start hole")
+        lv.add((c[0], c[1], lv.z), "plunge", lv.feed_mm_min, "cleared: pre-drilled start hole", cleared=True)
     elif rho < rho_min:
         raise PlanningError(f"{lv.source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
                             "the region is too narrow for the tool")
@@ -68,8 +68,8 @@ def enter(lv, banned=None):
         p0 = (c[0] + rho, c[1])
         lv.add((p0[0], p0[1], lv.clearance_z), "rapid")
         # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
-        # the previous level cleared (tagged: the program writer allows a rapid there only so)
-        lv.add((p0[0], p0[1], lv.z_prev + lv.prm.approach_above_mm), "rapid", np.nan, "cleared: above the level")
+        # the previous level cleared (marked cleared: the program writer allows a rapid there only so)
+        lv.add((p0[0], p0[1], lv.z_prev + lv.prm.approach_above_mm), "rapid", np.nan, "cleared: above the level", cleared=True)
         lv.add((p0[0], p0[1], lv.z_prev), "plunge", lv.feed_mm_min, "air")
         drop = 2 * math.pi * rho * math.tan(math.radians(lv.helix_angle_deg))
         # the helix ends where it reaches z (the last turn partial); at least one full turn, so

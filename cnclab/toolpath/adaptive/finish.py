@@ -51,7 +51,7 @@ def finish_part(lv, part):
                 lv.retract()
                 lv.add((Rl[0, 0], Rl[0, 1], lv.clearance_z), "rapid")
                 if dm[k0] >= lv.r:          # free of material under the tool: feed down into cleared area
-                    lv.add((Rl[0, 0], Rl[0, 1], lv.z), "plunge", lv.feed_mm_min, "cleared")
+                    lv.add((Rl[0, 0], Rl[0, 1], lv.z), "plunge", lv.feed_mm_min, "cleared", cleared=True)
                 else:
                     ins = shapely.maximum_inscribed_circle(part)
                     raise PlanningError(

@@ -34,14 +34,19 @@ class _Level:
         self.todo_parts = []
         self.r_free = np.nan
 
-    def add(self, p, kind, feed=np.nan, tag="", arc=0, ctr=(np.nan, np.nan)):
+    def add(self, p, kind, feed=np.nan, tag="", arc=0, ctr=(np.nan, np.nan), cleared=False):
+        """One move to ``p`` (x, y, z) mm; ``cleared``: the planner's proof that the move runs through
+        air or cleared area (the ToolPath's ``cleared`` column: the writer's licence for a G0 below
+        the clearance plane); ``tag`` is free text for people."""
         self.pts.append(p); self.kinds.append(kind); self.feeds.append(feed); self.tags.append(tag); self.arcs.append(arc); self.ctrs.append(ctr)
+        self.clears.append(bool(cleared))
 
-    def add_line_moves(self, Q, z, kind, feed, tag):
-        """Straight moves at height z to the points Q (m, 2); kind, feed, tag: arrays (m,) or scalars."""
+    def add_line_moves(self, Q, z, kind, feed, tag, cleared=False):
+        """Straight moves at height z to the points Q (m, 2); kind, feed, tag, cleared (the proof of
+        air, see :meth:`add`): arrays (m,) or scalars."""
         m = len(Q)
         self.pts.extend(zip(Q[:, 0].tolist(), Q[:, 1].tolist(), [z] * m))
-        for lst, v in ((self.kinds, kind), (self.feeds, feed), (self.tags, tag)):
+        for lst, v in ((self.kinds, kind), (self.feeds, feed), (self.tags, tag), (self.clears, cleared)):
             lst.extend(v.tolist() if isinstance(v, np.ndarray) else [v] * m)
         self.arcs.extend([0] * m)
         self.ctrs.extend([(np.nan, np.nan)] * m)
@@ -111,7 +116,7 @@ class _Level:
                     a, b = legs
                     if a is not None:
                         self.add((a[0], a[1], self.z), "link", self.link_feed_mm_min)
-                    self.add((b[0], b[1], self.z), "rapid", np.nan, "cleared: link through cleared area")
+                    self.add((b[0], b[1], self.z), "rapid", np.nan, "cleared: link through cleared area", cleared=True)
                     if b[0] != q[0] or b[1] != q[1]:
                         self.add((q[0], q[1], self.z), "link", self.link_feed_mm_min)
                 self.cur = (float(q[0]), float(q[1]))
@@ -245,7 +250,7 @@ class _Level:
                 fr, ai = free[1:], air[1:]
                 self.add_line_moves(P[1:], self.z, np.where(fr, "rapid", np.where(ai, "link", "cut")).astype(object),
                                np.where(fr, np.nan, np.where(ai, self.link_feed_mm_min, self.feed_mm_min)),
-                               np.where(fr, "cleared: air inside cleared area", "").astype(object))
+                               np.where(fr, "cleared: air inside cleared area", "").astype(object), fr)
                 self.cur = (float(P[-1, 0]), float(P[-1, 1]))
             if self.finish:
                 # every part of the tool-centre region is finished once, the nearest to the tool first (a part
@@ -267,7 +272,7 @@ class _Level:
                 L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
                 t_feed = float(np.sum(np.where(np.isfinite(F3) & (F3 > 0), L3 / np.where(F3 > 0, F3, 1.0), 0.0)))
                 if took < self.prm.clean_round_min_yield * self.a_e * self.feed_mm_min * t_feed or took <= 0.0:
-                    for lst in (self.pts, self.kinds, self.tags, self.feeds, self.arcs, self.ctrs):
+                    for lst in (self.pts, self.kinds, self.tags, self.feeds, self.arcs, self.ctrs, self.clears):
                         del lst[n0:]
                     self.g.restore(snap0)
                     self.cur = cur0
@@ -295,8 +300,8 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     (default r/30); ``source`` names the job in error messages; ``params``: the tuning constants
     (:class:`AdaptiveParams`, each field with its unit and reason);
     ``rapid_links``: the links at depth between passes (chords proven free of material on the rapid
-    stock: no pixel of it within r + h/sqrt(2) of the chord, see Grid) are written as G0 tagged
-    ``cleared`` (as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
+    stock: no pixel of it within r + h/sqrt(2) of the chord, see Grid) are written as G0 marked
+    ``cleared`` (the ToolPath column; as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
     G0 is a straight line on LinuxCNC (and on any controller with interpolated rapids); on a
     controller whose rapids dog-leg, set it False (job key ``"rapid_links": false``).
     """
@@ -351,7 +356,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     zlev = [top_z - min(depth, a_p * (k + 1)) for k in range(int(math.ceil(depth / a_p - 1e-9)))]
 
     # move list (shared with the level planners: _Level.add, add_line_moves)
-    pts, kinds, tags, feeds, arcs, ctrs = [], [], [], [], [], []
+    pts, kinds, tags, feeds, arcs, ctrs, clears = [], [], [], [], [], [], []
     stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0}
     allowed_parts = list(shapely.get_parts(allowed))
     part_wide = {}        # part index -> inscribed radius of that part of the tool-centre region (mm)
@@ -371,7 +376,7 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
         raise PlanningError(f"{source}: nothing to machine")
     kinds[0] = "rapid"
     tp = ToolPath.build(np.array(pts, float), kind=kinds, tag=np.array(tags, dtype=object),
-                        feed=np.array(feeds, float), spindle=spindle, arc=np.array(arcs),
+                        feed=np.array(feeds, float), spindle=spindle, cleared=np.array(clears, bool), arc=np.array(arcs),
                         arc_center=np.array(ctrs, float), tool=tool or Tool(2 * r),
                         info={"planner": "adaptive_clearing", "theta_deg": theta_deg, "resolution_mm": h,
                               "step_mm": ds, **stats, "plan_time_s": time.perf_counter() - t_start})
