@@ -84,16 +84,17 @@ def main(argv=None):
         if not P.is_valid or P.buffer(-r).is_empty:
             continue
         row = {"pocket": f"{a.seed}:{it}", "r_mm": r, "theta_deg": th, "area_mm2": round(P.area)}
+        job = Job(P, Tool(2 * r), th, 1.0, feed_mm_min=300.0, spindle_rpm=6000.0, rapid_mm_min=10000.0,
+                  source=f"random {a.seed}:{it}")
         t0 = time.perf_counter()
         try:
-            tp = adaptive_clearing(P, r, th, 1.0, 300.0, source=f"random {a.seed}:{it}")
+            tp = adaptive_clearing(job)
         except PlanningError as e:
             row["refused"] = str(e)
             rows.append(row)
             print(row["pocket"], "refused:", e, flush=True)
             continue
         row["plan_s"] = time.perf_counter() - t0
-        job = Job(P, Tool(2 * r), th, 1.0, feed_mm_min=300.0, spindle_rpm=6000.0, rapid_mm_min=10000.0)
         ev = evaluate(tp, job, 0.05 if P.area < 2500 else 0.1)
         row.update({"p95-theta": ev.engagement_p95_deg - th, "max-theta": ev.engagement_max_deg - th,
                     "share>θ+5_pct": ev.share_above_5_pct, "entries": tp.info["entries"],

@@ -30,8 +30,8 @@ def warm() -> float:
     model): every shared kernel is compiled and cached. Returns the wall seconds it took."""
     t0 = time.perf_counter()
     poly = box(0, 0, 12, 9)
-    tp = adaptive_clearing(poly, 1.5, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=0.05, step_mm=0.05)
     job = Job(poly, Tool(3.0), 60.0, 1.0, feed_mm_min=255.0, spindle_rpm=6000.0)
+    tp = adaptive_clearing(job, resolution_mm=0.05, step_mm=0.05)
     evaluate(tp, job, 0.1)
     evaluate(tp, job, 0.1, feed_control=True)
     xs = np.arange(-2.0, 14.0, 0.1)

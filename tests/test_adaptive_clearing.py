@@ -32,13 +32,13 @@ R = 1.5
 H = 0.05
 
 
-def _job(poly, theta, r=R):
-    return Job(poly, Tool(2 * r), theta, 1.0, feed_mm_min=255.0, spindle_rpm=6366.0, rapid_mm_min=10000.0)
+def _job(poly, theta, r=R, source="<dict>", **kw):
+    return Job(poly, Tool(2 * r), theta, 1.0, feed_mm_min=255.0, spindle_rpm=6366.0, rapid_mm_min=10000.0,
+               source=source, **kw)
 
 
 def _plan(poly, theta):
-    return adaptive_clearing(poly, R, theta, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05,
-                             source="hypothesis")
+    return adaptive_clearing(_job(poly, theta, source="hypothesis"), resolution_mm=H, step_mm=0.05)
 
 
 @st.composite
@@ -193,7 +193,7 @@ def test_finish_snap_stays_on_its_ring():
     point nearest to an island ring's closing vertex was once sent to the next ring's start, 22 mm
     away, through an island. Two islands side by side, a lap around each."""
     poly = box(0, 0, 30, 14).difference(box(8, 5, 11, 9)).difference(box(19, 5, 22, 9))
-    tp = adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, source="islands")
+    tp = adaptive_clearing(_job(poly, 60.0, source="islands"), resolution_mm=H)
     assert _wall_gouge(tp, poly) <= 1e-3
 
 
@@ -208,7 +208,7 @@ def test_random_pockets_engagement_bounded(poly, theta):
 
 def test_refuses_pocket_narrower_than_the_tool():
     with pytest.raises(PlanningError, match="narrow-job.*does not fit|narrow-job.*narrower"):
-        adaptive_clearing(box(0, 0, 20, 2.5), R, 60, a_p=1, feed_mm_min=255, source="narrow-job")
+        adaptive_clearing(_job(box(0, 0, 20, 2.5), 60.0, source="narrow-job"))
 
 
 GOLDEN = Path(__file__).parent / "fixtures" / "adaptive" / "box_9x7_theta60.ngc"
@@ -251,9 +251,8 @@ def test_rapid_links_switch():
     # only where a G0 needs a detour to be proven (an air run along a wall moved 2 h off it, a feed leg
     # off a wall at a link's ends): the same number of passes, and no rapid removes material (evaluator)
     poly = box(0, 0, 16, 11)
-    a = adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05)
-    b = adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05,
-                          rapid_links=False)
+    a = adaptive_clearing(_job(poly, 60.0), resolution_mm=H, step_mm=0.05)
+    b = adaptive_clearing(_job(poly, 60.0, rapid_links=False), resolution_mm=H, step_mm=0.05)
     assert a.info["passes"] == b.info["passes"] and a.info["entries"] == b.info["entries"]
     low_a = a.is_kind("rapid") & (a.xyz[:, 2] < 0)
     assert low_a.any() and set(a.tag[low_a]) <= {"cleared: link through cleared area", "cleared: air inside cleared area"}
@@ -276,16 +275,14 @@ def test_sliver_pocket_refused_with_reason():
 
     poly = wkt.loads(_SLIVER_WKT)
     with pytest.raises(PlanningError, match="sliver-test: .*too narrow"):
-        adaptive_clearing(poly, R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=H, step_mm=0.05,
-                          source="sliver-test")
+        adaptive_clearing(_job(poly, 60.0, source="sliver-test"), resolution_mm=H, step_mm=0.05)
 
 
 def test_coarse_planning_stock_refused():
     # coarser than r/30 the pixel stock cannot resolve the engagement (measured: r/20 left 169 mm^2 of
     # the Kim & Yang pocket uncut): a clear error naming the parameter, not a poor path
     with pytest.raises(PlanningError, match="coarse-test: resolution_mm must be in"):
-        adaptive_clearing(box(0, 0, 16, 11), R, 60.0, a_p=1.0, feed_mm_min=255.0, resolution_mm=R / 20,
-                          source="coarse-test")
+        adaptive_clearing(_job(box(0, 0, 16, 11), 60.0, source="coarse-test"), resolution_mm=R / 20)
 
 
 def test_neck_between_islands_is_taken_from_its_ends_not_by_helix_after_helix():
@@ -296,7 +293,7 @@ def test_neck_between_islands_is_taken_from_its_ends_not_by_helix_after_helix():
     # Also: no entry helix is smaller than 0.1 r where its part of the region is wider.
     islands = [box(14, 10, 28, 30), box(35.8, 10, 49.8, 30)]
     poly = box(0, 0, 63.8, 40).difference(unary_union(islands))
-    tp = adaptive_clearing(poly, 3.0, 60.0, 1.0, 255.0, source="neck")
+    tp = adaptive_clearing(_job(poly, 60.0, r=3.0, source="neck"))
     assert tp.info["entries"] <= 3
     ev = evaluate(tp, _job(poly, 60.0, 3.0), 0.1)
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0

@@ -176,7 +176,6 @@ def test_the_checker_sees_each_kind_of_violation(tmp_path):
 MAX_FUNCTION_LINES, MAX_PARAMETERS, MAX_MODULE_LINES = 120, 12, 800
 
 _ADAPTIVE = "numba nopython kernel of the adaptive planner: arrays and scalars passed positionally"
-_ADAPTIVE_MAIN = "the planner's keywords (about 14 repeat Job fields): to become adaptive_clearing(job, params=AdaptiveParams()) (issue 29 item 1)"
 _NJIT = "numba nopython kernel: arrays and scalars passed positionally (no dataclass in nopython mode)"
 #: shrink-only allow-list: (what, module path, qualified name) -> (today's size, reason). The test fails
 #: when an entry grows, when an entry already fits (remove it) or no longer exists, and for any new
@@ -203,7 +202,6 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/toolpath/adaptive/grid.py", "Grid.run_pass"): (15, "the pass kernel's settings passed through; to take the planner's parameters object"),
     ("lines", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (127, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (20, _ADAPTIVE),
-    ("params", "cnclab/toolpath/adaptive/planner.py", "adaptive_clearing"): (17, _ADAPTIVE_MAIN),
     ("lines", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (185, "the old clearing planner, to be retired (issue 29 item 1)"),
     ("params", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (22, "the old clearing planner, to be retired (issue 29 item 1)"),
     ("params", "cnclab/toolpath/constant_engagement.py", "multi_pass"): (13, "Thesis II/III integration settings; to take a Job"),

@@ -118,7 +118,10 @@ Levels (a pocket deeper than ``a_p``) are planned one by one by
 
 >>> import numpy as np
 >>> from shapely.geometry import box
->>> tp = adaptive_clearing(box(0, 0, 24, 18), tool_radius=3, theta_deg=60, a_p=1, feed_mm_min=255)
+>>> from cnclab.toolpath.job import Job
+>>> from cnclab.toolpath.path import Tool
+>>> job = Job(box(0, 0, 24, 18), Tool(6.0), theta_deg=60, a_p=1, feed_mm_min=255, spindle_rpm=6000)
+>>> tp = adaptive_clearing(job)
 >>> sorted(set(tp.kinds()))
 ['cut', 'helix', 'link', 'plunge', 'rapid']
 >>> bool(np.all(tp.xyz[tp.is_kind("plunge"), 2] >= 0.0))   # the only plunge ends on the stock top (air)

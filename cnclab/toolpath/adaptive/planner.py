@@ -12,7 +12,7 @@ import shapely
 from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
-from ..path import Tool, ToolPath
+from ..path import ToolPath
 from . import entries, finish
 from .entries import PlanningError
 from .grid import Grid
@@ -285,20 +285,18 @@ class _Level:
 # ------------------------------------------------------------------------------------------------
 # the planner
 # ------------------------------------------------------------------------------------------------
-def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, feed_mm_min: float,
-                      depth: float | None = None, start_hole=None, link_feed_mm_min: float = 1500.0,
-                      rapid_links: bool = True, clearance_z: float = 5.0, top_z: float = 0.0,
-                      spindle_rpm: float | None = None, tool: Tool | None = None, resolution_mm: float | None = None,
-                      step_mm: float | None = None, source: str = "<pocket>",
-                      params: AdaptiveParams = AdaptiveParams()) -> ToolPath:
-    """Engagement-controlled clearing of ``pocket`` (see the module docstring); a :class:`ToolPath`.
+def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolution_mm: float | None = None,
+                      step_mm: float | None = None) -> ToolPath:
+    """Engagement-controlled clearing of ``job.polygon`` (see the module docstring); a :class:`ToolPath`.
 
-    Parameters: ``tool_radius`` mm; ``theta_deg`` target engagement (deg); ``a_p`` axial depth per
-    level (mm); ``depth`` total depth (mm, default ``a_p``; levels of at most ``a_p``);
-    ``start_hole`` None or (x, y, diameter) mm of a pre-drilled hole; feeds mm/min; z in mm
-    (stock top ``top_z``); ``resolution_mm`` planning pixel (default r/60); ``step_mm`` path step
-    (default r/30); ``source`` names the job in error messages; ``params``: the tuning constants
-    (:class:`AdaptiveParams`, each field with its unit and reason);
+    ``job``: a :class:`cnclab.toolpath.job.Job` (or any object with its attribute names); the planner
+    reads ``polygon``, ``tool`` (its radius, mm), ``theta_deg`` target engagement (deg), ``a_p`` axial
+    depth per level (mm), ``depth`` total depth (mm, None: ``a_p``; levels of at most ``a_p``),
+    ``start_hole`` (None or (x, y, diameter) mm of a pre-drilled hole), ``feed_mm_min`` and
+    ``link_feed_mm_min`` (mm/min), ``rapid_links``, ``clearance_z`` and ``top_z`` (mm),
+    ``spindle_rpm`` and ``source`` (names the job in error messages). ``params``: the tuning
+    constants (:class:`AdaptiveParams`, each field with its unit and reason); ``resolution_mm``
+    planning pixel (mm, None: r/60); ``step_mm`` path step (mm, None: r/30).
     ``rapid_links``: the links at depth between passes (chords proven free of material on the rapid
     stock: no pixel of it within r + h/sqrt(2) of the chord, see Grid) are written as G0 marked
     ``cleared`` (the ToolPath column; as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
@@ -307,6 +305,11 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     """
     t_start = time.perf_counter()
     prm = params
+    pocket, tool, theta_deg, a_p, feed_mm_min = job.polygon, job.tool, job.theta_deg, job.a_p, job.feed_mm_min
+    tool_radius, depth, start_hole = tool.radius, getattr(job, "depth", None), getattr(job, "start_hole", None)
+    link_feed_mm_min, rapid_links = getattr(job, "link_feed_mm_min", 1500.0), bool(getattr(job, "rapid_links", True))
+    clearance_z, top_z = getattr(job, "clearance_z", 5.0), getattr(job, "top_z", 0.0)
+    spindle_rpm, source = getattr(job, "spindle_rpm", None), str(getattr(job, "source", "<job>"))
     guard_deg, clean_rounds, helix_angle_deg = prm.guard_deg, prm.clean_rounds, prm.helix_angle_deg
     finish, finish_margin_deg, finish_laps, max_passes = prm.finish, prm.finish_margin_deg, prm.finish_laps, prm.max_passes
     if not isinstance(pocket, (Polygon, MultiPolygon)) or pocket.is_empty or not pocket.is_valid:
@@ -377,20 +380,13 @@ def adaptive_clearing(pocket, tool_radius: float, theta_deg: float, a_p: float, 
     kinds[0] = "rapid"
     tp = ToolPath.build(np.array(pts, float), kind=kinds, tag=np.array(tags, dtype=object),
                         feed=np.array(feeds, float), spindle=spindle, cleared=np.array(clears, bool), arc=np.array(arcs),
-                        arc_center=np.array(ctrs, float), tool=tool or Tool(2 * r),
+                        arc_center=np.array(ctrs, float), tool=tool,
                         info={"planner": "adaptive_clearing", "theta_deg": theta_deg, "resolution_mm": h,
                               "step_mm": ds, **stats, "plan_time_s": time.perf_counter() - t_start})
     return tp
 
 
 def plan_job(job, **kw) -> ToolPath:
-    """:func:`adaptive_clearing` with the tool, engagement, depths, feeds and start hole of a job
-    (``cnclab.toolpath.job.Job`` or any object with its attribute names)."""
-    sh = getattr(job, "start_hole", None)
-    return adaptive_clearing(job.polygon, job.tool.radius, job.theta_deg, job.a_p, job.feed_mm_min,
-                             depth=getattr(job, "depth", None), start_hole=sh,
-                             link_feed_mm_min=getattr(job, "link_feed_mm_min", 1500.0),
-                             rapid_links=bool(getattr(job, "rapid_links", True)),
-                             clearance_z=getattr(job, "clearance_z", 5.0), top_z=getattr(job, "top_z", 0.0),
-                             spindle_rpm=getattr(job, "spindle_rpm", None), tool=job.tool,
-                             source=str(getattr(job, "source", "<job>")), **kw)
+    """:func:`adaptive_clearing` of ``job`` (the registry's name for it); ``kw``: its ``params``,
+    ``resolution_mm``, ``step_mm``."""
+    return adaptive_clearing(job, **kw)
