@@ -25,9 +25,11 @@ True
 """
 from __future__ import annotations
 
+import dataclasses
 import io
 import re
 from pathlib import Path
+from typing import Callable
 
 from .fileio import atomic_write
 from .paths import PACKAGE_DIR, figures_dir
@@ -35,6 +37,39 @@ from .paths import PACKAGE_DIR, figures_dir
 STYLE_PATH = PACKAGE_DIR / "paper.mplstyle"
 #: journal figure widths (mm): one column and the full page width
 WIDTH_PRESETS_MM = {"column": 85.0, "page": 175.0}
+
+
+@dataclasses.dataclass(frozen=True)
+class FigureRecipe:
+    """A figure recipe: ``work`` (the reproduced work), ``description``, ``draw() -> Figure``."""
+
+    work: str
+    description: str
+    draw: Callable
+
+
+#: figure name (its stem in ``build/figures/<work>/``) -> :class:`FigureRecipe`; filled by the works'
+#: ``figures`` modules when they are imported (``cnclab.figures`` imports them all).
+FIGURES: dict[str, FigureRecipe] = {}
+
+
+def register_figure(name: str, work: str, description: str):
+    """Decorator: register a zero-argument function drawing figure ``name`` of ``work``."""
+    def deco(f):
+        FIGURES[name] = FigureRecipe(work, description, f)
+        return f
+    return deco
+
+
+def draw_figure(name: str, style=None):
+    """Draw registered figure ``name`` under ``style`` (a style-sheet path or name; default the
+    collection's ``paper.mplstyle``) and return the matplotlib figure."""
+    import matplotlib.pyplot as plt
+
+    if name not in FIGURES:
+        raise ValueError(f"unknown figure {name!r}: covered are {', '.join(sorted(FIGURES))}")
+    with plt.style.context(str(style or STYLE_PATH)):
+        return FIGURES[name].draw()
 MM_PER_INCH = 25.4
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]*$")
 _MEDIABOX_RE = re.compile(rb"/MediaBox\s*\[\s*([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)\s*\]")
