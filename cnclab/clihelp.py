@@ -27,6 +27,8 @@ __all__ = ["HelpFormatter", "number", "parser", "plain"]
 _ROLE_RE = re.compile(r":(?:py:)?[a-z]+:`~?([^`]+)`")
 _LITERAL_RE = re.compile(r"``([^`]*)``")
 #: a decimal number as a machine operator types it (the APT reader's grammar): no '1_0', hex, 'nan'
+#: spelled non-finite values: parsed, then refused by the range check as "must be finite"
+_NONFINITE_WORDS = ("nan", "inf", "-inf", "+inf")
 _NUMBER_RE = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?", re.ASCII)
 
 
@@ -92,8 +94,8 @@ def number(name: str, lo=None, lo_open: bool = True, hi=None, kind=float):
     """
     def conv(text):
         try:
-            if not _NUMBER_RE.fullmatch(text.strip()):
-                raise ValueError(text)
+            if not _NUMBER_RE.fullmatch(text.strip()) and text.strip().lower() not in _NONFINITE_WORDS:
+                raise ValueError(text)      # strict grammar: no '1_0', no hex, no full-width digits
             v = kind(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"{name} must be {'an integer' if kind is int else 'a number'}, "

@@ -12,36 +12,14 @@ its own line naming the option or the file and line.
 """
 from __future__ import annotations
 
-import argparse
-import math
 import sys
 import warnings
 
 from .. import clihelp
 from ..fileio import InterruptReport
 from ..cutting.spindle_model import POINT_RULES
-from .apt import NUMBER_RE
 from .spindle_control import postprocess_files
 
-
-def _number(name, lo=None, lo_open=True, hi=None, kind=float):
-    """argparse type: a finite number in the range (message names the option)."""
-    def conv(text):
-        try:
-            if not NUMBER_RE.fullmatch(text.strip()) and text.strip().lower() not in ("nan", "inf", "-inf", "+inf"):
-                raise ValueError(text)      # strict grammar: no '1_0', no hex, no full-width digits
-            v = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} must be {'an integer' if kind is int else 'a number'}, "
-                                             f"got {text!r}") from None
-        ok = math.isfinite(v) and (lo is None or (v > lo if lo_open else v >= lo)) and (hi is None or v <= hi)
-        if not ok:
-            rng = ("(" if lo_open else "[") + (f"{lo:g}" if lo is not None else "-inf") + ", " + \
-                  (f"{hi:g}]" if hi is not None else "inf)")
-            raise argparse.ArgumentTypeError(f"{name} must be finite and in {rng}, got {text!r}")
-        return v
-    conv.__name__ = name
-    return conv
 
 def main(argv=None) -> int:
     ap = clihelp.parser(
@@ -62,31 +40,31 @@ def main(argv=None) -> int:
     ap.add_argument("stl", help="part surface STL (ASCII or binary, mm)")
     ap.add_argument("apt", help="APT CL file of a ball-end path (UNITS/MM)")
     ap.add_argument("-o", "--out", required=True, help="output APT file (must differ from the inputs)")
-    ap.add_argument("--vc", type=_number("--vc", 0), required=True, help="cutting speed v_c to hold (m/min)")
-    ap.add_argument("--fz", type=_number("--fz", 0), required=True, help="feed per tooth f_z (mm)")
-    ap.add_argument("--teeth", type=_number("--teeth", 1, lo_open=False, kind=int), required=True,
+    ap.add_argument("--vc", type=clihelp.number("--vc", 0), required=True, help="cutting speed v_c to hold (m/min)")
+    ap.add_argument("--fz", type=clihelp.number("--fz", 0), required=True, help="feed per tooth f_z (mm)")
+    ap.add_argument("--teeth", type=clihelp.number("--teeth", 1, lo_open=False, kind=int), required=True,
                     help="number of teeth z (integer >= 1)")
-    ap.add_argument("--ap", type=_number("--ap", 0), required=True, help="depth of cut a_p (mm, <= D/2)")
-    ap.add_argument("--ae", type=_number("--ae", 0), default=None, help="width of cut a_e (mm; reported only; default: not reported)")
-    ap.add_argument("--tool-diameter", type=_number("--tool-diameter", 0), default=None,
+    ap.add_argument("--ap", type=clihelp.number("--ap", 0), required=True, help="depth of cut a_p (mm, <= D/2)")
+    ap.add_argument("--ae", type=clihelp.number("--ae", 0), default=None, help="width of cut a_e (mm; reported only; default: not reported)")
+    ap.add_argument("--tool-diameter", type=clihelp.number("--tool-diameter", 0), default=None,
                     help="ball diameter D (mm; default: from the CUTTER record of the APT)")
-    ap.add_argument("--feed-direction", type=_number("--feed-direction"), default=None,
+    ap.add_argument("--feed-direction", type=clihelp.number("--feed-direction"), default=None,
                     help="constant feed direction A_f (deg; default: from the path, eq. 7-3)")
     ap.add_argument("--point", choices=POINT_RULES, default="max", help="contact point rule")
     ap.add_argument("--facet", choices=("centroid", "nearest"), default="centroid",
                     help="facet of a CL point: nearest centroid (the thesis) or the true nearest facet")
-    ap.add_argument("--nmax", type=_number("--nmax", 0), default=None, help="spindle speed limit (rpm; default: no limit)")
-    ap.add_argument("--vfmax", type=_number("--vfmax", 0), default=None, help="feed limit (mm/min; default: no limit)")
-    ap.add_argument("--accel", type=_number("--accel", 0), default=None, help="spindle acceleration limit (rpm/s; default: no limit)")
-    ap.add_argument("--rpm-threshold", type=_number("--rpm-threshold", 0, lo_open=False), default=50.0,
+    ap.add_argument("--nmax", type=clihelp.number("--nmax", 0), default=None, help="spindle speed limit (rpm; default: no limit)")
+    ap.add_argument("--vfmax", type=clihelp.number("--vfmax", 0), default=None, help="feed limit (mm/min; default: no limit)")
+    ap.add_argument("--accel", type=clihelp.number("--accel", 0), default=None, help="spindle acceleration limit (rpm/s; default: no limit)")
+    ap.add_argument("--rpm-threshold", type=clihelp.number("--rpm-threshold", 0, lo_open=False), default=50.0,
                     help="insert SPINDL when the speed changes by more than this (rpm, >= 0)")
-    ap.add_argument("--vf-threshold", type=_number("--vf-threshold", 0, lo_open=False), default=10.0,
+    ap.add_argument("--vf-threshold", type=clihelp.number("--vf-threshold", 0, lo_open=False), default=10.0,
                     help="insert FEDRAT when the feed changes by more than this (mm/min, >= 0)")
     ap.add_argument("--gcode", default=None, help="also write RS274/NGC G-code to this file (differs from -o and the inputs; default: none)")
-    ap.add_argument("--mismatch-tol", type=_number("--mismatch-tol", 0), default=1.0,
+    ap.add_argument("--mismatch-tol", type=clihelp.number("--mismatch-tol", 0), default=1.0,
                     help="part/path check: a feed CL point is off the part if its ball is farther than this "
                          "from the surface (mm)")
-    ap.add_argument("--max-off-share", type=_number("--max-off-share", 0, lo_open=False, hi=1), default=0.2,
+    ap.add_argument("--max-off-share", type=clihelp.number("--max-off-share", 0, lo_open=False, hi=1), default=0.2,
                     help="part/path check: largest accepted share of off-part feed points (0..1)")
     ap.add_argument("--allow-mismatch", action="store_true",
                     help="process even when the part/path check fails (the share is still reported)")
