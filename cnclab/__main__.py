@@ -1,11 +1,38 @@
 """Command line: ``python -m cnclab <command> ...``.
 
 Commands are imported lazily, so ``python -m cnclab claims`` does not import torch.
-"""
-from __future__ import annotations
 
-import importlib
+Interrupts: the first statements below (before any other import) make SIGINT, SIGTERM and SIGHUP end
+the process at once with one line "interrupted (SIG...): nothing written ..." and exit code
+128 + signal number (130, 143, 129), until the command's ``main`` starts; nothing is on disk then
+(``cnclab/__init__.py`` imports nothing, so this is reached ~1 ms after the interpreter's own
+start-up). While the command runs, SIGINT raises ``KeyboardInterrupt`` and SIGTERM/SIGHUP
+``SystemExit(128 + signum)`` (temporary files of atomic writes are removed on the way out); the
+commands that write files say what is on disk (:class:`cnclab.fileio.InterruptReport`), and an
+interrupt no command handled is reported here.
+"""
+import os as _os
+import signal as _signal
 import sys
+
+
+def _stop_before_start(signum, frame):
+    """Signal handler until the command starts: one line on stderr, exit 128 + signum, no traceback and no
+    interpreter finalization (an import cut in the middle cannot crash a finalizer)."""
+    try:
+        _os.write(2, f"\ninterrupted ({_signal.Signals(signum).name}): nothing written (the command had not "
+                     "started)\n".encode())
+    finally:
+        _os._exit(128 + signum)
+
+
+_SIGNAL_NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
+if __name__ == "__main__":
+    for _name in _SIGNAL_NAMES:
+        if hasattr(_signal, _name):
+            _signal.signal(getattr(_signal, _name), _stop_before_start)
+
+import importlib  # noqa: E402  (after the handlers: everything below may be interrupted)
 
 #: command -> (module, one-line help). Each module has ``main(argv) -> int``.
 COMMANDS = {
@@ -37,47 +64,60 @@ def main(argv=None) -> int:
             print(f"\nerror: unknown command {argv[0]!r}")
             return 2
         return 0
-    try:
-        with _terminate_raises():
-            mod = importlib.import_module(COMMANDS[argv[0]][0])
-    except (KeyboardInterrupt, _Terminated) as exc:          # the command has not started: nothing written
-        print("\ninterrupted: nothing written", file=sys.stderr)
-        return exc.code if isinstance(exc, _Terminated) else 130
-    return int(mod.main(argv[1:]) or 0)
+    mod = importlib.import_module(COMMANDS[argv[0]][0])   # an interrupt here: _stop_before_start
+    with _interrupts_raise():
+        try:
+            return int(mod.main(argv[1:]) or 0)
+        except (KeyboardInterrupt, _Interrupted) as exc:
+            _ignore_signals()     # a second interrupt cannot cut this message
+            # the command did not handle it: its outputs are written atomically (each one complete or
+            # not created), so say which of them
+            signum = exc.signum if isinstance(exc, _Interrupted) else _signal.SIGINT
+            print(f"\ninterrupted ({_signal.Signals(signum).name}): {argv[0]} stopped before it finished; its outputs "
+                  "are written atomically, each one is complete or was not written", file=sys.stderr)
+            return 128 + signum
 
 
-class _Terminated(Exception):
-    def __init__(self, code):
-        super().__init__(code)
-        self.code = code
+class _Interrupted(SystemExit):
+    """SIGTERM / SIGHUP while a command runs: a ``SystemExit(128 + signum)`` (like
+    :func:`cnclab.fileio.cleanup_on_signals`), so atomic writes clean up on the way out."""
+
+    def __init__(self, signum):
+        super().__init__(128 + signum)
+        self.signum = signum
 
 
-class _terminate_raises:
-    """SIGTERM/SIGHUP raise :class:`_Terminated` (like SIGINT raises KeyboardInterrupt) while the
-    command's module is imported (main thread; restored afterwards)."""
+class _interrupts_raise:
+    """While a command runs (main thread): SIGINT raises ``KeyboardInterrupt``, SIGTERM/SIGHUP
+    :class:`_Interrupted`; the start-up handlers are restored afterwards (a late signal during the
+    exit is then ignored by :func:`_exit`)."""
 
     def __enter__(self):
-        import signal
         import threading
 
         self.old = {}
         if threading.current_thread() is threading.main_thread():
-            for name in ("SIGTERM", "SIGHUP"):
-                sig = getattr(signal, name, None)
+            for name in _SIGNAL_NAMES:
+                sig = getattr(_signal, name, None)
                 if sig is not None:
-                    self.old[sig] = signal.signal(sig, self._raise)
+                    self.old[sig] = _signal.signal(sig, _signal.default_int_handler if sig == _signal.SIGINT
+                                                   else self._raise)
         return self
 
     @staticmethod
     def _raise(signum, frame):
-        raise _Terminated(128 + signum)
+        raise _Interrupted(signum)
 
     def __exit__(self, *exc):
-        import signal
-
-        for sig, h in self.old.items():
-            signal.signal(sig, h)
+        for sig, h in self.old.items():      # after the command, "nothing written" would be a lie: ignore
+            _signal.signal(sig, _signal.SIG_IGN if h is _stop_before_start else h)
         return False
+
+
+def _ignore_signals():
+    for name in _SIGNAL_NAMES:
+        if hasattr(_signal, name):
+            _signal.signal(getattr(_signal, name), _signal.SIG_IGN)
 
 
 def _exit(rc: int):
@@ -90,20 +130,14 @@ def _exit(rc: int):
     the middle (scipy's, ~1.2 s into ``spindle``), and finalizing such a module can crash; CPython
     would also re-kill itself with SIGINT at exit when the KeyboardInterrupt passed through an
     extension's embedded Python code, although the command handled it."""
-    import os
-    import signal
-
-    for name in ("SIGINT", "SIGTERM", "SIGHUP"):
-        sig = getattr(signal, name, None)
-        if sig is not None:
-            signal.signal(sig, signal.SIG_IGN)
-    if rc in {128 + int(getattr(signal, n)) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)}:
+    _ignore_signals()
+    if rc in {128 + int(getattr(_signal, n)) for n in _SIGNAL_NAMES if hasattr(_signal, n)}:
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.flush()
             except (OSError, ValueError):
                 pass
-        os._exit(rc)
+        _os._exit(rc)
     sys.exit(rc)
 
 

@@ -91,6 +91,32 @@ def test_plan_api_resolution_refused(res):
         planners.plan(job, "zig-zag", res)
 
 
+@pytest.mark.parametrize("res,why", [(0.61, "above D/10"), (3.0, "above D/10"), (100.0, "above D/10"),
+                                     (0.004, "below 0.005 mm")])
+def test_plan_resolution_bounded(res, why):
+    """``resolution_mm`` outside [0.005, D/10] (D 6 mm: 0.6 mm) is refused before planning, naming the
+    option, its bound, the job and why; the same through the CLI's ``--resolution``."""
+    job = Job.from_dict(BASE, source="res.json")
+    for strategy in sorted(planners.STRATEGIES):
+        with pytest.raises(ValueError, match=rf"^resolution_mm {res:g} mm is outside \[0.005, 0.6\] mm for res.json "
+                                             rf"\(tool D 6 mm\): {why}"):
+            planners.plan(job, strategy, res)
+    planners.check_resolution(0.6, job)                 # the bounds themselves are accepted
+    planners.check_resolution(0.005, job)
+
+
+def test_plan_cli_resolution_bounded(tmp_path, capsys):
+    job = tmp_path / "res.json"
+    job.write_text(json.dumps(BASE))
+    out = tmp_path / "p.ngc"
+    assert cli_plan.main([str(job), "-o", str(out), "--resolution", "0.7"]) == 2
+    err = capsys.readouterr().err
+    assert "error: --resolution 0.7 mm is outside [0.005, 0.6] mm for" in err and "res.json" in err, err
+    assert not out.exists()
+    assert cli_plan.main([str(job), "-o", str(out), "--resolution", "0.3", "--strategy", "zig-zag"]) == 0
+    assert check_program(out.read_text(), clearance_z=5.0, top_z=0.0).ok
+
+
 def test_outcomes_cover_both_kinds():
     """The fuzz above produced both refusals and programs (run after it: file order)."""
     kinds = {k for _, k in OUTCOMES}

@@ -33,13 +33,14 @@ from pathlib import Path
 import numpy as np
 
 from .. import clihelp
-from ..fileio import atomic_write_many, check_outputs, cleanup_on_signals
+from ..fileio import InterruptReport, atomic_write_many, check_outputs
 from ..paths import build_dir
 from .gcode import GcodeError, read_toolpath
 from .machine import SMALL_VMC, machine_time
 
 from ..toolpath.evaluate import POSITION_TOL_MM, evaluate
 from ..toolpath.job import load_job
+from ..toolpath.planners import MAX_RESOLUTION_TOOL_FRACTION, MIN_RESOLUTION_MM
 
 __all__ = ["main", "analyze", "trace_figure", "engagement_map"]
 
@@ -100,12 +101,9 @@ def engagement_map(trace: dict, polygon=None, title: str = ""):
     return fig
 
 
-#: bounds of ``--resolution`` (mm): below 0.005 mm the dixel rows and path samples grow without
-#: use (the engagement of a 1 mm tool is resolved to < 1 deg at 0.005 mm); above D/10 the tool disc
-#: spans fewer than 10 dixel rows and the engagement and uncut area are meaningless (100 mm on a 6 mm
-#: tool gave NaN and uncut 0). Samples and rows are also bounded (memory, run time).
-MIN_RESOLUTION_MM = 0.005
-MAX_RESOLUTION_TOOL_FRACTION = 0.1
+#: bounds of ``--resolution`` (mm): those of ``plan``'s ``resolution_mm``
+#: (:data:`cnclab.toolpath.planners.MIN_RESOLUTION_MM`, D x :data:`~cnclab.toolpath.planners.MAX_RESOLUTION_TOOL_FRACTION`,
+#: the reasons there). Samples and rows are also bounded (memory, run time).
 MAX_SAMPLES = 5_000_000
 MAX_ROWS = 100_000
 OUTPUT_NAMES = ("summary.csv", "trace.csv", "events.csv", "trace.png", "trace.pdf", "engagement_map.png")
@@ -292,10 +290,20 @@ def main(argv=None) -> int:
     ap.add_argument("--resolution", type=float, default=0.05, help="dixel size of the simulation (mm)")
     ap.add_argument("-o", "--outdir", default=None, help="output folder (default: build/analyze/<program name>)")
     args = ap.parse_args(argv)
+    outdir = Path(args.outdir) if args.outdir is not None else build_dir() / "analyze" / Path(args.program).stem
+    run = InterruptReport([outdir / name for name in OUTPUT_NAMES])   # an interrupt says what is on disk
     try:
-        with cleanup_on_signals():
-            analyze(args.program, args.job, args.resolution, args.outdir)
+        with run:
+            analyze(args.program, args.job, args.resolution, outdir)
+            run.check()
+    except (KeyboardInterrupt, SystemExit) as exc:
+        code = run.exit_code(exc)
+        if code is None:
+            raise
+        return code
     except (GcodeError, ValueError, OSError, RuntimeError) as exc:
+        if run.signum is not None:                 # a library turned the interrupt into an error
+            return run.exit_code(KeyboardInterrupt())
         print(f"error: {exc}", file=sys.stderr)
         return 2
     return 0

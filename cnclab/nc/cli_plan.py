@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 
 from .. import clihelp
-from ..fileio import check_outputs
+from ..fileio import InterruptReport, check_outputs
 from .gcode import read_gcode
 from .machine import machine_for_dialect, machine_time
 from .program import COOLANT, DIALECTS, check_program, program_path, write_program
@@ -28,7 +28,7 @@ from .program import COOLANT, DIALECTS, check_program, program_path, write_progr
 from ..geometry.drawing import CHORD_TOL_MM
 from ..toolpath.from_drawing import load_job_input
 from ..toolpath.job import load_job
-from ..toolpath.planners import DEFAULT_STRATEGY, STRATEGIES, plan
+from ..toolpath.planners import DEFAULT_STRATEGY, MIN_RESOLUTION_MM, STRATEGIES, plan
 
 __all__ = ["main", "plan_program", "planned_program", "with_machine_warnings"]
 
@@ -47,24 +47,26 @@ def with_machine_warnings(job, dialect: str):
 
 def planned_program(job_file, strategy: str | None = None, source: str | None = None, *, cutting=None,
                     layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
-                    allow_uncut: bool = False, dialect: str = "linuxcnc", coolant: str | None = None, out=None,
-                    inputs=()):
+                    dialect: str = "linuxcnc", coolant: str | None = None, out=None, inputs=(),
+                    plan_options: dict | None = None):
     """Plan ``job_file`` with ``strategy`` (None: the planner's default) and write its program text:
     ``(text, job, path, check)`` — what ``python -m cnclab plan`` writes (also used by
     ``python -m cnclab programs``). Raises ``ValueError`` when the program fails the static safety
     check or leaves more uncut area than :func:`cnclab.toolpath.coverage.uncut_limit_mm2` allows in a
-    region (with ``allow_uncut``: a WARNING line in the program header instead, and in
+    region (with ``plan_options={"allow_uncut": True}``: a WARNING line in the program header instead, and in
     ``path.info["warnings"]``); ``source`` names the program in the messages. ``job_file`` may be a
     drawing (.dxf/.svg): then ``cutting`` (CUTTING.json) gives every other job key,
     ``layer``/``tolerance`` (mm)/``units`` how the drawing is read
-    (:func:`cnclab.toolpath.from_drawing.load_job_input`)."""
+    (:func:`cnclab.toolpath.from_drawing.load_job_input`); ``plan_options`` are keywords of
+    :func:`cnclab.toolpath.planners.plan`: ``allow_uncut`` (bool), ``resolution_mm`` (mm, None: each
+    planner's default; bounded to [0.005, D/10])."""
     if load_job is None or plan is None:
         raise RuntimeError("cnclab plan needs cnclab.toolpath.job and cnclab.toolpath.planners "
                            f"(issue 12, toolpath-core), not available: {_MISSING}")
     job_file = Path(job_file)
     job = load_job_input(job_file, cutting=cutting, layer=layer, tolerance=tolerance, units=units)
     job = with_machine_warnings(job, dialect)
-    path = plan(job, strategy or DEFAULT_STRATEGY, allow_uncut=allow_uncut)
+    path = plan(job, strategy or DEFAULT_STRATEGY, **(plan_options or {}))
     name = strategy or path.info.get("strategy", "default")
     rep = path.info["uncut"]
     header = [f"cnclab plan {job_file.name} strategy {name}",
@@ -90,7 +92,8 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
 
 def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False, *, cutting=None,
                  layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
-                 allow_uncut: bool = False, dialect: str = "linuxcnc", coolant: str | None = None) -> Path:
+                 allow_uncut: bool = False, dialect: str = "linuxcnc", coolant: str | None = None,
+                 resolution_mm: float | None = None) -> Path:
     """Plan ``job_file`` (a job file, or a drawing with ``cutting`` data, see :func:`planned_program`)
     with ``strategy`` (None: the planner's default) and write the program to ``out``; returns the
     output path. Raises ``ValueError`` when the written program fails the static safety check or
@@ -101,8 +104,9 @@ def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False
     inputs = [job_file] + ([Path(cutting)] if cutting is not None else [])
     check_outputs([out], inputs)
     text, job, path, chk = planned_program(job_file, strategy, source=str(out), cutting=cutting, layer=layer,
-                                           tolerance=tolerance, units=units, allow_uncut=allow_uncut, dialect=dialect,
-                                           coolant=coolant, out=out, inputs=inputs)
+                                           tolerance=tolerance, units=units, dialect=dialect, coolant=coolant, out=out,
+                                           inputs=inputs,
+                                           plan_options=dict(allow_uncut=allow_uncut, resolution_mm=resolution_mm))
     for w in path.info.get("warnings", []):
         print(f"warning: {w}", file=sys.stderr)
     name = strategy or path.info.get("strategy", "default")
@@ -155,12 +159,28 @@ def main(argv=None) -> int:
                          "characters, tool named in a comment)")
     ap.add_argument("--coolant", default=None, choices=sorted(COOLANT),
                     help="coolant on after the spindle (flood M8, mist M7; grbl: flood only), off before M5")
+    ap.add_argument("--resolution", type=clihelp.number("--resolution", 0), default=None, metavar="MM",
+                    help=f"planning dixel / sampling step, mm, in [{MIN_RESOLUTION_MM:g}, D/10] (default: the "
+                         "planner's own, 0.1 mm; adaptive r/60)")
     args = ap.parse_args(argv)
+    run = InterruptReport([args.output])       # an interrupt says whether the program is on disk
     try:
-        plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
-                     tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut,
-                     dialect=args.dialect, coolant=args.coolant)
+        with run:
+            plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
+                         tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut,
+                         dialect=args.dialect, coolant=args.coolant, resolution_mm=args.resolution)
+            run.check()
+    except (KeyboardInterrupt, SystemExit) as exc:
+        code = run.exit_code(exc)
+        if code is None:
+            raise
+        return code
     except (ValueError, OSError, RuntimeError, KeyError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        if run.signum is not None:                 # a library turned the interrupt into an error
+            return run.exit_code(KeyboardInterrupt())
+        msg = str(exc)
+        if args.resolution is not None and msg.startswith("resolution_mm "):
+            msg = "--resolution" + msg[len("resolution_mm"):]
+        print(f"error: {msg}", file=sys.stderr)
         return 2
     return 0

@@ -41,13 +41,53 @@ from .levels import join_levels
 from .path import ToolPath
 
 __all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "MAX_LEVELS", "MIN_LEVEL_STEP_MM", "GOUGE_TOL_MM", "CE_PROMISE_DEG",
-           "UncutError", "check_limits", "plan", "register"]
+           "MIN_RESOLUTION_MM", "MAX_RESOLUTION_TOOL_FRACTION", "UncutError", "check_limits", "check_resolution",
+           "plan", "register"]
 
 #: name -> (planner(job, resolution_mm, **options) -> ToolPath for one level, one-line description);
 #: ``resolution_mm`` None: the planner's own default
 STRATEGIES: dict = {}
 #: the planners' dixel / sampling step (mm) when :func:`plan` is given none (the adaptive planner: r/60)
 DEFAULT_RESOLUTION_MM = 0.1
+
+
+#: bounds of a planning / evaluation resolution (mm), shared by :func:`plan` and ``python -m cnclab analyze
+#: --resolution``: below 0.005 mm the dixel rows and path samples grow without use (the engagement of a
+#: 1 mm tool is resolved to < 1 deg at 0.005 mm); above D/10 the tool disc spans fewer than 10 dixel
+#: rows, and the planners' stock, the engagement and the uncut area are meaningless (100 mm on a 6 mm
+#: tool gave NaN and uncut 0)
+MIN_RESOLUTION_MM = 0.005
+MAX_RESOLUTION_TOOL_FRACTION = 0.1
+
+
+def check_resolution(resolution_mm, job: Job, name: str = "resolution_mm") -> None:
+    """Refuse (ValueError naming ``name`` and the job) a ``resolution_mm`` (mm) outside
+    [:data:`MIN_RESOLUTION_MM`, :data:`MAX_RESOLUTION_TOOL_FRACTION` x the tool diameter]; None passes
+    (each planner's own default).
+
+    >>> from shapely.geometry import box
+    >>> from cnclab.toolpath.path import Tool
+    >>> check_resolution(1.0, Job(box(0, 0, 30, 20), Tool(6.0), 60.0, 1.0, v_c=100, f_z=0.05, source="j.json"))
+    Traceback (most recent call last):
+    ...
+    ValueError: resolution_mm 1 mm is outside [0.005, 0.6] mm for j.json (tool D 6 mm): above D/10 the tool disc spans fewer than 10 dixel rows and the planning stock, engagement and uncut area are meaningless
+    """
+    if resolution_mm is None:
+        return
+    if (isinstance(resolution_mm, bool) or not isinstance(resolution_mm, (int, float, np.integer, np.floating))
+            or not (math.isfinite(resolution_mm) and resolution_mm > 0)):
+        raise ValueError(f"{name} must be a finite number > 0 mm (or None: each planner's default), "
+                         f"got {resolution_mm!r}")
+    hi = MAX_RESOLUTION_TOOL_FRACTION * job.tool_diameter
+    why = None
+    if resolution_mm > hi:
+        why = ("above D/10 the tool disc spans fewer than 10 dixel rows and the planning stock, engagement and "
+               "uncut area are meaningless")
+    elif resolution_mm < MIN_RESOLUTION_MM:
+        why = f"below {MIN_RESOLUTION_MM:g} mm the dixel rows and samples grow without gain in accuracy"
+    if why:
+        raise ValueError(f"{name} {float(resolution_mm):g} mm is outside [{MIN_RESOLUTION_MM:g}, {hi:g}] mm for "
+                         f"{job.source} (tool D {job.tool_diameter:g} mm): {why}")
 
 
 def _res(resolution_mm):
@@ -246,16 +286,13 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     material the levels above left, ``info["uncut"]`` what the plan leaves by region
     (:func:`cnclab.toolpath.coverage.uncut_report`). A plan leaving more than the stated limit in a
     region raises :class:`UncutError`, unless ``allow_uncut`` (then ``info["warnings"]`` says it).
-    A job beyond :data:`MAX_LEVELS` / :data:`MIN_LEVEL_STEP_MM` is refused before planning."""
+    A job beyond :data:`MAX_LEVELS` / :data:`MIN_LEVEL_STEP_MM`, or a ``resolution_mm`` outside
+    [:data:`MIN_RESOLUTION_MM`, D / 10] (:func:`check_resolution`), is refused before planning."""
     if strategy not in STRATEGIES:
         raise ValueError(f"unknown strategy {strategy!r}: must be one of {sorted(STRATEGIES)}")
     if not isinstance(job, Job):
         raise TypeError(f"job must be a cnclab.toolpath.job.Job, got {type(job).__name__}")
-    if resolution_mm is not None and (isinstance(resolution_mm, bool)
-                                      or not isinstance(resolution_mm, (int, float, np.integer, np.floating))
-                                      or not (math.isfinite(resolution_mm) and resolution_mm > 0)):
-        raise ValueError(f"resolution_mm must be a finite number > 0 mm (or None: each planner's default), "
-                         f"got {resolution_mm!r}")
+    check_resolution(resolution_mm, job)
     check_limits(job)
     f = STRATEGIES[strategy][0]
     levels = job.levels()
