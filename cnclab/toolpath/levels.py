@@ -171,7 +171,8 @@ def join_levels(paths, tops, job, tol_mm2: float = PROOF_TOL_MM2) -> ToolPath:
             extra.append(float(body.intersection(left_above).area))
         else:
             extra.append(0.0)
-        left_above = left_above.union(material.difference(swept_region(p, top, r)))
+        if k < len(paths) - 1:          # what the levels below need (the last level's is never read)
+            left_above = left_above.union(material.difference(swept_region(p, top, r)))
         out.append(p)
     joined = out[0] if len(out) == 1 else ToolPath.concat(out)
     joined.info["levels_extra_mm2"] = extra
