@@ -95,6 +95,31 @@ def figsize(width: float = 1.0, height: float = 1.0) -> tuple[float, float]:
     return (round(float(width) * w, 6), round(float(height) * h, 6))
 
 
+def with_style(func=None, *, style=None):
+    """Decorator: draw a figure function under a style sheet (``style``, default the collection's
+    ``paper.mplstyle``), so fonts and :func:`figsize` follow the style outside a notebook too (the
+    ``analyze`` command's figures). Does not import pyplot.
+
+    >>> @with_style
+    ... def size():
+    ...     return figsize(2, 1)
+    >>> size()
+    (12.0, 3.8)
+    """
+    import functools
+
+    def deco(f):
+        @functools.wraps(f)
+        def wrapper(*args, **kwargs):
+            import matplotlib.style
+
+            with matplotlib.style.context(str(style or STYLE_PATH)):
+                return f(*args, **kwargs)
+        return wrapper
+
+    return deco(func) if func is not None else deco
+
+
 def _mm(value, name: str):
     if value is None:
         return None
@@ -147,6 +172,9 @@ def export_figure(fig, name: str, outdir, *, width_mm=None, height_mm=None, form
             fig.set_size_inches(w / MM_PER_INCH, h_in)
             if fig.get_layout_engine() is None or type(fig.get_layout_engine()).__name__ == "PlaceHolderLayoutEngine":
                 fig.set_layout_engine("constrained")
+            for ax in fig.axes:       # a legend inside an axes at column width must not collapse the layout
+                if ax.get_legend() is not None:
+                    ax.get_legend().set_in_layout(False)
             mpl.rcParams["savefig.bbox"] = "standard"   # no cropping: the page is exactly the requested size
         for fmt in formats:
             buf = io.BytesIO()

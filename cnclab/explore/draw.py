@@ -5,11 +5,14 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..plotting import figsize
+
 __all__ = ["thesis1", "ce_growth", "trochoid", "kim_yang", "hoang", "working_diameter", "cusp", "spindle"]
 
 
-def _fig(w=9.0, h=3.8, ncols=2, **kw):
-    fig = Figure(figsize=(w, h))
+def _fig(w=1.5, h=1.0, ncols=2, **kw):
+    """A figure of ``w`` x ``h`` times the style's ``figure.figsize`` (the paper style: 9 x 3.8 in)."""
+    fig = Figure(figsize=figsize(w, h))
     fig.subplots_adjust(left=0.08, right=0.97, bottom=0.14, top=0.9, wspace=0.3)   # fixed: fast redraws
     return fig, fig.subplots(1, ncols, **kw) if ncols > 1 else fig.subplots()
 
@@ -54,7 +57,7 @@ def ce_growth(sc):
 
 
 def trochoid(sc):
-    fig, (a, b) = _fig(w=10)
+    fig, (a, b) = _fig(w=10 / 6)
     P, link = sc["points"], sc["link"]
     W = sc["width_mm"]
     a.axhspan(-W / 2, W / 2, color="0.92")
@@ -73,7 +76,7 @@ def trochoid(sc):
 
 
 def kim_yang(sc):
-    fig, (a, b) = _fig(w=10)
+    fig, (a, b) = _fig(w=10 / 6)
     a.plot(*sc["pocket"].T, "k", lw=1)
     for h in sc["islands"]:
         a.plot(*h.T, "k", lw=1)
@@ -94,7 +97,7 @@ def kim_yang(sc):
 
 
 def hoang(sc):
-    fig, (a, b) = _fig(w=10)
+    fig, (a, b) = _fig(w=10 / 6)
     fig.subplots_adjust(wspace=0.65)                   # room for the bar labels
     for ball in sc["balls"]:
         a.plot(*ball.T, "0.5", lw=1)
@@ -112,7 +115,7 @@ def hoang(sc):
 
 
 def working_diameter(sc):
-    fig = Figure(figsize=(9, 4.2))
+    fig = Figure(figsize=figsize(1.5, 4.2 / 3.8))
     fig.subplots_adjust(left=0.02, right=0.97, bottom=0.14, top=0.9, wspace=0.2)
     a = fig.add_subplot(1, 2, 1, projection="3d")
     b = fig.add_subplot(1, 2, 2)
@@ -154,7 +157,7 @@ def cusp(sc):
 
 
 def spindle(sc):
-    fig, (a, b) = _fig(w=10)
+    fig, (a, b) = _fig(w=10 / 6)
     xyz = sc["xyz"]
     m = a.scatter(xyz[:, 0], xyz[:, 1], c=sc["n_rpm"], s=3, cmap="viridis")
     fig.colorbar(m, ax=a, label="n [rpm]")

@@ -35,6 +35,7 @@ import numpy as np
 from .. import clihelp
 from ..fileio import InterruptReport, atomic_write_many, check_outputs
 from ..paths import build_dir
+from ..plotting import figsize, with_style
 from .gcode import GcodeError, read_toolpath
 from .machine import SMALL_VMC, machine_time
 
@@ -54,6 +55,7 @@ def _png_pdf(fig):
     return out
 
 
+@with_style
 def trace_figure(trace: dict, title: str = ""):
     """Figure: engagement [deg], MRR [mm³/min] and feed [mm/min] against path length [mm]."""
     import matplotlib
@@ -61,7 +63,7 @@ def trace_figure(trace: dict, title: str = ""):
     import matplotlib.pyplot as plt
 
     s = np.asarray(trace["s_mm"], float)
-    fig, ax = plt.subplots(3, 1, figsize=(8, 6.5), sharex=True)
+    fig, ax = plt.subplots(3, 1, figsize=figsize(1.35, 1.7), sharex=True)
     for a, key, lab in zip(ax, ("engagement_deg", "mrr_mm3_min", "feed_mm_min"),
                            ("engagement [deg]", "MRR [mm³/min]", "feed [mm/min]")):
         a.plot(s, np.asarray(trace[key], float), lw=0.7)
@@ -74,6 +76,7 @@ def trace_figure(trace: dict, title: str = ""):
     return fig
 
 
+@with_style
 def engagement_map(trace: dict, polygon=None, title: str = ""):
     """Figure: engagement angle [deg] coloured along the tool-centre path over the pocket outline."""
     import matplotlib
@@ -82,7 +85,7 @@ def engagement_map(trace: dict, polygon=None, title: str = ""):
 
     x, y = np.asarray(trace["x"], float), np.asarray(trace["y"], float)
     e = np.asarray(trace["engagement_deg"], float)
-    fig, ax = plt.subplots(figsize=(7, 6))
+    fig, ax = plt.subplots(figsize=figsize(1.15, 1.6))
     if polygon is not None:
         geoms = getattr(polygon, "geoms", [polygon])
         for g in geoms:

@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from ...paths import REPO_ROOT
+from ...plotting import figsize
 from ...runtime import pick
 from ...toolpath import planners
 from ...toolpath.evaluate import evaluate
@@ -211,7 +212,7 @@ def distribution_figure(df: pd.DataFrame):
 
     R = ratio_columns(df)
     fams = sorted(R["family"].unique())
-    fig, axs = plt.subplots(2, 3, figsize=(15, 7.5))
+    fig, axs = plt.subplots(2, 3, figsize=figsize(2.5, 2))
     for ax, (col, target, yscale) in zip(axs.flat, PANELS):
         for i, f in enumerate(fams):
             v = R.loc[R["family"] == f, col].dropna()

@@ -32,11 +32,12 @@ import pandas as pd
 from ... import __version__
 from ...cache import cached
 from ...analysis import response_surface as rs
-from ...analysis.doe import full_factorial, interaction_means, main_effects
+from ...analysis.doe import full_factorial
 from ...analysis.error_stats import STAT_NAMES, difference_stats
 from ...claims import Interval
 from ...fileio import atomic_write
 from ...paths import DATA_DIR, data_path
+from ...runtime import pick
 from ...geometry.ball_end import tangent_point_diameters
 from ...analysis.mlp import train_mlp
 from ...sweep import sweep
@@ -547,104 +548,19 @@ def seed_summary(stats: pd.DataFrame, columns=STAT_NAMES) -> pd.DataFrame:
     return pd.DataFrame({"mean": s.mean(), "sd": s.std(ddof=1), "min": s.min(), "max": s.max()})
 
 
-# ---------------------------------------------------------------------------------------- figures
-def fig_main_effects(df: pd.DataFrame | None = None, response: str = "D_eff1"):
-    """Figure 6-2: mean working diameter at each level of each factor (MiniTab main-effects plot)."""
-    import matplotlib.pyplot as plt
-
-    df = dataset() if df is None else df
-    me = main_effects(df, INPUTS, response)
-    fig, axes = plt.subplots(1, 4, figsize=(11, 3), sharey=True)
-    for ax, f in zip(axes, INPUTS):
-        ax.plot(me[f].index, me[f].to_numpy(), "o-")
-        ax.axhline(df[response].mean(), color="grey", lw=0.8, ls="--")
-        ax.set_xlabel(f + (" (deg)" if f.startswith("A_") else " (mm)"))
-    axes[0].set_ylabel(f"mean {response} (mm)")
-    fig.suptitle("Main effects plot (Fig 6-2)")
-    return fig
+def run_settings() -> tuple[int, int]:
+    """``(n_seeds, max_epochs)`` of the notebook and figure runs of the networks: (:data:`N_SEEDS`,
+    :data:`MAX_EPOCHS`), or (2, 100) in fast mode (``CNCLAB_FAST=1``)."""
+    return pick(N_SEEDS, 2), pick(MAX_EPOCHS, 100)
 
 
-def fig_interactions(df: pd.DataFrame | None = None, response: str = "D_eff1"):
-    """Figure 6-3: interaction plot matrix (row factor on x, one line per level of the column factor)."""
-    import matplotlib.pyplot as plt
-
-    df = dataset() if df is None else df
-    n = len(INPUTS)
-    fig, axes = plt.subplots(n, n, figsize=(11, 9))
-    for i, fx in enumerate(INPUTS):
-        for j, fl in enumerate(INPUTS):
-            ax = axes[i, j]
-            if i == j:
-                ax.text(0.5, 0.5, fx, ha="center", va="center", fontsize=12, transform=ax.transAxes)
-                ax.set_axis_off()
-                continue
-            tab = interaction_means(df, fx, fl, response)
-            cols = tab.columns if len(tab.columns) <= 4 else tab.columns[::3]
-            for c in cols:
-                ax.plot(tab.index, tab[c], lw=1, label=f"{fl}={c:g}")
-            ax.tick_params(labelsize=7)
-            if i == 0:
-                ax.legend(fontsize=6)
-    fig.suptitle(f"Interaction plot for {response} (Fig 6-3)")
-    return fig
-
-
-def fig_estimated_vs_calculated(predictions: dict, y=None, bins: int = 40):
-    """Figures 6-10 / 6-11: estimated vs calculated D_eff1 and the histogram of the differences."""
-    import matplotlib.pyplot as plt
-
-    y = dataset()["D_eff1"].to_numpy() if y is None else y
-    fig, axes = plt.subplots(len(predictions), 2, figsize=(9, 3.2 * len(predictions)), squeeze=False)
-    for (name, pred), (a, b) in zip(predictions.items(), axes):
-        a.plot(y, pred, ".", ms=2)
-        a.plot([0, y.max()], [0, y.max()], "k-", lw=0.8)
-        a.set(xlabel="calculated D_eff1 (mm)", ylabel="estimated (mm)", title=name)
-        b.hist(y - pred, bins=bins)
-        b.set(xlabel="difference (mm)", ylabel="count", title=f"{name}: differences")
-    fig.tight_layout()
-    return fig
-
-
-def fig_statistics_bars(table: pd.DataFrame):
-    """Figure 6-12: the statistics of Table 6-3 per model as grouped bars (``table``: stats × models)."""
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 3.5))
-    table.T.plot.bar(ax=ax, rot=0)
-    ax.set(ylabel="value (mm or fraction)", title="Statistics of the differences (Fig 6-12)")
-    ax.legend(fontsize=8, ncol=5)
-    return fig
-
-
-def fig_ann_diagnostics(net, title: str):
-    """Figs 6-4…6-9 for one network: 20-bin error histogram (both outputs, all samples, by subset),
-    outputs vs targets per subset with R (plotregression), and the MSE curves with the best epoch."""
-    import matplotlib.pyplot as plt
-
-    df = dataset()
-    X, Y = df[list(INPUTS)].to_numpy(), df[list(OUTPUTS)].to_numpy()
-    P = net.predict(X)
-    names = ("training", "validation", "test")
-    fig, axes = plt.subplots(1, 5, figsize=(16, 3.2))
-    err = Y - P
-    edges = np.histogram_bin_edges(err.ravel(), bins=20)
-    axes[0].hist([err[idx].ravel() for idx in net.split], bins=edges, stacked=True, label=names)
-    axes[0].axvline(0, color="orange")
-    axes[0].set(xlabel="error = target − output (mm)", ylabel="instances", title=f"{title}: error histogram")
-    axes[0].legend(fontsize=7)
-    for ax, name, idx in zip(axes[1:4], names, net.split):
-        t, o = Y[idx].ravel(), P[idx].ravel()
-        ax.plot(t, o, ".", ms=2)
-        ax.plot([0, t.max()], [0, t.max()], "k--", lw=0.8)
-        ax.set(xlabel="target (mm)", ylabel="output (mm)", title=f"{name}: R = {np.corrcoef(t, o)[0, 1]:.5f}")
-    h = net.history
-    for col in ("train_mse", "val_mse", "test_mse"):
-        axes[4].semilogy(h["epoch"], h[col], label=col.split("_")[0])
-    axes[4].axvline(net.best_epoch, color="grey", ls=":")
-    axes[4].set(xlabel="epoch", ylabel="MSE (scaled)", title=f"best validation at epoch {net.best_epoch}")
-    axes[4].legend(fontsize=7)
-    fig.tight_layout()
-    return fig
+def table6_3_reproduced(n_seeds: int = N_SEEDS, max_epochs: int = MAX_EPOCHS) -> pd.DataFrame:
+    """Table 6-3 reproduced (statistics of D_eff1 differences × models, mm or fraction): r1, r2 (eq 6-5)
+    and the means over ``n_seeds`` LM-trained networks a1, a2 (``max_epochs`` each)."""
+    t = regression_statistics()[["r1", "r2 (unified, eq 6-5)"]].set_axis(["r1", "r2"], axis=1)
+    for m in ARCHITECTURES:
+        t[m] = seed_summary(ann_statistics(m, n_seeds, "lm", max_epochs))["mean"]
+    return t
 
 
 def surrogate_statistics(n_seeds: int = 3, max_epochs: int = 400) -> pd.DataFrame:

@@ -22,7 +22,7 @@ from ...geometry.freeform_part import FreeformPart, freeform_part_mesh
 from ...geometry.mesh import FacetLocator, machined_surface_mask, read_stl, write_stl
 from ...nc import apt
 from ...nc.apt import reordered_program
-from ...nc.spindle_control import spindle_schedule
+from ...nc.spindle_control import postprocess_files, spindle_schedule
 from ...paths import build_dir, data_path
 from ...runtime import pick
 from ...sweep import sweep
@@ -103,6 +103,19 @@ def schedule(feed_angle_deg: float, point: str = "thesis", a_e: float = 0.25, ac
     return spindle_schedule(read_stl(part_stl()), cl, tool_diameter=tp["D"], a_p=tp["a_p"], v_c=tp["v_c"],
                             f_z=tp["f_z"], teeth=tp["teeth"], feed_direction_deg=feed_angle_deg, point=point,
                             accel_rpm_s=accel_rpm_s)
+
+
+@functools.cache
+def controlled_apt(feed_angle_deg: float = 0.0, point: str = "thesis") -> str:
+    """Post-process the A_f zig-zag APT (read from disk) against the STL with Table 7-1 data, as
+    ``python -m cnclab spindle STL APT -o OUT --vc 63 --fz 0.125 --teeth 2 --ap 0.3 --feed-direction A_f
+    --point thesis`` does (:func:`cnclab.nc.spindle_control.postprocess_files`); write the controlled APT
+    into build/ and return its path (Figs 7-16 ... 7-18 read it back)."""
+    tp = parameters()["table7_1"]
+    out = _out(f"ch7_Af{feed_angle_deg:g}_{point}_controlled_recipe.apt")
+    postprocess_files(part_stl(), zigzag_apt(feed_angle_deg), out, v_c=tp["v_c"], f_z=tp["f_z"], teeth=tp["teeth"],
+                      a_p=tp["a_p"], feed_direction_deg=feed_angle_deg, point=point)
+    return str(out)
 
 
 def direction_table(point: str = "thesis") -> pd.DataFrame:

@@ -1,0 +1,62 @@
+"""Mgherony (2024) figures for papers: every figure a Mgherony notebook saves has a recipe, and every recipe
+re-renders without its notebook to an 85 mm PDF (fast mode: 1 mm STL/CL resolution, 2 networks x 100
+epochs, shared with the notebooks through the functools and on-disk caches)."""
+import json
+import re
+
+import matplotlib.pyplot as plt
+import pytest
+
+from cnclab import figures, plotting
+from cnclab.paths import NOTEBOOKS_DIR
+
+WORK = "mgherony2024"
+NB_DIR = NOTEBOOKS_DIR / WORK
+MM_PER_INCH = 25.4
+TOL_PT = 0.5        # the page size is written with 10+ significant digits; 0.5 pt = 0.18 mm is generous
+NAMES = sorted(n for n, r in figures.FIGURES.items() if r.work == WORK)
+SAVE_RE = re.compile(r"""savefig\(\s*(\w+)\s*,\s*["']([^"']+)["']""")
+DRAW_RE = re.compile(r"""figures\.draw\(\s*["']([^"']+)["']\s*\)""")
+
+
+def _code_cells():
+    for nb in sorted(NB_DIR.glob("*.ipynb")):
+        for i, cell in enumerate(json.loads(nb.read_text(encoding="utf-8"))["cells"]):
+            if cell["cell_type"] == "code":
+                yield nb.name, i, "".join(cell["source"])
+
+
+def test_every_saved_figure_is_drawn_by_its_registered_recipe():
+    saved = {}
+    for nb, i, src in _code_cells():
+        drawn = DRAW_RE.findall(src)
+        for var, name in SAVE_RE.findall(src):
+            saved[name] = nb
+            assert name in NAMES, f"{nb} cell {i} saves {name!r}, which has no recipe in cnclab.figures"
+            assert name in drawn, f"{nb} cell {i} saves {name!r} but does not draw it with figures.draw({name!r})"
+        # plotting lives in the package: no notebook cell builds a matplotlib figure itself
+        assert not re.search(r"\bplt\.|subplots\(|Figure\(", src), f"{nb} cell {i} draws a figure itself"
+    assert len(saved) >= 30
+    # and the other way round: no recipe without the notebook figure it re-renders
+    assert sorted(saved) == NAMES
+
+
+def test_notebooks_import_only_their_chapters_recipes():
+    # make reproduce keys a notebook on the modules it imports: ch. 3-5 notebooks must not depend on
+    # the networks (ch6) or the drop-cutter pipeline (ch7_9) through an all-chapters figures module
+    for nb, _, src in _code_cells():
+        assert "import figures\n" not in src and not src.rstrip().endswith("import figures"), nb
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_recipe_renders_an_85_mm_pdf(tmp_path, name):
+    fig = figures.draw(name)
+    try:
+        shown = [ax for ax in fig.axes if ax.axison]      # Fig 6-3's diagonal carries only the factor name
+        assert shown and all(ax.has_data() for ax in shown), [ax.get_title() for ax in shown if not ax.has_data()]
+        [p] = plotting.export_figure(fig, name, tmp_path, width_mm=85, formats=("pdf",))
+    finally:
+        plt.close(fig)
+    w, h = plotting.pdf_page_size_pt(p)
+    assert abs(w - 85 / MM_PER_INCH * 72) < TOL_PT          # 240.94 pt
+    assert h > 0.2 * w
