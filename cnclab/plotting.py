@@ -54,22 +54,28 @@ FIGURES: dict[str, FigureRecipe] = {}
 
 
 def register_figure(name: str, work: str, description: str):
-    """Decorator: register a zero-argument function drawing figure ``name`` of ``work``."""
+    """Decorator: register a function drawing figure ``name`` of ``work`` and returning the figure.
+
+    Called without arguments it computes what it draws (fast settings under ``CNCLAB_FAST=1``);
+    a notebook that has computed the data already passes it by keyword (:func:`draw_figure`)."""
     def deco(f):
         FIGURES[name] = FigureRecipe(work, description, f)
         return f
     return deco
 
 
-def draw_figure(name: str, style=None):
+def draw_figure(name: str, style=None, **data):
     """Draw registered figure ``name`` under ``style`` (a style-sheet path or name; default the
-    collection's ``paper.mplstyle``) and return the matplotlib figure."""
+    collection's ``paper.mplstyle``) and return the matplotlib figure; ``data``: keyword arguments
+    of the recipe (results a notebook has computed already, so they are not computed twice)."""
     import matplotlib.pyplot as plt
 
     if name not in FIGURES:
         raise ValueError(f"unknown figure {name!r}: covered are {', '.join(sorted(FIGURES))}")
     with plt.style.context(str(style or STYLE_PATH)):
-        return FIGURES[name].draw()
+        return FIGURES[name].draw(**data)
+
+
 MM_PER_INCH = 25.4
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]*$")
 _MEDIABOX_RE = re.compile(rb"/MediaBox\s*\[\s*([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)\s+([-\d.]+)\s*\]")

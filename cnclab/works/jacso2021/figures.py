@@ -1,26 +1,43 @@
-"""Figure recipes of jacso2021: each draws one figure of the collection from the package alone.
+"""Jacsó (2021) and the planner comparisons built on it: the drawing of every figure its notebooks save.
 
-Registered in :data:`cnclab.plotting.FIGURES` (``python -m cnclab figure --list``); the notebooks
-call :func:`draw` (the same recipe), so a notebook figure and a paper figure cannot differ.
-Kept per work so that a notebook depends only on its own work's recipes (``make reproduce`` keys).
+A recipe called without arguments computes its data (fast settings under ``CNCLAB_FAST=1``, the
+notebooks' own); a notebook passes what it has computed already, by keyword.
 
->>> sorted(n for n, r in FIGURES.items() if r.work == "jacso2021")[:1]
-['fig3-1_engagement_vs_stepover']
+>>> FIGURES["thesis3_convergence_arc"].work
+'jacso2021'
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ...geometry import engagement as eng
+from ...geometry.contours import Arc, Ellipse, SplineContour
 from ...plotting import FIGURES, draw_figure as draw, figsize, register_figure as _register
+from ...runtime import fast_mode, pick
+from ...toolpath import constant_engagement as ce
+from ...toolpath import trochoidal as tr
+from . import corpus_comparison as corpus
+from . import freecad_comparison as fx
+from . import theses_1_3 as rec
+from . import thesis4_star_pocket as t4
 
-__all__ = ["draw"]
+__all__ = ["draw", "thesis3_spline", "simulated_deviation", "multi_pass_laps", "closed_path_trace",
+           "accuracy", "trochoid_iteration", "freecad_runs", "SHOWN_POCKETS"]
 
+R_TOOL, THETA = 3.0, 60.0          # tool radius (mm) and engagement (deg) of the Theses II-III figures
+_KIND_COLOURS = (("cut", "C0"), ("roll-in", "g"), ("roll-out", "r"), ("link", "k"))
+
+
+def _plt():
+    import matplotlib.pyplot as plt
+    return plt
+
+
+# ------------------------------------------------------------------------------ Thesis I
 @_register("fig3-1_engagement_vs_stepover", "jacso2021",
            "Jacsó (2021) Fig 3-1: engagement angle against stepover, straight and on arcs (r = 3 mm)")
 def fig3_1_engagement_vs_stepover(r: float = 3.0):
-    import matplotlib.pyplot as plt
-
+    plt = _plt()
     s = np.linspace(0.01, 2 * r, 300)
     fig, ax = plt.subplots(figsize=figsize())
     ax.plot(s, eng.theta_straight(s, r), "k", label="straight")
@@ -31,3 +48,325 @@ def fig3_1_engagement_vs_stepover(r: float = 3.0):
     ax.set(xlabel="stepover s [mm]", ylabel="engagement θ [deg]")
     ax.legend(fontsize=7)
     return fig
+
+
+# ------------------------------------------------------------------------------ Theses II and III
+def thesis3_spline() -> SplineContour:
+    """The closed spline contour of the Thesis III studies (8 knots on a 10 x 8 mm oval, wavy)."""
+    tk = np.linspace(0, 2 * np.pi, 9)[:-1]
+    return SplineContour(np.c_[10 * np.cos(tk), 8 * np.sin(tk) + np.sin(2 * tk)], closed=True)
+
+
+@_register("fig3-3_3-4_feed_field_and_step", "jacso2021",
+           "Jacsó (2021) Fig 3-3/3-4: Thesis III feed directions and steps along an ellipse (r = 3 mm, θ = 60°)")
+def fig3_3_3_4_feed_field_and_step():
+    plt = _plt()
+    ell = Ellipse((0, 0), 12, 8)
+    res = ce.thesis3_path(ell, R_TOOL, THETA, 0.4, "euler", t_end=2.0)
+    fig, ax = plt.subplots(figsize=figsize(1, 1.3))
+    ax.plot(*ell.sample(400).T, "k", lw=1, label="contour c(t)")
+    v = ce.thesis3_feed_direction(res.P, res.C, THETA)
+    ax.quiver(*res.P.T, *v.T, color="C0", scale=12, label="feed direction")
+    ax.plot(*res.P.T, "C1.-", label="Thesis III points P_i")
+    for P, C in zip(res.P[::2], res.C[::2]):
+        ax.plot(*np.c_[P, C], "C2", lw=0.6)
+        ax.add_patch(plt.Circle(P, R_TOOL, fill=False, lw=0.4, color="0.5"))
+    ax.set_aspect("equal")
+    ax.legend(fontsize=7)
+    return fig
+
+
+@_register("thesis3_convergence_arc", "jacso2021",
+           "Jacsó (2021) Thesis III: Euler vs midpoint error on a concave arc (ρ = 8 mm) against Δt")
+def thesis3_convergence_arc():
+    plt = _plt()
+    arc = Arc((0, 0), 8.0, 0, 200)
+    P0, d = ce.arc_start_point(arc, R_TOOL, THETA, "concave")
+    dts = np.array([0.4, 0.2, 0.1, 0.05, 0.025])
+    fig, ax = plt.subplots(figsize=figsize(0.85, 1.05))
+    for m in ("euler", "midpoint"):
+        e = [np.max(np.abs(np.hypot(*ce.thesis3_path(arc, R_TOOL, THETA, dt, m, P0=P0).P.T) - d)) for dt in dts]
+        k = np.polyfit(np.log(dts), np.log(e), 1)[0]
+        ax.loglog(dts, e, "o-", label=f"{m}: slope {k:.2f}")
+    ax.set(xlabel="Δt [mm]", ylabel="max radial error [mm]")
+    ax.legend()
+    return fig
+
+
+@_register("thesis3_convergence_ellipse_spline", "jacso2021",
+           "Jacsó (2021) Thesis III: observed order on an ellipse and a closed spline (reference: Thesis II IVP)")
+def thesis3_convergence_ellipse_spline():
+    plt = _plt()
+    contours = {"ellipse 12×8": (Ellipse((0, 0), 12, 8), 3.0), "spline": (thesis3_spline(), 20.0)}
+    dts = np.array([0.08, 0.04, 0.02, 0.01])
+    fig, axs = plt.subplots(1, 2, figsize=figsize(1.65, 1.05))
+    for ax, (name, (c, t_end)) in zip(axs, contours.items()):
+        table, orders = ce.convergence_study(c, R_TOOL, THETA, dts, t_end=t_end)
+        for m, g in table.groupby("method", sort=False):
+            ax.loglog(g.dt, g.max_err_mm, "o-", label=f"{m}: observed order {orders[m]:.2f}")
+        ax.set(title=name, xlabel="Δt [mm]", ylabel="max |P_i − p(t_i)| [mm]")
+        ax.legend()
+    return fig
+
+
+def simulated_deviation(dts=None) -> dict:
+    """Engagement deviation from θ measured by the dixel simulator (0.05 mm) along the Thesis III
+    paths on :func:`thesis3_spline` (first 25 mm), per method: ``{method: DataFrame}``
+    (:func:`cnclab.toolpath.constant_engagement.simulated_deviation_vs_dt`); ``dts`` (mm) default
+    0.8 ... 0.05 (fast mode 0.8 ... 0.1)."""
+    from shapely.geometry import Polygon, box
+
+    spline = thesis3_spline()
+    stock = box(-25, -25, 25, 25).difference(Polygon(spline.sample(4000)))
+    dts = pick([0.8, 0.4, 0.2, 0.1, 0.05], [0.8, 0.4, 0.2, 0.1]) if dts is None else dts
+    return {m: ce.simulated_deviation_vs_dt(spline, stock, R_TOOL, THETA, dts, method=m, resolution_mm=0.05,
+                                            t_end=25.0) for m in ("euler", "midpoint")}
+
+
+@_register("thesis3_simulated_deviation_vs_dt", "jacso2021",
+           "Jacsó (2021) Thesis III: simulated |engagement − θ| (max, p95) on the spline against Δt")
+def thesis3_simulated_deviation_vs_dt(dev=None):
+    dev = simulated_deviation() if dev is None else dev
+    fig, ax = _plt().subplots(figsize=figsize(0.85, 1.05))
+    for m, df in dev.items():
+        ax.loglog(df.dt, df.max_dev_deg, "o-", label=f"{m}: max")
+        ax.loglog(df.dt, df.p95_dev_deg, "x:", label=f"{m}: p95")
+    ax.set(xlabel="Δt [mm]", ylabel="|engagement − θ| [deg]")
+    ax.legend(fontsize=7)
+    return fig
+
+
+def multi_pass_laps(n_passes=None):
+    """Constant-engagement laps around a Ø12 mm hole limited by a Ø28 mm final contour (dixel
+    0.05 mm, Δt 0.1 mm; ``n_passes`` default 4, fast mode 2): ``(laps, final polygon)``."""
+    from shapely.geometry import Point, box
+    from ...simulation import dixel
+
+    domain, final = box(-20, -20, 20, 20), Point(0, 0).buffer(14.0, quad_segs=128)
+    stock = dixel.Stock.from_polygon(domain.difference(Point(0, 0).buffer(6.0, quad_segs=128)), 0.05)
+    n = pick(4, 2) if n_passes is None else n_passes
+    return ce.multi_pass(stock, domain, final, (0, 0), R_TOOL, THETA, n_passes=n, dt=0.1), final
+
+
+@_register("multi_pass_engagement", "jacso2021",
+           "Jacsó (2021) Theses II-III: successive laps limited by a final contour and their simulated engagement")
+def multi_pass_engagement(laps=None, final=None):
+    if laps is None or final is None:
+        laps, final = multi_pass_laps()
+    fig, (a1, a2) = _plt().subplots(1, 2, figsize=figsize(1.65, 1.05))
+    for i, lap in enumerate(laps):
+        a1.plot(*lap["path"].T, lw=0.8, label=f"lap {i + 1}")
+        a2.plot(lap["table"].s, lap["table"].engagement_deg, lw=0.6, label=f"lap {i + 1}")
+    a1.plot(*np.asarray(final.exterior.coords).T, "k")
+    a1.set_aspect("equal")
+    a1.legend(fontsize=7)
+    a2.axhline(THETA, color="k", ls=":")
+    a2.set(xlabel="path length [mm]", ylabel="engagement [deg]")
+    return fig
+
+
+# ------------------------------------------------------------------------------ §2.2 dixel simulator
+def accuracy():
+    """:func:`cnclab.works.jacso2021.theses_1_3.accuracy_table` at the notebook's resolutions
+    (0.1 ... 0.01 mm; fast mode down to 0.02)."""
+    return rec.accuracy_table(resolutions=pick((0.1, 0.05, 0.02, 0.01), (0.1, 0.05, 0.02)))
+
+
+@_register("dixel_pixel_engagement_error_vs_h", "jacso2021",
+           "Jacsó (2021) §2.2: dixel and pixel engagement error against the resolution (closed forms of §3.1)")
+def dixel_pixel_engagement_error_vs_h(acc=None):
+    acc = accuracy() if acc is None else acc
+    worst = acc.groupby(["model", "feed_direction", "h_mm"]).max_abs_err_deg.max().unstack("h_mm")
+    fig, ax = _plt().subplots(figsize=figsize(0.9, 1.05))
+    for (m, fd), row in worst.iterrows():
+        ax.loglog(row.index, row.values, "o-" if fd == "central" else "x:", label=f"{m}, {fd}")
+    ax.set(xlabel="resolution h [mm]", ylabel="max |error| over the 3 cases [deg]")
+    ax.legend(fontsize=7)
+    return fig
+
+
+def closed_path_trace(model: str = "pixel", resolution_mm: float = 0.02):
+    """A closed trochoid-like path (r = 3 mm, 3 mm deep, 255 mm/min, f_z 0.04 mm) cut into a 30 mm
+    square by the ``"dixel"`` or ``"pixel"`` simulator: ``(per-step DataFrame, swept area mm²)``,
+    the swept area from shapely (the tool disc along the path, clipped to the square)."""
+    from shapely.geometry import LineString, box
+    from ...simulation import dixel, pixel
+
+    t = np.linspace(0, 2 * np.pi, 3000)
+    path = np.c_[6 * np.cos(t) + 1.5 * np.cos(3 * t), 5 * np.sin(t)]
+    square = box(-15, -15, 15, 15)
+    swept = square.intersection(LineString(path).buffer(R_TOOL, quad_segs=256)).area
+    mod = {"dixel": dixel, "pixel": pixel}[model]
+    df = mod.simulate(mod.Stock.from_polygon(square, resolution_mm), path, R_TOOL, 3, 255, f_z=0.04)
+    return df, swept
+
+
+@_register("dixel_closed_path_trace", "jacso2021",
+           "Jacsó (2021) §2.2: engagement and MRR along a closed path (pixel stock, 0.02 mm)")
+def dixel_closed_path_trace(df=None):
+    df = closed_path_trace("pixel")[0] if df is None else df
+    fig, ax = _plt().subplots(2, 1, figsize=figsize(1.15, 1.3), sharex=True)
+    ax[0].plot(df.s, df.engagement_deg)
+    ax[0].set_ylabel("engagement [deg]")
+    ax[1].plot(df.s, df.mrr_mm3_min)
+    ax[1].set(ylabel="MRR [mm³/min]", xlabel="path length [mm]")
+    return fig
+
+
+# ------------------------------------------------------------------------------ Thesis IV
+def trochoid_iteration(resolution_mm=None):
+    """The Thesis IV period iteration of Fig. 3.5 (W = 12 mm, r = 3 mm, θ = 60°, 8 periods, dixel
+    0.05 mm, fast mode 0.1)."""
+    return tr.ce_trochoid_iteration(12.0, 3.0, 60.0, n_periods=8,
+                                    resolution_mm=pick(0.05, 0.1) if resolution_mm is None else resolution_mm)
+
+
+@_register("fig3-5_ce_trochoid_iteration", "jacso2021",
+           "Jacsó (2021) Fig 3-5: the constant-engagement trochoid period iteration (W = 12 mm, r = 3 mm, θ = 60°)")
+def fig3_5_ce_trochoid_iteration(it=None):
+    it = trochoid_iteration() if it is None else it
+    fig, ax = _plt().subplots(figsize=figsize(1.15, 0.9))
+    for per in it.periods:
+        K = tr.pattern_kinds(per)
+        for kind, col in _KIND_COLOURS[:3]:
+            ax.plot(np.where(K == kind, per.xyz[:, 0], np.nan), np.where(K == kind, per.xyz[:, 1], np.nan), c=col, lw=0.8)
+    for lk in it.links:
+        ax.plot(lk[:, 0], lk[:, 1], "k:", lw=0.5)
+    ax.axhline(3, c="k", lw=0.5)
+    ax.axhline(-3, c="k", lw=0.5)
+    ax.set(aspect="equal", xlabel="x (mm)", ylabel="y (mm)", title="green roll-in, blue cut, red roll-out, dotted link")
+    return fig
+
+
+@_register("thesis4_patterns_engagement", "jacso2021",
+           "Jacsó (2021) Thesis IV: circular, cycloid and constant-engagement trochoids and their engagement (θ_max 60°)")
+def thesis4_patterns_engagement(cmp=None, resolution_mm=None):
+    res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
+    cmp = t4.trochoid_comparison(12.0, 60.0) if cmp is None else cmp
+    c = cmp.loc["constant-engagement"]
+    it_ce = tr.ce_trochoid_iteration(12, 3, c.theta_plan_deg, 8, res, fillet_radius_mm=c.fillet_radius_mm)
+    pats = {"circular": tr.circular_trochoid(cmp.loc["circular", "step_mm"], 12, 3, 5, ds=res),
+            "cycloid": tr.cycloid(cmp.loc["cycloid", "step_mm"], 12, 3, 5, ds=res),
+            "constant-engagement": tr.ce_trochoid(12, 3, c.theta_plan_deg, 5, res, iteration=it_ce, theta_max_deg=60)}
+    fig, axs = _plt().subplots(2, 3, figsize=figsize(1.65, 1.3))
+    for j, (name, p) in enumerate(pats.items()):
+        df, _ = tr.evaluate_pattern(p, 12, 3, res)
+        axs[0, j].plot(p.xyz[:, 0], p.xyz[:, 1], lw=0.7)
+        axs[0, j].set(aspect="equal", title=name)
+        sel = df[df.period == 3]
+        for kind, g in sel.groupby("kind"):
+            axs[1, j].plot(g.s - sel.s.iloc[0], g.engagement_deg, ".", ms=1.5, label=kind)
+        axs[1, j].axhline(60, c="r", lw=0.5)
+        axs[1, j].set_xlabel("path length in period 3 (mm)")
+        axs[1, j].legend(fontsize=6)
+    axs[1, 0].set_ylabel("engagement (deg)")
+    return fig
+
+
+# ------------------------------------------------------------------------------ §4 star pocket
+def _kinds(ax, T, kinds, ms, **kw):
+    for kind, col in kinds:
+        m = (T.kind == kind).to_numpy()
+        ax.plot(T.x[m], T.y[m], ".", ms=ms, c=col, label=kind, **kw)
+
+
+@_register("fig4-1_star_hybrid_path", "jacso2021",
+           "Jacsó (2021) Fig 4-1: the star pocket, its medial axis and the hybrid path by segment kind")
+def fig4_1_star_hybrid_path():
+    import shapely
+
+    hp, T = t4.star_strategies()[1]["hybrid"]
+    fig, ax = _plt().subplots(figsize=figsize(1, 1.6))
+    ax.plot(*t4.star_job().polygon.exterior.xy, "k", lw=1)
+    for g in shapely.get_parts(hp.info["medial_axis"]):
+        ax.plot(*np.asarray(g.coords).T, c="0.6", lw=0.6)
+    _kinds(ax, T, _KIND_COLOURS, 0.6)
+    ax.set_aspect("equal")
+    ax.legend(markerscale=10, fontsize=7)
+    ax.set_title(f"{hp.info['laps']} laps, periods per arm {hp.info['periods_per_arm']}")
+    return fig
+
+
+@_register("fig4-1_star_engagement_mrr", "jacso2021",
+           "Jacsó (2021) Fig 4-1: engagement, MRR and feed along the star's hybrid path with feed control")
+def fig4_1_star_engagement_mrr():
+    T = t4.star_strategies()[1]["hybrid"][1]
+    fig, axs = _plt().subplots(3, 1, figsize=figsize(1.5, 1.6), sharex=True)
+    for kind, col in _KIND_COLOURS[:3]:
+        m = T.kind == kind
+        axs[0].plot(T.s[m], T.engagement_deg[m], ".", ms=0.6, c=col, label=kind)
+        axs[1].plot(T.s[m], T.mrr_ctrl_mm3_min[m], ".", ms=0.6, c=col)
+        axs[2].plot(T.s[m], T.feed_mm_min[m], ".", ms=0.6, c=col)
+    axs[0].axhline(60, c="k", lw=0.5)
+    axs[0].set_ylabel("θ (deg)")
+    axs[0].legend(markerscale=10, fontsize=7)
+    axs[1].axhline(t4.mrr_nominal(), c="k", lw=0.5)
+    axs[1].set(ylim=(0, 3000), ylabel="MRR (mm³/min)")
+    axs[2].set(ylabel="v_f (mm/min)", xlabel="path length (mm)")
+    return fig
+
+
+@_register("s4_user_pockets_hybrid_path", "jacso2021",
+           "Jacsó (2021) §4 method on user pockets (rectangle, L-shape): hybrid paths, samples above θ + 5°")
+def s4_user_pockets_hybrid_path():
+    summ, runs = t4.user_pockets()
+    fig, axs = _plt().subplots(1, len(runs), figsize=figsize(1.5, 1.2))
+    for ax, (case, (uj, up, UT)) in zip(axs, runs.items()):
+        ax.plot(*uj.polygon.exterior.xy, "k", lw=1)
+        _kinds(ax, UT, _KIND_COLOURS, 0.5)
+        hot = (UT.engagement_deg > uj.theta_deg + 5).to_numpy() & (UT.kind != "link").to_numpy()
+        ax.plot(UT.x[hot], UT.y[hot], "x", ms=3, c="m", label=f"θ > {uj.theta_deg + 5:g}°")
+        ax.set_title(f"{case}, max_wall_share {up.info['max_wall_share']}\n"
+                     f"max {summ.loc[case, 'engagement_max_deg']:.0f}°", fontsize=8)
+        ax.set_aspect("equal")
+    fig.legend(*axs[0].get_legend_handles_labels(), loc="lower center", ncol=5, markerscale=6, fontsize=7)
+    return fig
+
+
+# ------------------------------------------------------------------------------ against FreeCAD Adaptive
+SHOWN_POCKETS = ("star", "two_islands_neck", "kim_yang_120x85", "spline")
+
+
+def freecad_runs(names=None) -> dict:
+    """``{pocket: {label: (path, evaluation)}}`` of the adaptive planner and FreeCAD Adaptive
+    (:func:`cnclab.works.jacso2021.freecad_comparison.comparison`'s ``keep``) on ``names``
+    (default :data:`SHOWN_POCKETS`, fast mode the star only)."""
+    names = (("star",) if fast_mode() else SHOWN_POCKETS) if names is None else names
+    keep = {}
+    for name in names:
+        keep[name] = {}
+        fx.comparison(name, {"adaptive_clearing": "adaptive"}, feed_control=False, keep=keep[name])
+    return keep
+
+
+@_register("adaptive_vs_freecad_paths", "jacso2021",
+           "Adaptive planner vs FreeCAD Adaptive: cutting samples coloured by simulated engagement, wall gouges")
+def adaptive_vs_freecad_paths(keep=None):
+    keep = freecad_runs() if keep is None else keep
+    shown = [n for n in SHOWN_POCKETS if n in keep]
+    fig, axs = _plt().subplots(len(shown), 2, figsize=figsize(2, 1.1 * len(shown)), squeeze=False)
+    for row, name in zip(axs, shown):
+        jb, sc = fx.job(name), None
+        for ax, who in zip(row, ["adaptive_clearing", fx.FREECAD]):
+            for g in getattr(jb.polygon, "geoms", [jb.polygon]):
+                ax.fill(*g.exterior.xy, color="0.92")
+                for i in g.interiors:
+                    ax.fill(*i.xy, color="white")
+            ax.set(aspect="equal", title=f"{name}: {who}", xlabel="x [mm]")
+            if who not in keep[name]:
+                ax.set_title(f"{name}: {who} wrote no program")
+                continue
+            t = keep[name][who][1].trace
+            c = t["cutting"]
+            sc = ax.scatter(t["x"][c], t["y"][c], c=t["engagement_deg"][c], s=0.3, cmap="turbo",
+                            vmin=jb.theta_deg - 30, vmax=jb.theta_deg + 30, rasterized=True)  # pixels in PDF/SVG
+            ax.plot(*fx.gouge_points(keep[name][who][1], jb, 0.05), "kx", ms=3)
+        if sc is not None:
+            fig.colorbar(sc, ax=row, label="engagement [deg]")
+    return fig
+
+
+@_register("adaptive_vs_freecad_corpus", "jacso2021",
+           "Adaptive planner vs FreeCAD Adaptive on the 71-pocket corpus: ratios per family against the targets")
+def adaptive_vs_freecad_corpus(rows=None):
+    return corpus.distribution_figure(corpus.load_rows() if rows is None else rows)

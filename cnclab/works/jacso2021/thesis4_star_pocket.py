@@ -217,18 +217,23 @@ def user_pocket_job(fname: str, res: float):
     return job, hp, T, s
 
 
-@functools.cache
 def user_pockets(resolution_mm=None):
     """The hybrid path with default settings (``max_wall_share="auto"``) on the user-pocket
     examples of ``data/jacso2021`` (rectangle, L-shape), evaluated with feed control.
 
     Returns ``(summaries DataFrame indexed by case, {case: (job, path, table)})``; the summary adds
     ``uncut_beyond_unreachable_mm2`` = uncut area minus the corners the tool cannot reach and the
-    chosen ``max_wall_share``.
+    chosen ``max_wall_share``. Cached on disk (build/cache, keyed by the code, the two job files and
+    the resolution): the s4 notebook and its figure recipe share one computation.
     """
+    return _user_pockets(pick(0.05, 0.1) if resolution_mm is None else float(resolution_mm))
+
+
+@functools.cache
+@cached(data=tuple(f"jacso2021/{fname}" for _, fname in USER_POCKETS))
+def _user_pockets(res: float):
     import pandas as pd
 
-    res = pick(0.05, 0.1) if resolution_mm is None else resolution_mm
     rows, out = [], {}
     runs = sweep(user_pocket_job, [(fname, res) for _, fname in USER_POCKETS])
     for (case, fname), (job, hp, T, s) in zip(USER_POCKETS, runs):
