@@ -8,11 +8,9 @@ it with :func:`cnclab.plotting.export_figure` (width/height in mm, formats, dpi)
 show these figures call the same recipes, so the notebook and the paper figure cannot differ.
 
 ``python -m cnclab figure NAME --width-mm 85 --format pdf -o DIR`` is the command line;
-``python -m cnclab figure --list`` lists the covered figures. Covered so far: the figures whose
-plotting lives in the package or was moved here from its notebook (Jacsó Fig 3-1; Hoang Table 2; Kim & Yang Fig 2;
-Mgherony Fig 3-5, 3-6/3-7/3-8, the three other ch. 3 figures, 4-1, 4-2/4-3, 5-6, 5-7, 5-8/5-9, 6-2, 6-3,
-6-10); the other notebook figures still draw in their notebook cell
-(``--list`` shows the state).
+``python -m cnclab figure --list`` lists the covered figures: every figure the notebooks of
+jacso2021, kim_yang2006 and hoang2024 save (tests/test_figures.py checks each notebook's ``savefig``
+against its recipe) and the Mgherony figures whose plotting lives in the package.
 
 >>> FIGURES["fig5-6_deff_vs_depth_of_cut"].work
 'mgherony2024'

@@ -14,6 +14,7 @@ from ...geometry import engagement as eng
 from ...geometry.contours import Arc, Ellipse, SplineContour
 from ...plotting import FIGURES, draw_figure as draw, figsize, register_figure as _register
 from ...runtime import fast_mode, pick
+from ...simulation import dixel, pixel
 from ...toolpath import constant_engagement as ce
 from ...toolpath import trochoidal as tr
 from . import corpus_comparison as corpus
@@ -140,7 +141,6 @@ def multi_pass_laps(n_passes=None):
     """Constant-engagement laps around a Ø12 mm hole limited by a Ø28 mm final contour (dixel
     0.05 mm, Δt 0.1 mm; ``n_passes`` default 4, fast mode 2): ``(laps, final polygon)``."""
     from shapely.geometry import Point, box
-    from ...simulation import dixel
 
     domain, final = box(-20, -20, 20, 20), Point(0, 0).buffer(14.0, quad_segs=128)
     stock = dixel.Stock.from_polygon(domain.difference(Point(0, 0).buffer(6.0, quad_segs=128)), 0.05)
@@ -190,7 +190,6 @@ def closed_path_trace(model: str = "pixel", resolution_mm: float = 0.02):
     square by the ``"dixel"`` or ``"pixel"`` simulator: ``(per-step DataFrame, swept area mm²)``,
     the swept area from shapely (the tool disc along the path, clipped to the square)."""
     from shapely.geometry import LineString, box
-    from ...simulation import dixel, pixel
 
     t = np.linspace(0, 2 * np.pi, 3000)
     path = np.c_[6 * np.cos(t) + 1.5 * np.cos(3 * t), 5 * np.sin(t)]
