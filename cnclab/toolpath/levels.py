@@ -40,7 +40,8 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, Point
 
-from .path import KINDS, ToolPath, ToolPathBuilder, helix_ring
+from .helix import HELIX_CHORD_MM, helix_ring, helix_segments
+from .path import KINDS, ToolPath, ToolPathBuilder
 
 __all__ = ["swept_region", "join_levels", "LevelError", "PROOF_TOL_MM2", "CLEARED_ABOVE"]
 
@@ -51,8 +52,6 @@ PROOF_TOL_MM2 = 1e-3
 CLEARED_ABOVE = "cleared: levels above"
 _K = {k: i for i, k in enumerate(KINDS)}
 _CHUNK = 200
-#: mm: chord error of the re-entry helix's polyline (the program's 4th decimal x 100)
-HELIX_CHORD_MM = 0.01
 _EPS = 1e-9
 
 
@@ -93,32 +92,53 @@ def _move_sweep(path, k, r):
     return LineString([a[:2], b[:2]]).buffer(r, quad_segs=32)
 
 
+def _following_helix(path, k):
+    """``(centre xy, ccw, sweep rad, drop mm, feed)`` of the helix that follows move ``k`` of ``path``:
+    one G2/G3 move, or a run of ``helix`` line moves on a ring (:meth:`ToolPathBuilder.helix`, its
+    centre the circumcentre of its first three points); None if no helix follows."""
+    nxt = k + 1
+    if nxt >= len(path) or (path.arc[nxt] == 0 and path.kind[nxt] != _K["helix"]):
+        return None
+    p0 = path.xyz[k]
+    if path.arc[nxt] != 0:
+        c, p1 = path.arc_center[nxt], path.xyz[nxt]
+        a0, a1 = math.atan2(p0[1] - c[1], p0[0] - c[0]), math.atan2(p1[1] - c[1], p1[0] - c[0])
+        ccw = path.arc[nxt] == 3
+        sweep = (a1 - a0) % (2 * math.pi) if ccw else (a0 - a1) % (2 * math.pi)
+        return c, ccw, (sweep if sweep > 1e-9 else 2 * math.pi), p0[2] - p1[2], float(path.feed[nxt])
+    e = nxt
+    while e + 1 < len(path) and path.kind[e + 1] == _K["helix"] and path.arc[e + 1] == 0:
+        e += 1
+    if e < nxt + 1:
+        return None
+    (ax, ay), (bx, by), (cx, cy) = path.xyz[k:k + 3, :2]
+    d = 2.0 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by))
+    if abs(d) <= 1e-12:
+        return None
+    ux = ((ax * ax + ay * ay) * (by - cy) + (bx * bx + by * by) * (cy - ay) + (cx * cx + cy * cy) * (ay - by)) / d
+    uy = ((ax * ax + ay * ay) * (cx - bx) + (bx * bx + by * by) * (ax - cx) + (cx * cx + cy * cy) * (bx - ax)) / d
+    ang = np.unwrap(np.arctan2(path.xyz[k:e + 1, 1] - uy, path.xyz[k:e + 1, 0] - ux))
+    return np.array([ux, uy]), bool(ang[-1] > ang[0]), float(abs(ang[-1] - ang[0])), p0[2] - path.xyz[e, 2], \
+        float(path.feed[nxt])
+
+
 def _helix_from_top(path, k, top_z, r):
     """Moves (list of (xyz, kind, arc, centre, feed, tag)) replacing the unproven vertical descent
     ``k`` of ``path`` (ending on the level top above a helix): a plunge to ``top_z`` (air) and a helix
-    about the following helix's centre, in its sense and at no more than its pitch, down to the
-    descent's end, by the package's one helix generator (:meth:`ToolPathBuilder.helix` on a
-    :func:`helix_ring` of chord error <= ``HELIX_CHORD_MM``)."""
-    nxt = k + 1
-    if nxt >= len(path) or path.arc[nxt] == 0:
+    about the following helix's centre (:func:`_following_helix`), in its sense and at no more than
+    its pitch, down to the descent's end, by the package's one helix generator
+    (:meth:`ToolPathBuilder.helix` on a :func:`helix_ring` of chord error <= ``HELIX_CHORD_MM``)."""
+    hx = _following_helix(path, k)
+    if hx is None:
         return None
+    c, ccw, sweep, drop, feed = hx
     end = path.xyz[k]
-    c = path.arc_center[nxt]
     rad = math.hypot(end[0] - c[0], end[1] - c[1])
-    if rad <= 1e-6:
+    if rad <= 1e-6 or not drop > 1e-9 or not sweep > 1e-9:
         return None
-    # the following helix's pitch: its z drop over its swept angle (full turns when start = end)
-    p0, p1 = path.xyz[k], path.xyz[nxt]
-    a0, a1 = math.atan2(p0[1] - c[1], p0[0] - c[0]), math.atan2(p1[1] - c[1], p1[0] - c[0])
-    ccw = path.arc[nxt] == 3
-    sweep = (a1 - a0) % (2 * math.pi) if ccw else (a0 - a1) % (2 * math.pi)
-    sweep = sweep if sweep > 1e-9 else 2 * math.pi
-    drop = p0[2] - p1[2]
-    if not drop > 1e-9:
-        return None
+    a0 = math.atan2(end[1] - c[1], end[0] - c[0])
     turns = max(1, math.ceil((top_z - end[2]) / (drop * 2 * math.pi / sweep) - 1e-9))
-    feed = float(path.feed[nxt])
-    n = max(16, math.ceil(math.pi / math.acos(max(1.0 - HELIX_CHORD_MM / rad, -1.0))))
+    n = helix_segments(rad, HELIX_CHORD_MM)
     ring = helix_ring((0.0, 0.0), rad, n)                       # counter-clockwise from angle 0
     if not ccw:
         ring[:, 1] = -ring[:, 1]

@@ -30,8 +30,10 @@ import math
 
 import numpy as np
 
+from .helix import HELIX_CHORD_MM, helix_ring, helix_segments  # noqa: F401  (the path API re-exports them)
+
 __all__ = ["MOTIONS", "Move", "KINDS", "ENTRY_KINDS", "Tool", "ToolPath", "ToolPathBuilder", "arc_geometry",
-           "helix_ring", "sample_arc", "subdivide", "resample_polyline", "classify_moves"]
+           "helix_ring", "helix_segments", "HELIX_CHORD_MM", "sample_arc", "subdivide", "resample_polyline", "classify_moves"]
 
 MOTIONS = ("G0", "G1", "G2", "G3")
 
@@ -513,24 +515,6 @@ def classify_moves(xyz, rapid, arc, z_tol: float = 1e-6) -> np.ndarray:
     k[rapid] = "rapid"
     return k
 
-def helix_ring(center_xy, radius: float, n_segments: int) -> np.ndarray:
-    """The xy trace (n_segments + 1, 2) mm of one counter-clockwise turn of radius ``radius`` mm about
-    ``center_xy``, from angle 0 back to it (last point = first point exactly): the ring a helical
-    entry descends along (:meth:`ToolPathBuilder.helix`).
-
-    >>> helix_ring((0, 0), 2.0, 4).round(12).tolist()
-    [[2.0, 0.0], [0.0, 2.0], [-2.0, 0.0], [-0.0, -2.0], [2.0, 0.0]]
-    """
-    if not (math.isfinite(radius) and radius > 0):
-        raise ValueError(f"radius must be a finite number > 0 mm, got {radius!r}")
-    if int(n_segments) != n_segments or n_segments < 3:
-        raise ValueError(f"n_segments must be an integer >= 3, got {n_segments!r}")
-    a = np.linspace(0.0, 2 * math.pi, int(n_segments) + 1)
-    pts = np.asarray(center_xy, float) + radius * np.c_[np.cos(a), np.sin(a)]
-    pts[-1] = pts[0]
-    return pts
-
-
 class ToolPathBuilder:
     """Moves appended one block at a time, then :meth:`build` one :class:`ToolPath`: the one way a
     planner assembles a path (no parallel lists of x, y, z, kind, feed, tag).
@@ -625,7 +609,9 @@ class ToolPathBuilder:
         if len(P) < 2 or not s[-1] > 0:
             raise ValueError("helix: ring_xy must be a polyline of positive length (mm)")
         t = np.arange(1, len(P)) / (len(P) - 1) if equal_steps else s[1:] / s[-1]
-        self.add(P[1:], "helix", feed, tag, z=z_from + (z_to - z_from) * t, cleared=cleared)
+        z = z_from + (z_to - z_from) * t
+        z[-1] = z_to                                         # the depth exactly (no rounding)
+        self.add(P[1:], "helix", feed, tag, z=z, cleared=cleared)
 
     def ramp(self, path_xy, z_from: float, z_to: float, feed, *, ramp_deg: float = 3.0,
              max_mm: float = 10.0) -> None:
@@ -659,6 +645,19 @@ class ToolPathBuilder:
         if pos > 1e-9:                                       # back to the segment start at depth
             mid = inner[inner < pos][::-1]
             self.add(at(np.r_[mid, 0.0]), "cut", feed, "ramp-return", z=z_to)
+
+    def tail(self, start: int) -> tuple:
+        """The moves ``start:`` appended so far, read back: ``(xyz (m, 3) mm, kind (m,) indices into
+        :data:`KINDS`, feed (m,) mm/min)`` (e.g. a planner retracing its own last moves)."""
+        if not 0 <= start <= self._n:
+            raise ValueError(f"start must be in [0, {self._n}], got {start!r}")
+        got, i = [(np.zeros((0, 3)), np.zeros(0, np.int8), np.zeros(0))], self._n
+        for chunk in reversed(self._chunks[-(self._n - start):] if start < self._n else []):
+            i -= len(chunk[0])
+            got.insert(1, [c[max(start - i, 0):] for c in chunk[:3]])
+            if i <= start:
+                break
+        return tuple(np.concatenate([g[j] for g in got]) for j in range(3))
 
     def mark(self) -> int:
         """The number of moves so far (a point to :meth:`rollback` to)."""

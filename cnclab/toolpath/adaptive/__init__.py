@@ -61,7 +61,8 @@ Design (the ideas and where they come from; the code is cnclab's own)
   r sin(theta/2) of its centre (the move then meets it over at most theta) and the move meets no
   other material; otherwise the tool enters there by helix. A place entered before is banned.
 * **Entries**: a pre-drilled start hole is used as it is (plunge into the hole, air); otherwise a
-  helix (G3 turns, 5 deg ramp like FreeCAD's default) at the point of the tool-centre region
+  helix (the package's one helix generator, ToolPathBuilder.helix on a helix_ring: counter-clockwise
+  chords within 0.01 mm of the circle, 5 deg ramp like FreeCAD's default) at the point of the tool-centre region
   farthest from its boundary (the centre of the largest inscribed circle), radius
   ``min(0.75 r, 0.9 x inscribed radius - h)`` (FreeCAD's is 0.75 r too), then a floor circle;
   each entry's engagement is reported apart by the evaluator. A place that allows less than

@@ -12,6 +12,8 @@ import numpy as np
 import shapely
 from shapely.geometry import Point, Polygon
 
+from ..helix import helix_ring, helix_segments
+
 __all__ = ["PlanningError", "enter"]
 
 
@@ -59,32 +61,30 @@ def enter(lv, banned=None):
     if lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0:
         c = np.array(lv.hole[:2])
         rho = 0.0
-        lv.add((c[0], c[1], lv.clearance_z), "rapid")
-        lv.add((c[0], c[1], lv.z), "plunge", lv.feed_mm_min, "cleared: pre-drilled start hole", cleared=True)
+        lv.b.rapid([c], z=lv.clearance_z)
+        lv.b.plunge(c, lv.z, lv.feed_mm_min, tag="cleared: pre-drilled start hole", cleared=True)
     elif rho < rho_min:
         raise PlanningError(f"{lv.source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
                             "the region is too narrow for the tool")
     else:
         p0 = (c[0] + rho, c[1])
-        lv.add((p0[0], p0[1], lv.clearance_z), "rapid")
+        lv.b.rapid([p0], z=lv.clearance_z)
         # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
         # the previous level cleared (marked cleared: the program writer allows a rapid there only so)
-        lv.add((p0[0], p0[1], lv.z_prev + lv.prm.approach_above_mm), "rapid", np.nan, "cleared: above the level", cleared=True)
-        lv.add((p0[0], p0[1], lv.z_prev), "plunge", lv.feed_mm_min, "air")
+        lv.b.rapid([p0], z=lv.z_prev + lv.prm.approach_above_mm, tag="cleared: above the level", cleared=True)
+        lv.b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
         drop = 2 * math.pi * rho * math.tan(math.radians(lv.helix_angle_deg))
         # the helix ends where it reaches z (the last turn partial); at least one full turn, so
-        # that the floor circle after it cuts in the helix's own groove
+        # that the floor circle after it cuts in the helix's own groove. The package's one helix
+        # generator: chords within HELIX_CHORD_MM of the circle, z in proportion to the angle
         turns = max((lv.z_prev - lv.z) / drop, 1.0)
-        drop = (lv.z_prev - lv.z) / turns
-        zz = lv.z_prev
-        for _ in range(int(math.floor(turns + 1e-9))):
-            zz -= drop
-            lv.add((p0[0], p0[1], max(zz, lv.z)), "helix", lv.feed_mm_min, "entry", 3, (c[0], c[1]))
-        phi = 2 * math.pi * (turns - math.floor(turns + 1e-9))
-        pe = (c[0] + rho * math.cos(phi), c[1] + rho * math.sin(phi)) if phi > 1e-6 else p0
-        if phi > 1e-6:
-            lv.add((pe[0], pe[1], lv.z), "helix", lv.feed_mm_min, "entry", 3, (c[0], c[1]))
-        lv.add((pe[0], pe[1], lv.z), "cut", lv.feed_mm_min, "entry-floor", 3, (c[0], c[1]))
+        n = helix_segments(rho)
+        ring = helix_ring(c, rho, max(int(math.ceil(n * turns - 1e-9)), n), turns=turns)
+        lv.b.helix(ring, lv.z_prev, lv.z, lv.feed_mm_min, tag="entry", equal_steps=True)
+        pe = ring[-1]
+        floor = helix_ring(c, rho, n, start_rad=2 * math.pi * turns)
+        floor[0] = floor[-1] = pe
+        lv.b.cut(floor[1:], lv.feed_mm_min, z=lv.z, tag="entry-floor")
         circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
         lv.g.cut_path(circ)
         lv.stats["entries"] += 1

@@ -13,7 +13,7 @@ import shapely
 
 from .control import GUARD_LEVEL, replay
 from .entries import PlanningError
-from .stock import densify, resample
+from ..path import resample_polyline
 
 __all__ = ["finish_part"]
 
@@ -27,7 +27,7 @@ def finish_part(lv, part):
         R = np.asarray(ring.coords)[:-1]
         if len(R) < 3:
             continue
-        Rs = resample(np.vstack([R, R[:1]]), lv.ds)[:-1]
+        Rs = resample_polyline(np.vstack([R, R[:1]]), lv.ds, uniform=True)[:-1]
         for lap in range(lv.finish_laps):   # repeated while the corner wedges are peeled
             D, Ac = lv.g.free_field()
             jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
@@ -49,9 +49,9 @@ def finish_part(lv, part):
                 e = None
             if e is None:
                 lv.retract()
-                lv.add((Rl[0, 0], Rl[0, 1], lv.clearance_z), "rapid")
+                lv.b.rapid([Rl[0]], z=lv.clearance_z)
                 if dm[k0] >= lv.r:          # free of material under the tool: feed down into cleared area
-                    lv.add((Rl[0, 0], Rl[0, 1], lv.z), "plunge", lv.feed_mm_min, "cleared", cleared=True)
+                    lv.b.plunge(Rl[0], lv.z, lv.feed_mm_min, tag="cleared", cleared=True)
                 else:
                     ins = shapely.maximum_inscribed_circle(part)
                     raise PlanningError(
@@ -60,7 +60,7 @@ def finish_part(lv, part):
                         "is too narrow to be cleared under engagement control: no cleared place to start "
                         "its finishing pass (the pocket is too narrow for the tool)")
             elif math.hypot(Rl[0, 0] - lv.cur[0], Rl[0, 1] - lv.cur[1]) > 1e-9:
-                lv.add((Rl[0, 0], Rl[0, 1], lv.z), "link", lv.link_feed_mm_min)
+                lv.b.link([Rl[0]], lv.link_feed_mm_min, z=lv.z)
                 lv.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
             # the wall-following pass: the same engagement control, sliding along the wall;
             # it ends 2 r past the last ring point that still has material within reach
@@ -91,7 +91,8 @@ def finish_part(lv, part):
                 # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
                 # into a corner)
                 for _ in range(lv.prm.finish_replay_rounds):       # a reverted point changes the stock the later ones meet
-                    Qd, seg = densify(Q, 1.5 * lv.ds)
+                    Qd, seg = resample_polyline(Q, 1.5 * lv.ds, return_index=True)
+                    Qd = np.ascontiguousarray(Qd)
                     Es, Eg = replay(M_before.copy(), lv.g.x0, lv.g.y0, lv.h, lv.r, Qd, lv.lag, lv.n_samp, GUARD_LEVEL)
                     bad = np.zeros(len(Q), bool)
                     bad[seg[(Es > lv.cap_finish) | (Eg > lv.cap_finish)]] = True
@@ -104,6 +105,6 @@ def finish_part(lv, part):
                 E = lv.g.replay(Q, lv.lag, lv.n_samp)
                 P = Q
             ai = E[1:] < lv.air_rad
-            lv.add_line_moves(P[1:], lv.z, np.where(ai, "link", "cut").astype(object),
-                           np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min), "finish")
+            lv.b.add(P[1:], np.where(ai, "link", "cut").astype(object), np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min),
+                     "finish", z=lv.z)
             lv.cur = (float(P[-1, 0]), float(P[-1, 1]))

@@ -12,19 +12,24 @@ import shapely
 from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
-from ..path import ToolPath
+from ..path import KINDS, ToolPath, ToolPathBuilder, resample_polyline
 from . import entries, finish
 from .entries import PlanningError
 from .grid import Grid
 from .params import AdaptiveParams
 from .links import rapid_legs, shortcut
-from .stock import capsule_free, component_discs, label8, resample, segment_inside
+from .stock import capsule_free, component_discs, label8, segment_inside
+
+_RAPID, _PLUNGE = KINDS.index("rapid"), KINDS.index("plunge")
 
 
 class _Level:
     """One level of the plan: the state the loop shares (the grid, the tool position ``cur``, the
     entries made, the parts still to finish) and the steps of the loop as methods (see the package
-    docstring). ``cfg``: the planner's settings and move lists (:func:`adaptive_clearing`)."""
+    docstring). ``cfg``: the planner's settings and its :class:`ToolPathBuilder` ``b``
+    (:func:`adaptive_clearing`): every move goes to ``b``, with its ``cleared`` flag (the planner's
+    proof that the move runs through air or cleared area: the writer's licence for a G0 below the
+    clearance plane); tags are free text for people."""
 
     def __init__(self, cfg, lev, z, z_prev, g):
         self.__dict__.update(cfg)
@@ -34,28 +39,11 @@ class _Level:
         self.todo_parts = []
         self.r_free = np.nan
 
-    def add(self, p, kind, feed=np.nan, tag="", arc=0, ctr=(np.nan, np.nan), cleared=False):
-        """One move to ``p`` (x, y, z) mm; ``cleared``: the planner's proof that the move runs through
-        air or cleared area (the ToolPath's ``cleared`` column: the writer's licence for a G0 below
-        the clearance plane); ``tag`` is free text for people."""
-        self.pts.append(p); self.kinds.append(kind); self.feeds.append(feed); self.tags.append(tag); self.arcs.append(arc); self.ctrs.append(ctr)
-        self.clears.append(bool(cleared))
-
-    def add_line_moves(self, Q, z, kind, feed, tag, cleared=False):
-        """Straight moves at height z to the points Q (m, 2); kind, feed, tag, cleared (the proof of
-        air, see :meth:`add`): arrays (m,) or scalars."""
-        m = len(Q)
-        self.pts.extend(zip(Q[:, 0].tolist(), Q[:, 1].tolist(), [z] * m))
-        for lst, v in ((self.kinds, kind), (self.feeds, feed), (self.tags, tag), (self.clears, cleared)):
-            lst.extend(v.tolist() if isinstance(v, np.ndarray) else [v] * m)
-        self.arcs.extend([0] * m)
-        self.ctrs.extend([(np.nan, np.nan)] * m)
-
     def retract(self):
         if self.cur is not None:
             # straight up out of the tool's own cut: G0 (as FreeCAD lifts); the writer and the
             # static check accept a rapid only so below the clearance plane
-            self.add((self.cur[0], self.cur[1], self.clearance_z), "rapid")
+            self.b.rapid([(self.cur[0], self.cur[1], self.clearance_z)])
             self.stats["retracts"] += 1
             self.cur = None
 
@@ -77,20 +65,20 @@ class _Level:
             # no straight chord from here reaches a free cell inside the region (an island corner in
             # the way): retrace the tool's own path at this depth (inside the region, its material
             # removed) to the last point from which one does, as feed links
+            pts, kinds, _ = self.b.tail(max(len(self.b) - self.prm.retrace_max_moves - 1, 0))
             n_back = 0
-            while n_back < len(self.pts) - 1 and self.pts[-2 - n_back][2] == self.z and self.kinds[-1 - n_back] != "plunge"\
+            while n_back < len(pts) - 1 and pts[-2 - n_back][2] == self.z and kinds[-1 - n_back] != _PLUNGE\
                     and n_back < self.prm.retrace_max_moves:
                 n_back += 1
             for k in range(self.prm.retrace_stride, n_back + 1, self.prm.retrace_stride):
-                p = self.pts[-1 - k]
+                p = pts[-1 - k]
                 route = self.g.route((p[0], p[1]), r_free, band_hi, banned, cell)
                 if not isinstance(route, str):
-                    back = [self.pts[-1 - q] for q in range(1, k + 1)]
+                    back = [pts[-1 - q] for q in range(1, k + 1)]
                     break
             if isinstance(route, str) or route is None:
                 return None
-            for p in back:
-                self.add((p[0], p[1], self.z), "link", self.link_feed_mm_min)
+            self.b.link(np.asarray(back)[:, :2], self.link_feed_mm_min, z=self.z)
             self.cur = (float(back[-1][0]), float(back[-1][1]))
         if route is None:
             return None
@@ -107,7 +95,7 @@ class _Level:
             if math.hypot(q[0] - self.cur[0], q[1] - self.cur[1]) > 1e-9:
                 legs = rapid_legs(self.g, self.cur, q) if self.rapid_links else None
                 if legs is None:
-                    self.add((q[0], q[1], self.z), "link", self.link_feed_mm_min)
+                    self.b.link([q[:2]], self.link_feed_mm_min, z=self.z)
                 else:
                     # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
                     # chord's tool disc is truly swept (see Grid), sub-pixel slivers included; a
@@ -115,10 +103,10 @@ class _Level:
                     # is tangent there) gets a short feed leg off it
                     a, b = legs
                     if a is not None:
-                        self.add((a[0], a[1], self.z), "link", self.link_feed_mm_min)
-                    self.add((b[0], b[1], self.z), "rapid", np.nan, "cleared: link through cleared area", cleared=True)
+                        self.b.link([a[:2]], self.link_feed_mm_min, z=self.z)
+                    self.b.rapid([b[:2]], z=self.z, tag="cleared: link through cleared area", cleared=True)
                     if b[0] != q[0] or b[1] != q[1]:
-                        self.add((q[0], q[1], self.z), "link", self.link_feed_mm_min)
+                        self.b.link([q[:2]], self.link_feed_mm_min, z=self.z)
                 self.cur = (float(q[0]), float(q[1]))
         self.stats["links"] += 1
         return route[-1]
@@ -160,8 +148,8 @@ class _Level:
                     continue                       # the sweep would meet other material too
                 if self.link_to(self.r_free, cell=(jS, iS), end_xy=(S[0], S[1])) is None:
                     continue
-                Q = resample(np.vstack([S, E]), self.ds)
-                self.add_line_moves(Q[1:], self.z, "cut", self.feed_mm_min, "remnant sweep")
+                Q = resample_polyline(np.vstack([S, E]), self.ds, uniform=True)
+                self.b.cut(Q[1:], self.feed_mm_min, z=self.z, tag="remnant sweep")
                 self.g.cut_path(np.ascontiguousarray(Q))
                 self.cur = (float(E[0]), float(E[1]))
                 self.stats["remnant_sweeps"] += 1
@@ -197,7 +185,7 @@ class _Level:
                 if not (Ac & (D < self.r - 2 * self.g.hc)).any():
                     break
                 self.todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
-                saved = (len(self.pts), self.g.snapshot(), self.cur, dict(self.stats))
+                saved = (self.b.mark(), self.g.snapshot(), self.cur, dict(self.stats))
             banned = np.zeros((self.g.ny // self.g.k, self.g.nx // self.g.k), bool)
             for _ in range(self.max_passes):
                 D, Ac = self.g.free_field()
@@ -248,9 +236,9 @@ class _Level:
                 air = E < self.air_rad                # nothing in front of the tool: a link at the link feed, or
                                                  # a G0 where the chord is proven clear (``free``, see pass_kernel)
                 fr, ai = free[1:], air[1:]
-                self.add_line_moves(P[1:], self.z, np.where(fr, "rapid", np.where(ai, "link", "cut")).astype(object),
-                               np.where(fr, np.nan, np.where(ai, self.link_feed_mm_min, self.feed_mm_min)),
-                               np.where(fr, "cleared: air inside cleared area", "").astype(object), fr)
+                self.b.add(P[1:], np.where(fr, "rapid", np.where(ai, "link", "cut")).astype(object),
+                           np.where(fr, np.nan, np.where(ai, self.link_feed_mm_min, self.feed_mm_min)),
+                           np.where(fr, "cleared: air inside cleared area", "").astype(object), z=self.z, cleared=fr)
                 self.cur = (float(P[-1, 0]), float(P[-1, 1]))
             if self.finish:
                 # every part of the tool-centre region is finished once, the nearest to the tool first (a part
@@ -267,13 +255,12 @@ class _Level:
                 # (its rapids not counted); else roll it back
                 n0, snap0, cur0, st0 = saved
                 took = float(snap0[0].sum() - self.g.M.sum()) * self.h * self.h
-                P3 = np.asarray(self.pts[n0 - 1:], float)
-                F3 = np.asarray(self.feeds[n0:], float)
+                P3, _, F3 = self.b.tail(n0 - 1)
+                F3 = F3[1:]
                 L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
                 t_feed = float(np.sum(np.where(np.isfinite(F3) & (F3 > 0), L3 / np.where(F3 > 0, F3, 1.0), 0.0)))
                 if took < self.prm.clean_round_min_yield * self.a_e * self.feed_mm_min * t_feed or took <= 0.0:
-                    for lst in (self.pts, self.kinds, self.tags, self.feeds, self.arcs, self.ctrs, self.clears):
-                        del lst[n0:]
+                    self.b.rollback(n0)
                     self.g.restore(snap0)
                     self.cur = cur0
                     self.stats.clear(); self.stats.update(st0)
@@ -358,8 +345,9 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
     spindle = np.nan if spindle_rpm is None else float(spindle_rpm)
     zlev = [top_z - min(depth, a_p * (k + 1)) for k in range(int(math.ceil(depth / a_p - 1e-9)))]
 
-    # move list (shared with the level planners: _Level.add, add_line_moves)
-    pts, kinds, tags, feeds, arcs, ctrs, clears = [], [], [], [], [], [], []
+    # the moves (shared with the level planners: _Level.b)
+    b = ToolPathBuilder(tool=tool, spindle=spindle, info={"planner": "adaptive_clearing", "theta_deg": theta_deg,
+                                                          "resolution_mm": h, "step_mm": ds})
     stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0}
     allowed_parts = list(shapely.get_parts(allowed))
     part_wide = {}        # part index -> inscribed radius of that part of the tool-centre region (mm)
@@ -375,14 +363,11 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
                                 f"{h:g} mm: the pocket is too narrow for the tool")
 
         _Level(cfg, lev, z, z_prev, g).run()
-    if not pts:
+    if len(b) == 0:
         raise PlanningError(f"{source}: nothing to machine")
-    kinds[0] = "rapid"
-    tp = ToolPath.build(np.array(pts, float), kind=kinds, tag=np.array(tags, dtype=object),
-                        feed=np.array(feeds, float), spindle=spindle, cleared=np.array(clears, bool), arc=np.array(arcs),
-                        arc_center=np.array(ctrs, float), tool=tool,
-                        info={"planner": "adaptive_clearing", "theta_deg": theta_deg, "resolution_mm": h,
-                              "step_mm": ds, **stats, "plan_time_s": time.perf_counter() - t_start})
+    tp = b.build(**stats, plan_time_s=time.perf_counter() - t_start)
+    if tp.kind[0] != _RAPID:                     # the first move (from an unknown place) is a rapid
+        tp.kind[0], tp.feed[0], tp.arc[0], tp.arc_center[0] = _RAPID, np.nan, 0, np.nan
     return tp
 
 

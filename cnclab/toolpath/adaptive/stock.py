@@ -400,30 +400,3 @@ def segment_inside(A, x0, y0, h, ax, ay, bx, by, skip):
         if not inside_mask(A, x0, y0, h, ax + t * (bx - ax), ay + t * (by - ay)):
             return False
     return True
-
-
-# ------------------------------------------------------------------------------------------------
-# helpers
-# ------------------------------------------------------------------------------------------------
-def resample(P, step):
-    P = np.asarray(P, float)
-    if len(P) < 2:
-        return P
-    d = np.hypot(*np.diff(P, axis=0).T)
-    s = np.r_[0.0, np.cumsum(d)]
-    if s[-1] == 0:
-        return P[:1]
-    n = max(int(math.ceil(s[-1] / step)), 1)
-    t = np.linspace(0, s[-1], n + 1)
-    return np.c_[np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])]
-
-
-def densify(Q, step):
-    """The polyline Q (n, 2) with points inserted so that no chord is longer than ``step`` mm, and for
-    each of its points the index k of the chord Q[k-1] -> Q[k] it ends on (0 for Q[0])."""
-    L = np.hypot(*np.diff(Q, axis=0).T)
-    m = np.maximum(1, np.ceil(L / step).astype(int))
-    seg = np.r_[0, np.repeat(np.arange(1, len(Q)), m)]
-    t = np.concatenate([np.arange(1, k + 1) / k for k in m]) if len(m) else np.zeros(0)
-    a = Q[seg[1:] - 1]
-    return np.ascontiguousarray(np.vstack([Q[:1], a + t[:, None] * (Q[seg[1:]] - a)])), seg
