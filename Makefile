@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.cnclab-installed
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: reproduce test lab venv claims bench strip clean help browser-test site gcode-check
+.PHONY: reproduce test lab venv claims bench strip clean help browser-test site gcode-check tp-check
 
 help:
 	@echo "make reproduce   execute every notebook, write build/ (figures, HTML, claims report)"
@@ -17,6 +17,7 @@ help:
 	@echo "make site        build the offline site build/site/index.html from what build/ holds"
 	@echo "make browser-test  JupyterLab explorer + offline site in headless Chromium (screens in build/screens)"
 	@echo "make gcode-check run every written NC program through LinuxCNC's rs274 (installs it if missing)"
+	@echo "make tp-check    time the tests/fixtures/linuxcnc programs with LinuxCNC's planner, headless (rewrites tp_times.json)"
 
 venv: $(STAMP)
 
@@ -58,6 +59,10 @@ gcode-check: $(STAMP)
 	@command -v rs274 >/dev/null || (apt-get update && apt-get install -y --no-install-recommends linuxcnc-uspace)
 	@test -f build/gcode/manifest.json || CNCLAB_FAST=1 $(PY) -m cnclab programs || true  # failures are in the manifest
 	$(PY) -m cnclab.nc.gcode_check build/gcode
+
+tp-check: $(STAMP)
+	@command -v linuxcnc >/dev/null || (apt-get update && apt-get install -y --no-install-recommends linuxcnc-uspace)
+	$(PY) benchmarks/linuxcnc_tp.py
 
 claims: $(STAMP)
 	$(PY) -m cnclab claims

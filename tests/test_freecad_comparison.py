@@ -95,9 +95,12 @@ def test_comparison_table_rectangle_fast():
     T = fx.comparison("rectangle", {"adaptive_clearing": "adaptive"}, fast=True, keep=keep)
     lab, lab_fc = "adaptive_clearing", "adaptive_clearing" + fx.FEED_CONTROL_SUFFIX
     assert list(T.index) == [lab, lab_fc, fx.FREECAD]
-    same = [c for c in fx.COLUMNS if c != "program_time_min"]
+    same = [c for c in fx.COLUMNS if c not in ("program_time_min", "machine_time_min")]
     assert np.allclose(T.loc[lab, same].to_numpy(float), T.loc[lab_fc, same].to_numpy(float), equal_nan=True)
     assert T.loc[lab_fc, "program_time_min"] < T.loc[lab, "program_time_min"]
+    for r in (lab, lab_fc, fx.FREECAD):
+        assert T.loc[r, "machine_time_min"] > 0
+    assert T.loc[lab, "machine_time_min"] == pytest.approx(keep[lab][1].time_machine_s / 60)
     assert T.loc[fx.FREECAD, "plan_time_s"] == fx.freecad_plan_time_s("rectangle")
     assert T.loc[lab, "program_time_min"] == pytest.approx(keep[lab][1].time_total_s / 60)
     R = fx.ratios(T)

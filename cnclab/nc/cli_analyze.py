@@ -37,7 +37,6 @@ from ..fileio import InterruptReport, atomic_write_many, check_outputs
 from ..paths import build_dir
 from ..plotting import figsize, with_style
 from .gcode import GcodeError, read_toolpath
-from .machine import SMALL_VMC, machine_time
 
 from ..toolpath.evaluate import POSITION_TOL_MM, evaluate
 from ..toolpath.job import load_job
@@ -236,10 +235,7 @@ def analyze(program, job_file, resolution_mm: float = 0.05, outdir=None, quiet: 
     _check_resolution(resolution_mm, job, path)
     ev = evaluate(path, job, resolution_mm, sampling="arc_length")
     notes = list(path.info.get("warnings", [])) + _bbox_warnings(path, job, ev, program, job_file)
-    table = ev.summary_table()
-    # the program's time on a machine that accelerates (cnclab.nc.machine, small-VMC model)
-    table.loc[len(table)] = {"metric": "time_machine_s", "unit": "s",
-                             "value": machine_time(path.to_moves(), SMALL_VMC)["time_machine_s"]}
+    table = ev.summary_table()      # with time_machine_s: the program on the small-VMC model (cnclab.nc.machine)
     trace = ev.trace
     blobs = {"summary.csv": table.to_csv(index=False, lineterminator="\n"), "trace.csv": _trace_csv(trace),
              "events.csv": ev.events.to_csv(index=False, float_format="%.6g", lineterminator="\n")}

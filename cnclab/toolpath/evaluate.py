@@ -33,7 +33,14 @@ Model (units: mm, deg, mm/min, s):
   region no tool disc can reach (the pocket minus the morphological opening: the union of the tool
   discs over the allowed tool-centre region).
 * **Times**: :meth:`ToolPath.time_s` at ``job.rapid_mm_min`` — the motion model of the written program
-  (feed moves at their feed, rapids at the rapid rate, no acceleration).
+  (feed moves at their feed, rapids at the rapid rate, no acceleration) — and beside it
+  ``time_machine_s``: the same blocks on a machine that accelerates (:mod:`cnclab.toolpath.motion`,
+  default :data:`~cnclab.toolpath.motion.SMALL_VMC`: per-axis rate and acceleration, corner and
+  centripetal limits, look-ahead; validated against LinuxCNC's planner). It times the path as given:
+  a planner's polyline as polyline, a path read from a program with its arcs. The program writer
+  fits arcs (:mod:`cnclab.nc.arcfit`) and writes entries at the job's entry feed, so a written
+  program's machine time differs: by 0.1-1 % on the rectangle, L and 120 x 85 bench pockets
+  (arcs), more where entries dominate (entry feed; the length / feed time differs alike).
 * **Feed control** (``feed_control=True``, Jacsó Thesis IV / §4): the cutting level (the lowest z
   of the path, :func:`planar_view`) is cut through one dixel stock of the pocket minus the entry hole
   (:func:`entry_hole`) with segment kinds from the tags (cut / roll-in / roll-out / link); the
@@ -69,6 +76,7 @@ from ..cutting.feed_control import controlled_feed, mrr_error_windowed
 from ..simulation import dixel
 from ..simulation.common import simulate, simulate_runs
 from .job import Job
+from .motion import SMALL_VMC, Machine, path_machine_time
 from .path import KINDS, ToolPath
 
 __all__ = ["Evaluation", "evaluate", "UNITS", "weighted_percentile", "unreachable_region", "planar_view",
@@ -132,6 +140,7 @@ class Evaluation:
     theta_deg: float
     resolution_mm: float
     time_feed_controlled_s: float = float("nan")
+    time_machine_s: float = float("nan")
     mrr_error_cut_pct: float = float("nan")
     mrr_error_cut_p95_pct: float = float("nan")
     wall_gouge_max_mm: float = float("nan")
@@ -328,7 +337,7 @@ def _cutting_level(path: ToolPath, job: Job, resolution_mm, feed_control, block_
 def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2: float | None = None,
              mrr_window_mm: float = 1.0, feed_control: bool | None = None, block_mm: float = 0.5,
              margin_deg: float = 5.0, link_tol_mm2: float = 1e-3, level_only: bool = False,
-             sampling: str = "vertices") -> Evaluation:
+             sampling: str = "vertices", machine: Machine | None = SMALL_VMC) -> Evaluation:
     """Cut ``path`` through a fresh stock of ``job`` (level by level) and measure it.
 
     Parameters
@@ -352,6 +361,7 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         :meth:`ToolPath.resample`) or 'arc_length' (:func:`resample_by_length`: equal steps of at
         most h between corners, whatever the block length -- what ``cnclab analyze`` uses for
         programs of unknown block length).
+    machine : the machine model of ``time_machine_s`` (:mod:`cnclab.toolpath.motion`); None: NaN.
 
     Returns an :class:`Evaluation`; besides the metrics it holds the wall gouge
     (:func:`wall_gouge`: ``wall_gouge_max_mm``, ``wall_gouge_area_mm2``, ``gouges`` = gouging
@@ -375,7 +385,7 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     elif level_only:
         raise ValueError("level_only needs feed_control=True or False")
     if level_only:
-        return _level_evaluation(path, job, h, level)
+        return _level_evaluation(path, job, h, level, machine)
     air = 0.5 * h * h if air_tol_mm2 is None else float(air_tol_mm2)
     r = job.tool_radius
     rp, src = _samples(path, h, sampling)
@@ -455,6 +465,7 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         time_cut_s=times["cut_s"], time_link_s=times["link_s"], time_rapid_s=times["rapid_s"],
         time_entry_s=times["helix_s"] + times["ramp_s"] + times["plunge_s"], time_retract_s=times["retract_s"],
         time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h,
+        time_machine_s=_machine_s(path, machine),
         wall_gouge_max_mm=float(gouge.max(initial=0.0)), wall_gouge_area_mm2=g_area,
         gouges=len(_runs(g_mask)), events=events,
         **_level_fields(times, level, trace))
@@ -646,7 +657,12 @@ def _level_fields(times, level, trace) -> dict:
             "mrr_error_cut_p95_pct": summary["mrr_error_cut_p95_pct"], "trace": trace}
 
 
-def _level_evaluation(path: ToolPath, job: Job, h: float, level) -> Evaluation:
+def _machine_s(path: ToolPath, machine: Machine | None) -> float:
+    """``time_machine_s`` of the path on ``machine`` (NaN without one)."""
+    return float("nan") if machine is None else path_machine_time(path, machine)
+
+
+def _level_evaluation(path: ToolPath, job: Job, h: float, level, machine: Machine | None = SMALL_VMC) -> Evaluation:
     """An :class:`Evaluation` with only the path's lengths/times and the cutting-level figures."""
     nan = float("nan")
     lengths, times = path.lengths(), path.time_s(job.rapid_mm_min)
@@ -666,4 +682,4 @@ def _level_evaluation(path: ToolPath, job: Job, h: float, level) -> Evaluation:
         time_cut_s=times["cut_s"], time_link_s=times["link_s"], time_rapid_s=times["rapid_s"],
         time_entry_s=times["helix_s"] + times["ramp_s"] + times["plunge_s"], time_retract_s=times["retract_s"],
         time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h,
-        **_level_fields(times, level, {}))
+        time_machine_s=_machine_s(path, machine), **_level_fields(times, level, {}))

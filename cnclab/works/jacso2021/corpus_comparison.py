@@ -14,7 +14,9 @@ tool; doubled in fast mode); the planner plans at the same h.
 :func:`score_job` gives one row (planner columns, FreeCAD's with the suffix ``_fc``, the per-job
 target flags); :func:`family_table` the per-family distribution (jobs, planned, worst value per axis);
 :func:`targets` the issue-29 targets over the corpus (met or not, with the measured value).
-Units: mm, mm^2, deg, min (program time), s (plan time).
+Units: mm, mm^2, deg, min (program time: length / feed; machine time: the small-VMC model of
+:mod:`cnclab.toolpath.motion`, ``Evaluation.time_machine_s``), s (plan time). Rows written before the
+machine time was a column (a ``corpus_rows.csv`` without ``machine_time_min``) give NaN machine ratios.
 
 >>> len(job_names()) >= 60 and family("gear10_island")
 'gear'
@@ -46,7 +48,7 @@ FIXTURES = REPO_ROOT / "tests" / "fixtures" / "freecad" / "corpus"
 RESULTS = REPO_ROOT / "benchmarks" / "results" / "corpus_rows.csv"
 #: the axes of the comparison: planner column -> FreeCAD column is the same name + "_fc"
 AXES = ["p95_deg", "max_deg", "share>θ+5_pct", "plunges_into_material", "rapids_into_material", "wall_gouge_mm",
-        "lifts", "uncut_beyond_mm2", "program_time_min", "plan_time_s"]
+        "lifts", "uncut_beyond_mm2", "program_time_min", "machine_time_min", "plan_time_s"]
 ROW_COLUMNS = (["family", "D_mm", "theta_deg", "levels"] + AXES + [a + "_fc" for a in AXES]
                + ["uncut_over_limit", "ok_safe", "ok_engagement", "note"])
 
@@ -119,6 +121,13 @@ def _ratio(df, a):
     return df[a] / df[a + "_fc"].replace(0.0, np.nan)
 
 
+def _machine_ratio(df):
+    """Machine-time ratio to FreeCAD (NaN for rows written before ``machine_time_min`` existed)."""
+    if "machine_time_min" not in df or "machine_time_min_fc" not in df:
+        return pd.Series(np.nan, index=df.index)
+    return _ratio(df, "machine_time_min")
+
+
 def family_table(df: pd.DataFrame) -> pd.DataFrame:
     """Per family: jobs, planned, unsafe jobs, worst (max) engagement excess over theta (p95, max),
     worst share above theta + 5, worst program-time and plan-time ratio to FreeCAD, worst lifts and
@@ -127,6 +136,7 @@ def family_table(df: pd.DataFrame) -> pd.DataFrame:
     d["p95-θ"] = d["p95_deg"] - d["theta_deg"]
     d["max-θ"] = d["max_deg"] - d["theta_deg"]
     d["program ratio"] = _ratio(d, "program_time_min")
+    d["machine ratio"] = _machine_ratio(d)
     d["plan ratio"] = _ratio(d, "plan_time_s")
     d["lifts - FC"] = d["lifts"] - d["lifts_fc"]
     d["uncut - FC"] = d["uncut_beyond_mm2"] - d["uncut_beyond_mm2_fc"]
@@ -135,7 +145,8 @@ def family_table(df: pd.DataFrame) -> pd.DataFrame:
                       "unsafe": g["ok_safe"].apply(lambda s: int((s == False).sum())),  # noqa: E712 -- NaN: not planned
                       "worst p95-θ": g["p95-θ"].max(), "worst max-θ": g["max-θ"].max(),
                       "worst share>θ+5 %": g["share>θ+5_pct"].max(), "worst program ratio": g["program ratio"].max(),
-                      "median program ratio": g["program ratio"].median(), "worst plan ratio": g["plan ratio"].max(),
+                      "median program ratio": g["program ratio"].median(),
+                      "worst machine ratio": g["machine ratio"].max(), "worst plan ratio": g["plan ratio"].max(),
                       "worst lifts - FC": g["lifts - FC"].max(), "worst uncut - FC mm2": g["uncut - FC"].max()})
     return T
 
@@ -193,6 +204,7 @@ def ratio_columns(df: pd.DataFrame) -> pd.DataFrame:
     """Per job: program-time and plan-time ratios to FreeCAD, lifts and uncut area minus FreeCAD's,
     engagement max and p95 minus theta (ours and FreeCAD's), family."""
     return pd.DataFrame({"family": df["family"], "program time / FC": _ratio(df, "program_time_min"),
+                         "machine time / FC": _machine_ratio(df),
                          "plan time / FC": _ratio(df, "plan_time_s"), "lifts - FC": df["lifts"] - df["lifts_fc"],
                          "uncut - FC (mm²)": df["uncut_beyond_mm2"] - df["uncut_beyond_mm2_fc"],
                          "max - θ (deg)": df["max_deg"] - df["theta_deg"],

@@ -16,7 +16,10 @@ helices/ramps/plunges, reported apart), retracts (the evaluator's: feed moves of
 lifts (:func:`lifts`: every rise from below the stock top to above it, G0 or G1 -- FreeCAD lifts by
 G0, which the evaluator's count does not see), plunges and rapids into material (counts),
 uncut area beyond the unreachable corners (mm^2), program time (min: the written program's
-motion model, rapids at the job's rapid rate), plan time (s, wall clock: noisy on a shared CPU) and
+motion model, rapids at the job's rapid rate), machine time (min: the same path on the small-VMC
+model of :mod:`cnclab.toolpath.motion`, acceleration and corners, ``Evaluation.time_machine_s``;
+both programs timed as paths, FreeCAD's as written, ours unfitted: see :mod:`cnclab.toolpath.evaluate`),
+plan time (s, wall clock: noisy on a shared CPU) and
 the wall gouge (mm, :func:`wall_gouge_mm`: how far the tool disc reaches into a wall or island
 below the stock top -- the evaluator's stock is the pocket only, so it cannot see such a cut).
 
@@ -49,6 +52,7 @@ from ...runtime import pick
 from ...toolpath import planners
 from ...toolpath.evaluate import Evaluation, evaluate, wall_gouge
 from ...toolpath.job import Job, load_job
+from ...toolpath.motion import path_machine_time
 from ...toolpath.path import KINDS, Tool, ToolPath
 
 __all__ = ["POCKETS", "FIXTURES", "COLUMNS", "PLANNER_ROWS", "FREECAD", "job", "resolution_mm",
@@ -74,7 +78,7 @@ PLANNER_ROWS = {"adaptive_clearing": "adaptive", "ce_clearing (old)": "constant-
 FEED_CONTROL_SUFFIX = " + §4 feed control"
 COLUMNS = ["p95_deg", "max_deg", "share>θ+5_pct", "share>θ+15_pct", "entry_max_deg", "retracts", "lifts",
            "plunges_into_material", "rapids_into_material", "uncut_beyond_mm2", "program_time_min",
-           "plan_time_s", "wall_gouge_mm"]
+           "machine_time_min", "plan_time_s", "wall_gouge_mm"]
 _CUT = KINDS.index("cut")
 
 
@@ -141,6 +145,8 @@ def summary(tables: dict) -> pd.DataFrame:
                      "plan ratio": a["plan_time_s"] / f["plan_time_s"],
                      "program_min": a["program_time_min"], "program_min FC": f["program_time_min"],
                      "program ratio": a["program_time_min"] / f["program_time_min"],
+                     "machine_min": a["machine_time_min"], "machine_min FC": f["machine_time_min"],
+                     "machine ratio": a["machine_time_min"] / f["machine_time_min"],
                      "max_deg": a["max_deg"], "max_deg FC": f["max_deg"], "share>θ+5": a["share>θ+5_pct"],
                      "uncut_mm2": a["uncut_beyond_mm2"], "uncut_mm2 FC": f["uncut_beyond_mm2"],
                      "lifts": a["lifts"], "lifts FC": f["lifts"],
@@ -265,16 +271,19 @@ def lifts(ev: Evaluation, top_z: float = 0.0) -> int:
         below[:-1] & (np.abs(z[1:] - top_z) <= 1e-9) & np.r_[z[2:] > top_z + 1e-9, False]))
 
 
-def row(ev: Evaluation, plan_s: float, time_s: float | None = None, jb: Job | None = None) -> dict:
-    """One table row (:data:`COLUMNS`) of an evaluation; ``time_s`` overrides the program time (s);
-    with ``jb`` the wall gouge is measured (else NaN)."""
+def row(ev: Evaluation, plan_s: float, time_s: float | None = None, jb: Job | None = None,
+        machine_s: float | None = None) -> dict:
+    """One table row (:data:`COLUMNS`) of an evaluation; ``time_s`` overrides the program time (s)
+    and ``machine_s`` the machine time (s: ``ev.time_machine_s``, the small-VMC model of
+    :mod:`cnclab.toolpath.motion`); with ``jb`` the wall gouge is measured (else NaN)."""
     return {"wall_gouge_mm": math.nan if jb is None else wall_gouge_mm(ev, jb),"p95_deg": ev.engagement_p95_deg, "max_deg": ev.engagement_max_deg,
             "share>θ+5_pct": ev.share_above_5_pct, "share>θ+15_pct": ev.share_above_15_pct,
             "entry_max_deg": ev.entry_engagement_max_deg, "retracts": ev.retracts,
             "lifts": lifts(ev, jb.top_z if jb is not None else 0.0),
             "plunges_into_material": ev.plunges_into_material, "rapids_into_material": ev.rapids_into_material,
             "uncut_beyond_mm2": ev.uncut_beyond_unreachable_mm2,
-            "program_time_min": (ev.time_total_s if time_s is None else time_s) / 60.0, "plan_time_s": plan_s}
+            "program_time_min": (ev.time_total_s if time_s is None else time_s) / 60.0,
+            "machine_time_min": (ev.time_machine_s if machine_s is None else machine_s) / 60.0, "plan_time_s": plan_s}
 
 
 def _nan_row(note: str) -> dict:
@@ -303,7 +312,8 @@ def comparison(name: str, planner_rows: dict | None = None, fast: bool | None = 
             keep[label] = (tp, ev)
         if feed_control and k == 0:
             fc = feed_controlled(tp, jb, ev)
-            rows[label + FEED_CONTROL_SUFFIX] = row(ev, t_plan, fc.time_s(jb.rapid_mm_min)["total_s"], jb) | {
+            rows[label + FEED_CONTROL_SUFFIX] = row(ev, t_plan, fc.time_s(jb.rapid_mm_min)["total_s"], jb,
+                                                    path_machine_time(fc)) | {
                 "note": "same path, feeds per 0.5 mm block (MRR held, <= v_fmax)"}
     if freecad is None:
         try:
