@@ -10,6 +10,17 @@ outcomes:
 
 The job file is never changed (hash before/after). Outcome counts by family are asserted to cover
 both outcomes (a suite that only ever refuses, or never refuses, tests nothing).
+
+The second half (:func:`adversarial_cases`) generates adversarial *pockets* from a seed -- necks
+narrower than the tool, wedges of 5-15 deg, islands touching a wall, pockets smaller than the tool,
+self-intersecting outlines, duplicated points, huge coordinates, NaN, inch-looking values -- and
+plans each with every registered strategy in turn, alternately through the API
+(:func:`cnclab.toolpath.planners.plan`) and the CLI. Each case is classified **correct** (a program
+that passes :func:`~cnclab.nc.program.check_program`, and whose path, re-simulated by the one
+evaluator, has no plunge or rapid into material and no wall gouge beyond
+:data:`~cnclab.toolpath.planners.GOUGE_TOL_MM`), **clear error** (``ValueError`` / exit 2 whose
+message names the job file or a job key, nothing written) or **wrong** (anything else: must be 0).
+The counts by class are printed (``-s``) and asserted to include both correct and clear errors.
 """
 from __future__ import annotations
 
@@ -22,9 +33,12 @@ import numpy as np
 import pytest
 
 from cnclab.nc import cli_plan
-from cnclab.nc.program import check_program
+from cnclab.nc.arcfit import DEFAULT_TOL_MM
+from cnclab.nc.gcode import read_toolpath
+from cnclab.nc.program import check_program, write_program
 from cnclab.runtime import pick
-from cnclab.toolpath import planners
+from cnclab.toolpath import coverage, planners
+from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import Job
 
 BASE = {"polygon": [[0, 0], [24, 0], [24, 16], [0, 16]], "tool_diameter": 6, "teeth": 2, "theta_deg": 60,
@@ -122,3 +136,210 @@ def test_outcomes_cover_both_kinds():
     kinds = {k for _, k in OUTCOMES}
     assert kinds == {"error", "program"}, OUTCOMES
     assert sum(OUTCOMES.values()) == len(CASES)
+
+
+# --- adversarial pockets x every strategy x API and CLI (issue 28 item 4) ---------------------------
+
+D_TOOL = 6.0
+#: planning resolution of the adversarial cases (mm): D / 20, the coarsest the safety tests use
+RES_FUZZ = 0.3
+#: evaluation dixel of the re-simulation (mm): r / 20
+H_FUZZ = 0.15
+#: wall gouge allowed in a *written* program (mm): the planner's GOUGE_TOL_MM plus the arc-fitting
+#: tolerance every program header states (cnclab.nc.arcfit.DEFAULT_TOL_MM) and the 4-decimal rounding
+WRITTEN_GOUGE_TOL_MM = planners.GOUGE_TOL_MM + DEFAULT_TOL_MM + 1e-4
+
+
+def _rect(w, h, x0=0.0, y0=0.0):
+    return [[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]]
+
+
+def _neck(rng):
+    """Two rooms joined by a neck 0.3-0.95 D wide (narrower than the tool)."""
+    a, w = rng.uniform(9, 13), rng.uniform(0.3, 0.95) * D_TOOL
+    L = rng.uniform(4, 10)
+    y0, y1 = (a - w) / 2, (a + w) / 2
+    return {"polygon": [[0, 0], [a, 0], [a, y0], [a + L, y0], [a + L, 0], [2 * a + L, 0], [2 * a + L, a],
+                        [a + L, a], [a + L, y1], [a, y1], [a, a], [0, a]]}
+
+
+def _wedge(rng):
+    """A wedge whose apex is 5-15 deg, closed by a room wide enough for the tool."""
+    apex = np.radians(rng.uniform(5, 15))
+    L = rng.uniform(20, 30)
+    h = L * np.tan(apex / 2)
+    return {"polygon": [[0, 0], [L, -h], [L, -7], [L + 12, -7], [L + 12, 7], [L, 7], [L, h]]}
+
+
+def _island_touching(rng):
+    """An island that touches (or crosses) the outer wall, or another island."""
+    W, H = rng.uniform(22, 30), rng.uniform(16, 22)
+    x = rng.uniform(6, W - 12)
+    kind = int(rng.integers(3))
+    isl = ([[x, 0], [x + 5, 0], [x + 5, 5], [x, 5]] if kind == 0 else                   # on the wall
+           [[x, -1], [x + 5, -1], [x + 5, 5], [x, 5]] if kind == 1 else                 # through it
+           [[x, 6], [x + 5, 6], [x + 5, 10], [x + 10, 10], [x + 10, 6.0001], [x, 6]])  # a near-degenerate ring
+    return {"polygon": _rect(W, H), "islands": [isl]}
+
+
+def _tiny(rng):
+    """A pocket about the tool's size (0.5-1.3 D)."""
+    s = rng.uniform(0.5, 1.3) * D_TOOL
+    return {"polygon": _rect(s, s * rng.uniform(0.8, 1.2))}
+
+
+def _self_intersecting(rng):
+    """A bow tie, or a rectangle with one vertex pulled across the opposite edge."""
+    W, H = rng.uniform(15, 25), rng.uniform(10, 18)
+    if rng.random() < 0.5:
+        return {"polygon": [[0, 0], [W, H], [W, 0], [0, H]]}
+    return {"polygon": [[0, 0], [W, 0], [W, H], [W / 2, -H / 2], [0, H]]}
+
+
+def _duplicated(rng):
+    """Repeated vertices: consecutive duplicates, the closing point, a point repeated later."""
+    P = _rect(rng.uniform(16, 24), rng.uniform(12, 16))
+    k = int(rng.integers(4))
+    P = P[:k + 1] + [P[k]] * int(rng.integers(1, 4)) + P[k + 1:]
+    if rng.random() < 0.5:
+        P = P + [P[0]]
+    if rng.random() < 0.3:
+        P = P + [P[1]]                                  # revisits a vertex: a zero-width spike
+    return {"polygon": P}
+
+
+def _huge(rng):
+    """A small pocket far from the origin (1e3-1e8 mm: inside and beyond the writer's +-1e4 mm and the
+    job format's 1e6 mm): float precision and the program's number format."""
+    off = 10.0 ** rng.uniform(3, 8)
+    return {"polygon": _rect(rng.uniform(16, 22), rng.uniform(12, 16), off, -off)}
+
+
+def _nan(rng):
+    """NaN or infinity in a coordinate or a cutting value (JSON: the non-standard NaN / Infinity tokens)."""
+    d = {"polygon": _rect(20, 14)}
+    key = ["polygon", "a_p", "theta_deg", "tool_diameter"][int(rng.integers(4))]
+    v = [math.nan, math.inf, -math.inf][int(rng.integers(3))]
+    if key == "polygon":
+        d["polygon"][int(rng.integers(4))][int(rng.integers(2))] = v
+    else:
+        d[key] = v
+    return d
+
+
+def _inch(rng):
+    """Every length in inches, written where mm are expected (a 0.8 x 0.6 'mm' pocket, a 0.25 'mm' tool),
+    or only the tool in inches on a pocket in mm."""
+    if rng.random() < 0.5:       # v_c 100 m/min needs 127324 rpm on this tool: refused with the inch hint
+        return {"polygon": _rect(20, 14), "tool_diameter": 0.25, "a_p": 0.08}
+    d = {"polygon": _rect(0.8, 0.6), "tool_diameter": 0.25, "a_p": 0.04}
+    if rng.random() < 0.5:
+        d["v_c"] = 15.0          # a cutting speed the spindle reaches on a 0.25 mm tool: plausible numbers
+    return d
+
+
+ADVERSARIAL = (_neck, _wedge, _island_touching, _tiny, _self_intersecting, _duplicated, _huge, _nan, _inch)
+
+
+def adversarial_cases(seed=2805, n=None):
+    """``n`` cases (default 63 = every family x every strategy once, 27 in fast mode) ``(family, job dict, strategy, via)``: families and
+    strategies cycle (every family meets every strategy over the slow run), ``via`` alternates
+    ``api`` / ``cli``; the geometry of each case is drawn from ``seed``."""
+    rng = np.random.default_rng(seed)
+    n = n or pick(63, 27)
+    strategies = sorted(planners.STRATEGIES)
+    out = []
+    for k in range(n):
+        fam = ADVERSARIAL[k % len(ADVERSARIAL)]
+        d = dict(BASE, a_p=1.0, theta_deg=60)
+        d.pop("polygon")
+        d.update(fam(rng))
+        out.append((fam.__name__[1:], d, strategies[(k // len(ADVERSARIAL) + k) % len(strategies)],
+                    "api" if k % 2 == 0 else "cli"))
+    return out
+
+
+ADV_CASES = adversarial_cases()
+ADV_OUTCOMES = collections.Counter()
+
+
+def _names_input(msg: str, source: str) -> bool:
+    """A clear error names the job file or a job key ($.key) or the option."""
+    return source in msg or "$." in msg or "resolution" in msg
+
+
+def _safe_path(path, job, tol_mm=planners.GOUGE_TOL_MM) -> list:
+    """What is wrong with a path re-simulated by the evaluator (empty: nothing); ``tol_mm``: the wall
+    gouge allowed (mm)."""
+    ev = evaluate(path, job, min(H_FUZZ, job.tool_radius / 10))
+    gouge, at = coverage.wall_gouge(path, job)
+    bad = []
+    if ev.plunges_into_material:
+        bad.append(f"{ev.plunges_into_material} plunge(s) into material")
+    if ev.rapids_into_material:
+        bad.append(f"{ev.rapids_into_material} rapid(s) into material")
+    if gouge > tol_mm:
+        bad.append(f"wall gouge {gouge:.4f} mm at {at}")
+    return bad
+
+
+def _adv_api(d, strategy, source):
+    try:
+        job = Job.from_dict(d, source=source)
+        path = planners.plan(job, strategy, min(RES_FUZZ, job.tool_diameter / 10), allow_uncut=True)
+        text = write_program(path, job)
+    except ValueError as exc:
+        return ("clear error", str(exc)) if _names_input(str(exc), source) else ("wrong", f"vague: {exc}")
+    except Exception as exc:          # noqa: BLE001 -- the point: any other exception is a wrong outcome
+        return "wrong", f"{type(exc).__name__}: {exc}"
+    chk = check_program(text, clearance_z=job.clearance_z, top_z=job.top_z)
+    bad = ([] if chk.ok else chk.errors[:3]) + _safe_path(path, job)
+    return ("wrong", "; ".join(bad)) if bad else ("correct", "")
+
+
+def _adv_cli(d, strategy, tmp_path, capsys):
+    jf = tmp_path / "adv_job.json"
+    jf.write_text(json.dumps(d))                       # NaN / Infinity as JSON's non-standard tokens
+    before = hashlib.sha256(jf.read_bytes()).hexdigest()
+    out = tmp_path / "adv.ngc"
+    res = min(RES_FUZZ, d["tool_diameter"] / 10) if math.isfinite(d["tool_diameter"]) else RES_FUZZ
+    try:
+        rc = cli_plan.main([str(jf), "-o", str(out), "--strategy", strategy, "--allow-uncut",
+                            "--resolution", f"{res:g}"])
+    except BaseException as exc:      # noqa: BLE001 -- a traceback out of the CLI is a wrong outcome
+        return "wrong", f"{type(exc).__name__}: {exc}"
+    err = capsys.readouterr().err
+    if hashlib.sha256(jf.read_bytes()).hexdigest() != before:
+        return "wrong", "the job file was changed"
+    if rc == 2:
+        ok = err.startswith("error: ") and ("adv_job" in err or "adv.ngc: not written" in err) and not out.exists()
+        return ("clear error", err) if ok else ("wrong", f"vague or partial: {err}")
+    if rc != 0 or not out.exists():
+        return "wrong", f"exit {rc}: {err}"
+    text = out.read_text()
+    job = Job.from_dict(d, source=str(jf))
+    chk = check_program(text, clearance_z=job.clearance_z, top_z=job.top_z)
+    bad = ([] if chk.ok else chk.errors[:3]) + _safe_path(read_toolpath(out, tool=job.tool), job, WRITTEN_GOUGE_TOL_MM)
+    return ("wrong", "; ".join(bad)) if bad else ("correct", "")
+
+
+@pytest.mark.parametrize("fam,d,strategy,via", ADV_CASES,
+                         ids=[f"{f}-{s}-{v}-{i}" for i, (f, _, s, v) in enumerate(ADV_CASES)])
+def test_adversarial_pocket_correct_or_clear_error(tmp_path, capsys, fam, d, strategy, via):
+    if via == "api":
+        kind, why = _adv_api(d, strategy, f"adv_{fam}.json")
+    else:
+        kind, why = _adv_cli(d, strategy, tmp_path, capsys)
+    ADV_OUTCOMES[(fam, kind)] += 1
+    assert kind != "wrong", (fam, strategy, via, why[:600])
+
+
+def test_adversarial_outcomes_by_class():
+    """Counts by class of the run above (file order: after it): no wrong outcome, and both correct
+    programs and clear errors (a suite that only refuses, or never refuses, tests nothing)."""
+    by_class = collections.Counter()
+    for (_, kind), n in ADV_OUTCOMES.items():
+        by_class[kind] += n
+    print("plan fuzz, adversarial pockets: by class", dict(by_class), "by family", dict(ADV_OUTCOMES))
+    assert sum(by_class.values()) == len(ADV_CASES)
+    assert by_class["wrong"] == 0 and by_class["correct"] >= 1 and by_class["clear error"] >= 1, by_class

@@ -20,6 +20,10 @@ def rect():
 
 @pytest.mark.parametrize("name", sorted(STRATEGIES))
 def test_every_strategy_plans_a_safe_toolpath(rect, name):
+    if name == "constant-engagement":       # breaks its promise on this pocket (4.7 % above theta + 5): refused
+        with pytest.raises(ValueError, match="rectangle_pocket.json: the constant-engagement strategy promises"):
+            plan(rect, name, resolution_mm=RES)
+        return
     p = plan(rect, name, resolution_mm=RES)
     assert isinstance(p, ToolPath) and p.info["strategy"] == name and p.tool == rect.tool
     rapid = p.is_kind("rapid")

@@ -10,9 +10,11 @@ refusal -- or returns a path on which the independent checks hold: no plunge and
 material (the dixel evaluator, 0.15 mm), the tool disc never past a wall or island (exact geometry
 along the path, 1e-3 mm: :data:`~cnclab.toolpath.planners.GOUGE_TOL_MM`), and the engagement bound of
 the strategies that promise one (adaptive: max <= theta + 10 deg, issue 16's target;
-constant-engagement: theta + :data:`~cnclab.toolpath.planners.CE_PROMISE_DEG`), measured by the
-evaluator at 0.15 mm (a dixel of r / 20: the engagement it reports is within ~2 deg of the exact one
-away from the first contact). Each strategy must actually plan a minimum number of the pockets (no
+constant-engagement: max <= theta + :data:`~cnclab.toolpath.planners.CE_PROMISE_DEG` and at most
+:data:`~cnclab.toolpath.planners.CE_SHARE_ABOVE_5_PCT` % of the cutting length above theta + 5 deg),
+measured by the evaluator at 0.15 mm (a dixel of r / 20, the resolution of the constant-engagement
+strategy's own check: the engagement it reports is within ~2 deg of the exact one away from the
+first contact). Each strategy must actually plan a minimum number of the pockets (no
 silent pass by refusing everything).
 """
 import numpy as np
@@ -31,6 +33,8 @@ D = 6.0
 THETA = 60.0
 #: engagement bound (deg above theta) of the strategies that promise one
 PROMISE = {"adaptive": 10.0, "constant-engagement": planners.CE_PROMISE_DEG}
+#: share (%) of the cutting length above theta + 5 deg the strategies promise at most
+SHARE5 = {"constant-engagement": planners.CE_SHARE_ABOVE_5_PCT}
 #: strategies with no island or wedge caveat must plan at least this share of the pockets
 MIN_PLANNED = {"adaptive": 0.6, "contour-parallel": 0.6, "zig-zag": 0.6}
 
@@ -97,6 +101,8 @@ def test_every_strategy_safe_or_refusing(strategy):
         assert gouge <= planners.GOUGE_TOL_MM, (strategy, name, gouge, at)
         if strategy in PROMISE:
             assert ev.engagement_max_deg <= THETA + PROMISE[strategy], (strategy, name, ev.engagement_max_deg)
+        if strategy in SHARE5:
+            assert ev.share_above_5_pct <= SHARE5[strategy], (strategy, name, ev.share_above_5_pct)
         planned.append(name)
     need = int(np.ceil(MIN_PLANNED.get(strategy, 0.0) * len(POCKETS)))
     assert len(planned) >= need, f"{strategy} planned only {planned}; refused {refused}"
@@ -116,3 +122,23 @@ def test_the_generator_makes_what_it_says():
         x = np.asarray(P.exterior.coords)
         apex = np.degrees(2 * np.arctan2(x[1, 1] * -1, x[1, 0]))
         assert 10 <= apex <= 25
+
+
+def test_constant_engagement_keeps_its_promise_or_names_the_breach():
+    """The constant-engagement strategy plans a disc (its laps are circles: measured max theta + 6 deg,
+    0.08 % above theta + 5) and keeps the promise there, two levels deep; on Jacso's own rectangle its
+    laps and links break it (4.7 % above theta + 5, max ~128 deg) and it refuses, naming the measured
+    maximum, where it is, and the share by part of the path."""
+    disc = Job(Point(0, 0).buffer(20, 64), Tool(D), THETA, 1.0, depth=2.0, v_c=100, f_z=0.05, source="disc.json")
+    path = planners.plan(disc, "constant-engagement")
+    assert path.info["levels"] == [-1.0, -2.0]
+    ev = evaluate(path, disc, H)
+    assert ev.engagement_max_deg <= THETA + planners.CE_PROMISE_DEG
+    assert ev.share_above_5_pct <= planners.CE_SHARE_ABOVE_5_PCT
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    rect = Job(box(0, 0, 40, 24), Tool(D), THETA, 1.0, v_c=100, f_z=0.05, source="rect.json")
+    with pytest.raises(ValueError, match=r"^rect.json: the constant-engagement strategy promises an engagement "
+                                         r"<= theta \+ 15 deg.*measures max \d+\.\d deg \(theta 60 \+ \d+\.\d\) at "
+                                         r"\(-?\d+\.\d\d, -?\d+\.\d\d\) in its (laps|links cutting material|cleanup), "
+                                         r"\d+\.\d\d % of the cutting length above theta \+ 5 deg \(laps "):
+        planners.plan(rect, "constant-engagement")

@@ -174,6 +174,7 @@ def _setup(path: ToolPath, job, overrides: dict) -> _Setup:
         finite = path.spindle[np.isfinite(path.spindle)]
         if len(finite):
             values["spindle_rpm"], origin["spindle_rpm"] = float(finite[0]), "the path's spindle speed"
+    origin["geometry"] = f"the polygon coordinates ($.polygon), depth and a_p of {src}"
     if values.get("entry_feed_mm_min") is None and values.get("feed_mm_min") is not None:
         values["entry_feed_mm_min"] = ENTRY_FEED_FRACTION * float(values["feed_mm_min"])
         origin["entry_feed_mm_min"] = (f"default entry feed {ENTRY_FEED_FRACTION:g} x job key 'feed_mm_min' "
@@ -233,7 +234,7 @@ def _check_path_numbers(path: ToolPath, setup: _Setup, decimals: int) -> None:
     if big.any():
         k, ax = (int(v) for v in np.argwhere(big)[0])
         raise ValueError(f"move {k} ({kinds[k]}): {'XYZ'[ax]} = {path.xyz[k, ax]:g} mm beyond the writer's "
-                         f"+-{MAX_COORD_MM:g} mm: check the job's polygon coordinates, depth and a_p (mm)")
+                         f"+-{MAX_COORD_MM:g} mm: check {setup.origin.get('geometry', 'the job')} (mm)")
 
 
 def _check_depth(path: ToolPath, job, setup: _Setup, decimals: int) -> None:
