@@ -37,6 +37,7 @@ class _Level:
         self.cur = None   # current xy at depth (None: at clearance)
         self.entered = set()   # coarse cells of the entries at this level
         self.todo_parts = []
+        self.skinned_rings = set()   # finish rings whose first (skin) lap ran: later rounds take rests only
         self.r_free = np.nan
 
     def retract(self):
