@@ -126,76 +126,83 @@ MACHINES = {"small-vmc": SMALL_VMC, "grbl-router": GRBL_ROUTER}
 
 def _axis_limit(limits, u) -> float:
     """``min_i(limit_i / |u_i|)`` over the axes the unit vector ``u`` moves (GRBL)."""
-    u = np.abs(np.asarray(u, float))
-    m = u > 1e-12
-    return float(np.min(np.asarray(limits)[m] / u[m])) if m.any() else math.inf
+    return float(_axis_limits(limits, np.asarray(u, float).reshape(1, 3))[0])
+
+
+def _axis_limits(limits, U) -> np.ndarray:
+    """:func:`_axis_limit` for each row of ``U`` (n, 3); inf for a zero row."""
+    A = np.abs(U)
+    with np.errstate(divide="ignore"):
+        q = np.where(A > 1e-12, np.asarray(limits, float) / np.where(A > 1e-12, A, 1.0), math.inf)
+    return q.min(axis=1)
+
+
+def _arc_row(p0, mv, rate, acc, machine: Machine):
+    """(length, speed cap, acceleration, entry tangent, exit tangent) of one G2/G3 block."""
+    cx, cy, r, a0, sweep = arc_geometry(p0, mv.xyz, (p0[0] + mv.i, p0[1] + mv.j), mv.motion == "G3")
+    dz = float(mv.xyz[2] - p0[2])
+    arc_len = abs(sweep) * r
+    length = math.hypot(arc_len, dz)
+    s = 1.0 if sweep > 0 else -1.0
+    tz = dz / length if length > 0 else 0.0
+    k = arc_len / length if length > 0 else 0.0
+    a1 = a0 + sweep
+    tin = (-s * math.sin(a0) * k, s * math.cos(a0) * k, tz)
+    tout = (-s * math.sin(a1) * k, s * math.cos(a1) * k, tz)
+    plan_rate, plan_acc = min(rate[0], rate[1]), min(acc[0], acc[1])
+    v = min(plan_rate / max(k, 1e-12), rate[2] / abs(tz) if abs(tz) > 1e-12 else math.inf)
+    a = min(plan_acc / max(k, 1e-12), acc[2] / abs(tz) if abs(tz) > 1e-12 else math.inf)
+    a *= machine.arc_tangential_accel_fraction
+    # centripetal limit (on the xy projection)
+    v = min(v, math.sqrt(machine.arc_normal_accel_fraction * plan_acc * r) / max(k, 1e-12))
+    return length, v, a, tin, tout
 
 
 def _block_table(moves, machine: Machine, start):
-    """Per block (zero-length moves dropped): length L [mm], speed cap [mm/s], acceleration
-    [mm/s^2], entry and exit unit tangents."""
-    cur = None if start is None else np.asarray(start, float)
+    """Per block (zero-length lines dropped): length L [mm], speed cap [mm/s], acceleration
+    [mm/s^2], entry and exit unit tangents (arrays; lines vectorised, arcs one by one)."""
+    moves = list(moves)
+    if start is None:
+        if not moves:
+            return np.zeros(0), np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
+        start, moves = moves[0].xyz, moves[1:]
+    n = len(moves)
+    P = np.empty((n + 1, 3))
+    P[0] = np.asarray(start, float)
+    if n:
+        P[1:] = [mv.xyz for mv in moves]
     rate = np.asarray(machine.max_rate_mm_min) / 60.0
     acc = np.asarray(machine.accel_mm_s2)
-    L, vmax, amax, t_in, t_out = [], [], [], [], []
-    for mv in moves:
-        end = mv.xyz
-        if cur is None:
-            cur = end
-            continue
-        d = end - cur
-        if mv.motion in ("G2", "G3"):
-            cx, cy, r, a0, sweep = arc_geometry(cur, end, (cur[0] + mv.i, cur[1] + mv.j), mv.motion == "G3")
-            arc_len = abs(sweep) * r
-            length = math.hypot(arc_len, d[2])
-            s = 1.0 if sweep > 0 else -1.0
-            tz = d[2] / length if length > 0 else 0.0
-            k = arc_len / length if length > 0 else 0.0
-            a1 = a0 + sweep
-            tin = np.array([-s * math.sin(a0) * k, s * math.cos(a0) * k, tz])
-            tout = np.array([-s * math.sin(a1) * k, s * math.cos(a1) * k, tz])
-            plan_rate, plan_acc = min(rate[0], rate[1]), min(acc[0], acc[1])
-            v = min(plan_rate / max(k, 1e-12), rate[2] / abs(tz) if abs(tz) > 1e-12 else math.inf)
-            a = min(plan_acc / max(k, 1e-12), acc[2] / abs(tz) if abs(tz) > 1e-12 else math.inf)
-            a *= machine.arc_tangential_accel_fraction
-            # centripetal limit (on the xy projection)
-            v = min(v, math.sqrt(machine.arc_normal_accel_fraction * plan_acc * r) / max(k, 1e-12))
-        else:
-            length = float(np.linalg.norm(d))
-            if length <= 1e-9:
-                cur = end
-                continue
-            u = d / length
-            tin = tout = u
-            v, a = _axis_limit(rate, u), _axis_limit(acc, u) * machine.line_accel_fraction
-        if mv.motion != "G0":
-            v = min(v, float(mv.feed) / 60.0)
-        if machine.block_rate_hz is not None:
-            v = min(v, length * machine.block_rate_hz)
-        L.append(length); vmax.append(v); amax.append(a); t_in.append(tin); t_out.append(tout)
-        cur = end
-    return (np.asarray(L), np.asarray(vmax), np.asarray(amax), np.asarray(t_in).reshape(-1, 3),
-            np.asarray(t_out).reshape(-1, 3))
+    is_arc = np.array([mv.motion in ("G2", "G3") for mv in moves], bool)
+    feed = np.array([math.inf if mv.motion == "G0" else float(mv.feed) / 60.0 for mv in moves], float)
+    D = P[1:] - P[:-1]
+    L = np.linalg.norm(D, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        U = D / np.where(L > 0, L, 1.0)[:, None]
+    vmax = _axis_limits(rate, U)
+    amax = _axis_limits(acc, U) * machine.line_accel_fraction
+    t_in, t_out = U.copy(), U.copy()
+    for k in np.flatnonzero(is_arc):
+        L[k], vmax[k], amax[k], t_in[k], t_out[k] = _arc_row(P[k], moves[k], rate, acc, machine)
+    vmax = np.minimum(vmax, feed)
+    if machine.block_rate_hz is not None:
+        vmax = np.minimum(vmax, L * machine.block_rate_hz)
+    keep = is_arc | (L > 1e-9)
+    return L[keep], vmax[keep], amax[keep], t_in[keep], t_out[keep]
 
 
 def _junction_speeds(t_out_prev, t_in_next, machine: Machine) -> np.ndarray:
     """GRBL junction-deviation speed limit [mm/s] at each junction (arrays of unit vectors)."""
     acc = np.asarray(machine.accel_mm_s2)
-    cos_theta = -np.einsum("ij,ij->i", t_out_prev, t_in_next)       # theta: reversed entry vs exit
-    cos_theta = np.clip(cos_theta, -1.0, 1.0)
-    out = np.empty(len(cos_theta))
-    for k, c in enumerate(cos_theta):
-        if c > 0.999999:                     # full reversal: stop
-            out[k] = 0.0
-            continue
-        if c < -0.999999:                    # straight on: no junction limit
-            out[k] = math.inf
-            continue
-        jv = t_in_next[k] - t_out_prev[k]
-        n = np.linalg.norm(jv)
-        a = _axis_limit(acc, jv / n) if n > 0 else float(acc.min())
-        s = math.sqrt(0.5 * (1.0 - c))        # sin(theta / 2)
-        out[k] = math.sqrt(a * machine.junction_deviation_mm * s / (1.0 - s))
+    cos_theta = np.clip(-np.einsum("ij,ij->i", t_out_prev, t_in_next), -1.0, 1.0)  # reversed entry vs exit
+    jv = t_in_next - t_out_prev
+    nrm = np.linalg.norm(jv, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        a = np.where(nrm > 0, _axis_limits(acc, jv / np.where(nrm > 0, nrm, 1.0)[:, None]), acc.min())
+        s = np.sqrt(0.5 * (1.0 - cos_theta))          # sin(theta / 2)
+        out = np.sqrt(a * machine.junction_deviation_mm * s / (1.0 - s))
+    out[cos_theta > 0.999999] = 0.0                   # full reversal: stop
+    out[cos_theta < -0.999999] = math.inf             # straight on: no junction limit
     return out
 
 
@@ -234,11 +241,12 @@ def machine_time(moves: Sequence[Move], machine: Machine = SMALL_VMC, start=None
     if n > 1:
         vj = _junction_speeds(t_out[:-1], t_in[1:], machine)
         cap[1:n] = np.minimum(vj, np.minimum(vmax[:-1], vmax[1:]))
+    e, cap, Ls, vs, As = e.tolist(), cap.tolist(), L.tolist(), vmax.tolist(), amax.tolist()
     for i in range(n - 1, 0, -1):             # backward: able to slow down to what follows
-        e[i] = min(cap[i], math.sqrt(e[i + 1] ** 2 + 2 * amax[i] * L[i]))
+        e[i] = min(cap[i], math.sqrt(e[i + 1] ** 2 + 2 * As[i] * Ls[i]))
     for i in range(1, n):                     # forward: reachable from what precedes
-        e[i] = min(e[i], math.sqrt(e[i - 1] ** 2 + 2 * amax[i - 1] * L[i - 1]))
-    t = sum(trapezoid_time(L[i], e[i], vmax[i], e[i + 1], amax[i]) for i in range(n))
+        e[i] = min(e[i], math.sqrt(e[i - 1] ** 2 + 2 * As[i - 1] * Ls[i - 1]))
+    t = math.fsum(trapezoid_time(Ls[i], e[i], vs[i], e[i + 1], As[i]) for i in range(n))
     return {"time_machine_s": float(t), "blocks": int(n), "mean_speed_mm_s": float(L.sum() / t) if t > 0 else 0.0,
             "length_mm": float(L.sum()), "machine": machine.name}
 
