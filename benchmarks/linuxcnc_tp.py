@@ -44,7 +44,8 @@ from cnclab.nc.machine import SMALL_VMC, Machine  # noqa: E402
 
 FIX = ROOT / "tests" / "fixtures" / "linuxcnc"
 DRIVER = Path(__file__).resolve().parent / "linuxcnc" / "driver.py"
-SERVO_PERIOD_NS = 1_000_000
+#: servo period [ns] (1 ms; ``$CNCLAB_TP_SERVO_NS`` overrides it, recorded per case)
+SERVO_PERIOD_NS = int(os.environ.get("CNCLAB_TP_SERVO_NS", "1000000"))
 
 def _spiral(n: int = 4000) -> str:
     """``n`` blocks of an Archimedean spiral from r = 2 mm, 2 mm per turn, chords of ~0.1 mm, F3000."""
@@ -229,16 +230,17 @@ def main(argv) -> None:
     stamp = time.strftime("%Y-%m-%dT%H:%MZ", time.gmtime())
     traj = os.environ.get("CNCLAB_TP_TRAJ", "")
     for name, v in res.items():
-        cases[name] = dict(v, measured_utc=stamp, traj_extra=traj)
+        cases[name] = dict(v, measured_utc=stamp, traj_extra=traj, servo_period_s=SERVO_PERIOD_NS * 1e-9)
     for name, why in failed.items():         # a failure never replaces a measurement
         if "time_motion_s" not in cases.get(name, {}):
-            cases[name] = {"failed": why, "measured_utc": stamp, "traj_extra": traj}
+            cases[name] = {"failed": why, "measured_utc": stamp, "traj_extra": traj,
+                           "servo_period_s": SERVO_PERIOD_NS * 1e-9}
     doc = {"_provenance": {
         "linuxcnc": version(), "written_utc": stamp,
         "command": "python benchmarks/linuxcnc_tp.py (make tp-check): linuxcnc sim.ini with RUNTESTS=1 "
                    "RTAPI_UID=65534, DISPLAY = benchmarks/linuxcnc/driver.py, halsampler on motion.current-vel",
         "config": {"machine": m.name, "max_rate_mm_min": m.max_rate_mm_min, "accel_mm_s2": m.accel_mm_s2,
-                   "g64": f"G64 P{tol:g} Q0", "servo_period_s": SERVO_PERIOD_NS * 1e-9, "kinematics": "trivkins XYZ",
+                   "g64": f"G64 P{tol:g} Q0", "servo_period_s": 1e-3, "kinematics": "trivkins XYZ",
                    "traj": "ARC_BLEND_* defaults (enabled, optimization depth 50), NO_FORCE_HOMING; per case "
                            "traj_extra: lines added to [TRAJ] from $CNCLAB_TP_TRAJ",
                    "start": "machine at X0 Y0 Z0"},

@@ -16,6 +16,8 @@ import time
 import linuxcnc
 
 STAT, CMD, ERR = linuxcnc.stat(), linuxcnc.command(), linuxcnc.error_channel()
+#: status poll interval [s] (a GUI polls at ~10-20 Hz)
+POLL_S = float(os.environ.get("CNCLAB_TP_POLL_S", "0.1"))
 
 
 def wait(pred, timeout_s, what, stall_s=30.0):
@@ -33,7 +35,7 @@ def wait(pred, timeout_s, what, stall_s=30.0):
         elif time.time() - t_moved > stall_s:
             raise RuntimeError(f"motion stalled at line {STAT.motion_line} ({STAT.queue} segments queued, "
                                f"no motion for {stall_s} s) waiting for {what}")
-        time.sleep(0.005)
+        time.sleep(POLL_S)
     raise RuntimeError(f"timeout ({timeout_s} s) waiting for {what}")
 
 

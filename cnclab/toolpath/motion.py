@@ -30,10 +30,11 @@ the program as a GRBL-style (and, for the look-ahead, LinuxCNC-like) trajectory 
   after the last move).
 
 Validated against LinuxCNC 2.9's own planner run headless in simulation (``make tp-check``,
-``benchmarks/linuxcnc_tp.py``; fixture ``tests/fixtures/linuxcnc/tp_times.json``): within 3 % on a
-line, a corner, a small full circle, a 360-gon and two bench pocket programs
-(``tests/test_machine_linuxcnc.py``); LinuxCNC's blend arcs (a ``G64 P`` tolerance) are modelled by
-the junction-deviation corner speed, the main source of the difference.
+``benchmarks/linuxcnc_tp.py``; fixture ``tests/fixtures/linuxcnc/tp_times.json``): within 2.6 % on
+a line, a corner, a small full circle, a 360-gon, a 4000-chord spiral and our rectangle bench
+program (``tests/test_machine_linuxcnc.py``, ``docs/linuxcnc-trajectory-check.md``); LinuxCNC's
+blend arcs (a ``G64 P`` tolerance, tangent segments at full acceleration) are modelled by the
+junction-deviation corner speed, the main source of the difference.
 
 Layering: this module (toolpath layer) is the core, usable by the evaluator
 (:mod:`cnclab.toolpath.evaluate`) on any :class:`~cnclab.toolpath.path.ToolPath`
