@@ -231,8 +231,10 @@ def main(argv) -> None:
     traj = os.environ.get("CNCLAB_TP_TRAJ", "")
     for name, v in res.items():
         cases[name] = dict(v, measured_utc=stamp, traj_extra=traj, servo_period_s=SERVO_PERIOD_NS * 1e-9)
-    for name, why in failed.items():         # a failure never replaces a measurement
-        if "time_motion_s" not in cases.get(name, {}):
+    for name, why in failed.items():         # a failure never replaces a measurement; failures add up
+        prev = cases.get(name, {})
+        if "time_motion_s" not in prev:
+            why = f"{prev['failed']}; {stamp}: {why}" if prev.get("failed") else why
             cases[name] = {"failed": why, "measured_utc": stamp, "traj_extra": traj,
                            "servo_period_s": SERVO_PERIOD_NS * 1e-9}
     doc = {"_provenance": {

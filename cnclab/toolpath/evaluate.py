@@ -39,8 +39,11 @@ Model (units: mm, deg, mm/min, s):
   centripetal limits, look-ahead; validated against LinuxCNC's planner). It times the path as given:
   a planner's polyline as polyline, a path read from a program with its arcs. The program writer
   fits arcs (:mod:`cnclab.nc.arcfit`) and writes entries at the job's entry feed, so a written
-  program's machine time differs: by 0.1-1 % on the rectangle, L and 120 x 85 bench pockets
-  (arcs), more where entries dominate (entry feed; the length / feed time differs alike).
+  program's machine time differs. Measured on the eight bench pockets (adaptive, small VMC, full
+  resolution, 2026-11-25): the written program's is 0.6-0.9 % longer on the star, rectangle, L and
+  120 x 85 pockets (arc fitting, approach and retract), 2.4 / 4.0 / 7.8 / 55 % on spline,
+  two_islands_neck, two_regions and slot, where the writer's slower entry feed makes the length /
+  feed time longer alike (1.9 / 3.6 / 7.7 / 58 %).
 * **Feed control** (``feed_control=True``, Jacsó Thesis IV / §4): the cutting level (the lowest z
   of the path, :func:`planar_view`) is cut through one dixel stock of the pocket minus the entry hole
   (:func:`entry_hole`) with segment kinds from the tags (cut / roll-in / roll-out / link); the
