@@ -148,7 +148,7 @@ def test_bad_input_names_the_parameter():
 @pytest.mark.parametrize("name", ["plain", "island"])
 def test_reentry_plunges_are_tagged_cleared_and_the_program_counts_none(name):
     """Every vertical plunge below the stock top follows a jump into the cleared region: the planner
-    tags it ``cleared`` (written ``(cleared)``), the static checker counts no plunge into material,
+    flags it ``cleared`` (written ``(cnclab:cleared/1)``), the static checker counts no plunge into material,
     and the dixel evaluator (independently) finds none either."""
     from cnclab.nc.program import check_program, write_program
 
@@ -159,7 +159,7 @@ def test_reentry_plunges_are_tagged_cleared_and_the_program_counts_none(name):
     text = write_program(path, job)
     chk = check_program(text, clearance_z=job.clearance_z, top_z=job.top_z)
     assert chk.plunges_into_material == 0 and chk.entries["plunge"] >= pl.sum()
-    assert text.count("(cleared)") >= pl.sum()
+    assert text.count("(cnclab:cleared/1)") >= pl.sum()
     assert ev.plunges_into_material == 0
 
 

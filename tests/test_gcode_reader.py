@@ -247,7 +247,7 @@ def test_gcode_check_rows_from_committed_canonical_output(tmp_path, monkeypatch)
 
 
 def test_gcode_check_fails_an_unmarked_plunge_below_the_stock_top(tmp_path, monkeypatch):
-    """A vertical plunge below the stock top without the ``(cleared)`` mark fails `make gcode-check`
+    """A vertical plunge below the stock top without the ``(cnclab:cleared/1)`` mark fails `make gcode-check`
     (the planners tag the plunges into area they cleared; the static count must be 0)."""
     import json
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from cnclab.nc.gcode import parse_gcode, program_time, read_gcode
-from cnclab.nc.program import START_BLOCK, check_program, write_program
+from cnclab.nc.program import CLEARED_MARK, START_BLOCK, check_program, cleared_mark, write_program
 from cnclab.toolpath.path import Tool, ToolPath
 
 FREECAD = Path(__file__).parent / "fixtures" / "freecad"
@@ -45,11 +45,37 @@ def test_rapid_below_clearance_needs_the_cleared_flag():
     with pytest.raises(ValueError, match="move 4: rapid from z -1.5 to z -1.5 mm below the clearance plane"):
         write_program(_pocket_path(""), clearance_z=5, spindle_rpm=6000)
     text = write_program(_pocket_path("cleared"), clearance_z=5, spindle_rpm=6000)
-    assert "G0 Y5.0000 (cleared)" in text
+    assert "G0 Y5.0000 (cnclab:cleared/1)" in text
     # the checker refuses the same block without its mark
-    bad = text.replace(" (cleared)", "")
+    bad = text.replace(" (cnclab:cleared/1)", "")
     chk = check_program(bad, clearance_z=5)
     assert chk.rapids_below_clearance == 1 and "word G0: rapid below the clearance plane" in chk.errors[0]
+
+
+@pytest.mark.parametrize("comment", ["cleared", "not cleared", "cleared: link through cleared area",
+                                     "cnclab:cleared/2", "cnclab:cleared/1 (no)", "CNCLAB:CLEARED/1", "x cnclab:cleared/1",
+                                     "cnclab:cleared/10", ""])
+def test_no_other_comment_text_grants_clearance(comment):
+    """Only the writer's structured marker (exactly ``cnclab:cleared/1``) marks a block cleared: a free
+    text comment that mentions 'cleared', a tag, another version or a longer text grants nothing (the
+    rapid at depth and the plunge below the stock top are then errors)."""
+    text = write_program(_pocket_path("cleared"), clearance_z=5, spindle_rpm=6000)
+    assert check_program(text, clearance_z=5).ok and text.count(f"({CLEARED_MARK})") == 1
+    other = text.replace(f"({CLEARED_MARK})", f"({comment})" if "(" not in comment else f"; {comment}")
+    assert not cleared_mark(comment)
+    chk = check_program(other, clearance_z=5)
+    assert chk.rapids_below_clearance == 1 and not chk.ok
+
+
+def test_check_program_on_a_path_reads_its_cleared_column():
+    """A ToolPath is checked from its ``cleared`` column (data), its tags ignored: the same verdicts as
+    its written program; a tag saying 'cleared' without the flag is refused."""
+    good = _pocket_path("cleared")
+    chk = check_program(good, clearance_z=5)
+    assert chk.rapids_below_clearance == 0 and chk.entries["helix"] == 1
+    tagged_only = ToolPath(good.xyz, good.kind, good.tag, good.feed, good.spindle, good.arc, good.arc_center,
+                           good.tool, {}, np.zeros(len(good), bool))
+    assert "cleared" in tagged_only.tag[4] and check_program(tagged_only, clearance_z=5).rapids_below_clearance == 1
 
 
 def test_written_time_is_the_path_time():
@@ -79,10 +105,13 @@ def test_checker_finds_each_violation(text, fragment):
 
 
 def test_checker_accepts_marked_plunge_and_counts_ramps():
-    text = ("G21\nS1000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100 (cleared: start hole)\nG1 X5 Z-2\nG2 X5 Y0 Z-3 I1 J0\n"
+    text = ("G21\nS1000 M3\nG0 X0 Y0 Z5\nG1 Z-1 F100 (cnclab:cleared/1)\nG1 X5 Z-2\nG2 X5 Y0 Z-3 I1 J0\n"
             "G0 Z5\nM5\nM30\n")
     chk = check_program(text, clearance_z=5)
     assert chk.ok, chk.errors
+    # a free-text comment that says so is no mark: the plunge counts as into material
+    free = check_program(text.replace("(cnclab:cleared/1)", "(cleared: start hole)"), clearance_z=5)
+    assert free.plunges_into_material == 1
     assert chk.entries == {"helix": 1, "ramp": 1, "plunge": 1} and chk.plunges_into_material == 0
 
 
@@ -138,7 +167,7 @@ def test_plunge_flagged_cleared_is_written_as_such():
     pts = [[0, 0, 5], [0, 0, -2], [10, 0, -2], [10, 0, 5]]
     p = ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], cleared=[0, 1, 0, 0], feed=300)
     text = write_program(p, clearance_z=5, spindle_rpm=5000)
-    assert "G1 Z-2.0000 F300.0 (cleared)" in text
+    assert "G1 Z-2.0000 F300.0 (cnclab:cleared/1)" in text
     assert check_program(text, clearance_z=5).ok
     untagged = write_program(ToolPath.build(pts, kind=["rapid", "plunge", "cut", "retract"], feed=300),
                              clearance_z=5, spindle_rpm=5000)

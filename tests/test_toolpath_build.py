@@ -139,7 +139,7 @@ def test_writer_reads_the_cleared_flag_not_the_tag():
     kind = ["rapid", "plunge", "cut", "rapid", "cut", "retract"]
     ok = ToolPath.build(pts, kind=kind, feed=300, cleared=[0, 1, 0, 1, 0, 0])
     text = write_program(ok, clearance_z=5, spindle_rpm=6000)
-    assert text.count("(cleared)") == 2 and check_program(text, clearance_z=5).ok
+    assert text.count("(cnclab:cleared/1)") == 2 and check_program(text, clearance_z=5).ok
     lying = ToolPath.build(pts, kind=kind, feed=300, tag=["", "cleared", "", "cleared", "", ""], cleared=False)
     with pytest.raises(ValueError, match="move 3: rapid"):
         write_program(lying, clearance_z=5, spindle_rpm=6000)

@@ -18,10 +18,11 @@ given ``out``, writes it atomically (the one way a program reaches disk):
   arcs and longer lines within 0.005 mm (:mod:`cnclab.nc.arcfit`); :func:`program_path` is that
   path, its :meth:`~cnclab.toolpath.path.ToolPath.time_s` the program's time;
 * rapids only at or above ``clearance_z``, or straight up (a retract), or where the path marks the
-  move as inside cleared area (its ``cleared`` flag, the planner's proof; written as a ``(cleared)``
-  comment on the block, as on any other move the path flags ``cleared``, e.g. a plunge into cleared
-  area — the evaluator proves it; tags are free text and decide nothing); any other rapid below the
-  clearance plane is refused
+  move as inside cleared area (its ``cleared`` flag, the planner's proof from its stock simulation;
+  written as the structured, versioned marker :data:`CLEARED_MARK` ``(cnclab:cleared/1)`` on the
+  block, as on any other move the path flags ``cleared``, e.g. a plunge into cleared area — the
+  evaluator proves it again by simulation; tags are free text and decide nothing); any other rapid
+  below the clearance plane is refused
   (``ValueError`` naming the move index). The first point is reached from the clearance plane by
   a feed move when it lies below it (never a rapid onto the part);
 * the end: a rapid straight up to ``clearance_z``, (``M9``), ``M5``, ``M30``.
@@ -35,11 +36,14 @@ post-processor's: :mod:`cnclab.nc.spindle_control` turns an APT CL file with its
 records into G-code through them) as it is, with the same text rules; the G-code text of every
 program cnclab writes comes from this module.
 
-:func:`check_program` reads a program (any post's) and checks: the spindle is on before the first
-feed move, no G0 below the clearance plane (except straight up, or a block commented
-``cleared``), every Z-descending feed move classified (helix / ramp / plunge; a plunge below the stock
-top ``top_z`` is a plunge into material unless commented ``cleared``), and the program stops the
-spindle (``M5``) and ends (``M30`` or ``M2``).
+:func:`check_program` reads a program (any post's) or a :class:`~cnclab.toolpath.path.ToolPath` and
+checks: the spindle is on before the first feed move, no G0 below the clearance plane (except
+straight up, or a move marked cleared), every Z-descending feed move classified (helix / ramp /
+plunge; a plunge below the stock top ``top_z`` is a plunge into material unless marked cleared),
+and the program stops the spindle (``M5``) and ends (``M30`` or ``M2``). "Marked cleared" is data:
+on a ToolPath its ``cleared`` column; in a program text only a block whose comment is exactly
+:data:`CLEARED_MARK` (:func:`cleared_mark`, the one parser, next to the writer): no other comment
+text (``(cleared)``, ``(not cleared)``, a tag) grants anything.
 
 >>> from cnclab.toolpath.path import Tool, ToolPath
 >>> p = ToolPath.build([[0, 0, 1], [0, 0, -1], [10, 0, -1]], kind=["rapid", "plunge", "cut"], feed=300)
@@ -66,6 +70,8 @@ M30
 %
 >>> check_program(text, clearance_z=5).errors
 ['<string>:14: word G1: plunge into material below the stock top Z0 (not marked cleared)']
+>>> check_program(p, clearance_z=5).plunges_into_material          # the path itself: its cleared column
+1
 >>> print(write_program(p, clearance_z=5, tool=Tool(6), spindle_rpm=6000, dialect="grbl",
 ...                     coolant="flood"))   # doctest: +NORMALIZE_WHITESPACE, +ELLIPSIS
 (cnclab program: mm, clearance plane Z5 mm, stock top Z0 mm)
@@ -100,11 +106,13 @@ from .gcode import (MAX_COORD_MM, MAX_FEED_MM_MIN, MAX_SPINDLE_RPM, GcodeProgram
                     parse_gcode, path_lengths, program_time, read_gcode, read_program_text)
 
 __all__ = ["write_program", "write_moves", "write_linear_moves", "gcode_roundtrip_error", "program_path",
-           "check_program", "ProgramCheck", "START_BLOCK", "DIALECTS",
+           "check_program", "ProgramCheck", "CLEARED_MARK", "cleared_mark", "START_BLOCK", "DIALECTS",
            "TOOL_NUMBER_RANGE", "ENTRY_FEED_FRACTION", "GRBL_LINE_MAX", "COOLANT"]
 
 START_BLOCK = "G21 G90 G17 G94 G40 G49 G80"
-CLEARED = "cleared"
+#: the structured marker (versioned) the writer puts on a block whose move the path flags ``cleared``
+#: (:attr:`ToolPath.cleared`, the planner's proof); read back only by :func:`cleared_mark`
+CLEARED_MARK = "cnclab:cleared/1"
 _TOL = 1e-6
 
 
@@ -290,7 +298,7 @@ def _program_moves(path: ToolPath, clearance_z: float, spindle_rpm: float, decim
     first_feed = next((float(f) for f in path.feed if np.isfinite(f)), None)
     if z0 < clearance_z - _TOL:
         if path.kind[0] == 0 and path.cleared[0]:
-            moves.append(Move("G0", x0, y0, z0, spindle=spindle_rpm)); comments.append(CLEARED)
+            moves.append(Move("G0", x0, y0, z0, spindle=spindle_rpm)); comments.append(CLEARED_MARK)
         else:
             if first_feed is None:
                 raise ValueError("move 0: the path starts below the clearance plane and has no feed move "
@@ -301,7 +309,7 @@ def _program_moves(path: ToolPath, clearance_z: float, spindle_rpm: float, decim
         if k == 0:
             continue
         moves.append(dataclasses.replace(mv, spindle=spindle_rpm))
-        comments.append(CLEARED if path.cleared[k] else "")
+        comments.append(CLEARED_MARK if path.cleared[k] else "")
     xe, ye, ze = xyz[-1]
     if ze < clearance_z:
         moves.append(Move("G0", xe, ye, cz, spindle=spindle_rpm)); comments.append("")
@@ -449,9 +457,25 @@ class ProgramCheck:
         return not self.errors
 
 
+def cleared_mark(comment: str) -> bool:
+    """Whether a block's comment (as :attr:`GcodeProgram.comments` holds it) is the writer's marker
+    :data:`CLEARED_MARK` — exactly (surrounding blanks aside), the one parser of it: any other text,
+    ``(cleared)`` or a marker of another version included, grants nothing.
+
+    >>> cleared_mark("cnclab:cleared/1"), cleared_mark("cleared"), cleared_mark("not cnclab:cleared/1")
+    (True, False, False)
+    """
+    return comment.strip() == CLEARED_MARK
+
+
 def check_program(program, clearance_z: float, top_z: float = 0.0, source: str | None = None) -> ProgramCheck:
-    """Static safety check of a program (text, a file path, or a :class:`GcodeProgram`); see the
-    module docstring for the rules. ``clearance_z``/``top_z`` in mm."""
+    """Static safety check of a program (text, a file path, or a :class:`GcodeProgram`) or of a
+    :class:`ToolPath` (its moves and its ``cleared`` column; no program end to check); see the module
+    docstring for the rules. ``clearance_z``/``top_z`` in mm."""
+    if isinstance(program, ToolPath):
+        moves = program.to_moves()
+        return _check_moves(moves, list(range(len(moves))), program.cleared, source or "<path>", clearance_z,
+                            top_z, None)
     if isinstance(program, GcodeProgram):
         prog = program
     else:
@@ -460,20 +484,25 @@ def check_program(program, clearance_z: float, top_z: float = 0.0, source: str |
             prog = read_gcode(read_program_text(p), source=source or str(p))
         else:
             prog = read_gcode(program, source=source or "<string>")
-    src = prog.source
+    return _check_moves(prog.moves, prog.lines, [cleared_mark(c) for c in prog.comments], prog.source,
+                        clearance_z, top_z, prog)
+
+
+def _check_moves(moves, lines, cleared, src, clearance_z, top_z, prog) -> ProgramCheck:
+    """The rules of :func:`check_program` over ``moves`` (``cleared``: per move, the data that marks
+    it cleared); ``prog``: the program whose end and spindle stop are checked too (None: a path)."""
     errors = []
     entries = {"helix": 0, "ramp": 0, "plunge": 0}
     plunges = rapids_bad = 0
     spindle_ok = True
     seen_feed = False
     prev_entry = None
-    moves, lines, cmts = prog.moves, prog.lines, prog.comments
     if moves and moves[0].z < clearance_z - _TOL:
         errors.append(f"{src}:{lines[0]}: word {moves[0].motion}: the first move ends below the clearance "
                       f"plane Z{clearance_z:g} (start position unknown)")
     for k, mv in enumerate(moves):
         where = f"{src}:{lines[k]}"
-        cleared = CLEARED in cmts[k]
+        ok_cleared = bool(cleared[k])
         if mv.motion != "G0" and not seen_feed:
             seen_feed = True
             if mv.spindle is None:
@@ -487,7 +516,7 @@ def check_program(program, clearance_z: float, top_z: float = 0.0, source: str |
             prev_entry = None
             above = min(a[2], b[2]) >= clearance_z - _TOL
             straight_up = b[2] >= a[2] and math.hypot(*(b[:2] - a[:2])) <= _TOL
-            if not (above or straight_up or cleared):
+            if not (above or straight_up or ok_cleared):
                 rapids_bad += 1
                 errors.append(f"{where}: word G0: rapid below the clearance plane Z{clearance_z:g} "
                               f"(z {a[2]:g} -> {b[2]:g} mm) not marked cleared")
@@ -497,18 +526,22 @@ def check_program(program, clearance_z: float, top_z: float = 0.0, source: str |
                 "plunge" if math.hypot(*(b[:2] - a[:2])) <= _TOL else "ramp")
             if kind != prev_entry:          # an entry is a run of descending blocks (a helix of n arcs: 1)
                 entries[kind] += 1
-            if kind == "plunge" and b[2] < top_z - _TOL and not cleared:
+            if kind == "plunge" and b[2] < top_z - _TOL and not ok_cleared:
                 plunges += 1
                 errors.append(f"{where}: word {mv.motion}: plunge into material below the stock top "
                               f"Z{top_z:g} (not marked cleared)")
             prev_entry = kind
             continue
         prev_entry = None
+    if prog is None:
+        return ProgramCheck(errors, entries, plunges, rapids_bad, spindle_ok, None)
     if prog.end_word is None:
         errors.append(f"{src}: no program end (M30 or M2)")
     if prog.spindle_stop_line is None or (lines and prog.spindle_stop_line < lines[-1]):
         errors.append(f"{src}: the spindle is not stopped (M5) after the last move")
     return ProgramCheck(errors, entries, plunges, rapids_bad, spindle_ok, prog.end_word)
+
+
 
 
 # --------------------------------------------------------------------------------------------

@@ -551,7 +551,7 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
 def _tag_cleared_plunges(path: ToolPath, segments, top_z: float) -> ToolPath:
     """Flag (and tag) ``cleared`` the vertical plunges below ``top_z`` that follow a jump landing in the cleared
     region (a jump segment tagged ``cleared`` by :func:`_segments`): the written program marks them
-    ``(cleared)`` and the static checker does not count them as plunges into material (the dixel
+    ``(cnclab:cleared/1)`` and the static checker does not count them as plunges into material (the dixel
     evaluator proves them: ``plunges_into_material``). ``path`` is changed in place and returned."""
     landings = [t == CLEARED for i, (P, k, t) in enumerate(segments) if isinstance(k, str) and k == "jump"
                 and not (i + 1 < len(segments) and isinstance(segments[i + 1][1], str) and segments[i + 1][1] == "helix")]

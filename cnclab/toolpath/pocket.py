@@ -90,7 +90,8 @@ def _to_toolpath(segs, job: Job, name: str, info: dict, resolution_mm: float = 0
 
 def _tag_hole_plunges(path: ToolPath, job: Job) -> ToolPath:
     """Flag (and tag) ``cleared`` every vertical plunge below the stock top whose tool disc lies inside the
-    pre-drilled start hole (air: the program marks it ``(cleared)``); in place, returned."""
+    pre-drilled start hole (air: the path flags it ``cleared``, the program marks it
+    ``(cnclab:cleared/1)``); in place, returned."""
     if job.start_hole is None:
         return path
     (cx, cy), d, _ = entry_hole(job)
