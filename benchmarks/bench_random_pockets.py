@@ -97,7 +97,7 @@ def main(argv=None):
         row["plan_s"] = time.perf_counter() - t0
         ev = evaluate(tp, job, 0.05 if P.area < 2500 else 0.1)
         row.update({"p95-theta": ev.engagement_p95_deg - th, "max-theta": ev.engagement_max_deg - th,
-                    "share>θ+5_pct": ev.share_above_5_pct, "entries": tp.info["entries"],
+                    "share_above_5_pct": ev.share_above_5_pct, "entries": tp.info["entries"],
                     "plunges": ev.plunges_into_material, "rapids_into": ev.rapids_into_material,
                     "uncut_mm2": ev.uncut_beyond_unreachable_mm2, "gouge_mm": ev.wall_gouge_max_mm,
                     "program_s": tp.time_s(10000.0)["total_s"]})
@@ -112,7 +112,7 @@ def main(argv=None):
     print(df.drop(columns=[c for c in ("refused",) if c in df]).round(3).to_string())
     print(f"\n== summary (seed {a.seed}): {len(planned)} planned, {len(df) - len(planned)} refused; "
           f"targets met on {int(planned['ok'].sum())}/{len(planned)}; max over theta {planned['max-theta'].max():.1f} deg, "
-          f"max share above theta+5 {planned['share>θ+5_pct'].max():.2f} %, plunges {int(planned['plunges'].sum())}, "
+          f"max share above theta+5 {planned['share_above_5_pct'].max():.2f} %, plunges {int(planned['plunges'].sum())}, "
           f"rapids into material {int(planned['rapids_into'].sum())}, max gouge {planned['gouge_mm'].max():.4f} mm, "
           f"max plan {planned['plan_s'].max():.2f} s")
 

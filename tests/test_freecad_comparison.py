@@ -113,8 +113,8 @@ def test_comparison_table_rectangle_fast():
 
 def test_comparison_pocket_freecad_left_unmachined_gets_a_nan_row_with_reason():
     T = fx.comparison("slot", {"adaptive_clearing": "adaptive"}, fast=True, feed_control=False)
-    assert np.isnan(T.loc[fx.FREECAD, "p95_deg"]) and "no cutting motion" in T.loc[fx.FREECAD, "note"]
-    assert np.isfinite(T.loc["adaptive_clearing", "p95_deg"])
+    assert np.isnan(T.loc[fx.FREECAD, "engagement_p95_deg"]) and "no cutting motion" in T.loc[fx.FREECAD, "note"]
+    assert np.isfinite(T.loc["adaptive_clearing", "engagement_p95_deg"])
 
 
 def test_unknown_pocket_is_refused():

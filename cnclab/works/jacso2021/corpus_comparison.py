@@ -47,8 +47,8 @@ FIXTURES = REPO_ROOT / "tests" / "fixtures" / "freecad" / "corpus"
 #: the committed rows of the last full run of benchmarks/bench_corpus.py (with its run notes in the .json)
 RESULTS = REPO_ROOT / "benchmarks" / "results" / "corpus_rows.csv"
 #: the axes of the comparison: planner column -> FreeCAD column is the same name + "_fc"
-AXES = ["p95_deg", "max_deg", "share>θ+5_pct", "plunges_into_material", "rapids_into_material", "wall_gouge_mm",
-        "lifts", "uncut_beyond_mm2", "program_time_min", "machine_time_min", "plan_time_s"]
+AXES = ["engagement_p95_deg", "engagement_max_deg", "share_above_5_pct", "plunges_into_material", "rapids_into_material",
+        "wall_gouge_mm", "lifts", "uncut_beyond_mm2", "program_time_min", "machine_time_min", "plan_time_s"]
 ROW_COLUMNS = (["family", "D_mm", "theta_deg", "levels"] + AXES + [a + "_fc" for a in AXES]
                + ["uncut_over_limit", "ok_safe", "ok_engagement", "note"])
 
@@ -113,7 +113,8 @@ def score_job(name: str, fast: bool | None = None) -> dict:
     th = jb.theta_deg
     out["ok_safe"] = bool(out["plunges_into_material"] == 0 and out["rapids_into_material"] == 0
                           and out["wall_gouge_mm"] <= 1e-3) if out["note"][:5] != "Plann" else math.nan
-    out["ok_engagement"] = bool(out["p95_deg"] <= th + 2 and out["max_deg"] <= th + 10 and out["share>θ+5_pct"] <= 0.5)
+    out["ok_engagement"] = bool(out["engagement_p95_deg"] <= th + 2 and out["engagement_max_deg"] <= th + 10
+                                and out["share_above_5_pct"] <= 0.5)
     return out
 
 
@@ -133,18 +134,19 @@ def family_table(df: pd.DataFrame) -> pd.DataFrame:
     worst share above theta + 5, worst program-time and plan-time ratio to FreeCAD, worst lifts and
     uncut excess over FreeCAD's (lifts - lifts_fc, uncut - uncut_fc in mm^2)."""
     d = df.copy()
-    d["p95-θ"] = d["p95_deg"] - d["theta_deg"]
-    d["max-θ"] = d["max_deg"] - d["theta_deg"]
+    d["p95-θ"] = d["engagement_p95_deg"] - d["theta_deg"]
+    d["max-θ"] = d["engagement_max_deg"] - d["theta_deg"]
     d["program ratio"] = _ratio(d, "program_time_min")
     d["machine ratio"] = _machine_ratio(d)
     d["plan ratio"] = _ratio(d, "plan_time_s")
     d["lifts - FC"] = d["lifts"] - d["lifts_fc"]
     d["uncut - FC"] = d["uncut_beyond_mm2"] - d["uncut_beyond_mm2_fc"]
     g = d.groupby("family")
-    T = pd.DataFrame({"jobs": g.size(), "planned": g["max_deg"].count(), "FC planned": g["max_deg_fc"].count(),
+    T = pd.DataFrame({"jobs": g.size(), "planned": g["engagement_max_deg"].count(),
+                      "FC planned": g["engagement_max_deg_fc"].count(),
                       "unsafe": g["ok_safe"].apply(lambda s: int((s == False).sum())),  # noqa: E712 -- NaN: not planned
                       "worst p95-θ": g["p95-θ"].max(), "worst max-θ": g["max-θ"].max(),
-                      "worst share>θ+5 %": g["share>θ+5_pct"].max(), "worst program ratio": g["program ratio"].max(),
+                      "worst share>θ+5 %": g["share_above_5_pct"].max(), "worst program ratio": g["program ratio"].max(),
                       "median program ratio": g["program ratio"].median(),
                       "worst machine ratio": g["machine ratio"].max(), "worst plan ratio": g["plan ratio"].max(),
                       "worst lifts - FC": g["lifts - FC"].max(), "worst uncut - FC mm2": g["uncut - FC"].max()})
@@ -156,8 +158,8 @@ def targets(df: pd.DataFrame) -> pd.DataFrame:
     not plan counts against every target; the comparisons with FreeCAD are over the jobs FreeCAD
     planned (the count is stated): where FreeCAD wrote no program there is nothing to compare."""
     n = len(df)
-    planned = df["max_deg"].notna()
-    both = df[planned & df["max_deg_fc"].notna()]
+    planned = df["engagement_max_deg"].notna()
+    both = df[planned & df["engagement_max_deg_fc"].notna()]
     nb = f"of {len(both)} jobs both planned"
     prog = _ratio(both, "program_time_min")
     lifts_ok = both["lifts"] <= both["lifts_fc"]
@@ -168,7 +170,8 @@ def targets(df: pd.DataFrame) -> pd.DataFrame:
         ("0 plunges, 0 rapids into material, 0 wall/island gouge on every job",
          f"{int(safe.sum())}/{n} planned and safe ({int(planned.sum())} planned)", bool(safe.all())),
         ("p95 <= θ+2, max <= θ+10, share>θ+5 <= 0.5 % on every job",
-         f"{int(df['ok_engagement'].sum())}/{n}; worst max-θ {float((df['max_deg'] - df['theta_deg']).max()):.1f} deg",
+         f"{int(df['ok_engagement'].sum())}/{n}; "
+         f"worst max-θ {float((df['engagement_max_deg'] - df['theta_deg']).max()):.1f} deg",
          bool(df["ok_engagement"].all())),
         ("program time <= FreeCAD's on >= 95 % of jobs", f"{float((prog <= 1.0).mean() * 100):.1f} % {nb}",
          bool((prog <= 1.0).mean() >= 0.95)),
@@ -182,10 +185,11 @@ def targets(df: pd.DataFrame) -> pd.DataFrame:
     for fam, label in (("channel_15d", "1.5 D channels"), ("tapered_channel", "tapered channels"),
                        ("slot_bulbs", "slots with bulbs"), ("gear", "gear outlines")):
         ch = df[df["family"] == fam]
-        cb = ch[ch["max_deg"].notna() & ch["max_deg_fc"].notna()]
+        cb = ch[ch["engagement_max_deg"].notna() & ch["engagement_max_deg_fc"].notna()]
         ok = (cb["lifts"] <= cb["lifts_fc"] + 1) & (_ratio(cb, "program_time_min") <= 1.0)
         rows.append((f"{label}: lifts <= FreeCAD's + 1 and program time <= FreeCAD's",
-                     f"{int(ok.sum())}/{len(cb)} (FreeCAD planned {len(cb)} of {len(ch)}; ours {int(ch['max_deg'].notna().sum())})",
+                     f"{int(ok.sum())}/{len(cb)} (FreeCAD planned {len(cb)} of {len(ch)}; "
+                     f"ours {int(ch['engagement_max_deg'].notna().sum())})",
                      bool(len(cb) and ok.all())))
     return pd.DataFrame(rows, columns=["target", "measured", "met"]).set_index("target")
 
@@ -207,9 +211,9 @@ def ratio_columns(df: pd.DataFrame) -> pd.DataFrame:
                          "machine time / FC": _machine_ratio(df),
                          "plan time / FC": _ratio(df, "plan_time_s"), "lifts - FC": df["lifts"] - df["lifts_fc"],
                          "uncut - FC (mm²)": df["uncut_beyond_mm2"] - df["uncut_beyond_mm2_fc"],
-                         "max - θ (deg)": df["max_deg"] - df["theta_deg"],
-                         "max - θ FC (deg)": df["max_deg_fc"] - df["theta_deg"],
-                         "p95 - θ (deg)": df["p95_deg"] - df["theta_deg"]})
+                         "max - θ (deg)": df["engagement_max_deg"] - df["theta_deg"],
+                         "max - θ FC (deg)": df["engagement_max_deg_fc"] - df["theta_deg"],
+                         "p95 - θ (deg)": df["engagement_p95_deg"] - df["theta_deg"]})
 
 
 #: the panels of :func:`distribution_figure`: column of :func:`ratio_columns`, target line, y scale

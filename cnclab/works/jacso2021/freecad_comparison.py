@@ -76,7 +76,9 @@ FREECAD = "FreeCAD Adaptive"
 #: planner rows: label -> strategy of cnclab.toolpath.planners.STRATEGIES
 PLANNER_ROWS = {"adaptive_clearing": "adaptive", "ce_clearing (old)": "constant-engagement"}
 FEED_CONTROL_SUFFIX = " + §4 feed control"
-COLUMNS = ["p95_deg", "max_deg", "share>θ+5_pct", "share>θ+15_pct", "entry_max_deg", "retracts", "lifts",
+#: the table's columns: the :class:`~cnclab.toolpath.evaluate.Evaluation` names where the value is one
+COLUMNS = ["engagement_p95_deg", "engagement_max_deg", "share_above_5_pct", "share_above_15_pct",
+           "entry_engagement_max_deg", "retracts", "lifts",
            "plunges_into_material", "rapids_into_material", "uncut_beyond_mm2", "program_time_min",
            "machine_time_min", "plan_time_s", "wall_gouge_mm"]
 _CUT = KINDS.index("cut")
@@ -147,7 +149,8 @@ def summary(tables: dict) -> pd.DataFrame:
                      "program ratio": a["program_time_min"] / f["program_time_min"],
                      "machine_min": a["machine_time_min"], "machine_min FC": f["machine_time_min"],
                      "machine ratio": a["machine_time_min"] / f["machine_time_min"],
-                     "max_deg": a["max_deg"], "max_deg FC": f["max_deg"], "share>θ+5": a["share>θ+5_pct"],
+                     "engagement_max_deg": a["engagement_max_deg"], "engagement_max_deg FC": f["engagement_max_deg"],
+                     "share>θ+5": a["share_above_5_pct"],
                      "uncut_mm2": a["uncut_beyond_mm2"], "uncut_mm2 FC": f["uncut_beyond_mm2"],
                      "lifts": a["lifts"], "lifts FC": f["lifts"],
                      "plunges+rapids into material": a["plunges_into_material"] + a["rapids_into_material"]}
@@ -216,8 +219,8 @@ def gouge_points(ev: Evaluation, jb: Job, tol_mm: float = 0.05):
     return t["x"][mask], t["y"][mask]
 
 
-def engagement_targets(p95_deg, max_deg, share5_pct, share15_pct, plunges, rapids, gouge_mm, theta_deg,
-                       gouge_tol_mm: float = 1e-3) -> dict:
+def engagement_targets(engagement_p95_deg, engagement_max_deg, share_above_5_pct, share_above_15_pct, plunges, rapids,
+                       gouge_mm, theta_deg, gouge_tol_mm: float = 1e-3) -> dict:
     """The issue-16 targets of one program (deg, %, counts, mm): p95 <= theta + 2, share above
     theta + 5 <= 0.5 %, above theta + 15 <= 0.05 %, max <= theta + 10, no plunge or rapid into
     material, no wall gouge beyond ``gouge_tol_mm`` (1e-3 mm: the finishing snap's tolerance).
@@ -227,8 +230,8 @@ def engagement_targets(p95_deg, max_deg, share5_pct, share15_pct, plunges, rapid
     True
     """
     th = float(theta_deg)
-    return {"p95<=θ+2": bool(p95_deg <= th + 2), "share>θ+5<=0.5%": bool(share5_pct <= 0.5),
-            "share>θ+15<=0.05%": bool(share15_pct <= 0.05), "max<=θ+10": bool(max_deg <= th + 10),
+    return {"p95<=θ+2": bool(engagement_p95_deg <= th + 2), "share>θ+5<=0.5%": bool(share_above_5_pct <= 0.5),
+            "share>θ+15<=0.05%": bool(share_above_15_pct <= 0.05), "max<=θ+10": bool(engagement_max_deg <= th + 10),
             "no plunges": bool(plunges == 0), "no rapids in mat.": bool(rapids == 0),
             f"no gouge (<={gouge_tol_mm:g} mm)": bool(gouge_mm <= gouge_tol_mm)}
 
@@ -244,8 +247,8 @@ def targets(t: pd.DataFrame, theta_deg: float, ours: str = "adaptive_clearing", 
     def le(x, y):
         return bool(x <= y) if np.isfinite(y) else None
 
-    out = engagement_targets(a.p95_deg, a.max_deg, a["share>θ+5_pct"], a["share>θ+15_pct"], a.plunges_into_material,
-                             a.rapids_into_material, a.wall_gouge_mm, theta_deg, gouge_tol_mm)
+    out = engagement_targets(a.engagement_p95_deg, a.engagement_max_deg, a.share_above_5_pct, a.share_above_15_pct,
+                             a.plunges_into_material, a.rapids_into_material, a.wall_gouge_mm, theta_deg, gouge_tol_mm)
     out.update({"lifts<=FC": le(a.lifts, f.lifts), "uncut<=FC": le(a.uncut_beyond_mm2, f.uncut_beyond_mm2),
                 "time<=FC": le(a.program_time_min, f.program_time_min),
                 "feed ctrl lower": bool(fc_time < a.program_time_min),
@@ -276,9 +279,10 @@ def row(ev: Evaluation, plan_s: float, time_s: float | None = None, jb: Job | No
     """One table row (:data:`COLUMNS`) of an evaluation; ``time_s`` overrides the program time (s)
     and ``machine_s`` the machine time (s: ``ev.time_machine_s``, the small-VMC model of
     :mod:`cnclab.toolpath.motion`); with ``jb`` the wall gouge is measured (else NaN)."""
-    return {"wall_gouge_mm": math.nan if jb is None else wall_gouge_mm(ev, jb),"p95_deg": ev.engagement_p95_deg, "max_deg": ev.engagement_max_deg,
-            "share>θ+5_pct": ev.share_above_5_pct, "share>θ+15_pct": ev.share_above_15_pct,
-            "entry_max_deg": ev.entry_engagement_max_deg, "retracts": ev.retracts,
+    return {"wall_gouge_mm": math.nan if jb is None else wall_gouge_mm(ev, jb),
+            "engagement_p95_deg": ev.engagement_p95_deg, "engagement_max_deg": ev.engagement_max_deg,
+            "share_above_5_pct": ev.share_above_5_pct, "share_above_15_pct": ev.share_above_15_pct,
+            "entry_engagement_max_deg": ev.entry_engagement_max_deg, "retracts": ev.retracts,
             "lifts": lifts(ev, jb.top_z if jb is not None else 0.0),
             "plunges_into_material": ev.plunges_into_material, "rapids_into_material": ev.rapids_into_material,
             "uncut_beyond_mm2": ev.uncut_beyond_unreachable_mm2,
