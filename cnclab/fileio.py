@@ -347,6 +347,39 @@ class InterruptReport:
         self.old = {}
         return False
 
+    def call(self, body, errors=(ValueError, OSError), message=None) -> int:
+        """A command's tail, the one copy: run ``body()`` with the report active and return the exit
+        code — 0 when it returns; after an interrupt :meth:`exit_code`'s (a signal a library turned
+        into one of ``errors`` included); after another exception of ``errors`` the line
+        ``message(exc)`` (default ``"error: <exc>"``) on stderr and 2. Anything else propagates.
+
+        >>> InterruptReport([]).call(lambda: None)
+        0
+        >>> import contextlib, io
+        >>> with contextlib.redirect_stderr(io.StringIO()) as err:
+        ...     code = InterruptReport([]).call(lambda: int("x"))
+        >>> code, err.getvalue().startswith("error: invalid literal")
+        (2, True)
+        """
+        import sys
+
+        try:
+            with self:
+                body()
+                self.check()
+        except (KeyboardInterrupt, SystemExit) as exc:
+            code = self.exit_code(exc)
+            if code is None:
+                raise
+            return code
+        except errors as exc:
+            if self.signum is not None:            # a library turned the interrupt into an error
+                return self.exit_code(KeyboardInterrupt())
+            sys.stdout.flush(), sys.stderr.flush()
+            print(message(exc) if message else f"error: {exc}", file=sys.stderr)
+            return 2
+        return 0
+
     def exit_code(self, exc: BaseException, quiet: bool = False):
         """The exit code after ``exc`` (None: ``exc`` is not an interrupt, re-raise it); the message is
         printed on stderr unless ``quiet``."""

@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import io
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -290,19 +289,6 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--outdir", default=None, help="output folder (default: build/analyze/<program name>)")
     args = ap.parse_args(argv)
     outdir = Path(args.outdir) if args.outdir is not None else build_dir() / "analyze" / Path(args.program).stem
-    run = InterruptReport([outdir / name for name in OUTPUT_NAMES])   # an interrupt says what is on disk
-    try:
-        with run:
-            analyze(args.program, args.job, args.resolution, outdir)
-            run.check()
-    except (KeyboardInterrupt, SystemExit) as exc:
-        code = run.exit_code(exc)
-        if code is None:
-            raise
-        return code
-    except (GcodeError, ValueError, OSError, RuntimeError) as exc:
-        if run.signum is not None:                 # a library turned the interrupt into an error
-            return run.exit_code(KeyboardInterrupt())
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    return 0
+    # an interrupt says what is on disk
+    return InterruptReport([outdir / name for name in OUTPUT_NAMES]).call(
+        lambda: analyze(args.program, args.job, args.resolution, outdir), (GcodeError, ValueError, OSError, RuntimeError))

@@ -121,28 +121,15 @@ def main(argv=None) -> int:
     ap.add_argument("--partno", default=None, help="PARTNO record (default: the output file name in upper case)")
     ap.add_argument("--quiet", action="store_true", help="print nothing on success")
     args = ap.parse_args(argv)
-    run = InterruptReport([args.out])
-    try:
-        with run:
-            s = finish_path(args.stl, args.out, args.tool_diameter, args.stepover, args.feed_angle, args.step,
-                            args.feed, args.rpm, args.clearance, args.link, args.partno)
-            if not args.quiet:
-                print(f"{s['passes']} passes, {s['cl_points']} CL points, path {s['path_mm']:.0f} mm, z "
-                      f"{s['z_min']:.3f} .. {s['z_max']:.3f} mm, clearance plane z {s['clearance_z']:.3f} mm; "
-                      f"wrote {s['out']} ({s['seconds']:.2f} s)")
-            run.check()
-    except (ValueError, OSError) as exc:
-        if run.signum is not None:
-            return run.exit_code(KeyboardInterrupt())
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except (KeyboardInterrupt, SystemExit) as exc:
-        code = run.exit_code(exc)
-        if code is None:
-            raise
-        return code
-    return 0
+    def body():
+        s = finish_path(args.stl, args.out, args.tool_diameter, args.stepover, args.feed_angle, args.step,
+                        args.feed, args.rpm, args.clearance, args.link, args.partno)
+        if not args.quiet:
+            print(f"{s['passes']} passes, {s['cl_points']} CL points, path {s['path_mm']:.0f} mm, z "
+                  f"{s['z_min']:.3f} .. {s['z_max']:.3f} mm, clearance plane z {s['clearance_z']:.3f} mm; "
+                  f"wrote {s['out']} ({s['seconds']:.2f} s)")
 
+    return InterruptReport([args.out]).call(body)
 
 if __name__ == "__main__":
     sys.exit(main())

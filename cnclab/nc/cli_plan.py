@@ -167,24 +167,15 @@ def main(argv=None) -> int:
                     help=f"planning dixel / sampling step, mm, in [{MIN_RESOLUTION_MM:g}, D/10] (default: the "
                          "planner's own, 0.1 mm; adaptive r/60)")
     args = ap.parse_args(argv)
-    run = InterruptReport([args.output])       # an interrupt says whether the program is on disk
-    try:
-        with run:
-            plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
-                         tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut,
-                         dialect=args.dialect, coolant=args.coolant, resolution_mm=args.resolution)
-            run.check()
-    except (KeyboardInterrupt, SystemExit) as exc:
-        code = run.exit_code(exc)
-        if code is None:
-            raise
-        return code
-    except (ValueError, OSError, RuntimeError, KeyError) as exc:
-        if run.signum is not None:                 # a library turned the interrupt into an error
-            return run.exit_code(KeyboardInterrupt())
+    def message(exc):
         msg = str(exc)
         if args.resolution is not None and msg.startswith("resolution_mm "):
             msg = "--resolution" + msg[len("resolution_mm"):]
-        print(f"error: {msg}", file=sys.stderr)
-        return 2
-    return 0
+        return f"error: {msg}"
+
+    # an interrupt says whether the program is on disk
+    return InterruptReport([args.output]).call(
+        lambda: plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
+                             tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut,
+                             dialect=args.dialect, coolant=args.coolant, resolution_mm=args.resolution),
+        (ValueError, OSError, RuntimeError, KeyError), message)

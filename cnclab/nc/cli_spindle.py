@@ -72,8 +72,9 @@ def main(argv=None) -> int:
     if args.ae is not None and args.tool_diameter is not None and args.ae > args.tool_diameter:
         ap.error(f"--ae must be <= the tool diameter ({args.tool_diameter:g} mm), got {args.ae:g}")
     run = InterruptReport([args.out, args.gcode])
-    try:
-        with run, warnings.catch_warnings(record=True) as caught:
+
+    def body():
+        with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             run.check()
             s = postprocess_files(args.stl, args.apt, args.out, v_c=args.vc, f_z=args.fz, teeth=args.teeth,
@@ -87,19 +88,8 @@ def main(argv=None) -> int:
             for w in caught:
                 print(f"warning: {w.message}", file=sys.stderr)
             _print_summary(s, args)
-            run.check()
-    except (ValueError, OSError) as exc:
-        if run.signum is not None:
-            return run.exit_code(KeyboardInterrupt())
-        sys.stderr.flush()
-        print(f"\nerror: {exc}", file=sys.stderr)
-        return 2
-    except (KeyboardInterrupt, SystemExit) as exc:
-        code = run.exit_code(exc)
-        if code is None:
-            raise
-        return code
-    return 0
+
+    return run.call(body, message=lambda exc: f"\nerror: {exc}")     # after the progress line
 
 
 def _print_summary(s: dict, args) -> None:
