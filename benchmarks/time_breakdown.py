@@ -10,6 +10,9 @@ over its feed, rapids at the job's rapid rate) is put into one class:
 * ``entry``: helix/ramp/plunge samples (z going down at feed);
 * ``rapid``: G0 (at depth and at clearance, retracts included).
 
+Beside the classes' ``total`` (length / feed), ``machine`` is the same path on the small-VMC machine
+model (``Evaluation.time_machine_s``: acceleration, corners; :mod:`cnclab.toolpath.motion`).
+
 Units: min. ``benchmarks/time_breakdown.py [--corpus] NAME ...`` prints one row per job (ours, FreeCAD).
 """
 from __future__ import annotations
@@ -47,6 +50,7 @@ def breakdown(ev, job) -> dict:
         eng < job.theta_deg - 10.0, "cut_low", "cut_theta"))))
     out = {c: float(t[cls == c].sum()) for c in CLASSES}
     out["total"] = float(t.sum())
+    out["machine"] = float(ev.time_machine_s) / 60.0
     out["air_feed_mm"] = float(L[cls == "air_feed"].sum())
     out["lifts"] = ev.retracts
     return out
