@@ -333,6 +333,7 @@ def _header(path: ToolPath, job, setup: _Setup, dialect: str, moves, notes, extr
     strategy = path.info.get("strategy") or path.info.get("planner")
     if strategy:
         hdr.append(f"strategy {strategy}")
+    hdr += [str(n) for n in path.info.get("notes", ())]     # the planner's own notes (e.g. its narrow regions)
     rapid = setup["rapid_mm_min"] or RAPID_DEFAULT_MM_MIN
     t = program_time(moves, rapid)
     hdr.append(f"estimated run time {t['total_s'] / 60:.2f} min: feed moves {t['feed_s'] / 60:.2f} min at their F, "

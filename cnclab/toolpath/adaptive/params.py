@@ -38,6 +38,9 @@ class AdaptiveParams:
     helix_min_frac: float = 0.1
     #: whether the wall-following finish laps run (off: roughing only)
     finish: bool = True
+    #: whether narrow regions (tool-centre half-width <= narrow.NARROW_HALF_WIDTH_FRAC r) are cut by
+    #: Thesis IV's trochoid along their medial axis before the passes (issue 29 item 5, narrow.py)
+    narrow_trochoid: bool = True
     #: deg: the finish is held at theta + finish_margin_deg (the simulator measures up to ~3 deg more
     #: than the planning stock on thin wall rests; theta + 10 is the bound)
     finish_margin_deg: float = 6.0

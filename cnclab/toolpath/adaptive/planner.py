@@ -13,7 +13,7 @@ from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
 from ..path import KINDS, ToolPath, ToolPathBuilder, resample_polyline
-from . import entries, finish
+from . import entries, finish, narrow
 from .entries import PlanningError
 from .grid import Grid
 from .params import AdaptiveParams
@@ -175,9 +175,11 @@ class _Level:
     def run(self):
         """Plan the level: enter, clear (passes, links, remnants), finish; up to clean_rounds more rounds."""
         self.todo_parts = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
-        if not self.enter():
-            return
         self.r_free = self.r + self.prm.free_margin_hc * self.g.hc      # coarse cell centre to material, with the cell half-diagonal margin
+        # narrow regions (narrow.py): out of the passes' view, each cut by Thesis IV's trochoid when reached
+        self.narrow_state = narrow.LevelRegions(self, self.narrow_regs)
+        if not self.enter() and not narrow.next_region(self):
+            return
         for rnd in range(self.clean_rounds + 1):
             # round 0 clears and finishes; a clean-up round takes what the sliver guard and the bans left
             # (a pass refused where its first steps would graze a crescent), then finishes again
@@ -191,6 +193,8 @@ class _Level:
             for _ in range(self.max_passes):
                 D, Ac = self.g.free_field()
                 end = self.link_to(self.r_free, self.r_free + 1.5 * self.g.hc, banned)
+                if end is None and narrow.next_region(self, banned):
+                    continue
                 if end is None:
                     D, Ac = self.g.free_field()
                     if not (Ac & (D < self.r) & ~banned).any():
@@ -241,6 +245,7 @@ class _Level:
                            np.where(fr, np.nan, np.where(ai, self.link_feed_mm_min, self.feed_mm_min)),
                            np.where(fr, "cleared: air inside cleared area", "").astype(object), z=self.z, cleared=fr)
                 self.cur = (float(P[-1, 0]), float(P[-1, 1]))
+            narrow.close(self)
             if self.finish:
                 # every part of the tool-centre region is finished once, the nearest to the tool first (a part
                 # is also finished as soon as its clearing is done, before the tool leaves it: no extra lift)
@@ -355,6 +360,8 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
     hole = None if start_hole is None else tuple(float(v) for v in start_hole)
     if hole is not None and not pocket.buffer(1e-9).contains(Point(hole[0], hole[1]).buffer(0.5 * hole[2] - 1e-6)):
         raise PlanningError(f"{source}: the start hole is not inside the pocket")
+    narrow_regs = narrow.narrow_regions(allowed, r, h) if prm.narrow_trochoid else []
+    narrow_done = []      # one line per narrow region cut by the trochoid (info, program header)
     cfg = {k: v for k, v in locals().items() if k not in ("lev", "z", "z_prev", "g")}
     for lev, z in enumerate(zlev):
         z_prev = top_z if lev == 0 else zlev[lev - 1]
@@ -366,7 +373,8 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
         _Level(cfg, lev, z, z_prev, g).run()
     if len(b) == 0:
         raise PlanningError(f"{source}: nothing to machine")
-    tp = b.build(**stats, plan_time_s=time.perf_counter() - t_start)
+    done = list(dict.fromkeys(narrow_done))        # the narrow regions cut by the trochoid (narrow.py)
+    tp = b.build(**stats, plan_time_s=time.perf_counter() - t_start, narrow_regions=done, notes=done)
     if tp.kind[0] != _RAPID:                     # the first move (from an unknown place) is a rapid
         tp.kind[0], tp.feed[0], tp.arc[0], tp.arc_center[0] = _RAPID, np.nan, 0, np.nan
     return tp

@@ -1,0 +1,639 @@
+"""Narrow regions by Thesis IV's constant-engagement trochoid (issue 29 item 5).
+
+Where the tool-centre region is too narrow for an engagement-controlled pass at theta -- its
+half-width ``c`` (distance from its medial axis to its boundary) at most ``NARROW_HALF_WIDTH_FRAC``
+r, i.e. a pocket at most 2 D wide: channels and slots of 1-2 D, necks, the fingers of a comb -- the
+controller of the level planner cannot turn inside it (its tightest turn is 0.8 r) and enters again
+and again. Such a region is cut instead by Jacsó's constant-engagement trochoid (2021, Thesis IV:
+:func:`cnclab.toolpath.trochoidal.ce_trochoid`, the converged period repeated at the step whose
+simulated maximum engagement stays at theta) laid along the region's medial axis, at the same theta.
+
+Steps (one role: the narrow regions, from detection to their moves):
+
+* **detection** (:func:`narrow_regions`): the wide part of the tool-centre region is its
+  morphological opening by ``c_max`` (every disc of radius ``c_max`` inside it: where a pass can
+  turn); a connected rest whose medial axis is at least ``NARROW_MIN_LENGTH_FRAC`` r long is a
+  narrow region (the other rests are the corners every pocket has);
+* **medial axis** (:func:`medial_axis`): the Voronoi diagram of the densified boundary
+  (``shapely.voronoi_polygons(only_edges=True)``, GEOS), its edges inside the region, the longest
+  path of that tree (networkx, two Dijkstra sweeps), the spurs into corners trimmed (where the
+  inscribed radius grows faster than ``SPUR_SLOPE`` per mm), resampled and smoothed;
+* **trochoid along the axis** (:func:`axis_trochoid`): the straight-slot period for the pocket
+  width ``2 (c_min + r)`` (the narrowest place of the axis, less one planning pixel), repeated at
+  its admissible step in arc length along the axis, each local point (x, y) mapped to
+  ``C(s0 + x) + y N(s0 + x)`` (C the axis, N its left normal: the pattern's climb side kept),
+  points that a bend or an end pushes outside the tool-centre region projected back on it;
+* **order** (:class:`LevelRegions`, :func:`next_region`): at the start of a level every region
+  leaves the level planner's view (its tool-centre pixels leave the grid's mask, the material only
+  centres inside it can reach leaves the planning stock, the finish parts holding it wait), so the
+  passes clear the wide parts without crawling into it. When the planner has nothing left within
+  reach through cleared area, a region whose open end (a mouth) the tool reaches through cleared
+  area is put back and cut from there -- the tool linked to the free point nearest the mouth whose
+  disc of radius r + c is free (the first periods' returns swing c to either side) -- with no lift;
+  the wide part behind it is then reached through the cleared slot. Only when no place is left to
+  enter is a region entered by a helix at its axis start (a closed end first), opened to the slot's
+  width by a spiral out (radial pitch a_e / 2) and a circle;
+* **moves** (:func:`cut_region`, :func:`emit_trochoid`): the trochoid's cutting moves at the
+  booklet's feed control (§4: roll-in, roll-out and the cutting part of the return hold the nominal
+  MRR, up to ``v_fmax``), its returns through air as one G0 chord where the rapid stock proves it
+  (with short feed legs off the cut boundary), else feed links; the planning stock is cut as it
+  goes, so that the level planner continues from the cleared slot. Each region cut is named in the
+  plan's ``info["narrow_regions"]`` and (``info["notes"]``) in the program header.
+
+Units: mm, deg, mm/min; ``r`` the tool radius.
+
+A 60 x 12 mm channel, D = 8 mm: the tool-centre region is 52 x 4 mm, its axis runs from 2 mm
+inside one end to 2 mm inside the other (60 - 2 r - 2 c = 48 mm):
+
+>>> from shapely.geometry import box
+>>> regs = narrow_regions(box(0, 0, 60, 12).buffer(-4.0, join_style="mitre"), 4.0)
+>>> len(regs), round(regs[0].c_min, 1), round(regs[0].length, 0), regs[0].dead
+(1, 2.0, 48.0, (True, True))
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import networkx as nx
+import numpy as np
+import shapely
+from shapely.geometry import LineString, MultiPoint, Point
+
+from ..constant_engagement import clamp_to_region
+from ..path import helix_ring
+from .links import rapid_legs
+from .stock import capsule_free, raster
+from ...cutting.feed_control import controlled_feed
+from ..trochoidal import ce_trochoid, evaluate_pattern, pattern_kinds, period_index
+
+__all__ = ["NarrowRegion", "narrow_regions", "medial_graph", "medial_axis", "trochoid_period", "axis_trochoid",
+           "width_classes", "along", "spiral_out", "helix_entry", "emit_trochoid", "cut_region", "LevelRegions",
+           "next_region", "close",
+           "NARROW_HALF_WIDTH_FRAC", "NARROW_MIN_LENGTH_FRAC"]
+
+#: a region is narrow where the tool-centre half-width c <= this x r (pocket width <= 2 D): the
+#: controller's tightest turn is 0.8 r, so a pass cannot turn round inside a band of half-width r
+NARROW_HALF_WIDTH_FRAC = 0.75
+#: ... its axis ends where the half-width falls below this x r (the tip of a wedge is the finishing
+#: lap's: a trochoid there would crawl at the step of a slot only a few hundredths of r wider than the tool)
+NARROW_MIN_HALF_WIDTH_FRAC = 0.2
+#: ... and its medial axis is at least this x r long (shorter rests are the corners of any pocket)
+NARROW_MIN_LENGTH_FRAC = 3.0
+#: the medial axis is cut off where the inscribed radius grows faster than this (mm per mm) towards
+#: its end: a spur into a corner of the region (a 90 deg corner: sin 45 deg = 0.71; a taper: < 0.2)
+SPUR_SLOPE = 0.4
+#: a step of the straight-slot period removing at most this (mm^2 per mm of path) is a return
+#: through air (a link at the link feed)
+AIR_MM2_PER_MM = 1e-3
+#: free cells tried (nearest first) for the start of a trochoid at a mouth onto cleared area
+MOUTH_CANDIDATES = 200
+#: boundary sampling of the Voronoi medial axis, x the planning pixel h (and at most r / 8)
+AXIS_SPACING_H = 4.0
+
+
+@dataclass
+class NarrowRegion:
+    """A narrow part of the tool-centre region: ``polygon`` (its tool-centre area, mm), ``axis``
+    (n, 2) its medial axis from ``start`` to the other end, ``radius`` (n,) the inscribed radius c
+    at each axis point (mm), ``dead`` which ends are closed (start, end: no wide area there)."""
+    index: int
+    polygon: object
+    axis: np.ndarray
+    radius: np.ndarray
+    dead: tuple
+
+    @property
+    def length(self) -> float:
+        return float(np.hypot(*np.diff(self.axis, axis=0).T).sum())
+
+    @property
+    def c_min(self) -> float:
+        return float(self.radius.min())
+
+    def reversed(self) -> "NarrowRegion":
+        return NarrowRegion(self.index, self.polygon, self.axis[::-1].copy(), self.radius[::-1].copy(),
+                            self.dead[::-1])
+
+    def describe(self) -> str:
+        """One line for the program header and the plan result."""
+        a, b = self.axis[0], self.axis[-1]
+        return (f"narrow region {self.index}: Thesis IV trochoid along its medial axis "
+                f"({a[0]:.1f}, {a[1]:.1f}) -> ({b[0]:.1f}, {b[1]:.1f}), {self.length:.1f} mm, "
+                f"pocket width {2 * self.c_min:.2f} mm + D")
+
+
+def _longest_path(G):
+    """Longest shortest path of a tree-like graph (two Dijkstra sweeps): node list."""
+    n0 = next(iter(G.nodes))
+    d = nx.single_source_dijkstra_path_length(G, n0, weight="w")
+    a = max(d, key=d.get)
+    d, paths = nx.single_source_dijkstra(G, a, weight="w")
+    b = max(d, key=d.get)
+    return paths[b]
+
+
+def _smooth(P, spacing):
+    """Polyline P resampled every ``spacing`` mm and smoothed by a 5-point moving average (ends kept)."""
+    line = LineString(P)
+    n = max(int(math.ceil(line.length / spacing)), 2)
+    Q = shapely.get_coordinates(shapely.line_interpolate_point(line, np.linspace(0, line.length, n + 1)))
+    if len(Q) >= 5:
+        S = Q.copy()
+        S[2:-2] = (Q[:-4] + Q[1:-3] + Q[2:-2] + Q[3:-1] + Q[4:]) / 5.0
+        Q = S
+    return Q
+
+
+def _trim_spurs(P, c):
+    """Index range of the axis P (n, 2) without its end spurs: ends where c grows faster than
+    SPUR_SLOPE (mm per mm) towards the middle (a spur into a corner) are dropped."""
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+    i0, i1 = 0, len(P) - 1
+    while i0 < i1 - 1 and (c[i0 + 1] - c[i0]) > SPUR_SLOPE * (s[i0 + 1] - s[i0]):
+        i0 += 1
+    while i1 > i0 + 1 and (c[i1 - 1] - c[i1]) > SPUR_SLOPE * (s[i1] - s[i1 - 1]):
+        i1 -= 1
+    return i0, i1
+
+
+def medial_graph(region, spacing):
+    """Medial-axis graph of the polygon ``region`` (mm): the Voronoi edges of its boundary sampled
+    every ``spacing`` mm (``shapely.voronoi_polygons(only_edges=True)``) that lie inside it, as a
+    networkx Graph (nodes (x, y), edge weight ``w`` = length mm; node attribute ``c`` = distance to
+    the boundary, mm): the approximation of the medial axis that converges as ``spacing`` -> 0."""
+    dense = shapely.segmentize(region, spacing)
+    pts = np.unique(np.round(shapely.get_coordinates(dense.boundary), 9), axis=0)
+    G = nx.Graph()
+    if len(pts) < 4:
+        return G
+    edges = shapely.get_parts(shapely.voronoi_polygons(MultiPoint(pts), only_edges=True))
+    shapely.prepare(region)
+    edges = edges[shapely.contains(region, edges)]
+    for e in edges:
+        q = np.round(shapely.get_coordinates(e), 7)
+        for a, b in zip(q[:-1], q[1:]):
+            w = float(np.hypot(*(b - a)))
+            if w > 0:
+                G.add_edge(tuple(a), tuple(b), w=w)
+    if G.number_of_nodes():
+        nodes = list(G.nodes)
+        c = shapely.distance(region.boundary, shapely.points(np.array(nodes, float)))
+        nx.set_node_attributes(G, dict(zip(nodes, c.tolist())), "c")
+    return G
+
+
+def medial_axis(region, spacing, G=None, keep=None):
+    """Medial axis of ``region`` (mm) as one polyline: the longest path of its medial graph
+    (:func:`medial_graph`, or the given ``G`` restricted to the nodes ``keep``), its corner spurs
+    trimmed, resampled and smoothed. Returns (axis (n, 2), c (n,) distance to the boundary of
+    ``region``), or None.
+
+    >>> from shapely.geometry import box
+    >>> P, c = medial_axis(box(0, 0, 40, 4), 0.5)
+    >>> bool(abs(P[:, 1] - 2).max() < 0.05), round(float(np.median(c)), 2)
+    (True, 2.0)
+    """
+    G = medial_graph(region, spacing) if G is None else G
+    if keep is not None:
+        G = G.subgraph(keep)
+    if G.number_of_edges() == 0:
+        return None
+    G = G.subgraph(max(nx.connected_components(G), key=len))
+    P = np.array(_longest_path(G), float)
+    c = np.array([G.nodes[tuple(p)]["c"] for p in P]) if "c" in G.nodes[tuple(P[0])] else \
+        shapely.distance(region.boundary, shapely.points(P))
+    i0, i1 = _trim_spurs(P, c)
+    P = P[i0:i1 + 1]
+    if len(P) < 2:
+        return None
+    P = _smooth(P, max(spacing, 0.25 * float(np.median(c[i0:i1 + 1]))))
+    return P, shapely.distance(region.boundary, shapely.points(P))
+
+
+def narrow_regions(allowed, r, h=None, half_width_frac=NARROW_HALF_WIDTH_FRAC,
+                   min_length_frac=NARROW_MIN_LENGTH_FRAC) -> list:
+    """The narrow regions of the tool-centre region ``allowed`` (pocket shrunk by the tool radius
+    ``r``, mm): see the module docstring. ``h``: planning pixel (mm, default r/60). A list of
+    :class:`NarrowRegion`, axes running from a closed (dead) end where there is one.
+
+    The medial graph is built once on the whole region (so that the axis runs on through the mouth
+    of a narrow part into the wide part with its true radius); each narrow part keeps the nodes of
+    radius at most ``half_width_frac`` r inside it."""
+    h = r / 60.0 if h is None else float(h)
+    c_max = half_width_frac * r
+    wide = allowed.buffer(-c_max, quad_segs=16).buffer(c_max, quad_segs=16)
+    rest = allowed.difference(wide.buffer(h))
+    parts = [p for p in sorted(shapely.get_parts(rest), key=lambda p: -p.area)
+             if p.area >= (min_length_frac * r) * (0.2 * r)]
+    if not parts:
+        return []
+    spacing = min(AXIS_SPACING_H * h, r / 8.0)
+    G = medial_graph(allowed, spacing)
+    if G.number_of_nodes() == 0:
+        return []
+    nodes = np.array(list(G.nodes), float)
+    cn = np.array([G.nodes[tuple(p)]["c"] for p in nodes])
+    out = []
+    for part in parts:
+        near = part.buffer(2 * h)
+        inside = shapely.contains_xy(near, nodes[:, 0], nodes[:, 1]) & (cn <= c_max * 1.02)
+        ax = medial_axis(allowed, spacing, G, [tuple(p) for p in nodes[inside]])
+        if ax is None:
+            continue
+        P, c = ax
+        ok = np.flatnonzero(c >= NARROW_MIN_HALF_WIDTH_FRAC * r + 2 * h)
+        if len(ok) < 2:
+            continue
+        P, c = P[ok[0]:ok[-1] + 1], c[ok[0]:ok[-1] + 1]
+        if float(np.hypot(*np.diff(P, axis=0).T).sum()) < min_length_frac * r or c.min() < NARROW_MIN_HALF_WIDTH_FRAC * r:
+            continue
+        dead = tuple(bool(wide.is_empty or wide.distance(Point(*p)) > 2 * c_max) for p in (P[0], P[-1]))
+        reg = NarrowRegion(len(out), part, P, c, dead)
+        out.append(reg.reversed() if (dead[1] and not dead[0]) else reg)
+    return out
+
+
+@lru_cache(maxsize=32)
+def trochoid_period(width, r, theta_deg, h, vmax_ratio=1.0):
+    """The converged Thesis IV period for a straight slot of ``width`` (mm) and tool radius ``r``
+    at ``theta_deg``, planned on a dixel of ``h`` mm, with the booklet's feed control (§4: the
+    roll-in, roll-out and the return's approach hold the nominal MRR, their feed raised up to
+    ``vmax_ratio`` x the nominal; :func:`cnclab.cutting.feed_control.controlled_feed` on the simulated
+    steady period of :func:`cnclab.toolpath.trochoidal.evaluate_pattern`).
+
+    Returns (points (m, 2) with min x = 0, kinds (m,) ``cut`` or ``link`` (a step of the steady
+    period that removes nothing), feed factors (m,) x the nominal feed (NaN on links), step mm).
+    Cached: a corpus of jobs repeats widths."""
+    p = ce_trochoid(width, r, theta_deg, n_periods=5, resolution_mm=h)
+    per = period_index(p)
+    k0, k3 = per == 0, per == 3
+    P = p.xyz[k0, :2]
+    df, _ = evaluate_pattern(p, width, r, h)
+    kinds = pattern_kinds(p)
+    rem, ds, eng = (df[c].to_numpy() for c in ("removed_mm2", "ds", "engagement_deg"))
+    air = rem <= AIR_MM2_PER_MM * ds
+    a_e = r * (1.0 - math.cos(math.radians(theta_deg)))
+    v = controlled_feed(rem, ds, eng, ~air, a_e, 1.0, max(float(vmax_ratio), 1.0), theta_deg,
+                        adjust=np.isin(kinds, ["roll-in", "roll-out", "link"]))
+    f3, a3 = v[k3], air[k3]
+    n = int(k0.sum())
+    if len(f3) != n - 1:        # the steady period lacks its first point (the previous return's end)
+        raise RuntimeError(f"period 3 has {len(f3)} points, period 0 {n}")
+    F = np.r_[f3[-1], f3]
+    A = np.r_[a3[-1], a3]
+    K = np.where(A, "link", "cut").astype(object)
+    return P - np.array([P[:, 0].min(), 0.0]), K, np.where(A, np.nan, F), float(p.info["step"])
+
+
+def _frame(axis):
+    """Arc length s (n,) and unit tangents (n, 2) of the polyline ``axis``."""
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(axis, axis=0).T))]
+    T = np.gradient(axis, s, axis=0)
+    return s, T / np.hypot(*T.T)[:, None]
+
+
+def along(axis, s_q, y_q):
+    """Map local pattern coordinates (arc length ``s_q`` mm along ``axis``, left offset ``y_q`` mm)
+    to the plane: ``C(s) + y N(s)``, the axis extended straight beyond its ends.
+
+    >>> along(np.array([[0.0, 0.0], [10.0, 0.0]]), np.array([2.0, 12.0]), np.array([1.0, -1.0])).tolist()
+    [[2.0, 1.0], [12.0, -1.0]]
+    """
+    s, T = _frame(axis)
+    ang = np.unwrap(np.arctan2(T[:, 1], T[:, 0]))
+    sq = np.asarray(s_q, float)
+    a = np.interp(sq, s, ang)
+    C = np.c_[np.interp(sq, s, axis[:, 0]), np.interp(sq, s, axis[:, 1])]
+    lo, hi = sq < 0, sq > s[-1]
+    C[lo] = axis[0] + sq[lo, None] * T[0]
+    C[hi] = axis[-1] + (sq[hi] - s[-1])[:, None] * T[-1]
+    return C + np.asarray(y_q, float)[:, None] * np.c_[-np.sin(a), np.cos(a)]
+
+
+def width_classes(region: NarrowRegion, q, span):
+    """Runs of the axis cut with one pattern: [(s_from, s_to, c)] in arc length (mm), c the half-width
+    of the tool-centre region the pattern is made for: the smallest c within ``span`` mm of each axis
+    point (the pattern reaches that far along the axis), rounded down to a multiple of ``q`` mm (at
+    most q of wall rest), runs shorter than ``span`` merged into their narrower neighbour."""
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(region.axis, axis=0).T))]
+    c = region.radius
+    cw = np.array([c[(s >= si - span) & (s <= si + span)].min() for si in s])
+    cls = np.maximum(np.floor(cw / q) * q, c.min())
+    runs = []
+    for i in range(len(s)):
+        if runs and runs[-1][2] == cls[i]:
+            runs[-1][1] = s[i]
+        else:
+            runs.append([s[i - 1] if i else 0.0, s[i], cls[i]])
+    merged = True
+    while merged and len(runs) > 1:
+        merged = False
+        for i, (a, b, cc) in enumerate(runs):
+            if b - a < span:
+                j = i - 1 if i == len(runs) - 1 or (i > 0 and runs[i - 1][2] < runs[i + 1][2]) else i + 1
+                runs[j] = [min(runs[j][0], a), max(runs[j][1], b), min(runs[j][2], cc)]
+                del runs[i]
+                merged = True
+                break
+    return [tuple(r_) for r_ in runs]
+
+
+def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, s_end=None, q=None, hole_mm=0.0,
+                  vmax_ratio=1.0):
+    """The trochoid of ``region`` (module docstring): (points (m, 2) mm, kinds (m,) of cut / link
+    (the pattern's return through the slot), feed factors (m,) x the nominal feed (NaN: link, see
+    :func:`trochoid_period`), the steps used (mm), number of points projected back into ``allowed``). Periods start at arc length ``s_start`` (mm) and follow each other while the
+    period's front (its largest local x) stays at most ``s_end`` (default: the axis end); each run of
+    :func:`width_classes` (``q`` mm, default r/10) with the period made for its width. ``s_start``
+    None: the first period's front one step beyond a hole of radius ``hole_mm`` (the helix's, tool
+    centre) about the axis start."""
+    s_end = region.length if s_end is None else s_end
+    q = 0.1 * r if q is None else q
+    X, Y, K, F, steps = [], [], [], [], []
+    x0 = s_start
+    for (a, b, cc) in width_classes(region, q, 2.0 * r):
+        P0, kinds0, F0, step = trochoid_period(round(2.0 * (cc + r), 3), float(r), float(theta_deg), float(h),
+                                               round(float(vmax_ratio), 3))
+        x_ext = float(P0[:, 0].max())
+        if x0 is None:
+            x0 = hole_mm + step - x_ext
+        stop = s_end if b >= region.length - 1e-9 else b
+        steps.append(step)
+        # period k runs from its roll-in start to the next period's (its return link included): the
+        # periods join end to start, the first point of each after the first dropped
+        while x0 + x_ext <= stop + 1e-9 or not X:
+            first = not X
+            if not first:        # a straight return to this pattern's start (a width change: a new shape)
+                last = np.array([X[-1][-1], Y[-1][-1]])
+                S = np.array([P0[0, 0] + x0, P0[0, 1]])
+                m = max(int(math.ceil(np.hypot(*(S - last)) / (2 * h))), 1)
+                t = np.linspace(0, 1, m + 1)[1:]
+                X.append(last[0] + t * (S[0] - last[0])); Y.append(last[1] + t * (S[1] - last[1]))
+                K.append(np.full(m, "link", dtype=object)); F.append(np.full(m, np.nan))
+            j = 0 if first else 1
+            X.append(P0[j:, 0] + x0); Y.append(P0[j:, 1]); K.append(kinds0[j:]); F.append(F0[j:])
+            # the period's own return already ends at the next period's start: drop the duplicate
+            X[-1], Y[-1], K[-1], F[-1] = X[-1][:-1], Y[-1][:-1], K[-1][:-1], F[-1][:-1]
+            x0 += step
+    X, Y, K, F = np.concatenate(X), np.concatenate(Y), np.concatenate(K), np.concatenate(F)
+    # behind the axis start lies the entry's round hole (radius c + r about the start, see
+    # :func:`cut_region`), then material (the dead end's corners, or the wide area at a mouth): the
+    # first periods' returns are held at x >= 0, where the tool disc stays inside the hole
+    X = np.maximum(X, 0.0)
+    Q = along(region.axis, X, Y)
+    inside = shapely.contains_xy(allowed, Q[:, 0], Q[:, 1])
+    n_out = int((~inside).sum())
+    if n_out:
+        Q = clamp_to_region(Q, allowed.buffer(-1e-4))
+    keep = np.r_[True, np.hypot(*np.diff(Q, axis=0).T) > 1e-6]
+    return Q[keep], K[keep], F[keep], steps, n_out
+
+
+def spiral_out(c_xy, rho0, rho1, pitch, ds):
+    """Counter-clockwise Archimedean spiral about ``c_xy`` from radius ``rho0`` (at angle 0) out to
+    ``rho1`` (mm) gaining at most ``pitch`` mm per turn, then one full circle at ``rho1``; points
+    about ``ds`` mm apart, (m, 2) mm.
+
+    >>> S = spiral_out((0.0, 0.0), 1.0, 2.0, 0.5, 0.1)
+    >>> S[0].round(9).tolist(), S[-1].round(9).tolist(), round(float(np.hypot(*S[-50].T)), 9)
+    ([1.0, 0.0], [2.0, 0.0], 2.0)
+    """
+    turns = max(int(math.ceil((rho1 - rho0) / pitch - 1e-9)), 1) if rho1 > rho0 else 0
+    m = max(int(math.ceil(2 * math.pi * max(rho1, rho0) / ds)), 16)
+    t = np.linspace(0.0, turns + 1.0, m * (turns + 1) + 1)
+    rad = np.where(t < turns, rho0 + (rho1 - rho0) * t / max(turns, 1), max(rho1, rho0))
+    P = np.asarray(c_xy, float) + rad[:, None] * np.c_[np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)]
+    P[0] = np.asarray(c_xy, float) + (rho0, 0.0)
+    P[-1] = np.asarray(c_xy, float) + (max(rho1, rho0), 0.0)
+    return P
+
+
+def helix_entry(b, c_xy, rho, z_from, z_to, feed, angle_deg, n_seg=48):
+    """A helix of radius ``rho`` (mm) about ``c_xy`` from ``z_from`` down to ``z_to`` at ``angle_deg``
+    (whole turns, at least one), then a floor circle, through ``b`` (:class:`ToolPathBuilder`, the
+    tool above the ring's start). Returns the end point (2,)."""
+    ring = helix_ring(c_xy, rho, n_seg)
+    drop = 2 * math.pi * rho * math.tan(math.radians(angle_deg))
+    turns = max(int(math.ceil((z_from - z_to) / drop - 1e-9)), 1)
+    full = np.vstack([ring[:1]] + [ring[1:]] * turns)
+    b.helix(full, z_from, z_to, feed, tag="entry: narrow region", equal_steps=True)
+    b.cut(ring[1:], feed, z=z_to, tag="entry-floor")
+    return ring[-1]
+
+
+def emit_trochoid(b, g, start, Q, K, feed, z, link_feed, tag):
+    """Append the trochoid ``Q`` (m, 2) mm at height ``z`` to the builder ``b`` from ``start`` (2,),
+    cutting the planning stocks of the grid ``g`` as it goes: every run of cutting moves is cut into
+    ``g``; every run of returns (``K == "link"``) then becomes one G0 chord marked cleared where the
+    rapid stock proves it (:func:`~.links.rapid_legs`: no material within r + h/sqrt(2) of it, with
+    short feed legs off the cut boundary at its ends: how the level planner's links are proven),
+    else feed links at ``link_feed`` (mm/min).
+    ``feed``: per point, mm/min (NaN on links)."""
+    link = np.asarray(K) == "link"
+    edges = np.flatnonzero(np.diff(link.astype(int))) + 1
+    bounds = np.r_[0, edges, len(Q)]
+    prev = np.asarray(start, float)
+    for a, e in zip(bounds[:-1], bounds[1:]):
+        run = Q[a:e]
+        if not link[a]:
+            b.cut(run, np.round(feed[a:e], 1), z=z, tag=tag)
+            g.cut_path(np.vstack([prev[None], run]))
+        else:
+            legs = rapid_legs(g, prev, run[-1]) if len(run) > 1 else None
+            if legs is None:
+                b.link(run, link_feed, z=z, tag=tag)
+                g.cut_path(np.vstack([prev[None], run]))
+            else:
+                p1, q1 = legs
+                if p1 is not None:
+                    b.link([p1], link_feed, z=z, tag=tag)
+                b.rapid([q1], z=z, tag="cleared: trochoid return through the cleared slot", cleared=True)
+                if q1[0] != run[-1, 0] or q1[1] != run[-1, 1]:
+                    b.link(run[-1:], link_feed, z=z, tag=tag)
+        prev = run[-1]
+
+
+def _builder(lv):
+    """The level planner's :class:`ToolPathBuilder` (``lv.b``)."""
+    return lv.b
+
+
+def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
+    """Cut the narrow region ``reg`` at the level of the planner ``lv``
+    (:class:`cnclab.toolpath.adaptive.planner._Level`): the trochoid along the axis from its start,
+    the planning stock cut along it; the tool stays down at the trochoid's end (``lv.cur``).
+    ``from_cleared``: the tool stands at the axis start, reached through cleared area (the level
+    planner's link), and the trochoid starts there; else it retracts, enters by a helix at the axis
+    start (into material) and spirals out to the slot's width. False (nothing emitted) when the axis
+    start has no room for a helix of ``prm.helix_min_mm``: the region is left to the level planner."""
+    prm, r, h = lv.prm, lv.r, lv.h
+    c_start = float(reg.radius[0]) - h
+    rho = min(prm.helix_radius_frac * r, prm.helix_room_frac * float(reg.radius[0]) - h)
+    if not from_cleared and rho < prm.helix_min_mm:
+        return False
+    s_end = reg.length + (float(reg.radius[-1]) - h if reg.dead[1] else 0.0)
+    vmax = float(getattr(getattr(lv, "job", None), "v_fmax", lv.feed_mm_min))
+    Q, K, F, steps, n_out = axis_trochoid(reg, lv.allowed, r, lv.theta_deg, h, s_end=s_end,
+                                          hole_mm=0.0 if from_cleared else c_start, vmax_ratio=vmax / lv.feed_mm_min)
+    b = _builder(lv)
+    c0 = reg.axis[0]
+    if from_cleared:
+        p0 = np.array(lv.cur, float)
+    else:
+        lv.retract()
+        p0 = (c0[0] + rho, c0[1])
+        b.rapid([p0], z=lv.clearance_z)
+        b.rapid([p0], z=lv.z_prev + prm.approach_above_mm, tag="cleared: above the level", cleared=True)
+        b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
+        helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg)
+        lv.g.cut_path(helix_ring(c0, rho, 64))
+        # the hole opened to the slot's width: a spiral out to radius c (radial pitch a_e / 2), a circle
+        S = spiral_out(c0, rho, c_start, 0.5 * r * (1 - math.cos(math.radians(lv.theta_deg))), 2 * h)
+        b.cut(S[1:], lv.feed_mm_min, z=lv.z, tag="entry: narrow region, spiral out to the slot width")
+        lv.g.cut_path(S)
+        p0 = S[-1]
+        lv.stats["entries"] += 1
+    emit_trochoid(b, lv.g, np.asarray(p0, float), Q, K, F * lv.feed_mm_min, lv.z, lv.link_feed_mm_min,
+                  f"narrow region {reg.index}: Thesis IV trochoid")
+    lv.cur = (float(Q[-1, 0]), float(Q[-1, 1]))
+    lv.stats["narrow_regions"] = lv.stats.get("narrow_regions", 0) + 1
+    lv.narrow_done.append(reg.describe() + (" from cleared area" if from_cleared else " from a helix")
+                          + f", steps {', '.join(f'{s_:.3f}' for s_ in steps)} mm")
+    return True
+
+
+class LevelRegions:
+    """The narrow regions of one level while the level planner runs (see :func:`next_region`).
+
+    On creation every region is taken out of the planner's view: its tool-centre pixels leave the
+    grid's tool-centre mask (the passes cannot enter it) and the material that only tool centres
+    inside it can reach (farther than r from the rest of the region) leaves the planning stock
+    (no pass, entry or link is drawn to it); the finish parts that hold it wait. A region is put
+    back just before its trochoid cuts it."""
+
+    def __init__(self, lv, regions):
+        g = lv.g
+        self.lv, self.pending, self.parked = lv, list(regions), []
+        if not self.pending:
+            return
+        self.A0 = g.A.copy()
+        narrow_all = shapely.union_all([q.polygon.buffer(g.h) for q in self.pending])
+        rest = lv.allowed.difference(narrow_all)
+        reach = rest.buffer(lv.r) if not rest.is_empty else shapely.Polygon()
+        self.masks, self.saved = [], []
+        for reg in self.pending:
+            am = raster(reg.polygon.buffer(g.h), g.x0, g.y0, g.h, g.nx, g.ny) > 0
+            mm = raster(reg.polygon.buffer(lv.r + 2 * g.h).difference(reach), g.x0, g.y0, g.h, g.nx, g.ny) > 0
+            self.masks.append((am, mm))
+            self.saved.append(g.M[mm].copy())
+        for am, mm in self.masks:
+            g.A[am] = False
+            g.M[mm] = 0
+        self._refresh()
+        self.park()
+
+    def _refresh(self):
+        g = self.lv.g
+        g.Ac = g.coarse(g.A).min(axis=(1, 3)) > 0
+        g.touch(np.array([[g.x0, g.y0], [g.x0 + g.nx * g.h, g.y0 + g.ny * g.h]]), 0.0)
+
+    def park(self):
+        """Hold back the finish parts that meet a pending region (their laps would cut its hidden
+        material); give back the others."""
+        lv = self.lv
+        parts = list(lv.todo_parts) + self.parked
+        polys = [q.polygon for q in self.pending]
+        self.parked = [p for p in parts if any(p.intersects(q) for q in polys)]
+        lv.todo_parts[:] = [p for p in parts if not any(p.intersects(q) for q in polys)]
+
+    def restore(self, k):
+        """Put region ``k`` (index into ``pending``) back into the planner's view and drop it."""
+        g = self.lv.g
+        am, mm = self.masks.pop(k)
+        g.A[am] = self.A0[am]
+        g.M[mm] = np.maximum(g.M[mm], self.saved.pop(k))
+        self._refresh()
+        return self.pending.pop(k)
+
+    def reachable_mouth(self):
+        """(k, reversed?, cell, point) of a pending region whose open end the tool reaches through
+        cleared area: ``point`` the centre of the free coarse cell (its tool disc free of material)
+        nearest to that end of the axis within 2 r, reached by :meth:`Grid.route`; the shortest
+        route first. None when no open end is reachable."""
+        lv, g = self.lv, self.lv.g
+        if lv.cur is None:
+            return None
+        D, Ac = g.free_field()
+        free = Ac & (D >= lv.r_free)
+        best = None
+        for k, reg in enumerate(self.pending):
+            for rev, (end, dead) in enumerate(((reg.axis[0], reg.dead[0]), (reg.axis[-1], reg.dead[1]))):
+                if dead:
+                    continue
+                j0, i0 = g.cell(*end)
+                w = int(math.ceil(3 * lv.r / g.hc))
+                J, I = np.nonzero(free[max(j0 - w, 0):j0 + w + 1, max(i0 - w, 0):i0 + w + 1])
+                if len(J) == 0:
+                    continue
+                J, I = J + max(j0 - w, 0), I + max(i0 - w, 0)
+                C = np.c_[g.x0 + (I + 0.5) * g.hc, g.y0 + (J + 0.5) * g.hc]
+                # the nearest whose disc of radius r + c is free: the first periods' returns swing
+                # c to either side of it
+                rr = lv.r + float(reg.radius[0 if rev == 0 else -1]) + g.h
+                m = next((int(q) for q in np.argsort(np.hypot(*(C - end).T))[:MOUTH_CANDIDATES]
+                          if capsule_free(g.M, g.x0, g.y0, g.h, C[q, 0], C[q, 1], C[q, 0], C[q, 1], rr)), None)
+                if m is None:
+                    continue
+                route = g.route(lv.cur, lv.r_free, -np.inf, None, (int(J[m]), int(I[m])))
+                if route is None or isinstance(route, str):
+                    continue
+                if best is None or len(route) < best[4]:
+                    best = (k, bool(rev), (int(J[m]), int(I[m])), C[m], len(route))
+        return None if best is None else best[:4]
+
+
+def next_region(lv, banned=None) -> bool:
+    """The level planner has nothing left within reach through cleared area: cut the next narrow
+    region (True), or leave it to the planner (False). A region whose open end (a mouth onto the
+    cleared area) the tool reaches through cleared area is entered there by the planner's link;
+    else, once the planner has no place left to enter (no material within reach of a free cell of
+    its tool-centre region, ``banned`` cells aside), a region is entered by a helix at its axis start
+    (a closed end first); a region without room for that helix is handed back to the planner."""
+    st = getattr(lv, "narrow_state", None)
+    if st is None or not st.pending:
+        return False
+    hit = st.reachable_mouth()
+    if hit is not None:
+        k, rev, cell, pt = hit
+        reg = st.pending[k].reversed() if rev else st.pending[k]
+        if lv.link_to(lv.r_free, -np.inf, None, cell, end_xy=tuple(pt)) is not None:
+            st.restore(k)
+            # the axis starts at the free point the link reached (its tool disc is free of material)
+            reg = NarrowRegion(reg.index, reg.polygon, np.vstack([np.asarray(lv.cur, float)[None], reg.axis]),
+                               np.r_[reg.radius[0], reg.radius], (False, reg.dead[1]))
+            cut_region(lv, reg, from_cleared=True)
+            st.park()
+            return True
+    D, Ac = lv.g.free_field()
+    need = Ac & (D < lv.r)
+    if banned is not None:
+        need &= ~banned
+    if need.any():
+        return False
+    k = next((i for i, q in enumerate(st.pending) if q.dead[0]), 0)
+    cut_region(lv, st.restore(k))       # False: no room for its helix; back in the planner's view
+    st.park()
+    return True
+
+
+def close(lv) -> None:
+    """End of the level's passes: any region still pending goes back into the planner's view, and
+    every parked finish part back to the planner's list."""
+    st = getattr(lv, "narrow_state", None)
+    if st is None:
+        return
+    while st.pending:
+        st.restore(0)
+    st.park()

@@ -1,0 +1,90 @@
+"""Narrow regions by Thesis IV's trochoid (cnclab.toolpath.adaptive.narrow, issue 29 item 5).
+
+Channels 1.5 D wide (D = 6 mm, theta = 60 deg) -- a straight one and a curved one (an annulus
+sector) -- planned by the default planner (:func:`cnclab.toolpath.planners.plan`) and scored by the
+package's one evaluator at h = r / 30 (the corpus benchmark's resolution,
+benchmarks/bench_corpus.py). Bounds: the issue-29 targets (engagement p95 <= theta + 2 deg,
+max <= theta + 10 deg), 0 plunges or rapids into material, no wall gouge beyond 1 um; one entry and
+one lift (the channel is reached by one helix; before this module such channels took 15 to 78
+helix entries); the program header and ``info["narrow_regions"]`` name the region; the written
+program passes the static safety check.
+"""
+import math
+
+import numpy as np
+import pytest
+from shapely.geometry import Point, Polygon, box
+
+from cnclab.nc.program import check_program, write_program
+from cnclab.toolpath import planners
+from cnclab.toolpath.adaptive import narrow
+from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.job import Job
+from cnclab.toolpath.path import Tool
+from cnclab.works.jacso2021.freecad_comparison import lifts
+
+R = 3.0
+THETA = 60.0
+H = R / 30.0
+
+
+def _job(poly, source):
+    return Job(poly, Tool(2 * R), THETA, 3.0, feed_mm_min=764.0, spindle_rpm=5968.0, rapid_mm_min=10000.0,
+               link_feed_mm_min=1500.0, v_fmax=1146.0, source=source)
+
+
+def _annulus_sector(r0, r1, a0_deg, a1_deg):
+    a = np.radians(np.linspace(a0_deg, a1_deg, 121))
+    outer = np.c_[r1 * np.cos(a), r1 * np.sin(a)]
+    inner = np.c_[r0 * np.cos(a), r0 * np.sin(a)][::-1]
+    return Polygon(np.vstack([outer, inner]))
+
+
+def test_medial_axis_of_a_strip():
+    # a 40 x 4 mm strip: the axis is y = 2 from x = 2 to x = 38 (where the inscribed circle of radius
+    # 2 touches the ends; the spurs into the corners are trimmed); sampling 0.25 mm: the Voronoi
+    # vertices lie within a few hundredths of a mm of the true axis
+    P, c = narrow.medial_axis(box(0, 0, 40, 4), 0.25)
+    assert np.abs(P[:, 1] - 2.0).max() < 0.05
+    assert P[:, 0].min() == pytest.approx(2.0, abs=0.3) and P[:, 0].max() == pytest.approx(38.0, abs=0.3)
+    assert np.median(c) == pytest.approx(2.0, abs=0.02)
+
+
+def test_narrow_regions_found_in_a_channel_not_in_a_square():
+    ch = box(0, 0, 45, 9).buffer(-R, join_style="mitre")        # tool-centre region of a 1.5 D channel
+    regs = narrow.narrow_regions(ch, R, H)
+    assert len(regs) == 1
+    assert regs[0].c_min == pytest.approx(1.5, abs=0.05) and regs[0].dead == (True, True)
+    assert regs[0].length == pytest.approx(45 - 2 * R - 2 * 1.5, abs=0.5)
+    sq = box(0, 0, 40, 40).buffer(-R, join_style="mitre")      # corners are not narrow regions
+    assert narrow.narrow_regions(sq, R, H) == []
+
+
+@pytest.mark.parametrize("name, poly", [
+    ("straight channel", box(0, 0, 45, 9)),
+    ("curved channel", _annulus_sector(20.0, 29.0, 0.0, 120.0)),
+])
+def test_channel_is_cut_by_the_trochoid(name, poly):
+    job = _job(poly, name)
+    tp = planners.plan(job, "adaptive", H)
+    assert len(tp.info["narrow_regions"]) == 1 and "narrow region 0: Thesis IV trochoid" in tp.info["narrow_regions"][0]
+    assert tp.info["entries"] == 1
+    ev = evaluate(tp, job, H)
+    assert ev.engagement_p95_deg <= THETA + 2
+    assert ev.engagement_max_deg <= THETA + 10
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    assert ev.wall_gouge_max_mm <= 1e-3
+    assert lifts(ev, job.top_z) == 1
+    text = write_program(tp, job)
+    assert "narrow region 0: Thesis IV trochoid" in text
+    assert check_program(text, clearance_z=job.clearance_z, top_z=job.top_z).errors == []
+
+
+def test_spiral_out_reaches_the_slot_width():
+    S = narrow.spiral_out((1.0, 2.0), 0.5, 1.5, 0.3, 0.05)
+    rad = np.hypot(S[:, 0] - 1.0, S[:, 1] - 2.0)
+    assert rad[0] == pytest.approx(0.5) and rad[-1] == pytest.approx(1.5)
+    assert np.all(np.diff(rad) >= -1e-12)                      # never back inwards
+    # at most 0.3 mm gained per turn: 4 turns from 0.5 to 1.5 mm, then a full circle at 1.5
+    turn = np.unwrap(np.arctan2(S[:, 1] - 2.0, S[:, 0] - 1.0)) / (2 * math.pi)
+    assert turn[-1] == pytest.approx(5.0, abs=1e-9)
