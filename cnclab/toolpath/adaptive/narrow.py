@@ -28,8 +28,9 @@ Steps (one role: the narrow regions, from detection to their moves):
   centres inside it can reach leaves the planning stock, the finish parts holding it wait), so the
   passes clear the wide parts without crawling into it. When the planner has nothing left within
   reach through cleared area, a region whose open end (a mouth) the tool reaches through cleared
-  area is put back and cut from there -- the tool linked to the free point nearest the mouth whose
-  disc of radius r + c is free (the first periods' returns swing c to either side) -- with no lift;
+  area is put back and cut from there -- the tool linked to the free point nearest the mouth from
+  which the first periods' returns, swinging c to either side across the axis, meet no material
+  (a free capsule) -- with no lift;
   the wide part behind it is then reached through the cleared slot. Only when no place is left to
   enter is a region entered by a helix at its axis start (a closed end first), opened to the slot's
   width by a spiral out (radial pitch a_e / 2) and a circle;
@@ -579,11 +580,15 @@ class LevelRegions:
                     continue
                 J, I = J + max(j0 - w, 0), I + max(i0 - w, 0)
                 C = np.c_[g.x0 + (I + 0.5) * g.hc, g.y0 + (J + 0.5) * g.hc]
-                # the nearest whose disc of radius r + c is free: the first periods' returns swing
-                # c to either side of it
-                rr = lv.r + float(reg.radius[0 if rev == 0 else -1]) + g.h
+                # the nearest from which the first periods' returns, swinging c to either side across
+                # the axis, meet no material (the capsule of radius r + h about that swing is free)
+                ax = reg.axis if rev == 0 else reg.axis[::-1]
+                t = ax[min(3, len(ax) - 1)] - ax[0]
+                n = np.array([-t[1], t[0]]) / max(float(np.hypot(*t)), 1e-12)
+                sw = float(reg.radius[0 if rev == 0 else -1]) * n
                 m = next((int(q) for q in np.argsort(np.hypot(*(C - end).T))[:MOUTH_CANDIDATES]
-                          if capsule_free(g.M, g.x0, g.y0, g.h, C[q, 0], C[q, 1], C[q, 0], C[q, 1], rr)), None)
+                          if capsule_free(g.M, g.x0, g.y0, g.h, C[q, 0] - sw[0], C[q, 1] - sw[1], C[q, 0] + sw[0],
+                                          C[q, 1] + sw[1], lv.r + g.h)), None)
                 if m is None:
                     continue
                 route = g.route(lv.cur, lv.r_free, -np.inf, None, (int(J[m]), int(I[m])))
