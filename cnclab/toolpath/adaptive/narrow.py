@@ -63,7 +63,7 @@ import shapely
 from shapely.geometry import LineString, MultiPoint, Point
 
 from ..constant_engagement import clamp_to_region
-from ..path import helix_ring
+from ..helix import helix_ring, helix_segments
 from .links import rapid_legs
 from .stock import capsule_free, raster
 from ...cutting.feed_control import controlled_feed
@@ -392,10 +392,10 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
     return Q[keep], K[keep], F[keep], steps, n_out
 
 
-def spiral_out(c_xy, rho0, rho1, pitch, ds):
-    """Counter-clockwise Archimedean spiral about ``c_xy`` from radius ``rho0`` (at angle 0) out to
-    ``rho1`` (mm) gaining at most ``pitch`` mm per turn, then one full circle at ``rho1``; points
-    about ``ds`` mm apart, (m, 2) mm.
+def spiral_out(c_xy, rho0, rho1, pitch, ds, start_rad=0.0):
+    """Counter-clockwise Archimedean spiral about ``c_xy`` from radius ``rho0`` at angle ``start_rad``
+    (rad) out to ``rho1`` (mm) gaining at most ``pitch`` mm per turn, then one full circle at
+    ``rho1``; points about ``ds`` mm apart, (m, 2) mm.
 
     >>> S = spiral_out((0.0, 0.0), 1.0, 2.0, 0.5, 0.1)
     >>> S[0].round(9).tolist(), S[-1].round(9).tolist(), round(float(np.hypot(*S[-50].T)), 9)
@@ -405,23 +405,28 @@ def spiral_out(c_xy, rho0, rho1, pitch, ds):
     m = max(int(math.ceil(2 * math.pi * max(rho1, rho0) / ds)), 16)
     t = np.linspace(0.0, turns + 1.0, m * (turns + 1) + 1)
     rad = np.where(t < turns, rho0 + (rho1 - rho0) * t / max(turns, 1), max(rho1, rho0))
-    P = np.asarray(c_xy, float) + rad[:, None] * np.c_[np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)]
-    P[0] = np.asarray(c_xy, float) + (rho0, 0.0)
-    P[-1] = np.asarray(c_xy, float) + (max(rho1, rho0), 0.0)
+    a = start_rad + 2 * np.pi * t
+    P = np.asarray(c_xy, float) + rad[:, None] * np.c_[np.cos(a), np.sin(a)]
+    P[0] = np.asarray(c_xy, float) + rho0 * np.array([math.cos(start_rad), math.sin(start_rad)])
+    P[-1] = np.asarray(c_xy, float) + max(rho1, rho0) * np.array([math.cos(start_rad), math.sin(start_rad)])
     return P
 
 
-def helix_entry(b, c_xy, rho, z_from, z_to, feed, angle_deg, n_seg=48):
+def helix_entry(b, c_xy, rho, z_from, z_to, feed, angle_deg):
     """A helix of radius ``rho`` (mm) about ``c_xy`` from ``z_from`` down to ``z_to`` at ``angle_deg``
-    (whole turns, at least one), then a floor circle, through ``b`` (:class:`ToolPathBuilder`, the
-    tool above the ring's start). Returns the end point (2,)."""
-    ring = helix_ring(c_xy, rho, n_seg)
+    (at least one turn, the last partial), then a floor circle, through ``b``
+    (:class:`ToolPathBuilder`, the tool above the ring's start at angle 0): the package's one helix
+    generator (:func:`cnclab.toolpath.helix.helix_ring`) as the level planner's entries use it.
+    Returns the end point (2,)."""
     drop = 2 * math.pi * rho * math.tan(math.radians(angle_deg))
-    turns = max(int(math.ceil((z_from - z_to) / drop - 1e-9)), 1)
-    full = np.vstack([ring[:1]] + [ring[1:]] * turns)
-    b.helix(full, z_from, z_to, feed, tag="entry: narrow region", equal_steps=True)
-    b.cut(ring[1:], feed, z=z_to, tag="entry-floor")
-    return ring[-1]
+    turns = max((z_from - z_to) / drop, 1.0)
+    n = helix_segments(rho)
+    ring = helix_ring(c_xy, rho, max(int(math.ceil(n * turns - 1e-9)), n), turns=turns)
+    b.helix(ring, z_from, z_to, feed, tag="entry: narrow region", equal_steps=True)
+    floor = helix_ring(c_xy, rho, n, start_rad=2 * math.pi * turns)
+    floor[0] = floor[-1] = ring[-1]
+    b.cut(floor[1:], feed, z=z_to, tag="entry-floor")
+    return floor[-1]
 
 
 def emit_trochoid(b, g, start, Q, K, feed, z, link_feed, tag):
@@ -488,10 +493,12 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
         b.rapid([p0], z=lv.clearance_z)
         b.rapid([p0], z=lv.z_prev + prm.approach_above_mm, tag="cleared: above the level", cleared=True)
         b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
-        helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg)
+        pe = helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg)
         lv.g.cut_path(helix_ring(c0, rho, 64))
         # the hole opened to the slot's width: a spiral out to radius c (radial pitch a_e / 2), a circle
-        S = spiral_out(c0, rho, c_start, 0.5 * r * (1 - math.cos(math.radians(lv.theta_deg))), 2 * h)
+        S = spiral_out(c0, rho, c_start, 0.5 * r * (1 - math.cos(math.radians(lv.theta_deg))), 2 * h,
+                       start_rad=math.atan2(pe[1] - c0[1], pe[0] - c0[0]))
+        S[0] = pe
         b.cut(S[1:], lv.feed_mm_min, z=lv.z, tag="entry: narrow region, spiral out to the slot width")
         lv.g.cut_path(S)
         p0 = S[-1]
@@ -499,7 +506,7 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
     emit_trochoid(b, lv.g, np.asarray(p0, float), Q, K, F * lv.feed_mm_min, lv.z, lv.link_feed_mm_min,
                   f"narrow region {reg.index}: Thesis IV trochoid")
     lv.cur = (float(Q[-1, 0]), float(Q[-1, 1]))
-    lv.stats["narrow_regions"] = lv.stats.get("narrow_regions", 0) + 1
+    lv.stats["narrow_trochoids"] = lv.stats.get("narrow_trochoids", 0) + 1
     lv.narrow_done.append(reg.describe() + (" from cleared area" if from_cleared else " from a helix")
                           + f", steps {', '.join(f'{s_:.3f}' for s_ in steps)} mm")
     return True
