@@ -90,6 +90,12 @@ Design (the ideas and where they come from; the code is cnclab's own)
   along it is moved 2 h to its left (away from the material on the pass's right) with feed legs
   off and back on the line, and a link from or to a wall point gets a feed leg of 2 h or 4 h, where
   that makes the rest provable (:func:`bow_runs`, :func:`rapid_legs`).
+* **Narrow regions** (``narrow``; issue 29 item 5): where the tool-centre region is at most 0.75 r
+  half-wide (a pocket <= 1.75 D: channels, slots, necks, comb fingers) along at least 3 r of its
+  medial axis, the passes cannot turn; such a region is hidden from them and cut instead by Jacsó's
+  constant-engagement trochoid (Thesis IV) laid along its Voronoi medial axis at the same theta,
+  entered from cleared area at a mouth (no lift) or by a helix and a spiral out at a closed end; the
+  regions cut so are listed in ``info["narrow_regions"]`` and in the program header.
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
@@ -98,16 +104,19 @@ Package layout (one role per module)
 ``stock`` pixel-stock kernels; ``control`` the engagement controller (heading search, guard, a
 pass); ``links`` links at depth and the rapid proofs; ``grid`` the per-level state (stocks, masks,
 free field); ``entries`` the entry choice, helix and bans; ``finish`` the wall-following laps;
-``params`` :class:`AdaptiveParams` (every tuning constant with its unit and reason); ``planner`` the
+``params`` :class:`AdaptiveParams` (every tuning constant with its unit and reason); ``narrow`` the
+narrow regions (detection, medial axis, the trochoid along it, their order); ``planner`` the
 level planner object (``_Level``) whose ``run`` is the loop below, and :func:`adaptive_clearing`.
 
 The loop of one level (``_Level.run``)::
 
-    enter()                                   # helix at the widest place with material in reach
+    hide the narrow regions (narrow.LevelRegions)
+    enter() or a narrow region by helix       # helix at the widest place with material in reach
     for each round (0, then up to clean_rounds clean-up rounds, each kept only if it pays):
         repeat:
             link_to(next border cell)         # Dijkstra through free cells, chords as G0 where proven
             if no border cell is reachable:
+                narrow.next_region()          # a trochoid from a reachable mouth, or (nothing left) by helix
                 sweep_remnant() or finish_if_done() and enter() again, or stop
             else:
                 clearing_pass()               # steps at theta until the wall, air or the guard ends it
