@@ -112,6 +112,41 @@ def test_a_move_through_uncleared_levels_is_reentered_by_a_helix():
     assert check_program(text, job.clearance_z, job.top_z).errors == []
 
 
+def test_reentry_follows_a_helix_of_line_moves():
+    """The same re-entry when the level's own helix is the package's one helix generator's line moves
+    (ToolPathBuilder.helix on a helix_ring, as the adaptive planner writes it): centre (the
+    circumcentre of its first points), sense and pitch read from the line moves."""
+    from cnclab.toolpath.helix import helix_ring, helix_segments
+    from cnclab.toolpath.levels import join_levels
+    from cnclab.toolpath.path import ToolPathBuilder
+
+    job = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 1.0, depth=2.0, v_c=100, f_z=0.05, start_hole=(5, 10, 7))
+    c = (30.0, 10.0)
+    lv1 = ToolPath.build([[5, 10, 5], [5, 10, -1], [14, 10, -1], [14, 10, 5]],
+                         kind=["rapid", "plunge", "cut", "rapid"], feed=300, cleared=[False, True, False, False])
+    b = ToolPathBuilder(tool=job.tool)
+    b.rapid([[c[0] + 1, c[1]]], z=5)
+    b.rapid([[c[0] + 1, c[1]]], z=-0.5, tag="above the level", cleared=True)
+    b.plunge([c[0] + 1, c[1]], -1.0, 300, tag="air")
+    b.helix(helix_ring(c, 1.0, 24, turns=1.5), -1.0, -2.0, 300, equal_steps=True)   # 1.5 turns: 1 mm a turn / 1.5
+    b.retract(5, 300)
+    out = join_levels([lv1, b.build()], [0.0, -1.0], job)
+    k2 = len(lv1)
+    K = out.kinds()[k2:]
+    assert K[:2].tolist() == ["rapid", "plunge"] and out.xyz[k2 + 1, 2] == 0.0
+    n_new = int(np.flatnonzero(out.xyz[k2 + 2:, 2] == -1.0)[0]) + 1     # re-entry moves down to the level top
+    assert set(K[2:2 + n_new]) == {"helix"}
+    hx = out.xyz[k2 + 2:k2 + 2 + n_new]
+    assert np.allclose(np.hypot(hx[:, 0] - c[0], hx[:, 1] - c[1]), 1.0)      # about the level's helix centre
+    assert np.allclose(hx[-1, :2], [c[0] + 1, c[1]]) and np.all(np.diff(np.r_[0.0, hx[:, 2]]) < 0)
+    # whole turns of helix_segments(1 mm) chords (0.01 mm sagitta), pitch <= the level's 1/1.5 mm a
+    # turn: 1 mm in ceil(1.5) = 2 turns
+    assert n_new == 2 * helix_segments(1.0)
+    assert np.all(np.diff(np.unwrap(np.arctan2(hx[:, 1] - c[1], hx[:, 0] - c[0]))) > 0)   # counter-clockwise, as planned
+    assert not out.cleared[k2:].any()
+    assert check_program(write_program(out, job), job.clearance_z, job.top_z).errors == []
+
+
 def test_a_move_proven_by_the_level_above_is_tagged_cleared():
     job = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 1.0, depth=2.0, v_c=100, f_z=0.05)
     from cnclab.toolpath.levels import join_levels

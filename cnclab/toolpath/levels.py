@@ -83,10 +83,7 @@ def swept_region(path: ToolPath, below_z: float, r: float, moves=None):
 def _move_sweep(path, k, r):
     a, b = path.xyz[k - 1], path.xyz[k]
     if path.arc[k]:
-        piece = ToolPath(path.xyz[k - 1:k + 1], path.kind[k - 1:k + 1], path.tag[k - 1:k + 1],
-                         path.feed[k - 1:k + 1], path.spindle[k - 1:k + 1], path.arc[k - 1:k + 1],
-                         path.arc_center[k - 1:k + 1])
-        return swept_region(piece, math.inf, r)
+        return swept_region(path.take(slice(k - 1, k + 1)), math.inf, r)
     if math.hypot(b[0] - a[0], b[1] - a[1]) <= _EPS:
         return Point(b[:2]).buffer(r, quad_segs=32)
     return LineString([a[:2], b[:2]]).buffer(r, quad_segs=32)
@@ -123,7 +120,7 @@ def _following_helix(path, k):
 
 
 def _helix_from_top(path, k, top_z, r):
-    """Moves (list of (xyz, kind, arc, centre, feed, tag)) replacing the unproven vertical descent
+    """The moves (a :class:`ToolPath`, spindle as move ``k``'s) replacing the unproven vertical descent
     ``k`` of ``path`` (ending on the level top above a helix): a plunge to ``top_z`` (air) and a helix
     about the following helix's centre (:func:`_following_helix`), in its sense and at no more than
     its pitch, down to the descent's end, by the package's one helix generator
@@ -145,29 +142,22 @@ def _helix_from_top(path, k, top_z, r):
     rot = np.array([[math.cos(a0), -math.sin(a0)], [math.sin(a0), math.cos(a0)]])
     ring = ring @ rot.T + c
     ring[0] = ring[-1] = end[:2]                                # exactly where the tool is
-    b = ToolPathBuilder()
-    b.add(np.array([[end[0], end[1], top_z]]), "plunge", feed, "entry: down to the stock top (air)")
+    b = ToolPathBuilder(tool=path.tool, spindle=path.spindle[k])
+    b.plunge(end[:2], top_z, feed, tag="entry: down to the stock top (air)")
     b.helix(np.vstack([ring] + [ring[1:]] * (turns - 1)), top_z, float(end[2]), feed,
             tag="entry: helix through the levels above", equal_steps=True)
-    h = b.build()
-    return [(tuple(h.xyz[m]), KINDS[h.kind[m]], int(h.arc[m]), tuple(h.arc_center[m]), float(h.feed[m]), h.tag[m])
-            for m in range(len(h))]
+    return b.build()
 
 
 def _rebuild(path, replace):
-    """``path`` with moves ``k`` replaced by the lists ``replace[k]`` (see :func:`_helix_from_top`)."""
-    xyz, kind, arc, ctr, feed, tag, spin, clr = [], [], [], [], [], [], [], []
-    for k in range(len(path)):
-        if k in replace:
-            for p, kd, a, c, f, t in replace[k]:
-                xyz.append(p); kind.append(_K[kd]); arc.append(a); ctr.append(c); feed.append(f); tag.append(t)
-                spin.append(path.spindle[k]); clr.append(False)
-            continue
-        xyz.append(path.xyz[k]); kind.append(path.kind[k]); arc.append(path.arc[k]); ctr.append(path.arc_center[k])
-        feed.append(path.feed[k]); tag.append(path.tag[k]); spin.append(path.spindle[k]); clr.append(path.cleared[k])
-    return ToolPath(np.array(xyz, float), np.array(kind, np.int8), np.array(tag, dtype=object),
-                    np.array(feed, float), np.array(spin, float), np.array(arc, np.int8), np.array(ctr, float),
-                    path.tool, dict(path.info), np.array(clr, bool))
+    """``path`` with moves ``k`` replaced by the paths ``replace[k]`` (None: dropped; see
+    :func:`_helix_from_top`)."""
+    pieces, last = [], 0
+    for k in sorted(replace):
+        pieces += [path.take(slice(last, k))] + ([replace[k]] if replace[k] is not None else [])
+        last = k + 1
+    pieces.append(path.take(slice(last, None)))
+    return ToolPath.concat([q for q in pieces if len(q)], tool=path.tool, info=dict(path.info))
 
 
 def _with_tag(tag, extra):
@@ -236,7 +226,7 @@ def _prove_level(p, k, top, top0, left_above, r, tol_mm2):
                              f"through material the levels above left ({sweep.intersection(left_above).area:.3g} "
                              "mm^2) and is no descent onto a helix that could enter from the stock top")
         for m in range(i, j):
-            replace[m] = []                       # the vertical pieces before the descent's end
+            replace[m] = None                     # the vertical pieces before the descent's end
         replace[j] = new
     p = ToolPath(p.xyz, p.kind, tags, p.feed, p.spindle, p.arc, p.arc_center, p.tool, dict(p.info), cleared)
     return _rebuild(p, replace) if replace else p

@@ -260,6 +260,12 @@ class ToolPath:
         f[k == _KIND_INDEX["rapid"]] = np.nan
         return cls(P, k, tag, f, spindle, arc, arc_center, tool, dict(info or {}), cleared)
 
+    def take(self, index) -> "ToolPath":
+        """The moves ``index`` (a slice, indices or a boolean mask) with all their columns (same tool,
+        a copy of ``info``)."""
+        return ToolPath(self.xyz[index], self.kind[index], self.tag[index], self.feed[index], self.spindle[index],
+                        self.arc[index], self.arc_center[index], self.tool, dict(self.info), self.cleared[index])
+
     @classmethod
     def concat(cls, paths, tool: Tool | None = None, info: dict | None = None) -> "ToolPath":
         """Join paths end to end (the first move of each path continues from the previous end)."""
