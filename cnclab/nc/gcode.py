@@ -161,6 +161,8 @@ class GcodeProgram:
 
 
 def _split_comments(line: str, where: str):
+    if "(" not in line and ";" not in line:
+        return line, []                   # most blocks: no comment (a stray ')' is a word error later)
     out, comments, buf, depth = [], [], [], 0
     for k, ch in enumerate(line):
         if ch == "(":
@@ -226,7 +228,7 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
         if prog.moves and _M6.search(body.upper().replace(" ", "")):
             prog.warnings.append(f"{where}: tool change {body.strip()!r} after the program has moved: "
                                  "the moves after it are taken with the same tool as before")
-        words = [(m.group(1).upper(), m.group(2).replace(" ", "")) for m in _WORD.finditer(body)]
+        words = [(a.upper(), b.replace(" ", "")) for a, b in _WORD.findall(body)]
         coords: dict[str, float] = {}
         new_motion = None
         gset = set()

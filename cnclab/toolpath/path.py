@@ -116,6 +116,20 @@ def arc_geometry(start, end, center_xy, ccw: bool):
     return cx, cy, r, a0, sweep
 
 
+def _arcs_geometry(P0, P1, C, ccw):
+    """:func:`arc_geometry` of many arcs at once: arrays (n,) ``(radius, start_angle_rad, sweep_rad)``
+    of the arcs from ``P0[k]`` to ``P1[k]`` (mm, (n, >=2)) about ``C[k]`` ((n, 2)), counter-clockwise where
+    ``ccw[k]``."""
+    dx0, dy0 = P0[:, 0] - C[:, 0], P0[:, 1] - C[:, 1]
+    r = np.hypot(dx0, dy0)
+    a0 = np.arctan2(dy0, dx0)
+    a1 = np.arctan2(P1[:, 1] - C[:, 1], P1[:, 0] - C[:, 0])
+    sweep = np.where(ccw, np.mod(a1 - a0, 2 * math.pi), -np.mod(a0 - a1, 2 * math.pi))
+    full = np.abs(sweep) < 1e-12                   # same start and end: full circle
+    sweep[full] = np.where(ccw[full], 2 * math.pi, -2 * math.pi)
+    return r, a0, sweep
+
+
 def sample_arc(start, end, center_xy, ccw: bool, max_segment: float = 0.5) -> np.ndarray:
     """Points (n, 3) mm along the arc or helix from ``start`` to ``end`` (both included), segments at
     most ``max_segment`` mm long along the arc.
@@ -390,9 +404,10 @@ class ToolPath:
             return L
         d = np.diff(self.xyz, axis=0)
         L[1:] = np.linalg.norm(d, axis=1)
-        for k in np.flatnonzero(self.arc[1:] != 0) + 1:
-            _, _, r, _, sweep = arc_geometry(self.xyz[k - 1], self.xyz[k], self.arc_center[k], self.arc[k] == 3)
-            L[k] = math.hypot(abs(sweep) * r, self.xyz[k, 2] - self.xyz[k - 1, 2])
+        k = np.flatnonzero(self.arc[1:] != 0) + 1
+        if len(k):
+            r, _, sweep = _arcs_geometry(self.xyz[k - 1], self.xyz[k], self.arc_center[k], self.arc[k] == 3)
+            L[k] = np.hypot(np.abs(sweep) * r, self.xyz[k, 2] - self.xyz[k - 1, 2])
         return L
 
     def lengths(self) -> dict:
@@ -419,18 +434,33 @@ class ToolPath:
         """Sampled points: ``(points (M, 3) mm, move (M,) index of the move each point belongs to)``;
         arcs are sampled with chords of at most ``max_segment`` mm, lines are kept as they are (use
         :meth:`resample` to subdivide lines)."""
-        pts, idx = [self.xyz[:1]], [np.zeros(min(1, len(self)), int)]
+        if not max_segment > 0:
+            raise ValueError(f"max_segment must be > 0 mm, got {max_segment}")
         arcs = np.flatnonzero(self.arc != 0)
-        prev = 1
-        for k in arcs:
-            if k == 0:
-                continue
-            pts.append(self.xyz[prev:k]); idx.append(np.arange(prev, k))
-            s = sample_arc(self.xyz[k - 1], self.xyz[k], self.arc_center[k], self.arc[k] == 3, max_segment)[1:]
-            pts.append(s); idx.append(np.full(len(s), k))
-            prev = k + 1
-        pts.append(self.xyz[prev:]); idx.append(np.arange(prev, len(self)))
-        return np.vstack(pts), np.concatenate(idx)
+        arcs = arcs[arcs > 0]
+        if len(arcs) == 0:
+            return self.xyz.copy(), np.arange(len(self))
+        # every arc as sample_arc samples it (n points from its start, the start dropped), all at once
+        P0, P1 = self.xyz[arcs - 1], self.xyz[arcs]
+        r, a0, sweep = _arcs_geometry(P0, P1, self.arc_center[arcs], self.arc[arcs] == 3)
+        n = np.maximum(2, np.ceil(np.abs(sweep) * r / max_segment).astype(int) + 1)   # points per arc
+        count = np.ones(len(self), int)                  # output points per move: 1 per line, n - 1 per arc
+        count[arcs] = n - 1
+        idx = np.repeat(np.arange(len(self)), count)
+        first = np.cumsum(count) - count                  # where each move's points start
+        out = self.xyz[idx].copy()
+        which = np.repeat(np.arange(len(arcs)), n - 1)   # the arc of every arc sample
+        j = np.arange(len(which)) - np.repeat(np.cumsum(n - 1) - (n - 1), n - 1) + 1   # 1 .. n - 1 along its arc
+        t = j / (n[which] - 1.0)
+        ang = a0[which] + sweep[which] * t
+        C = self.arc_center[arcs][which]
+        z0, z1 = P0[which, 2], P1[which, 2]
+        rows = np.flatnonzero(np.isin(idx, arcs))
+        out[rows] = np.column_stack([C[:, 0] + r[which] * np.cos(ang), C[:, 1] + r[which] * np.sin(ang),
+                                     z0 + (z1 - z0) * t])
+        last = first[arcs] + n - 2                        # the arc's end point exactly
+        out[last] = P1
+        return out, idx
 
     def resample(self, max_step: float, return_index: bool = False):
         """The same path with every move split into pieces at most ``max_step`` mm long (arcs become
