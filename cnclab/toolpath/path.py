@@ -120,9 +120,7 @@ def _arcs_geometry(P0, P1, C, ccw):
     """:func:`arc_geometry` of many arcs at once: arrays (n,) ``(radius, start_angle_rad, sweep_rad)``
     of the arcs from ``P0[k]`` to ``P1[k]`` (mm, (n, >=2)) about ``C[k]`` ((n, 2)), counter-clockwise where
     ``ccw[k]``."""
-    dx0, dy0 = P0[:, 0] - C[:, 0], P0[:, 1] - C[:, 1]
-    r = np.hypot(dx0, dy0)
-    a0 = np.arctan2(dy0, dx0)
+    r, a0 = np.hypot(P0[:, 0] - C[:, 0], P0[:, 1] - C[:, 1]), np.arctan2(P0[:, 1] - C[:, 1], P0[:, 0] - C[:, 0])
     a1 = np.arctan2(P1[:, 1] - C[:, 1], P1[:, 0] - C[:, 0])
     sweep = np.where(ccw, np.mod(a1 - a0, 2 * math.pi), -np.mod(a0 - a1, 2 * math.pi))
     full = np.abs(sweep) < 1e-12                   # same start and end: full circle
@@ -436,8 +434,7 @@ class ToolPath:
         :meth:`resample` to subdivide lines)."""
         if not max_segment > 0:
             raise ValueError(f"max_segment must be > 0 mm, got {max_segment}")
-        arcs = np.flatnonzero(self.arc != 0)
-        arcs = arcs[arcs > 0]
+        arcs = np.flatnonzero(self.arc[1:] != 0) + 1
         if len(arcs) == 0:
             return self.xyz.copy(), np.arange(len(self))
         # every arc as sample_arc samples it (n points from its start, the start dropped), all at once
@@ -454,12 +451,9 @@ class ToolPath:
         t = j / (n[which] - 1.0)
         ang = a0[which] + sweep[which] * t
         C = self.arc_center[arcs][which]
-        z0, z1 = P0[which, 2], P1[which, 2]
-        rows = np.flatnonzero(np.isin(idx, arcs))
-        out[rows] = np.column_stack([C[:, 0] + r[which] * np.cos(ang), C[:, 1] + r[which] * np.sin(ang),
-                                     z0 + (z1 - z0) * t])
-        last = first[arcs] + n - 2                        # the arc's end point exactly
-        out[last] = P1
+        out[np.isin(idx, arcs)] = np.column_stack([C[:, 0] + r[which] * np.cos(ang), C[:, 1] + r[which] * np.sin(ang),
+                                                   P0[which, 2] + (P1[which, 2] - P0[which, 2]) * t])
+        out[first[arcs] + n - 2] = P1                     # the arc's end point exactly
         return out, idx
 
     def resample(self, max_step: float, return_index: bool = False):
