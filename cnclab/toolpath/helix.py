@@ -1,6 +1,7 @@
 """The one helix generator's ring: :func:`helix_ring`, the xy trace a helical entry descends along
-(:meth:`cnclab.toolpath.path.ToolPathBuilder.helix` turns it into moves), and :func:`helix_segments`,
-the chords per turn for a stated chord error. Units: mm, rad.
+(:meth:`cnclab.toolpath.path.ToolPathBuilder.helix` turns it into moves), :func:`helix_segments`,
+the chords per turn for a stated chord error, and :func:`helix_entry`, the planners' entry (a helix
+at a ramp angle, then a floor circle) on a builder. Units: mm, rad, deg.
 """
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import math
 
 import numpy as np
 
-__all__ = ["HELIX_CHORD_MM", "helix_segments", "helix_ring"]
+__all__ = ["HELIX_CHORD_MM", "helix_segments", "helix_ring", "helix_entry"]
 
 
 def _check_radius(radius):
@@ -52,3 +53,29 @@ def helix_ring(center_xy, radius: float, n_segments: int, *, turns: float = 1.0,
     pts = np.asarray(center_xy, float) + radius * np.c_[np.cos(a), np.sin(a)]
     pts[u == np.round(u)] = pts[0]
     return pts
+
+
+def helix_entry(b, c_xy, rho: float, z_from: float, z_to: float, feed: float, angle_deg: float, *,
+                tag: str = "entry") -> np.ndarray:
+    """A helical entry through the builder ``b`` (a :class:`~cnclab.toolpath.path.ToolPathBuilder`,
+    the tool at ``z_from`` over the ring's start, ``c_xy + (rho, 0)``): counter-clockwise turns of
+    radius ``rho`` mm about ``c_xy`` from ``z_from`` down to ``z_to`` mm at ``angle_deg`` deg (at
+    least one turn, the last partial: z linear in the angle, :meth:`ToolPathBuilder.helix`), chords
+    within :data:`HELIX_CHORD_MM` of the circle; then a floor circle at ``z_to`` (``cut`` moves tagged
+    ``entry-floor``). ``feed`` mm/min; ``tag`` of the helix moves. Returns the end point (2,) mm.
+
+    >>> from cnclab.toolpath.path import ToolPathBuilder
+    >>> b = ToolPathBuilder(); b.rapid([[1.0, 0.0]], z=0.0)
+    >>> end = helix_entry(b, (0, 0), 1.0, 0.0, -1.0, 300, 5.0)        # 1 mm at 5 deg: 1.82 turns, ends at 295 deg
+    >>> p = b.build(); int(p.is_kind("helix").sum()), round(float(p.xyz[:, 2].min()), 6), end.round(3).tolist()
+    (42, -1.0, [0.421, -0.907])
+    """
+    drop = 2 * math.pi * rho * math.tan(math.radians(angle_deg))
+    turns = max((z_from - z_to) / drop, 1.0)
+    n = helix_segments(rho)
+    ring = helix_ring(c_xy, rho, max(int(math.ceil(n * turns - 1e-9)), n), turns=turns)
+    b.helix(ring, z_from, z_to, feed, tag=tag, equal_steps=True)
+    floor = helix_ring(c_xy, rho, n, start_rad=2 * math.pi * turns)
+    floor[0] = floor[-1] = ring[-1]
+    b.cut(floor[1:], feed, z=z_to, tag="entry-floor")
+    return floor[-1]

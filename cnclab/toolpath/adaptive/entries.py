@@ -12,7 +12,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Point, Polygon
 
-from ..helix import helix_ring, helix_segments
+from ..helix import helix_entry
 
 __all__ = ["PlanningError", "enter"]
 
@@ -73,18 +73,9 @@ def enter(lv, banned=None):
         # the previous level cleared (marked cleared: the program writer allows a rapid there only so)
         lv.b.rapid([p0], z=lv.z_prev + lv.prm.approach_above_mm, tag="cleared: above the level", cleared=True)
         lv.b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
-        drop = 2 * math.pi * rho * math.tan(math.radians(lv.helix_angle_deg))
         # the helix ends where it reaches z (the last turn partial); at least one full turn, so
-        # that the floor circle after it cuts in the helix's own groove. The package's one helix
-        # generator: chords within HELIX_CHORD_MM of the circle, z in proportion to the angle
-        turns = max((lv.z_prev - lv.z) / drop, 1.0)
-        n = helix_segments(rho)
-        ring = helix_ring(c, rho, max(int(math.ceil(n * turns - 1e-9)), n), turns=turns)
-        lv.b.helix(ring, lv.z_prev, lv.z, lv.feed_mm_min, tag="entry", equal_steps=True)
-        pe = ring[-1]
-        floor = helix_ring(c, rho, n, start_rad=2 * math.pi * turns)
-        floor[0] = floor[-1] = pe
-        lv.b.cut(floor[1:], lv.feed_mm_min, z=lv.z, tag="entry-floor")
+        # that the floor circle after it cuts in the helix's own groove (the package's one entry helix)
+        pe = helix_entry(lv.b, c, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg)
         circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
         lv.g.cut_path(circ)
         lv.stats["entries"] += 1

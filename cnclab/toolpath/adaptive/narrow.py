@@ -63,7 +63,7 @@ import shapely
 from shapely.geometry import LineString, MultiPoint, Point
 
 from ..constant_engagement import clamp_to_region
-from ..helix import helix_ring, helix_segments
+from ..helix import helix_entry, helix_ring, helix_segments  # noqa: F401  (helix_entry: the one entry helix)
 from .links import rapid_legs
 from .stock import capsule_free, raster
 from ...cutting.feed_control import controlled_feed
@@ -412,23 +412,6 @@ def spiral_out(c_xy, rho0, rho1, pitch, ds, start_rad=0.0):
     return P
 
 
-def helix_entry(b, c_xy, rho, z_from, z_to, feed, angle_deg):
-    """A helix of radius ``rho`` (mm) about ``c_xy`` from ``z_from`` down to ``z_to`` at ``angle_deg``
-    (at least one turn, the last partial), then a floor circle, through ``b``
-    (:class:`ToolPathBuilder`, the tool above the ring's start at angle 0): the package's one helix
-    generator (:func:`cnclab.toolpath.helix.helix_ring`) as the level planner's entries use it.
-    Returns the end point (2,)."""
-    drop = 2 * math.pi * rho * math.tan(math.radians(angle_deg))
-    turns = max((z_from - z_to) / drop, 1.0)
-    n = helix_segments(rho)
-    ring = helix_ring(c_xy, rho, max(int(math.ceil(n * turns - 1e-9)), n), turns=turns)
-    b.helix(ring, z_from, z_to, feed, tag="entry: narrow region", equal_steps=True)
-    floor = helix_ring(c_xy, rho, n, start_rad=2 * math.pi * turns)
-    floor[0] = floor[-1] = ring[-1]
-    b.cut(floor[1:], feed, z=z_to, tag="entry-floor")
-    return floor[-1]
-
-
 def emit_trochoid(b, g, start, Q, K, feed, z, link_feed, tag):
     """Append the trochoid ``Q`` (m, 2) mm at height ``z`` to the builder ``b`` from ``start`` (2,),
     cutting the planning stocks of the grid ``g`` as it goes: every run of cutting moves is cut into
@@ -493,7 +476,7 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
         b.rapid([p0], z=lv.clearance_z)
         b.rapid([p0], z=lv.z_prev + prm.approach_above_mm, tag="cleared: above the level", cleared=True)
         b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
-        pe = helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg)
+        pe = helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg, tag="entry: narrow region")
         lv.g.cut_path(helix_ring(c0, rho, 64))
         # the hole opened to the slot's width: a spiral out to radius c (radial pitch a_e / 2), a circle
         S = spiral_out(c0, rho, c_start, 0.5 * r * (1 - math.cos(math.radians(lv.theta_deg))), 2 * h,
