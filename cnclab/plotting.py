@@ -126,6 +126,100 @@ def with_style(func=None, *, style=None):
     return deco(func) if func is not None else deco
 
 
+#: smallest text size (pt) :func:`fit_text` shrinks to: legible in print (journals ask for 6-8 pt)
+MIN_FONT_PT = 6.0
+
+
+def _ticklabels_in_view(ax):
+    out = []
+    for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+        lo, hi = sorted(lim)
+        eps = 1e-9 * max(1.0, abs(lo), abs(hi))
+        # the ticks drawn are the first len(locs) ones (an axis keeps spare ticks from earlier draws)
+        drawn = [*axis.get_major_ticks(len(axis.get_majorticklocs())),
+                 *axis.get_minor_ticks(len(axis.get_minorticklocs()))]
+        for tick in drawn:
+            if lo - eps <= tick.get_loc() <= hi + eps:
+                out += [t for t in (tick.label1, tick.label2) if t.get_visible() and t.get_text().strip()]
+    return out
+
+
+def _layout_texts(fig):
+    """(axes index, text) of every title, axis label and tick label in view of the shown axes."""
+    out = []
+    for i, ax in enumerate(fig.axes):
+        if ax.get_visible() and ax.axison:
+            texts = [ax.title, ax.xaxis.label, ax.yaxis.label, *_ticklabels_in_view(ax)]
+            out += [(i, t) for t in texts if t.get_visible() and t.get_text().strip()]
+    return out
+
+
+def text_clashes(fig, tol_pt: float = 0.5) -> list[str]:
+    """Texts of ``fig`` (titles, axis labels, tick labels in view, legends) that leave the page or overlap
+    another title/label/tick label by more than ``tol_pt`` (points) both ways, after laying the figure
+    out at its current size. Empty: every text is readable.
+
+    >>> import matplotlib; matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt
+    >>> fig, ax = plt.subplots(figsize=(2.0, 2.0), layout="constrained")
+    >>> _ = ax.set_title("a title much wider than the two inches of this page")
+    >>> text_clashes(fig)
+    ["axes 0: 'a title much wider than the two inches of this page' leaves the page"]
+    >>> _ = ax.set_title("short"); text_clashes(fig)
+    []
+    >>> plt.close(fig)
+    """
+    fig.draw_without_rendering()
+    px = fig.dpi / 72.0 * tol_pt
+    page = fig.bbox
+    texts = [(i, t, t.get_window_extent()) for i, t in _layout_texts(fig)]
+    texts += [(i, ax.get_legend(), ax.get_legend().get_window_extent()) for i, ax in enumerate(fig.axes)
+              if ax.get_visible() and ax.get_legend() is not None]
+    out = []
+    for i, t, b in texts:
+        if b.x0 < page.x0 - px or b.x1 > page.x1 + px or b.y0 < page.y0 - px or b.y1 > page.y1 + px:
+            out.append(f"axes {i}: {getattr(t, 'get_text', lambda: 'legend')()!r} leaves the page")
+    texts = [x for x in texts if hasattr(x[1], "get_text")]
+    for k, (i, t, b) in enumerate(texts):
+        for j, u, c in texts[k + 1:]:
+            if min(b.x1, c.x1) - max(b.x0, c.x0) > px and min(b.y1, c.y1) - max(b.y0, c.y0) > px:
+                out.append(f"axes {i}: {t.get_text()!r} overlaps axes {j}: {u.get_text()!r}")
+    return out
+
+
+def fit_text(fig, min_pt: float = MIN_FONT_PT, step: float = 0.9, max_rounds: int = 15) -> list[str]:
+    """Shrink the texts of ``fig`` by ``step`` per round (none below ``min_pt`` points; smaller ones
+    are kept) until :func:`text_clashes` finds nothing or every text is at ``min_pt``; returns the
+    clashes left (empty: fitted). Used by :func:`export_figure` at a journal width, where a figure
+    drawn for a 6-inch notebook page must fit 85 mm with its fonts in points unchanged elsewhere."""
+    import matplotlib.text as mtext
+
+    if not (0 < step < 1 and min_pt > 0):
+        raise ValueError(f"step must be in (0, 1) and min_pt > 0, got {step!r}, {min_pt!r}")
+    clashes = text_clashes(fig)
+    for _ in range(max_rounds):
+        if not clashes:
+            break
+        changed = False
+        ticks = set()
+        for ax in fig.axes:
+            for axis, name in ((ax.xaxis, "x"), (ax.yaxis, "y")):
+                labels = [t for tk in [*axis.get_major_ticks(), *axis.get_minor_ticks()] for t in (tk.label1, tk.label2)]
+                ticks.update(map(id, labels))
+                size = labels[0].get_fontsize() if labels else None
+                if size is not None and size > min_pt:
+                    axis.set_tick_params(which="both", labelsize=max(min_pt, size * step))
+                    changed = True
+        for t in fig.findobj(mtext.Text):
+            if id(t) not in ticks and t.get_fontsize() > min_pt:
+                t.set_fontsize(max(min_pt, t.get_fontsize() * step))
+                changed = True
+        if not changed:
+            break
+        clashes = text_clashes(fig)
+    return clashes
+
+
 def _mm(value, name: str):
     if value is None:
         return None
@@ -140,7 +234,7 @@ def _mm(value, name: str):
 
 
 def export_figure(fig, name: str, outdir, *, width_mm=None, height_mm=None, formats=("pdf", "svg", "png"),
-                  dpi: int = 300, style=None) -> list[Path]:
+                  dpi: int = 300, style=None, fit: bool = True) -> list[Path]:
     """Write ``fig`` as ``outdir/<name>.<format>`` for each format, atomically; returns the paths.
 
     Parameters
@@ -158,6 +252,8 @@ def export_figure(fig, name: str, outdir, *, width_mm=None, height_mm=None, form
     style : style sheet (path or name) active while saving (its ``savefig.*``, ``pdf.fonttype``, ...);
         None: the collection's ``paper.mplstyle``. Text sizes are set when a figure is drawn, so a
         figure drawn under another style is best re-drawn: ``python -m cnclab figure NAME --style S``.
+    fit : with a width: shrink texts that leave the page or overlap at that size (:func:`fit_text`,
+        down to :data:`MIN_FONT_PT`); the figure's texts keep their size where they fit.
 
     PDF and SVG carry no date, so identical figures give identical files.
     """
@@ -179,9 +275,11 @@ def export_figure(fig, name: str, outdir, *, width_mm=None, height_mm=None, form
             if fig.get_layout_engine() is None or type(fig.get_layout_engine()).__name__ == "PlaceHolderLayoutEngine":
                 fig.set_layout_engine("constrained")
             for ax in fig.axes:       # a legend inside an axes at column width must not collapse the layout
-                if ax.get_legend() is not None:
+                if ax.get_legend() is not None and ax.axison:       # (an axis-off legend panel keeps its room)
                     ax.get_legend().set_in_layout(False)
             mpl.rcParams["savefig.bbox"] = "standard"   # no cropping: the page is exactly the requested size
+            if fit:
+                fit_text(fig)
         for fmt in formats:
             buf = io.BytesIO()
             meta = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}.get(fmt)

@@ -5,6 +5,7 @@ import json
 import re
 
 import matplotlib.pyplot as plt
+import matplotlib.text as mtext
 import pytest
 
 from cnclab import figures, plotting
@@ -55,8 +56,46 @@ def test_recipe_renders_an_85_mm_pdf(tmp_path, name):
         shown = [ax for ax in fig.axes if ax.axison]      # Fig 6-3's diagonal carries only the factor name
         assert shown and all(ax.has_data() for ax in shown), [ax.get_title() for ax in shown if not ax.has_data()]
         [p] = plotting.export_figure(fig, name, tmp_path, width_mm=85, formats=("pdf",))
+        # readable at column width: no title/label/tick label/legend off the page or on another one,
+        # no text below 6 pt unless the recipe drew it so
+        assert plotting.text_clashes(fig) == []
+        sizes = [t.get_fontsize() for t in fig.findobj(mtext.Text) if t.get_text().strip()]
+        assert min(sizes) >= plotting.MIN_FONT_PT - 1e-9
     finally:
         plt.close(fig)
     w, h = plotting.pdf_page_size_pt(p)
     assert abs(w - 85 / MM_PER_INCH * 72) < TOL_PT          # 240.94 pt
-    assert h > 0.2 * w
+    assert h >= 0.25 * w                                    # no strip: at most 4:1
+
+
+def _two_titles(title):
+    fig, axs = plt.subplots(1, 2, figsize=(6.0, 3.0))
+    for ax in axs:
+        ax.plot([0, 1], [0, 1])
+        ax.set_title(title)
+    return fig
+
+
+def test_fit_text_shrinks_clashing_texts_to_the_floor_only(tmp_path):
+    fig = _two_titles("a title long enough to run into its neighbour")
+    [p] = plotting.export_figure(fig, "t", tmp_path, width_mm=85, formats=("pdf",), fit=False)
+    assert plotting.text_clashes(fig)                       # at 85 mm the two 9 pt titles collide
+    left = plotting.fit_text(fig, min_pt=6.0)
+    sizes = [t.get_fontsize() for t in fig.findobj(mtext.Text) if t.get_text().strip()]
+    assert min(sizes) >= 6.0 - 1e-9
+    if not left:                                            # fitted: nothing clashes any more
+        assert plotting.text_clashes(fig) == []
+    else:                                                   # not fittable: every text is at the floor
+        assert max(sizes) <= 6.0 + 1e-9
+    plt.close(fig)
+    assert abs(plotting.pdf_page_size_pt(p)[0] - 85 / MM_PER_INCH * 72) < TOL_PT
+
+
+def test_fit_text_leaves_a_fitting_figure_alone():
+    fig = _two_titles("short")
+    before = [t.get_fontsize() for t in fig.findobj(mtext.Text)]
+    assert plotting.fit_text(fig) == []
+    assert [t.get_fontsize() for t in fig.findobj(mtext.Text)] == before
+    plt.close(fig)
+    with pytest.raises(ValueError, match="step"):
+        plotting.fit_text(fig, step=1.5)

@@ -56,13 +56,13 @@ def fig5_8_5_9_deff_vs_feed_direction():
     import matplotlib.pyplot as plt
 
     Afs = np.linspace(0, 360, 721)
-    fig, axs = plt.subplots(1, 2, figsize=figsize(1.5, 0.85), sharey=True)
+    fig, axs = plt.subplots(1, 2, figsize=figsize(1.5, 1.0), sharey=True)
     for ax, ap_ in zip(axs, (1.0, 0.3)):
         r1, r2 = be.paper_deff_radius_valued(10, ap_, 35, 25, Afs)
         ax.plot(Afs, r1, label="point 1")
         ax.plot(Afs, r2, label="point 2")
         ax.set(xlabel="A_f [deg]", title=f"a_p = {ap_:g} mm (Fig 5-{8 if ap_ == 1 else 9})")
-    axs[0].set_ylabel("distance from axis ('D_eff' of the thesis) [mm]")
+    axs[0].set_ylabel("thesis' 'D_eff' [mm]")
     axs[0].legend()
     return fig
 
@@ -107,17 +107,17 @@ def fig3_6_3_7_3_8_roughness_vs_cusp_height():
     import matplotlib.pyplot as plt
 
     parts, stats = ch3.parts(), ch3.statistics()
-    fig, axes = plt.subplots(1, 3, figsize=figsize(1.5, 0.8), sharey=True)
+    fig, axes = plt.subplots(3, 1, figsize=figsize(1.0, 1.9), sharey=True, layout="constrained")
     for ax, (group, fig_no) in zip(axes, [("turning", "3-6"), ("milling", "3-7"), ("both", "3-8")]):
         sub = parts if group == "both" else parts[parts.process == group]
         xs = np.linspace(0, sub.CH_um.max() * 1.05, 50)
         for resp, marker in [("Ra", "o"), ("Rz", "s")]:
             ax.plot(sub.CH_um, sub[f"{resp}_um"], marker, ls="", label=resp)
             b0, b1 = stats[f"linear.{group}.{resp}.intercept"], stats[f"linear.{group}.{resp}.slope"]
-            ax.plot(xs, b0 + b1 * xs, lw=0.8, label=f"{resp} = {b1:.4f}·CH + {b0:.4f}")
-        ax.set(title=f"{group} (Fig {fig_no})", xlabel="CH [µm]")
-        ax.legend(fontsize=6)
-    axes[0].set_ylabel("roughness [µm]")
+            ax.plot(xs, b0 + b1 * xs, lw=0.8, label=f"{resp} = {b1:.4f}·CH {b0:+.4f}")
+        ax.set(title=f"{group} (Fig {fig_no})", ylabel="roughness [µm]")
+        ax.legend(fontsize=6, loc="upper left", ncol=2)
+    axes[-1].set_xlabel("CH [µm]")
     return fig
 
 
@@ -148,11 +148,12 @@ def ch3_ideal_profile_share():
     fig, axes = plt.subplots(1, 2, figsize=figsize(1.35, 0.8))
     x, z = ideal_cusp_profile(parts.loc["T3", "spacing_mm"], parts.loc["T3", "RE_mm"], 1.0, n=4001)
     axes[0].plot(x, 1000 * z)
-    axes[0].set(xlabel="x [mm]", ylabel="z [µm]", title="Ideal profile of T3 (f = 0.2 mm, RE = 0.4 mm)")
+    axes[0].set(xlabel="x [mm]", ylabel="z [µm]", title="Ideal profile of T3\n(f = 0.2 mm, RE = 0.4 mm)")
     w, idx = 0.38, np.arange(len(ideal))
     axes[1].bar(idx - w / 2, ideal.Rz_share * 100, w, label="Rz ideal / measured")
     axes[1].bar(idx + w / 2, ideal.Ra_share * 100, w, label="Ra ideal / measured")
-    axes[1].set(xticks=idx, xticklabels=ideal.index, ylabel="explained by geometry [%]")
+    axes[1].set(xticks=idx, ylabel="explained by geometry [%]")
+    axes[1].set_xticklabels(ideal.index, rotation=90)
     axes[1].legend(fontsize=7)
     return fig
 
@@ -162,7 +163,7 @@ def ch3_ideal_profile_share():
 def fig4_1_cv_cx_sections():
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=figsize(1.15, 0.8))
+    fig, ax = plt.subplots(figsize=figsize(1.15, 0.95), layout="constrained")
     for kind in ("CV", "CX"):
         part = CylinderPart(kind)
         y, z = part.section()
@@ -172,7 +173,7 @@ def fig4_1_cv_cx_sections():
         centre = np.c_[MEASURING_POSITIONS_MM, part.z(yc) + 5.0 * part.normal(yc)[:, 2]]
         ax.plot(*centre.T, "o", ms=3, label=f"{kind} ball centres (radius {Rt:g} mm)")
     ax.set(xlabel="y [mm]", ylabel="z [mm]", aspect="equal", title="CV/CX sections (Fig 4-1, Table 4-2)")
-    ax.legend(fontsize=7, ncol=2)
+    fig.legend(loc="outside lower center", fontsize=7, ncol=2)
     return fig
 
 
@@ -218,14 +219,16 @@ def fig5_3_transformed_circle_tangent_points():
            "Mgherony (2024) Figs 5-10 ... 5-13: working radii of points 1, 2 and v_c over the surface normal angles")
 def fig5_10_5_13_deff_vc_maps():
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     n_rpm = ch4_5.parameters()["ch5_fig5_10"]["n_rpm"]          # §5.5: 3820 1/min
-    fig, axs = plt.subplots(2, 3, figsize=figsize(1.85, 1.6), layout="constrained")
-    for row, (ap_, Af_) in enumerate(((1.0, 30), (0.3, 60))):
+    fig, axs = plt.subplots(3, 2, figsize=figsize(1.3, 2.0), layout="constrained", sharex=True, sharey=True)
+    for col, (ap_, Af_) in enumerate(((1.0, 30), (0.3, 60))):
         AN1, AN2, r1, r2 = ch4_5.surface_map(ap_, Af_)
-        for col, (z, lab) in enumerate(((r1, "point 1 radius [mm]"), (r2, "point 2 radius [mm]"),
-                                        (np.pi * n_rpm * r1 / 1000, "point 1 v_c (radius-based) [m/min]"))):
-            cs = axs[row, col].contourf(AN1, AN2, z, 20)
-            fig.colorbar(cs, ax=axs[row, col])
-            axs[row, col].set(xlabel="A_N1 [deg]", ylabel="A_N2 [deg]", title=f"a_p={ap_:g}, A_f={Af_}°: {lab}")
+        for row, (z, lab) in enumerate(((r1, "point 1 radius [mm]"), (r2, "point 2 radius [mm]"),
+                                        (np.pi * n_rpm * r1 / 1000, "point 1 v_c [m/min]\n(radius-based)"))):
+            ax = axs[row, col]
+            fig.colorbar(ax.contourf(AN1, AN2, z, 20), ax=ax, label=lab, ticks=MaxNLocator(4))
+            ax.set(ylabel="A_N2 [deg]" if col == 0 else "", xlabel="A_N1 [deg]" if row == 2 else "")
+        axs[0, col].set_title(f"a_p = {ap_:g} mm, A_f = {Af_}°")
     return fig

@@ -62,7 +62,7 @@ def interactions_figure(df: pd.DataFrame | None = None, response: str = "D_eff1"
                 ax.plot(tab.index, tab[c], lw=1, label=f"{fl}={c:g}")
             ax.tick_params(labelsize="small")
             if i == 0:
-                ax.legend(fontsize="x-small")
+                ax.legend(fontsize="x-small", handlelength=1, borderaxespad=0.2, labelspacing=0.2)
     fig.suptitle(f"Interaction plot for {response} (Fig 6-3)")
     return fig
 
@@ -91,7 +91,7 @@ def statistics_bars_figure(table: pd.DataFrame):
     fig, ax = plt.subplots(figsize=figsize(1.35, 0.92))
     table.T.plot.bar(ax=ax, rot=0)
     ax.set(ylabel="value (mm or fraction)", title="Statistics of the differences (Fig 6-12)")
-    ax.legend(fontsize="small", ncol=5)
+    ax.legend(fontsize="small", ncol=2)
     return fig
 
 
@@ -99,31 +99,33 @@ def ann_diagnostics_figure(net, title: str):
     """Figs 6-4…6-9 for one network: 20-bin error histogram (both outputs, all samples, by subset),
     outputs vs targets per subset with R (plotregression), and the MSE curves with the best epoch."""
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import LogLocator, MaxNLocator
 
     df = ch6.dataset()
     X, Y = df[list(ch6.INPUTS)].to_numpy(), df[list(ch6.OUTPUTS)].to_numpy()
     P = net.predict(X)
     names = ("training", "validation", "test")
-    fig, grid = plt.subplots(2, 3, figsize=figsize(1.85, 1.45), layout="constrained")
-    fig.delaxes(grid[1, 2])
+    fig, grid = plt.subplots(2, 3, figsize=figsize(1.85, 1.7), layout="constrained")
     axes = grid.flat[:5]                                   # histogram, three regressions, MSE curves
     err = Y - P
     edges = np.histogram_bin_edges(err.ravel(), bins=20)
     axes[0].hist([err[idx].ravel() for idx in net.split], bins=edges, stacked=True, label=names)
     axes[0].axvline(0, color="orange")
-    axes[0].set(xlabel="error = target − output (mm)", ylabel="instances", title=f"{title}: error histogram")
-    axes[0].legend(fontsize="x-small")
+    axes[0].xaxis.set_major_locator(MaxNLocator(2))        # a narrow panel at column width
+    axes[0].set(xlabel="target − output (mm)", ylabel="instances", title=f"{title}: error histogram")
     for ax, name, idx in zip(axes[1:4], names, net.split):
         t, o = Y[idx].ravel(), P[idx].ravel()
         ax.plot(t, o, ".", ms=2)
         ax.plot([0, t.max()], [0, t.max()], "k--", lw=0.8)
-        ax.set(xlabel="target (mm)", ylabel="output (mm)", title=f"{name}: R = {np.corrcoef(t, o)[0, 1]:.5f}")
+        ax.set(xlabel="target (mm)", ylabel="output (mm)", title=f"{name}\nR = {np.corrcoef(t, o)[0, 1]:.5f}")
     h = net.history
     for col in ("train_mse", "val_mse", "test_mse"):
         axes[4].semilogy(h["epoch"], h[col], label=col.split("_")[0])
+    axes[4].yaxis.set_major_locator(LogLocator(base=100.0))     # every second decade: 4+ decades in a short panel
     axes[4].axvline(net.best_epoch, color="grey", ls=":")
-    axes[4].set(xlabel="epoch", ylabel="MSE (scaled)", title=f"best validation at epoch {net.best_epoch}")
-    axes[4].legend(fontsize="x-small")
+    axes[4].set(xlabel="epoch", ylabel="MSE (scaled)", title=f"best validation\nat epoch {net.best_epoch}")
+    grid[1, 2].set_axis_off()                              # one legend for both: same subsets, same colours
+    grid[1, 2].legend(*axes[0].get_legend_handles_labels(), title="subset", loc="center")
     return fig
 
 

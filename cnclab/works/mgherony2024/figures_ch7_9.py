@@ -71,11 +71,11 @@ def fig7_16_7_18_controlled():
     vc_file = np.pi * s0.d_eff * back.spindle[fb] / 1000                # m/min
     fig, axs = plt.subplots(1, 3, figsize=figsize(2, 0.85), layout="constrained")
     axs[0].plot(back.feed[fb], lw=0.5)
-    axs[0].set(title="Fig 7-16: v_f in the file", ylabel="mm/min")
+    axs[0].set(title="Fig 7-16\nv_f in the file", ylabel="mm/min")
     axs[1].plot(back.spindle[fb], lw=0.5)
-    axs[1].set(title="Fig 7-17: n in the file", ylabel="rpm")
+    axs[1].set(title="Fig 7-17\nn in the file", ylabel="rpm")
     axs[2].scatter(s0.A_N2, vc_file, s=1)
-    axs[2].set(title="Fig 7-18: resulting v_c", xlabel="A_N2 [deg]", ylabel="m/min", ylim=(55, 70))
+    axs[2].set(title="Fig 7-18\nresulting v_c", xlabel="A_N2 [deg]", ylabel="m/min", ylim=(55, 70))
     return fig
 
 
@@ -135,11 +135,11 @@ def fig9_5_9_6_points_original_path():
     _, dense, _ = ch7_9.reorder_cases()
     fig, axs = plt.subplots(1, 3, figsize=figsize(2.15, 1.1))
     axs[0].scatter(P0[:, 0], P0[:, 1], s=0.5)
-    axs[0].set(title="Fig 9-5a: original points")
+    axs[0].set(title="Fig 9-5a\noriginal points")
     axs[1].scatter(dense[:, 0], dense[:, 1], s=0.2)
-    axs[1].set(title="Fig 9-5b: extended point cloud")
+    axs[1].set(title="Fig 9-5b\nextended point cloud")
     axs[2].plot(dense[:, 0], dense[:, 1], lw=0.3)
-    axs[2].set(title="Fig 9-6: original path")
+    axs[2].set(title="Fig 9-6\noriginal path")
     for a in axs:
         a.set(xlabel="x [mm]", ylabel="y [mm]", aspect="equal")
     return fig
@@ -151,8 +151,8 @@ def fig9_7_reordered_paths():
     import matplotlib.pyplot as plt
 
     cases, dense, orders = ch7_9.reorder_cases()
-    fig, axs = plt.subplots(1, 4, figsize=figsize(2.65, 1.1))
-    for ax, case in zip(axs, (1, 3, 2, 4)):
+    fig, axs = plt.subplots(2, 2, figsize=figsize(1.3, 1.9), sharex=True, sharey=True, layout="constrained")
+    for ax, case in zip(axs.flat, (1, 3, 2, 4)):
         r = orders[case]
         Q = dense[r.order]
         ax.plot(Q[:, 0], Q[:, 1], lw=0.3)
@@ -181,11 +181,13 @@ def fig9_8_distance_jumps():
            "Mgherony (2024) Fig 9-8b: jump points under each reading of the §9 neighbour and D_eff rules")
 def fig9_8b_jumps_per_reading():
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     readings = ch7_9.reorder_readings()
     fig, ax = plt.subplots(figsize=figsize(1.65, 0.85))
     piv = readings.pivot_table(index="reading", columns="k", values="jumps", sort=False)
     piv.plot.barh(ax=ax, logx=True)
+    ax.xaxis.set_minor_formatter(NullFormatter())          # decade labels only: minor ones crowd a column
     ax.set(xlabel="jumps (mean of the two start points)", ylabel="")
     return fig
 
