@@ -34,9 +34,11 @@ $(STAMP): environment.txt pyproject.toml
 reproduce: $(STAMP)
 	$(if $(FORCE),CNCLAB_NO_CACHE=1 )$(PY) -m cnclab reproduce --jobs $(or $(REPRO_JOBS),$(JOBS)) $(if $(FORCE),--force)
 
+# --dist loadgroup: tests marked @pytest.mark.xdist_group(name) run in one worker (they share a plan
+# or a fixture); every other test is handed out one at a time, longest first (tests/conftest.py)
 test: $(STAMP)
 	$(PY) -m cnclab warm
-	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --durations=15 tests
+	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --dist loadgroup --durations=15 tests
 
 # JupyterLab on the collection, opened at the index notebook (Ctrl-C twice to stop)
 lab: $(STAMP)

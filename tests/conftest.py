@@ -1,6 +1,9 @@
+import copy
 import os
+import pickle
 
 import matplotlib
+import pytest
 
 matplotlib.use("Agg")
 
@@ -45,3 +48,30 @@ def pytest_collection_modifyitems(session, config, items):
         return next((i for i, s in enumerate(_SLOW_FIRST) if s in item.nodeid), len(_SLOW_FIRST))
 
     items.sort(key=rank)   # stable: the rest keeps its order
+
+
+#: one-level plans by (strategy, one-level job, resolution, options), pickled, for the whole session
+_LEVEL_PLANS: dict = {}
+
+
+def _memo_planner(name, f):
+    def planner(job, resolution_mm, **options):
+        key = pickle.dumps((name, job, resolution_mm, sorted(options.items())))
+        if key not in _LEVEL_PLANS:
+            _LEVEL_PLANS[key] = f(job, resolution_mm, **options)
+        return copy.deepcopy(_LEVEL_PLANS[key])
+    return planner
+
+
+@pytest.fixture
+def memo_levels(monkeypatch):
+    """During the test, every registered one-level planner (what :func:`cnclab.toolpath.planners.plan`
+    runs per level) answers a job it has planned before in this session with a deep copy of that
+    plan. The key is the pickled (strategy, job, resolution, options): a job differing in any field is
+    planned anew. The planners are deterministic (golden-digest tests), so a test sees the path it
+    would have planned; plan() still joins the levels, checks gouges and uncut area, and the test
+    still writes and checks its own program. Refusals (exceptions) are not memoised."""
+    from cnclab.toolpath.planners import STRATEGIES
+
+    for name, (f, desc) in list(STRATEGIES.items()):
+        monkeypatch.setitem(STRATEGIES, name, (_memo_planner(name, f), desc))

@@ -45,9 +45,13 @@ CASES = [(n, m, h, i) for n in sorted(STRATEGIES) for m in (1, 2, 2.5) for h in 
          if not (n in SLOW and m == 2)]
 
 
-@pytest.mark.parametrize("name, mult, hole, island", CASES,
+# the a_p job of a cell is field for field the first level plan() makes of its 2 a_p job: with the
+# memo_levels fixture (tests/conftest.py) that level is planned once per strategy, and one xdist group
+# per strategy (make test: --dist loadgroup) keeps a strategy's cells in one worker
+@pytest.mark.parametrize("name, mult, hole, island",
+                         [pytest.param(*c, marks=pytest.mark.xdist_group(f"deep-{c[0]}")) for c in CASES],
                          ids=[f"{n}-{m}-{'hole' if h else 'no-hole'}-{'island' if i else 'plain'}" for n, m, h, i in CASES])
-def test_every_strategy_plans_every_depth_safely(name, mult, hole, island, tmp_path):
+def test_every_strategy_plans_every_depth_safely(name, mult, hole, island, tmp_path, memo_levels):
     job = _job(mult, hole, island)
     try:
         p = plan(job, name, resolution_mm=RES)

@@ -260,8 +260,10 @@ def _grbl_problems(text: str) -> list:
     return bad
 
 
-@pytest.mark.parametrize("dialect", ["linuxcnc", "grbl"])
-def test_plan_from_the_done_when_dxf_writes_a_safe_program(tmp_path, capsys, dialect):
+# one xdist group: the second dialect's `plan` answers its (identical) job from memo_levels
+@pytest.mark.parametrize("dialect", [pytest.param(d, marks=pytest.mark.xdist_group("done-when-dxf"))
+                                     for d in ("linuxcnc", "grbl")])
+def test_plan_from_the_done_when_dxf_writes_a_safe_program(tmp_path, capsys, dialect, memo_levels):
     """Issue 24's done-when drawing: bulged outline, CIRCLE island, LINE/ARC island, on layer POCKET
     among annotation layers -> `plan` writes, in both dialects, a program that passes the static safety
     check; GRBL's uses only GRBL 1.1 words. Read back and cut through a simulated stock of the
