@@ -199,7 +199,6 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/toolpath/adaptive/links.py", "bow_runs"): (14, _ADAPTIVE),
     ("lines", "cnclab/toolpath/adaptive/control.py", "pass_kernel"): (133, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/control.py", "pass_kernel"): (26, _ADAPTIVE),
-    ("params", "cnclab/toolpath/adaptive/grid.py", "Grid.run_pass"): (15, "the pass kernel's settings passed through; to take the planner's parameters object"),
     ("lines", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (127, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (20, _ADAPTIVE),
     ("lines", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (185, "the old clearing planner, to be retired (issue 29 item 1)"),

@@ -87,9 +87,8 @@ def finish_part(lv, part):
             snap = lv.g.snapshot()
             M_before = snap[0]
             n_before = int(np.count_nonzero(M_before))
-            P, _, _, E, _ = lv.g.run_pass(Rl[0, 0], Rl[0, 1], hd, lv.target_finish, lv.ds, lv.lag,
-                                       int(2 * L_ring / lv.ds) + 100, lv.n_samp, 1e18, lv.turn,
-                                       min(lv.turn, lv.ds / lv.turn_radius), 1.02 * L_ring + lv.ds, lv.guard_finish)
+            P, _, _, E, _ = lv.g.run_pass(Rl[0], hd, lv.target_finish, lv.pass_step, int(2 * L_ring / lv.ds) + 100, 1e18,
+                                          min(lv.turn, lv.ds / lv.turn_radius), 1.02 * L_ring + lv.ds, lv.guard_finish)
             # points the grid kept within 2 h of the wall go onto the exact wall
             # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
             band = lv.prm.finish_snap_band_h * lv.h

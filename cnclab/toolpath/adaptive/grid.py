@@ -5,12 +5,24 @@ package docstring). Units: mm.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from .control import GUARD_LEVEL, pass_kernel, replay
 from .links import dijkstra
 from .stock import coarse_any, cut_disc, cut_path, dist_window, max_filter, raster
+
+
+class PassStep(NamedTuple):
+    """How a pass steps (:func:`pass_kernel`'s settings that stay fixed for a plan): ``ds`` step (mm),
+    ``lag`` the look-back of the engagement sampling (mm), ``n_samp`` samples on the arc, ``turn``
+    the largest heading change a step (rad)."""
+
+    ds: float
+    lag: float
+    n_samp: int
+    turn: float
 
 
 class Grid:
@@ -86,12 +98,14 @@ class Grid:
         """Copies of the stocks, for :meth:`restore`."""
         return self.M.copy(), self.Mr.copy()
 
-    def run_pass(self, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
+    def run_pass(self, start, heading, target, step: PassStep, max_steps, air_stop, turn_right, max_len,
                  guard, air_eng=0.0, check_rapids=False):
-        """:func:`pass_kernel` on these stocks (every argument given: numba's fast dispatch); ``check_rapids``:
-        mark the air steps whose chord is clear on the rapid stock."""
+        """:func:`pass_kernel` on these stocks from ``start`` (x, y) mm (every argument given: numba's
+        fast dispatch); ``step``: the plan's :class:`PassStep`; ``check_rapids``: mark the air steps
+        whose chord is clear on the rapid stock."""
+        ds, lag, n_samp, turn = step
         P, removed, reason, E, F = pass_kernel(self.M, self.A, float(self.x0), float(self.y0), float(self.h), float(self.r),
-                                         float(sx), float(sy), float(heading), float(target), float(ds), float(lag),
+                                         float(start[0]), float(start[1]), float(heading), float(target), float(ds), float(lag),
                                          int(max_steps), int(n_samp), float(air_stop), float(turn), float(turn_right),
                                          float(max_len), float(guard), float(GUARD_LEVEL), self.free_field()[0],
                                          float(self.hc), self.Mr, float(self.r_rapid),

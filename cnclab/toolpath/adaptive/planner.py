@@ -15,7 +15,7 @@ from shapely.geometry.polygon import orient
 from ..path import KINDS, ToolPath, ToolPathBuilder, resample_polyline
 from . import entries, finish, narrow
 from .entries import PlanningError
-from .grid import Grid
+from .grid import Grid, PassStep
 from .params import AdaptiveParams
 from .links import rapid_legs, shortcut
 from .stock import capsule_free, component_discs, label8, segment_inside
@@ -54,8 +54,9 @@ class _Level:
 
     def clearing_pass(self, heading, a_stop):
         """A clearing pass from the tool's point (:meth:`Grid.run_pass`) with ``a_stop`` mm of air."""
-        return self.g.run_pass(self.cur[0], self.cur[1], heading, self.target, self.ds, self.lag, self.prm.pass_max_steps, self.n_samp, a_stop, self.turn,
-                          min(self.turn, self.ds / self.turn_radius), 1e18, self.guard_pass, self.air_rad, self.rapid_links)
+        return self.g.run_pass(self.cur, heading, self.target, self.pass_step, self.prm.pass_max_steps, a_stop,
+                               min(self.turn, self.ds / self.turn_radius), 1e18, self.guard_pass, self.air_rad,
+                               self.rapid_links)
 
     def link_to(self, r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None):
         """Link at depth through free cells to the nearest goal cell (:meth:`Grid.route`); its
@@ -346,6 +347,7 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
     lag = 2.0 * math.sqrt(2.0 * r * h) + 2.0 * h
     n_samp = prm.n_samples
     turn = math.radians(prm.max_turn_deg)
+    pass_step = PassStep(ds, lag, n_samp, turn)
     turn_radius = prm.turn_radius_frac * r    # the tightest right turn (the curvature limit of the passes), mm
     air_stop = prm.air_stop_frac * r          # a pass ends after so much air (its air tail is dropped)
     spindle = np.nan if spindle_rpm is None else float(spindle_rpm)
