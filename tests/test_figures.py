@@ -78,14 +78,21 @@ def test_every_recipe_renders_an_85_mm_pdf(name, tmp_path):
     # what `python -m cnclab figure NAME --width-mm 85 --format pdf` does (cnclab.figures.render), with
     # the figure kept open to look at its axes; fast mode: the recipes compute with the notebooks'
     # fast settings and read the works' disk caches (build/cache) that the notebooks fill
+    import warnings
+
     fig = figures.draw(name)
     try:
         drawn = [ax for ax in fig.axes if ax.has_data()]
         assert drawn, "no axes with data"
         assert all(ax.get_xlim()[0] < ax.get_xlim()[1] for ax in drawn)
-        [pdf] = plotting.export_figure(fig, name, tmp_path, width_mm=85, formats=("pdf",))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            [pdf] = plotting.export_figure(fig, name, tmp_path, width_mm=85, formats=("pdf",))
     finally:
         plt.close(fig)
+    # matplotlib's only sign that a figure does not fit the page: its constrained layout gave up
+    collapsed = [str(w.message) for w in caught if "constrained_layout not applied" in str(w.message)]
+    assert not collapsed, f"{name} does not fit 85 mm: {collapsed[0]}"
     assert abs(plotting.pdf_page_size_pt(pdf)[0] - 85 * PT_PER_MM) < TOL_PT     # 240.94 pt
 
 

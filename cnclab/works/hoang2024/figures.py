@@ -23,18 +23,18 @@ def table2_fr_printed_vs_consistent():
     import matplotlib.pyplot as plt
 
     printed, re = cv.table2_printed(), cv.table2_recomputed()
-    fig, axs = plt.subplots(1, 2, figsize=figsize(1.5, 0.9))
+    fig, axs = plt.subplots(1, 2, figsize=figsize(1.5, 1.2), layout="constrained")
     x = np.arange(1, 9)
     axs[0].semilogy(x, printed.Fr_mm, "o-", label="printed F_r (slip)")
     axs[0].semilogy(x, re.Fr_consistent, "s-", label="unit-consistent F_r, eq. 7")
     axs[0].semilogy(x, re.Fr_v2, "^--", label="F_r from V2, eq. 4")
     axs[0].set(xlabel="Table 2 row", ylabel="forward step F_r [mm]")
-    axs[0].legend(fontsize=7)
     th, R = re.theta_rad.to_numpy(), re.RT.to_numpy()
     axs[1].bar(x - 0.2, 0.5 * R**2 * (3.14 * th / 180 - np.sin(th)), 0.4, label="V_RT with slip")
     axs[1].bar(x + 0.2, sv.curvature_volume(th, R), 0.4, label="V_RT consistent")
     axs[1].set(xlabel="Table 2 row", ylabel="V_RT [mm²]")
-    axs[1].legend(fontsize=7)
+    handles, labels = (sum(x, []) for x in zip(*(ax.get_legend_handles_labels() for ax in axs)))
+    fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=7, columnspacing=0.8)
     return fig
 
 
@@ -66,9 +66,10 @@ def uncut_volume_formulas_vs_heightfield():
 
     tab = cv.uncut_volume_table(uncut_resolution_mm())
     fig, ax = plt.subplots(figsize=figsize(1, 0.9))
+    ax.set_title("cell: S_z × F_r", fontsize=8)
     x = np.arange(1, 9)
     for col, m in (("V1", "o"), ("V1_star", "s"), ("V2", "^"), ("heightfield_sweep", "x"), ("heightfield_discrete", "d")):
         ax.semilogy(x, tab[col], m + "-", label=col)
-    ax.set(xlabel="Table 2 row (printed F_r)", ylabel="uncut volume per S_z×F_r cell [mm³]")
+    ax.set(xlabel="Table 2 row (printed F_r)", ylabel="uncut volume per cell [mm³]")
     ax.legend(fontsize=7)
     return fig

@@ -228,16 +228,17 @@ def distribution_figure(df: pd.DataFrame):
 
     R = ratio_columns(df)
     fams = sorted(R["family"].unique())
-    fig, axs = plt.subplots(2, 3, figsize=figsize(2.5, 2))
+    # three rows of two, the families labelled once under the bottom row: legible at a column width of 85 mm
+    fig, axs = plt.subplots(3, 2, figsize=figsize(1.5, 2.2), sharex=True, layout="constrained")
     for ax, (col, target, yscale) in zip(axs.flat, PANELS):
         for i, f in enumerate(fams):
             v = R.loc[R["family"] == f, col].dropna()
-            ax.plot(i + np.linspace(-0.2, 0.2, len(v)) if len(v) > 1 else [i] * len(v), v, "o", ms=4, alpha=0.8)
+            ax.plot(i + np.linspace(-0.2, 0.2, len(v)) if len(v) > 1 else [i] * len(v), v, "o", ms=3, alpha=0.8)
         ax.axhline(target, ls="--", color="k", lw=0.8)
-        ax.set_xticks(range(len(fams)), fams, rotation=60, ha="right", fontsize=8)
-        ax.set_title(col, fontsize=10)
+        ax.set_title(col)
         ax.set_yscale(yscale, **({"linthresh": 1.0} if yscale == "symlog" else {}))
-    fig.tight_layout()
+    for ax in axs[-1]:
+        ax.set_xticks(range(len(fams)), fams, rotation=60, ha="right", fontsize=7)
     return fig
 
 

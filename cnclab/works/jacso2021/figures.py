@@ -34,6 +34,16 @@ def _plt():
     return plt
 
 
+def _log_x_ticks(ax, values):
+    """Log x axis labelled at the study's own values (the minor labels of a one-decade range overlap
+    at a column width of 85 mm); y: decades only."""
+    from matplotlib.ticker import NullFormatter
+
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.set_xticks(list(values), [f"{v:g}" for v in values])
+
+
 # ------------------------------------------------------------------------------ Thesis I
 @_register("fig3-1_engagement_vs_stepover", "jacso2021",
            "Jacsó (2021) Fig 3-1: engagement angle against stepover, straight and on arcs (r = 3 mm)")
@@ -90,6 +100,7 @@ def thesis3_convergence_arc():
         k = np.polyfit(np.log(dts), np.log(e), 1)[0]
         ax.loglog(dts, e, "o-", label=f"{m}: slope {k:.2f}")
     ax.set(xlabel="Δt [mm]", ylabel="max radial error [mm]")
+    _log_x_ticks(ax, dts[::2])
     ax.legend()
     return fig
 
@@ -100,13 +111,16 @@ def thesis3_convergence_ellipse_spline():
     plt = _plt()
     contours = {"ellipse 12×8": (Ellipse((0, 0), 12, 8), 3.0), "spline": (thesis3_spline(), 20.0)}
     dts = np.array([0.08, 0.04, 0.02, 0.01])
-    fig, axs = plt.subplots(1, 2, figsize=figsize(1.65, 1.05))
+    fig, axs = plt.subplots(1, 2, figsize=figsize(1.65, 1.05), layout="constrained")
     for ax, (name, (c, t_end)) in zip(axs, contours.items()):
         table, orders = ce.convergence_study(c, R_TOOL, THETA, dts, t_end=t_end)
         for m, g in table.groupby("method", sort=False):
-            ax.loglog(g.dt, g.max_err_mm, "o-", label=f"{m}: observed order {orders[m]:.2f}")
-        ax.set(title=name, xlabel="Δt [mm]", ylabel="max |P_i − p(t_i)| [mm]")
-        ax.legend()
+            ax.loglog(g.dt, g.max_err_mm, "o-", label=m)
+        ax.set_title(f"{name}\norders {orders['euler']:.2f} / {orders['midpoint']:.2f}", fontsize=8)
+        ax.set_xlabel("Δt [mm]")
+        _log_x_ticks(ax, dts[::2])
+    axs[0].set_ylabel("max |P_i − p(t_i)| [mm]", fontsize=8)
+    axs[0].legend(fontsize=7, loc="lower right")
     return fig
 
 
@@ -133,6 +147,7 @@ def thesis3_simulated_deviation_vs_dt(dev=None):
         ax.loglog(df.dt, df.max_dev_deg, "o-", label=f"{m}: max")
         ax.loglog(df.dt, df.p95_dev_deg, "x:", label=f"{m}: p95")
     ax.set(xlabel="Δt [mm]", ylabel="|engagement − θ| [deg]")
+    _log_x_ticks(ax, next(iter(dev.values())).dt)
     ax.legend(fontsize=7)
     return fig
 
@@ -153,7 +168,7 @@ def multi_pass_laps(n_passes=None):
 def multi_pass_engagement(laps=None, final=None):
     if laps is None or final is None:
         laps, final = multi_pass_laps()
-    fig, (a1, a2) = _plt().subplots(1, 2, figsize=figsize(1.65, 1.05))
+    fig, (a1, a2) = _plt().subplots(1, 2, figsize=figsize(1.65, 1.3), layout="constrained")
     for i, lap in enumerate(laps):
         a1.plot(*lap["path"].T, lw=0.8, label=f"lap {i + 1}")
         a2.plot(lap["table"].s, lap["table"].engagement_deg, lw=0.6, label=f"lap {i + 1}")
@@ -181,6 +196,7 @@ def dixel_pixel_engagement_error_vs_h(acc=None):
     for (m, fd), row in worst.iterrows():
         ax.loglog(row.index, row.values, "o-" if fd == "central" else "x:", label=f"{m}, {fd}")
     ax.set(xlabel="resolution h [mm]", ylabel="max |error| over the 3 cases [deg]")
+    _log_x_ticks(ax, worst.columns)
     ax.legend(fontsize=7)
     return fig
 
@@ -247,18 +263,18 @@ def thesis4_patterns_engagement(cmp=None, resolution_mm=None):
     pats = {"circular": tr.circular_trochoid(cmp.loc["circular", "step_mm"], 12, 3, 5, ds=res),
             "cycloid": tr.cycloid(cmp.loc["cycloid", "step_mm"], 12, 3, 5, ds=res),
             "constant-engagement": tr.ce_trochoid(12, 3, c.theta_plan_deg, 5, res, iteration=it_ce, theta_max_deg=60)}
-    fig, axs = _plt().subplots(2, 3, figsize=figsize(1.65, 1.3))
+    fig, axs = _plt().subplots(2, 3, figsize=figsize(1.65, 1.3), layout="constrained")
     for j, (name, p) in enumerate(pats.items()):
         df, _ = tr.evaluate_pattern(p, 12, 3, res)
         axs[0, j].plot(p.xyz[:, 0], p.xyz[:, 1], lw=0.7)
-        axs[0, j].set(aspect="equal", title=name)
+        axs[0, j].set(aspect="equal", title=name.replace("constant-engagement", "const. eng."))
         sel = df[df.period == 3]
         for kind, g in sel.groupby("kind"):
             axs[1, j].plot(g.s - sel.s.iloc[0], g.engagement_deg, ".", ms=1.5, label=kind)
         axs[1, j].axhline(60, c="r", lw=0.5)
-        axs[1, j].set_xlabel("path length in period 3 (mm)")
-        axs[1, j].legend(fontsize=6)
     axs[1, 0].set_ylabel("engagement (deg)")
+    fig.legend(*axs[1, -1].get_legend_handles_labels(), loc="outside right center", fontsize=7, markerscale=3)
+    fig.supxlabel("path length in period 3 (mm)", fontsize=9)
     return fig
 
 
@@ -290,7 +306,7 @@ def fig4_1_star_hybrid_path():
            "Jacsó (2021) Fig 4-1: engagement, MRR and feed along the star's hybrid path with feed control")
 def fig4_1_star_engagement_mrr():
     T = t4.star_strategies()[1]["hybrid"][1]
-    fig, axs = _plt().subplots(3, 1, figsize=figsize(1.5, 1.6), sharex=True)
+    fig, axs = _plt().subplots(3, 1, figsize=figsize(1.5, 2.2), sharex=True, layout="constrained")
     for kind, col in _KIND_COLOURS[:3]:
         m = T.kind == kind
         axs[0].plot(T.s[m], T.engagement_deg[m], ".", ms=0.6, c=col, label=kind)
@@ -298,27 +314,33 @@ def fig4_1_star_engagement_mrr():
         axs[2].plot(T.s[m], T.feed_mm_min[m], ".", ms=0.6, c=col)
     axs[0].axhline(60, c="k", lw=0.5)
     axs[0].set_ylabel("θ (deg)")
-    axs[0].legend(markerscale=10, fontsize=7)
+    fig.legend(*axs[0].get_legend_handles_labels(), loc="outside upper center", ncol=3, markerscale=10, fontsize=7)
     axs[1].axhline(t4.mrr_nominal(), c="k", lw=0.5)
-    axs[1].set(ylim=(0, 3000), ylabel="MRR (mm³/min)")
-    axs[2].set(ylabel="v_f (mm/min)", xlabel="path length (mm)")
+    axs[1].set(ylim=(0, 3000), ylabel="MRR\n(mm³/min)")
+    axs[2].set(ylabel="v_f\n(mm/min)", xlabel="path length (mm)")
+    fig.align_ylabels(axs)
     return fig
 
 
 @_register("s4_user_pockets_hybrid_path", "jacso2021",
            "Jacsó (2021) §4 method on user pockets (rectangle, L-shape): hybrid paths, samples above θ + 5°")
 def s4_user_pockets_hybrid_path():
+    from matplotlib.lines import Line2D
+
     summ, runs = t4.user_pockets()
-    fig, axs = _plt().subplots(1, len(runs), figsize=figsize(1.5, 1.2))
+    fig, axs = _plt().subplots(1, len(runs), figsize=figsize(1.5, 1.2), layout="constrained")
     for ax, (case, (uj, up, UT)) in zip(axs, runs.items()):
         ax.plot(*uj.polygon.exterior.xy, "k", lw=1)
         _kinds(ax, UT, _KIND_COLOURS, 0.5)
         hot = (UT.engagement_deg > uj.theta_deg + 5).to_numpy() & (UT.kind != "link").to_numpy()
         ax.plot(UT.x[hot], UT.y[hot], "x", ms=3, c="m", label=f"θ > {uj.theta_deg + 5:g}°")
-        ax.set_title(f"{case}, max_wall_share {up.info['max_wall_share']}\n"
+        ax.set_title(f"{case}\nwall share {up.info['max_wall_share']}, "
                      f"max {summ.loc[case, 'engagement_max_deg']:.0f}°", fontsize=8)
         ax.set_aspect("equal")
-    fig.legend(*axs[0].get_legend_handles_labels(), loc="lower center", ncol=5, markerscale=6, fontsize=7)
+    handles = [Line2D([], [], ls="", marker=ln.get_marker(), c=ln.get_color(), ms=4 if ln.get_marker() == "." else 3)
+               for ln in axs[0].get_legend_handles_labels()[0]]
+    fig.legend(handles, axs[0].get_legend_handles_labels()[1], loc="outside lower center", ncol=5, fontsize=7,
+               columnspacing=0.8, handletextpad=0.1)
     return fig
 
 
@@ -343,25 +365,28 @@ def freecad_runs(names=None) -> dict:
 def adaptive_vs_freecad_paths(keep=None):
     keep = freecad_runs() if keep is None else keep
     shown = [n for n in SHOWN_POCKETS if n in keep]
-    fig, axs = _plt().subplots(len(shown), 2, figsize=figsize(2, 1.1 * len(shown)), squeeze=False)
-    for row, name in zip(axs, shown):
+    fig, axs = _plt().subplots(len(shown), 2, figsize=figsize(2, 1.1 * len(shown)), squeeze=False,
+                               layout="constrained")
+    for k, (row, name) in enumerate(zip(axs, shown)):
         jb, sc = fx.job(name), None
-        for ax, who in zip(row, ["adaptive_clearing", fx.FREECAD]):
+        for ax, who, short in zip(row, ["adaptive_clearing", fx.FREECAD], ["ours (adaptive)", "FreeCAD Adaptive"]):
             for g in getattr(jb.polygon, "geoms", [jb.polygon]):
                 ax.fill(*g.exterior.xy, color="0.92")
                 for i in g.interiors:
                     ax.fill(*i.xy, color="white")
-            ax.set(aspect="equal", title=f"{name}: {who}", xlabel="x [mm]")
+            ax.set(aspect="equal", title=short if k == 0 else "")
             if who not in keep[name]:
-                ax.set_title(f"{name}: {who} wrote no program")
+                ax.set_title(f"{short}: no program")
                 continue
             t = keep[name][who][1].trace
             c = t["cutting"]
             sc = ax.scatter(t["x"][c], t["y"][c], c=t["engagement_deg"][c], s=0.3, cmap="turbo",
                             vmin=jb.theta_deg - 30, vmax=jb.theta_deg + 30, rasterized=True)  # pixels in PDF/SVG
             ax.plot(*fx.gouge_points(keep[name][who][1], jb, 0.05), "kx", ms=3)
+        row[0].set_ylabel(f"{name}\ny [mm]")
         if sc is not None:
-            fig.colorbar(sc, ax=row, label="engagement [deg]")
+            fig.colorbar(sc, ax=row, label="engagement [°]")
+    fig.supxlabel("x [mm]", fontsize=9)
     return fig
 
 

@@ -63,13 +63,14 @@ def fig10_11_original_vs_modified():
 def fig13_spindle_current_assumed():
     import matplotlib.pyplot as plt
 
-    fig, axs = plt.subplots(2, 1, figsize=figsize(1.65, 1.45), sharey=True)
+    fig, axs = plt.subplots(2, 1, figsize=figsize(1.65, 1.45), sharey=True, layout="constrained")
     for ax, which in zip(axs, ("original", "modified")):
         d = ky.mrr_trace(which, "pixel")
         ax.plot(d.s, cm.spindle_current(d.mrr_mm3_min.rolling(3, center=True).mean()), lw=0.5)
-        ax.set(ylabel="I_M [A] (assumed eq. 6)", title=which)
+        ax.set(title=which)
         ax.axhline(float(cm.spindle_current(ky.nominal_mrr())), color="k", ls=":", lw=0.8)
     axs[1].set_xlabel("cutting path length s [mm]")
+    fig.supylabel("I_M [A] (assumed eq. 6)", fontsize=9)
     return fig
 
 
@@ -79,7 +80,7 @@ def ce_vs_cmrr_paths():
     import matplotlib.pyplot as plt
 
     theta = cx.theta_deg()
-    fig, axs = plt.subplots(2, 2, figsize=figsize(2.15, 2.2))
+    fig, axs = plt.subplots(2, 2, figsize=figsize(2.15, 2.2), sharex=True, sharey=True, layout="constrained")
     for ax, w in zip(axs.flat, cx.PATHS):
         _pocket(ax)
         path = cx.path(w)
@@ -89,7 +90,9 @@ def ce_vs_cmrr_paths():
         T = cx.trace_table(w)
         hi = T[T.cutting & (T.engagement_deg > theta + 5)]
         ax.plot(hi.x, hi.y, "r.", ms=0.8)
-        ax.set(aspect="equal", title=f"{w} (red: engagement > θ+5°)", xlabel="x [mm]")
+        ax.set(aspect="equal", title=w)
+    fig.suptitle("red: engagement > θ + 5°", fontsize=9)
+    fig.supxlabel("x [mm]", fontsize=9)
     return fig
 
 
@@ -99,7 +102,8 @@ def ce_vs_cmrr_traces():
     import matplotlib.pyplot as plt
 
     theta = cx.theta_deg()
-    fig, axs = plt.subplots(len(cx.PATHS), 2, figsize=figsize(2.15, 2.65), sharex="row", sharey="col")
+    fig, axs = plt.subplots(len(cx.PATHS), 2, figsize=figsize(2.15, 2.65), sharex="row", sharey="col",
+                            layout="constrained")
     for row, w in zip(axs, cx.PATHS):
         T = cx.trace_table(w)
         C = T[T.cutting]
@@ -108,8 +112,9 @@ def ce_vs_cmrr_traces():
         row[0].axhline(theta + 5, color="r", ls=":", lw=0.8)
         row[1].plot(s, C.mrr_mm3_min.rolling(10, center=True).mean() / ky.nominal_mrr(), lw=0.4)
         row[1].axhline(1.0, color="k", ls=":", lw=0.8)
-        row[0].set(ylabel=f"{w}\nengagement [deg]")
-        row[1].set(ylabel="MRR / nominal (10-step mean)")
-    for ax in axs[-1]:
-        ax.set_xlabel("cutting length [mm]")
+        row[0].text(0.01, 0.97, w, transform=row[0].transAxes, va="top", fontsize=7,
+                    bbox=dict(fc="white", ec="none", pad=0.5, alpha=0.8))
+    axs[0, 0].set_title("engagement [deg]")
+    axs[0, 1].set_title("MRR / nominal")
+    fig.supxlabel("cutting length [mm]", fontsize=9)
     return fig
