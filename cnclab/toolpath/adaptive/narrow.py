@@ -88,6 +88,10 @@ SPUR_SLOPE = 0.4
 #: a step of the straight-slot period removing at most this (mm^2 per mm of path) is a return
 #: through air (a link at the link feed)
 AIR_MM2_PER_MM = 1e-3
+#: a width class whose admissible step is below this x r ends the trochoid (Thesis IV's pattern in a
+#: slot barely wider than the tool crawls: 0.03 mm steps measured at c = 0.2 r, theta 101.5 deg);
+#: the rest of the axis is left to the level planner
+MIN_STEP_FRAC = 0.05
 #: free cells tried (nearest first) for the start of a trochoid at a mouth onto cleared area
 MOUTH_CANDIDATES = 200
 #: boundary sampling of the Voronoi medial axis, x the planning pixel h (and at most r / 8)
@@ -358,6 +362,8 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
         P0, kinds0, F0, step = trochoid_period(round(2.0 * (cc + r), 3), float(r), float(theta_deg), float(h),
                                                round(float(vmax_ratio), 3))
         x_ext = float(P0[:, 0].max())
+        if step < MIN_STEP_FRAC * r:
+            break           # too slow a crawl: the rest of the axis is left to the level planner
         if x0 is None:
             x0 = hole_mm + step - x_ext
         stop = s_end if b >= region.length - 1e-9 else b
@@ -378,6 +384,8 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
             # the period's own return already ends at the next period's start: drop the duplicate
             X[-1], Y[-1], K[-1], F[-1] = X[-1][:-1], Y[-1][:-1], K[-1][:-1], F[-1][:-1]
             x0 += step
+    if not X:
+        return np.zeros((0, 2)), np.zeros(0, dtype=object), np.zeros(0), steps, 0
     X, Y, K, F = np.concatenate(X), np.concatenate(Y), np.concatenate(K), np.concatenate(F)
     # behind the axis start lies the entry's round hole (radius c + r about the start, see
     # :func:`cut_region`), then material (the dead end's corners, or the wide area at a mouth): the
@@ -456,7 +464,8 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
     ``from_cleared``: the tool stands at the axis start, reached through cleared area (the level
     planner's link), and the trochoid starts there; else it retracts, enters by a helix at the axis
     start (into material) and spirals out to the slot's width. False (nothing emitted) when the axis
-    start has no room for a helix of ``prm.helix_min_mm``: the region is left to the level planner."""
+    start has no room for a helix of ``prm.helix_min_mm`` or the pattern of its first width class
+    would crawl (step below ``MIN_STEP_FRAC`` r): the region is left to the level planner."""
     prm, r, h = lv.prm, lv.r, lv.h
     c_start = float(reg.radius[0]) - h
     rho = min(prm.helix_radius_frac * r, prm.helix_room_frac * float(reg.radius[0]) - h)
@@ -466,6 +475,8 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
     vmax = float(getattr(getattr(lv, "job", None), "v_fmax", lv.feed_mm_min))
     Q, K, F, steps, n_out = axis_trochoid(reg, lv.allowed, r, lv.theta_deg, h, s_end=s_end,
                                           hole_mm=0.0 if from_cleared else c_start, vmax_ratio=vmax / lv.feed_mm_min)
+    if len(Q) == 0:
+        return False
     b = _builder(lv)
     c0 = reg.axis[0]
     if from_cleared:
