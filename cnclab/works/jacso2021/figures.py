@@ -70,13 +70,15 @@ def thesis3_spline() -> SplineContour:
 
 @_register("fig3-3_3-4_feed_field_and_step", "jacso2021",
            "Jacsó (2021) Fig 3-3/3-4: Thesis III feed directions and steps along an ellipse (r = 3 mm, θ = 60°)")
-def fig3_3_3_4_feed_field_and_step():
+def fig3_3_3_4_feed_field_and_step(theta_deg: float = THETA, t_end: float = 2.0, dt: float = 0.4):
+    """``theta_deg``: engagement (deg); ``t_end``: how far along the ellipse and ``dt``: the Euler
+    step (contour parameter, mm)."""
     plt = _plt()
     ell = Ellipse((0, 0), 12, 8)
-    res = ce.thesis3_path(ell, R_TOOL, THETA, 0.4, "euler", t_end=2.0)
+    res = ce.thesis3_path(ell, R_TOOL, theta_deg, dt, "euler", t_end=t_end)
     fig, ax = plt.subplots(figsize=figsize(1, 1.3))
     ax.plot(*ell.sample(400).T, "k", lw=1, label="contour c(t)")
-    v = ce.thesis3_feed_direction(res.P, res.C, THETA)
+    v = ce.thesis3_feed_direction(res.P, res.C, theta_deg)
     ax.quiver(*res.P.T, *v.T, color="C0", scale=12, label="feed direction")
     ax.plot(*res.P.T, "C1.-", label="Thesis III points P_i")
     for P, C in zip(res.P[::2], res.C[::2]):
@@ -181,10 +183,11 @@ def multi_pass_engagement(laps=None, final=None):
 
 
 # ------------------------------------------------------------------------------ §2.2 dixel simulator
-def accuracy():
-    """:func:`cnclab.works.jacso2021.theses_1_3.accuracy_table` at the notebook's resolutions
-    (0.1 ... 0.01 mm; fast mode down to 0.02)."""
-    return rec.accuracy_table(resolutions=pick((0.1, 0.05, 0.02, 0.01), (0.1, 0.05, 0.02)))
+def accuracy(resolutions=None):
+    """:func:`cnclab.works.jacso2021.theses_1_3.accuracy_table` at ``resolutions`` (mm), default the
+    notebook's 0.1 ... 0.01 mm (fast mode down to 0.02)."""
+    return rec.accuracy_table(resolutions=pick((0.1, 0.05, 0.02, 0.01), (0.1, 0.05, 0.02))
+                              if resolutions is None else resolutions)
 
 
 @_register("dixel_pixel_engagement_error_vs_h", "jacso2021",
