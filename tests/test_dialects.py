@@ -10,6 +10,7 @@ from cnclab.nc.gcode import read_gcode
 from cnclab.nc.program import ENTRY_FEED_FRACTION, GRBL_LINE_MAX, check_program, program_path, write_program
 from cnclab.paths import data_path
 from cnclab.toolpath.job import Job
+from cnclab.toolpath.levels import with_entry_feed
 from cnclab.toolpath.path import Tool, ToolPath
 
 GRAMMAR = json.loads(data_path("nc", "grbl11_grammar.json").read_text(encoding="utf-8"))
@@ -97,14 +98,27 @@ def test_header_names_tool_stock_strategy_version_time_tolerance():
 
 
 def test_entry_feed_default_fraction_and_job_key():
+    """plan gives helix/ramp entries the job's entry feed (ENTRY_FEED_FRACTION x feed_mm_min, or the
+    job key entry_feed_mm_min); the writer writes them as planned, and a path not from plan keeps its feeds."""
+    from cnclab.toolpath.planners import plan
+
+    import dataclasses
+
     job = _job()
-    helix_feeds = {m.feed for m in read_gcode(write_program(_path(job), job)).moves if m.motion in ("G2", "G3")}
+    p = plan(dataclasses.replace(job, start_hole=None), "adaptive", resolution_mm=0.1)   # enters by helix
+    entry = p.is_kind("helix", "ramp")
+    assert entry.any() and set(p.feed[entry]) == {ENTRY_FEED_FRACTION * job.feed_mm_min} == {job.entry_feed}
+    assert p.info["entry_feed_mm_min"] == job.entry_feed
+    helix_feeds = {m.feed for m in read_gcode(write_program(with_entry_feed(_path(job), job), job)).moves
+                   if m.motion in ("G2", "G3")}
     assert helix_feeds == {round(ENTRY_FEED_FRACTION * job.feed_mm_min, 1)}
     job2 = _job(entry_feed_mm_min=111.0)
-    assert Job.from_dict(job2.to_dict()).entry_feed_mm_min == 111.0
-    moves = read_gcode(write_program(_path(job2), job2)).moves
-    assert {m.feed for m in moves if m.motion in ("G2", "G3")} == {111.0}
-    assert "entry_feed_mm_min" in write_program(_path(job2), job2)
+    assert Job.from_dict(job2.to_dict()).entry_feed_mm_min == 111.0 == job2.entry_feed
+    text = write_program(with_entry_feed(_path(job2), job2), job2)
+    assert {m.feed for m in read_gcode(text).moves if m.motion in ("G2", "G3")} == {111.0}
+    assert "entry_feed_mm_min" in text
+    # the writer changes no feed: the helix of a path built at F500 is written at F500
+    assert {m.feed for m in read_gcode(write_program(_path(job2), job2)).moves if m.motion in ("G2", "G3")} == {500.0}
 
 
 @pytest.mark.parametrize("change, key", [
@@ -124,7 +138,7 @@ def test_writer_limits_name_the_job_key(change, key):
     reader's 'prog.ngc:N: word F0.0'), by the writer or already by the job loader."""
     with pytest.raises(ValueError, match=re.escape(key)) as err:
         job = _job(**change)          # the job loader's plausibility checks may refuse it first
-        write_program(_path(job), job)
+        write_program(with_entry_feed(_path(job), job), job)
     assert "job.json" in str(err.value) or key == "tool_number"
 
 

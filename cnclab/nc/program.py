@@ -13,8 +13,10 @@ given ``out``, writes it atomically (the one way a program reaches disk):
   every line at most 80 characters; ``S.. M3`` before the first motion (so before the first
   cutting move), the coolant word after it when asked, ``G0 Z<clearance>`` and a rapid over the first
   point at the clearance plane;
-* the path's moves with helix and ramp entries at the entry feed (job key ``entry_feed_mm_min``,
-  default :data:`ENTRY_FEED_FRACTION` x ``feed_mm_min``) and runs of short moves fitted as G2/G3
+* the path's moves at the path's feeds (the planner's: :func:`cnclab.toolpath.planners.plan` gives
+  helix and ramp entries the job's entry feed, :attr:`Job.entry_feed <cnclab.toolpath.job.Job.entry_feed>`:
+  job key ``entry_feed_mm_min``, default :data:`ENTRY_FEED_FRACTION` x ``feed_mm_min``; the writer
+  changes no feed, so the evaluator's times are the program's) and runs of short moves fitted as G2/G3
   arcs and longer lines within 0.005 mm (:mod:`cnclab.nc.arcfit`); :func:`program_path` is that
   path, its :meth:`~cnclab.toolpath.path.ToolPath.time_s` the program's time;
 * rapids only at or above ``clearance_z``, or straight up (a retract), or where the path marks the
@@ -99,6 +101,7 @@ import numpy as np
 
 from .. import __version__
 from ..fileio import atomic_write
+from ..toolpath.job import ENTRY_FEED_FRACTION
 from ..toolpath.path import Move, ToolPath
 from .arcfit import DEFAULT_TOL_MM, fit_arcs
 from .machine import machine_for_dialect, machine_time
@@ -124,12 +127,10 @@ TOOL_NUMBER_RANGE = {"linuxcnc": (1, 2 ** 31 - 1), "grbl": (0, 255)}
 DIALECTS = tuple(TOOL_NUMBER_RANGE)
 #: GRBL 1.1 line buffer: at most 80 characters per line (``LINE_BUFFER_SIZE``, data/nc/grbl11_grammar.json)
 GRBL_LINE_MAX = 80
-#: default entry feed (helix and ramp entries) as a fraction of the cutting feed ``feed_mm_min``
-ENTRY_FEED_FRACTION = 0.5
 #: coolant words: flood M8, mist M7 (M7 is off in GRBL's default build: refused for grbl)
 COOLANT = {"flood": "M8", "mist": "M7"}
 _FEED_DEC = 1
-_ENTRY_KINDS = ("helix", "ramp")
+_ENTRY_KINDS = ("helix", "ramp")   # cnclab.toolpath.levels.ENTRY_MOVE_KINDS: the moves plan gives the entry feed
 
 #: where a feed move's F comes from, by move kind: (job key, how it is derived) — for the messages
 _FEED_SOURCE = {
@@ -137,8 +138,8 @@ _FEED_SOURCE = {
     "plunge": ("feed_mm_min", "or f_z x teeth x spindle_rpm"),
     "retract": ("feed_mm_min", "or f_z x teeth x spindle_rpm"),
     "link": ("link_feed", "the linking feed"),
-    "helix": ("entry_feed_mm_min", f"default {ENTRY_FEED_FRACTION:g} x feed_mm_min"),
-    "ramp": ("entry_feed_mm_min", f"default {ENTRY_FEED_FRACTION:g} x feed_mm_min"),
+    "helix": ("entry_feed_mm_min", f"default {ENTRY_FEED_FRACTION:g} x feed_mm_min, given the entries by plan"),
+    "ramp": ("entry_feed_mm_min", f"default {ENTRY_FEED_FRACTION:g} x feed_mm_min, given the entries by plan"),
 }
 
 
@@ -159,7 +160,7 @@ class _Setup:
 _JOB_ATTR = {"clearance_z": "clearance_z", "top_z": "top_z", "spindle_rpm": "spindle_rpm", "tool": "tool",
              "rapid_mm_min": "rapid_mm_min", "entry_feed_mm_min": "entry_feed_mm_min",
              "feed_mm_min": "feed_mm_min", "link_feed": "link_feed_mm_min"}
-_OVERRIDES = {"clearance_z", "top_z", "spindle_rpm", "tool", "rapid_mm_min", "entry_feed_mm_min"}
+_OVERRIDES = {"clearance_z", "top_z", "spindle_rpm", "tool", "rapid_mm_min"}
 
 
 def _setup(path: ToolPath, job, overrides: dict) -> _Setup:
@@ -184,7 +185,7 @@ def _setup(path: ToolPath, job, overrides: dict) -> _Setup:
             values["spindle_rpm"], origin["spindle_rpm"] = float(finite[0]), "the path's spindle speed"
     origin["geometry"] = f"the polygon coordinates ($.polygon), depth and a_p of {src}"
     if values.get("entry_feed_mm_min") is None and values.get("feed_mm_min") is not None:
-        values["entry_feed_mm_min"] = ENTRY_FEED_FRACTION * float(values["feed_mm_min"])
+        values["entry_feed_mm_min"] = ENTRY_FEED_FRACTION * float(values["feed_mm_min"])   # as Job.entry_feed
         origin["entry_feed_mm_min"] = (f"default entry feed {ENTRY_FEED_FRACTION:g} x job key 'feed_mm_min' "
                                        f"of {src}")
     return _Setup(values, origin)
@@ -260,9 +261,8 @@ def _check_depth(path: ToolPath, job, setup: _Setup, decimals: int) -> None:
 def program_path(path: ToolPath, job=None, *, arc_tol_mm: float | None = DEFAULT_TOL_MM, decimals: int = 4,
                  **values) -> ToolPath:
     """The path as :func:`write_program` writes it (before its approach from and retract to the
-    clearance plane): helix and ramp entries at the entry feed (``entry_feed_mm_min``: the job key,
-    else :data:`ENTRY_FEED_FRACTION` x the job's ``feed_mm_min``; without either, as planned) and
-    arcs fitted within ``arc_tol_mm`` (:func:`cnclab.nc.arcfit.fit_arcs`; curved G0 runs in
+    clearance plane): every feed as the path has it (a path of :func:`cnclab.toolpath.planners.plan`
+    has its helix and ramp entries at the job's entry feed already) and arcs fitted within ``arc_tol_mm`` (:func:`cnclab.nc.arcfit.fit_arcs`; curved G0 runs in
     cleared area as G2/G3 links at ``rapid_mm_min``). Its :meth:`~ToolPath.time_s` is the written
     program's time. ``values``: overrides of the job's numbers (see :func:`write_program`)."""
     setup = _setup(path, job, values)
@@ -271,13 +271,14 @@ def program_path(path: ToolPath, job=None, *, arc_tol_mm: float | None = DEFAULT
 
 def _program_path(path: ToolPath, setup: _Setup, arc_tol_mm, decimals) -> tuple:
     notes = []
-    ef = setup["entry_feed_mm_min"]
     entry = path.is_kind(*_ENTRY_KINDS)
-    if ef is not None and entry.any():
-        path = dataclasses.replace(path, feed=np.where(entry, float(ef), path.feed))
-        notes.append(f"helix and ramp entries at F{float(ef):g} mm/min ({setup.blame('entry_feed_mm_min')})")
-    elif entry.any():
-        notes.append("helix and ramp entries at the planned feed (no job: no entry_feed_mm_min)")
+    if entry.any():
+        ef = setup["entry_feed_mm_min"]
+        feeds = np.unique(path.feed[entry])
+        said = ", ".join(f"F{float(f):g}" for f in feeds[:4]) + (" ..." if len(feeds) > 4 else "")
+        why = (setup.blame("entry_feed_mm_min") if ef is not None and np.allclose(feeds, float(ef), rtol=1e-12, atol=0)
+               else "the planned feed")
+        notes.append(f"helix and ramp entries at {said} mm/min as planned ({why})")
     if arc_tol_mm is not None and arc_tol_mm <= 2 * 10.0 ** -decimals:
         notes.append(f"no arc fitting: tolerance {arc_tol_mm:g} mm not above 2 units of the {decimals}-decimal output")
     elif arc_tol_mm is not None:
@@ -360,8 +361,8 @@ def write_program(path: ToolPath, job=None, *, out=None, inputs=(), dialect: str
     numbers; ``values`` override them: ``clearance_z`` [mm], ``top_z`` [mm] (default 0), ``tool``
     (default ``path.tool``), ``spindle_rpm`` [rpm] (default the path's first spindle speed),
     ``rapid_mm_min`` [mm/min] (curved G0 runs in cleared area become G2/G3 at this rate; run-time
-    estimate), ``entry_feed_mm_min`` [mm/min] (helix/ramp entries; default
-    :data:`ENTRY_FEED_FRACTION` x the job's ``feed_mm_min``). ``dialect``: ``"linuxcnc"`` (``%``
+    estimate). Every feed is written as the path has it (helix and ramp entries: the entry feed
+    :func:`cnclab.toolpath.planners.plan` gave them, job key ``entry_feed_mm_min``). ``dialect``: ``"linuxcnc"`` (``%``
     lines, ``T.. M6`` then ``G43 H..``) or ``"grbl"`` (GRBL 1.1 words only: no ``%``, no ``M6``/``G43``,
     lines <= 80 characters, the tool named in a comment); ``coolant``: None, ``"flood"`` (M8) or
     ``"mist"`` (M7, linuxcnc only), on after the spindle, off (M9) before ``M5``; ``header`` extra

@@ -51,12 +51,17 @@ from ..geometry.drawing import CHORD_TOL_MM, circle_points
 from ..geometry.engagement import stepover_straight
 from .path import Tool
 
-__all__ = ["CUTTING_LENGTH_PER_D", "JOB_SCHEMA", "MAX_LAPS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "SPINDLE_RPM_MAX",
+__all__ = ["CUTTING_LENGTH_PER_D", "ENTRY_FEED_FRACTION", "JOB_SCHEMA", "MAX_LAPS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN",
+           "SPINDLE_RPM_MAX",
            "Job", "load_job", "plausibility", "read_job_json", "ring_points", "star_polygon", "theta_min_deg"]
 
 #: Linking feed (mm/min): Jacsó (2021) §4, "on the straight sections of the connecting movements, an
 #: equally increased feed rate (v_f = 1500 mm/min) was used" (text under Table 4.1).
 LINK_FEED_MM_MIN = 1500.0
+#: Default helix/ramp entry feed as a fraction of the cutting feed ``feed_mm_min`` (:attr:`Job.entry_feed`,
+#: when the job gives no ``entry_feed_mm_min``): a helix or ramp cuts a full slot while it descends, so it
+#: runs slower than the cut; 0.5 is cnclab's choice (issue 24), not a value from a source
+ENTRY_FEED_FRACTION = 0.5
 #: Rapid traverse (mm/min): an ASSUMED machine value (no seed gives one).
 RAPID_MM_MIN = 10000.0
 #: Default top spindle speed (rpm) when a job states none (``spindle_rpm_max``): an ASSUMED machine value,
@@ -133,7 +138,7 @@ JOB_SCHEMA = {
         "feed_mm_min": _pos("nominal cutting feed, mm/min"),
         "link_feed": _pos("linking feed, mm/min"),
         "entry_feed_mm_min": _pos("helix/ramp entry feed, mm/min (default 0.5 x the cutting feed, "
-                                  "cnclab.nc.program.ENTRY_FEED_FRACTION)"),
+                                  "cnclab.toolpath.job.ENTRY_FEED_FRACTION)"),
         "rapid_links": {"type": "boolean", "description": "links at depth through cleared area as G0 "
                         "(default true; false on a controller whose rapids dog-leg: G1 at link_feed)"},
         "v_fmax": _pos("maximum feed of the feed control, mm/min"),
@@ -292,8 +297,9 @@ class Job:
     ``feed_mm_min`` (nominal cutting feed), ``spindle_rpm``, ``link_feed_mm_min``, ``rapid_mm_min``,
     ``clearance_z``, ``top_z``, ``v_fmax`` (feed-control cap), ``roll_radius`` (roll-in radius of the
     hybrid path), ``rapid_links`` (links at depth through cleared area written as G0; False: G1 at
-    ``link_feed_mm_min``), ``entry_feed_mm_min`` (helix/ramp entry feed written by the program
-    writer; None: its default fraction of ``feed_mm_min``), ``source`` (file name for messages), ``description``, the machine and tool
+    ``link_feed_mm_min``), ``entry_feed_mm_min`` (helix/ramp entry feed; None:
+    :data:`ENTRY_FEED_FRACTION` x ``feed_mm_min``; :attr:`entry_feed` is the value, which
+    :func:`cnclab.toolpath.planners.plan` gives the path's entries), ``source`` (file name for messages), ``description``, the machine and tool
     limits ``cutting_length`` (None: 3 D), ``spindle_rpm_max`` (rpm) and ``feed_max_mm_min`` (None: the
     rapid rate) that :meth:`from_dict` checks (:func:`plausibility`), and the ``warnings`` it gave.
     Build with :meth:`from_dict` / :func:`load_job` (validated).
@@ -357,6 +363,21 @@ class Job:
     @property
     def teeth(self) -> int:
         return int(self.tool.flutes)
+
+    @property
+    def entry_feed(self) -> float:
+        """Feed (mm/min) of the helix and ramp entries: ``entry_feed_mm_min``, else
+        :data:`ENTRY_FEED_FRACTION` x ``feed_mm_min``. :func:`cnclab.toolpath.planners.plan` sets it on
+        the planned path's entries (:func:`cnclab.toolpath.levels.with_entry_feed`), so the evaluator
+        and the program writer see the same feeds.
+
+        >>> j = Job(Polygon([(0, 0), (20, 0), (20, 20), (0, 20)]), Tool(6), 60, 3, feed_mm_min=300, v_c=100)
+        >>> j.entry_feed, dataclasses.replace(j, entry_feed_mm_min=111.0).entry_feed
+        (150.0, 111.0)
+        """
+        if self.entry_feed_mm_min is not None:
+            return float(self.entry_feed_mm_min)
+        return ENTRY_FEED_FRACTION * float(self.feed_mm_min)
 
     @property
     def a_e(self) -> float:

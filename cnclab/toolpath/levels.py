@@ -43,7 +43,8 @@ from shapely.geometry import LineString, Point
 from .helix import HELIX_CHORD_MM, helix_ring, helix_segments
 from .path import KINDS, ToolPath, ToolPathBuilder
 
-__all__ = ["swept_region", "join_levels", "LevelError", "PROOF_TOL_MM2", "CLEARED_ABOVE"]
+__all__ = ["swept_region", "join_levels", "with_entry_feed", "ENTRY_MOVE_KINDS", "LevelError", "PROOF_TOL_MM2",
+           "CLEARED_ABOVE"]
 
 #: material area (mm^2) a proven move may meet: a sliver 0.01 mm wide over 0.1 mm (the buffer
 #: polygons' chord error at r = 4 mm with 32 segments a quarter is 0.005 mm)
@@ -53,6 +54,34 @@ CLEARED_ABOVE = "cleared: levels above"
 _K = {k: i for i, k in enumerate(KINDS)}
 _CHUNK = 200
 _EPS = 1e-9
+
+
+#: the move kinds that run at the job's entry feed (:func:`with_entry_feed`); a plunge keeps its feed
+#: (into a start hole or cleared area, or through air down to the stock top before a helix)
+ENTRY_MOVE_KINDS = ("helix", "ramp")
+
+
+def with_entry_feed(path: ToolPath, job) -> ToolPath:
+    """``path`` with its helix and ramp moves (:data:`ENTRY_MOVE_KINDS`) at the job's entry feed
+    :attr:`Job.entry_feed <cnclab.toolpath.job.Job.entry_feed>` (mm/min: the job key
+    ``entry_feed_mm_min``, else :data:`~cnclab.toolpath.job.ENTRY_FEED_FRACTION` x ``feed_mm_min``)
+    and ``info["entry_feed_mm_min"]`` set to it; every other move as given. The one place a planned
+    path gets its entry feed: :func:`cnclab.toolpath.planners.plan` applies it to every strategy's
+    joined levels, so the evaluator times the feeds the program writer writes (it writes a path's
+    feeds as they are). A new path; ``path`` is not changed.
+
+    >>> from types import SimpleNamespace
+    >>> p = ToolPath.build([[0, 0, 1], [0, 0, 0], [5, 0, 0]], kind=["rapid", "helix", "cut"], feed=200)
+    >>> with_entry_feed(p, SimpleNamespace(entry_feed=100.0)).feed.tolist()     # a rapid has no feed
+    [nan, 100.0, 200.0]
+    """
+    ef = float(job.entry_feed)
+    entry = path.is_kind(*ENTRY_MOVE_KINDS)
+    out = ToolPath(path.xyz.copy(), path.kind.copy(), path.tag.copy(), np.where(entry, ef, path.feed),
+                   path.spindle.copy(), path.arc.copy(), path.arc_center.copy(), path.tool, dict(path.info),
+                   path.cleared.copy())
+    out.info["entry_feed_mm_min"] = ef
+    return out
 
 
 class LevelError(ValueError):

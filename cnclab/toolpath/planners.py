@@ -38,7 +38,7 @@ from . import adaptive   # the default; the other planners' modules are imported
 from . import coverage
 from .evaluate import evaluate
 from .job import Job
-from .levels import join_levels
+from .levels import join_levels, with_entry_feed
 from .path import ToolPath
 
 __all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "MAX_LEVELS", "MIN_LEVEL_STEP_MM", "GOUGE_TOL_MM", "CE_PROMISE_DEG",
@@ -317,6 +317,10 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     one-level job whose top is the floor above, and joined by
     :func:`cnclab.toolpath.levels.join_levels`: a move through the levels above is marked cleared
     only where their swept area proves it, else the level enters by a helix from the stock top.
+    Every helix and ramp entry then runs at the job's entry feed (:attr:`Job.entry_feed`, mm/min;
+    :func:`cnclab.toolpath.levels.with_entry_feed`, ``info["entry_feed_mm_min"]``): the path carries
+    the feeds the program writer writes, so :func:`cnclab.toolpath.evaluate.evaluate` times the
+    written program.
     Returns one :class:`ToolPath`; ``info["levels"]`` holds the cutting z of each level,
     ``info["strategy"]`` the name, ``info["levels_extra_mm2"]`` the area each level's tool body meets
     material the levels above left, ``info["uncut"]`` what the plan leaves by region
@@ -337,7 +341,7 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     for top, z in zip(tops, levels):
         lv = job if len(levels) == 1 else dataclasses.replace(job, top_z=top, a_p=top - z, depth=top - z)
         paths.append(_run_strategy(f, strategy, lv, resolution_mm, options))
-    out = join_levels(paths, tops, job)
+    out = with_entry_feed(join_levels(paths, tops, job), job)
     out.info.update(strategy=strategy, levels=levels)
     gouge, at = coverage.wall_gouge(out, job)
     if gouge > GOUGE_TOL_MM:

@@ -41,6 +41,7 @@ from ..nc.spindle_control import to_gcode_moves as apt_to_moves
 from ..paths import build_dir, data_path
 from ..runtime import fast_mode, pick
 from ..toolpath.job import load_job
+from ..toolpath.levels import with_entry_feed
 from ..toolpath.path import Tool, ToolPath
 from ..toolpath.evaluate import evaluate
 from ..toolpath.planners import plan
@@ -71,6 +72,8 @@ def _ky(which):
         # the paper's passes, entered by a helix (the paper plunges; the reproduction keeps that in
         # ky.program, the program for a machine does not)
         path = ky.program_path(which, entry="helix") if which != "ce" else kyce.ce_path()
+        # planned from the job outside plan(): its helix entries get the job's entry feed as plan's do
+        path = with_entry_feed(path, job)
         hdr = [f"Kim and Yang 2006 pocket 120 x 85 mm: {which} path, tool D{job.tool.diameter:g} flat"]
         text = write_program(path, job, header=hdr, out=out)
         return text, {"clearance_z": job.clearance_z, "top_z": job.top_z, "path": program_path(path, job), "job": job}
@@ -179,7 +182,7 @@ def write_programs(outdir=None, works=None, quiet=False) -> dict:
             if not quiet:
                 print(f"{key}: NOT WRITTEN: {exc}", file=sys.stderr)
             continue
-        path = meta.pop("path")   # the path as written (program_path: entry feeds, fitted arcs)
+        path = meta.pop("path")   # the path as written (program_path: fitted arcs; entry feeds as planned)
         job = meta.pop("job", None)
         if job is not None:   # 2.5D pocket: the simulator proves entries and rapids (issue 12)
             # 0.1 mm in both modes: at 0.25 mm rows the dixel chord of a disc boundary leaves slivers of
