@@ -8,9 +8,10 @@ it with :func:`cnclab.plotting.export_figure` (width/height in mm, formats, dpi)
 show these figures call the same recipes, so the notebook and the paper figure cannot differ.
 
 ``python -m cnclab figure NAME --width-mm 85 --format pdf -o DIR`` is the command line;
-``python -m cnclab figure --list`` lists the covered figures: every figure the notebooks of
-jacso2021, kim_yang2006 and hoang2024 save (tests/test_figures.py checks each notebook's ``savefig``
-against its recipe) and the Mgherony figures whose plotting lives in the package.
+``python -m cnclab figure --list`` lists the covered figures: every figure the notebooks save
+(tests/test_figures.py checks each jacso2021, kim_yang2006 and hoang2024 notebook's ``savefig`` against
+its recipe, tests/test_figures_mgherony.py the mgherony2024 ones). At a given width the texts that
+would leave the page or run into each other are shrunk (:func:`cnclab.plotting.fit_text`, >= 6 pt).
 
 >>> FIGURES["fig5-6_deff_vs_depth_of_cut"].work
 'mgherony2024'
