@@ -541,19 +541,20 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
     info = {"seeds": seeds, "laps_per_seed": laps, "entry_radius_mm": entry_r,
             "planning_uncut_area_mm2": stock.area(), "theta_deg": float(theta_deg),
             "resolution_mm": float(resolution_mm), "step_mm": step, "name": "constant-engagement clearing"}
-    out = _segments(segs)
+    out, landed = _segments(segs)
     path = ToolPath.from_segments(out, z_cut=top_z - a_p, feed=feed_mm_min, clearance_z=clearance_z,
                                   top_z=top_z, link_feed=link_feed_mm_min, spindle=spindle_rpm, tool=tool,
                                   info=info)
-    return _tag_cleared_plunges(path, out, top_z)
+    return _tag_cleared_plunges(path, out, landed, top_z)
 
 
-def _tag_cleared_plunges(path: ToolPath, segments, top_z: float) -> ToolPath:
+def _tag_cleared_plunges(path: ToolPath, segments, landed, top_z: float) -> ToolPath:
     """Flag (and tag) ``cleared`` the vertical plunges below ``top_z`` that follow a jump landing in the cleared
-    region (a jump segment tagged ``cleared`` by :func:`_segments`): the written program marks them
+    region (``landed[i]``, per segment, from :func:`_segments`: the planner's stock check, not the
+    segment's tag, which only says so for people): the written program marks them
     ``(cnclab:cleared/1)`` and the static checker does not count them as plunges into material (the dixel
     evaluator proves them: ``plunges_into_material``). ``path`` is changed in place and returned."""
-    landings = [t == CLEARED for i, (P, k, t) in enumerate(segments) if isinstance(k, str) and k == "jump"
+    landings = [landed[i] for i, (P, k, t) in enumerate(segments) if isinstance(k, str) and k == "jump"
                 and not (i + 1 < len(segments) and isinstance(segments[i + 1][1], str) and segments[i + 1][1] == "helix")]
     down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
     plunges = np.flatnonzero(path.is_kind("plunge") & down & (path.xyz[:, 2] < top_z - 1e-9))
@@ -568,20 +569,23 @@ def _tag_cleared_plunges(path: ToolPath, segments, top_z: float) -> ToolPath:
 
 
 def _segments(segs):
-    """Planning segments ``(points, labels, seed)`` -> :meth:`ToolPath.from_segments` segments."""
-    out = []
+    """Planning segments ``(points, labels, seed)`` -> (:meth:`ToolPath.from_segments` segments, per
+    segment: a jump that lands in the cleared region (its last label ``CLEARED_LANDING``))."""
+    out, landed = [], []
     for P, K, g in segs:
         K = np.asarray(K, dtype=object)
+        jump = K[0] == "rapid" and np.isin(K, ("rapid", CLEARED_LANDING)).all()
+        landed.append(bool(jump and K[-1] == CLEARED_LANDING))
         if (K == "entry").all():
             out.append((P, "helix", f"seed {g}"))
-            continue
-        if K[0] == "rapid" and np.isin(K, ("rapid", CLEARED_LANDING)).all():
-            out.append((P[[0, -1]], "jump", CLEARED if K[-1] == CLEARED_LANDING else ""))
-            continue
-        kind = np.where(K == "link", "link", "cut")
-        tag = np.where(np.isin(K, ("cleanup", "linkcut")), K, np.where(K == "link", "", f"seed {g}" if g >= 0 else ""))
-        out.append((P, kind, tag.astype(object)))
-    return out
+        elif jump:
+            out.append((P[[0, -1]], "jump", CLEARED if landed[-1] else ""))
+        else:
+            kind = np.where(K == "link", "link", "cut")
+            tag = np.where(np.isin(K, ("cleanup", "linkcut")), K,
+                           np.where(K == "link", "", f"seed {g}" if g >= 0 else ""))
+            out.append((P, kind, tag.astype(object)))
+    return out, landed
 
 
 def clearing_path(job: Job, resolution_mm: float = 0.1, **options) -> ToolPath:
