@@ -126,9 +126,9 @@ def test_the_generator_makes_what_it_says():
 
 def test_constant_engagement_keeps_its_promise_or_names_the_breach():
     """The constant-engagement strategy plans a disc (its laps are circles: measured max theta + 6 deg,
-    0.08 % above theta + 5) and keeps the promise there, two levels deep; on Jacso's own rectangle its
-    laps and links break it (4.7 % above theta + 5, max ~128 deg) and it refuses, naming the measured
-    maximum, where it is, and the share by part of the path."""
+    0.08 % above theta + 5) and keeps the promise there, two levels deep; on a 28 x 18 mm rectangle its
+    links and laps break it (5.6 % above theta + 5, max ~120 deg; Jacso's own 40 x 24 mm: 4.7 %, 128 deg)
+    and it refuses, naming the measured maximum, where it is, and the share by part of the path."""
     disc = Job(Point(0, 0).buffer(20, 64), Tool(D), THETA, 1.0, depth=2.0, v_c=100, f_z=0.05, source="disc.json")
     path = planners.plan(disc, "constant-engagement")
     assert path.info["levels"] == [-1.0, -2.0]
@@ -136,7 +136,7 @@ def test_constant_engagement_keeps_its_promise_or_names_the_breach():
     assert ev.engagement_max_deg <= THETA + planners.CE_PROMISE_DEG
     assert ev.share_above_5_pct <= planners.CE_SHARE_ABOVE_5_PCT
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
-    rect = Job(box(0, 0, 40, 24), Tool(D), THETA, 1.0, v_c=100, f_z=0.05, source="rect.json")
+    rect = Job(box(0, 0, 28, 18), Tool(D), THETA, 1.0, v_c=100, f_z=0.05, source="rect.json")
     with pytest.raises(ValueError, match=r"^rect.json: the constant-engagement strategy promises an engagement "
                                          r"<= theta \+ 15 deg.*measures max \d+\.\d deg \(theta 60 \+ \d+\.\d\) at "
                                          r"\(-?\d+\.\d\d, -?\d+\.\d\d\) in its (laps|links cutting material|cleanup), "
