@@ -35,12 +35,16 @@ if os.environ.get("CI"):
 
 # Longest tests first: pytest-xdist hands tests out in collection order, so a long test collected
 # last runs alone at the end while the other worker idles (about a minute of the `make test` wall
-# time on 2 cores). Order only; nothing is skipped. The list names the tests that take > ~10 s.
+# time on 2 cores). Order only; nothing is skipped. The list names the tests that take > ~5 CPU-s.
+# With `--dist loadgroup` (make test) the xdist groups (several tests each) are handed out first,
+# then the rest in this order.
 _SLOW_FIRST = ("adaptive_vs_freecad", "ce_vs_constant_mrr", "ch6_neural", "s4_star", "test_notebooks.py::",
                "test_plan_real_every_job_file", "test_claim_status_holds[mgherony2024.ch6",
-               "test_random_pockets", "test_getting_started_blocks_run", "test_claim_status_holds[jacso2021.s4",
-               "test_auto_wall_share",
-               "test_claim_status_holds[mgherony2024.ch8", "test_every_strategy_plans")
+               "test_random_pockets", "test_getting_started_blocks_run", "test_every_strategy_safe_or_refusing",
+               "test_random_polylines_fit_within_tolerance", "test_claim_status_holds[jacso2021.s4",
+               "test_auto_wall_share", "test_interrupt_at_any_moment",
+               "test_claim_status_holds[mgherony2024.ch8", "test_every_strategy_plans",
+               "test_results_do_not_depend_on_block_length", "test_planned_pocket_figures_unchanged_by_fitting")
 
 
 def pytest_collection_modifyitems(session, config, items):

@@ -191,10 +191,18 @@ def raises():
     raise RuntimeError("boom")
 
 
-def test_cli_json_keys():
-    out = subprocess.run([sys.executable, "-m", "cnclab", "claims", "--json", "--skip-slow"],
+# The CLI's JSON and exit status on three slices that hold every kind of row the full ledger has
+# (every row's value is checked in-process by tests/test_claims.py; the full ledger through the CLI
+# would evaluate it all a second time): hoang2024 = the qualitative rows (HOLDS, PARTIAL,
+# NOT_TESTABLE) and DIFFERS; mgherony2024.ch9 = slow rows skipped and a reconstructed value;
+# mgherony2024.ch5 = an interval-valued reproduced value (a JSON object).
+@pytest.mark.parametrize("scope", [["--work", "hoang2024"], ["--prefix", "mgherony2024.ch9"],
+                                   ["--prefix", "mgherony2024.ch5"]], ids=lambda s: s[1])
+def test_cli_json_keys(scope):
+    out = subprocess.run([sys.executable, "-m", "cnclab", "claims", "--json", "--skip-slow", *scope],
                          capture_output=True, text=True, check=False)
     rows = json.loads(out.stdout)
+    assert rows and all(r["claim_id"].startswith(scope[1]) for r in rows)
     for r in rows:
         assert {"claim_id", "work", "seed_file", "location", "paper_value", "reproduced_value",
                 "status", "ok"} <= set(r)
