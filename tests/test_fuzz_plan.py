@@ -73,11 +73,10 @@ def cases(seed=28, n=None):
 
 
 CASES = cases()
-OUTCOMES = collections.Counter()
 
 
-@pytest.mark.parametrize("fam,value,strategy", CASES, ids=[f"{f}-{i}" for i, (f, _, _) in enumerate(CASES)])
-def test_plan_cli_error_or_safe_program(tmp_path, capsys, fam, value, strategy):
+def _mutation_case(tmp_path, capsys, fam, value, strategy) -> str:
+    """One mutated job through the CLI: "error" or "program" (asserting what each must satisfy)."""
     d = dict(BASE)
     d[fam] = value
     job = tmp_path / "fuzz_job.json"
@@ -88,14 +87,26 @@ def test_plan_cli_error_or_safe_program(tmp_path, capsys, fam, value, strategy):
     err = capsys.readouterr().err
     assert hashlib.sha256(job.read_bytes()).hexdigest() == before
     if rc == 2:
-        assert ("fuzz_job" in err or "p.ngc: not written" in err) and not out.exists(), err
-        OUTCOMES[(fam, "error")] += 1
-    else:
-        assert rc == 0
-        text = out.read_text()
-        assert check_program(text, clearance_z=float(d.get("clearance_z", 5.0)), top_z=0.0).ok
-        assert "uncut beyond unreachable corners by region" in text
-        OUTCOMES[(fam, "program")] += 1
+        assert ("fuzz_job" in err or "p.ngc: not written" in err) and not out.exists(), (fam, value, strategy, err)
+        return "error"
+    assert rc == 0, (fam, value, strategy, err)
+    text = out.read_text()
+    assert check_program(text, clearance_z=float(d.get("clearance_z", 5.0)), top_z=0.0).ok, (fam, value, strategy)
+    assert "uncut beyond unreachable corners by region" in text
+    return "program"
+
+
+def test_plan_cli_error_or_safe_program(tmp_path, capsys):
+    """Every mutated job ends in a clear error or a safe program, and the cases produce both (a suite
+    that only ever refuses, or never refuses, tests nothing). One test over all cases: the counts
+    need them in one process (xdist)."""
+    outcomes = collections.Counter()
+    for k, (fam, value, strategy) in enumerate(CASES):
+        sub = tmp_path / f"case{k}"
+        sub.mkdir()
+        outcomes[(fam, _mutation_case(sub, capsys, fam, value, strategy))] += 1
+    assert {kind for _, kind in outcomes} == {"error", "program"}, outcomes
+    assert sum(outcomes.values()) == len(CASES)
 
 
 @pytest.mark.parametrize("res", [0.0, -0.1, math.nan, math.inf, "0.1"])
@@ -129,13 +140,6 @@ def test_plan_cli_resolution_bounded(tmp_path, capsys):
     assert not out.exists()
     assert cli_plan.main([str(job), "-o", str(out), "--resolution", "0.3", "--strategy", "zig-zag"]) == 0
     assert check_program(out.read_text(), clearance_z=5.0, top_z=0.0).ok
-
-
-def test_outcomes_cover_both_kinds():
-    """The fuzz above produced both refusals and programs (run after it: file order)."""
-    kinds = {k for _, k in OUTCOMES}
-    assert kinds == {"error", "program"}, OUTCOMES
-    assert sum(OUTCOMES.values()) == len(CASES)
 
 
 # --- adversarial pockets x every strategy x API and CLI (issue 28 item 4) ---------------------------
