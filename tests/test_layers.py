@@ -184,8 +184,6 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/analysis/mlp.py", "train_mlp"): (15, "the thesis' training settings as keywords; to become a TrainConfig"),
     ("module", "cnclab/nc/apt.py", ""): (940, "APT reader (bulk + careful parser) and writer: to split reader / writer"),
     ("lines", "cnclab/nc/gcode.py", "read_gcode"): (183, "the reader's one-pass word state machine: to split per word group"),
-    ("params", "cnclab/nc/spindle_control.py", "spindle_schedule"): (17, "the post-processor's options mirror the CLI flags; to become one options object"),
-    ("params", "cnclab/nc/spindle_control.py", "postprocess_files"): (16, "the post-processor's options mirror the CLI flags; to become one options object"),
     ("module", "cnclab/simulation/_kernels.py", ""): (860, "the numba kernels of both stocks in one module (one JIT cache)"),
     ("params", "cnclab/simulation/_kernels.py", "_refine"): (18, _NJIT),
     ("params", "cnclab/simulation/_kernels.py", "_band"): (14, _NJIT),

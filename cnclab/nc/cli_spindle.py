@@ -18,7 +18,7 @@ import warnings
 from .. import clihelp
 from ..fileio import InterruptReport
 from ..cutting.spindle_model import POINT_RULES
-from .spindle_control import postprocess_files
+from .spindle_control import SpindleOptions, postprocess_files
 
 
 def main(argv=None) -> int:
@@ -77,13 +77,13 @@ def main(argv=None) -> int:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             run.check()
-            s = postprocess_files(args.stl, args.apt, args.out, v_c=args.vc, f_z=args.fz, teeth=args.teeth,
-                                  a_p=args.ap, tool_diameter=args.tool_diameter, gcode_path=args.gcode,
-                                  rpm_threshold=args.rpm_threshold, vf_threshold=args.vf_threshold,
-                                  progress=True, feed_direction_deg=args.feed_direction, point=args.point,
-                                  facet_rule=args.facet, n_max=args.nmax, vf_max=args.vfmax,
-                                  accel_rpm_s=args.accel, mismatch_tol=args.mismatch_tol,
+            opts = SpindleOptions(v_c=args.vc, f_z=args.fz, teeth=args.teeth, a_p=args.ap,
+                                  tool_diameter=args.tool_diameter, feed_direction_deg=args.feed_direction,
+                                  point=args.point, facet_rule=args.facet, n_max=args.nmax, vf_max=args.vfmax,
+                                  accel_rpm_s=args.accel, rpm_threshold=args.rpm_threshold,
+                                  vf_threshold=args.vf_threshold, mismatch_tol=args.mismatch_tol,
                                   max_off_share=args.max_off_share, allow_mismatch=args.allow_mismatch)
+            s = postprocess_files(args.stl, args.apt, args.out, opts, gcode_path=args.gcode, progress=True)
             run.check()
             for w in caught:
                 print(f"warning: {w.message}", file=sys.stderr)

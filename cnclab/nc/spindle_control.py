@@ -42,7 +42,7 @@ from .apt import AptProgram, AptRecord, CLPoints, GotoRun, fedrat, read_apt, spi
 from .numfmt import fixed, scaled_ints
 from .program import write_linear_moves, write_moves
 
-__all__ = ["SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
+__all__ = ["SpindleOptions", "SpindleSchedule", "feed_directions", "working_diameters", "spindle_schedule",
            "apply_acceleration_limit", "insert_spindle_records", "to_gcode_moves", "postprocess_files", "read_inputs",
            "path_surface_deviation",
            "POINT_RULES"]
@@ -111,20 +111,77 @@ def _cl_points(cl) -> CLPoints:
     return cl
 
 
-def spindle_schedule(mesh: TriMesh, cl: CLPoints | ToolPath, *, tool_diameter: float, a_p: float, v_c: float,
-                     f_z: float, teeth: int, feed_direction_deg: float | None = None,
-                     facet_rule: str = "centroid", point: str = "max", n_max: float | None = None,
-                     n_min: float | None = None, vf_max: float | None = None,
-                     accel_rpm_s: float | None = None, filter_facets: bool = True,
-                     locator: FacetLocator | None = None, workers: int = -1) -> SpindleSchedule:
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class SpindleOptions:
+    """Settings of the constant-cutting-speed post-processor (the ``spindle`` CLI flags), keyword-only.
+
+    Cutting data: ``v_c`` nominal cutting speed (m/min), ``f_z`` feed per tooth (mm), ``teeth`` (z,
+    integer >= 1), ``a_p`` depth of cut (mm), ``tool_diameter`` ball diameter D (mm; None: from the
+    CUTTER record in :func:`postprocess_files`, required by :func:`spindle_schedule`).
+    Schedule: ``feed_direction_deg`` constant A_f (deg) or None for eq 7-3; ``facet_rule``
+    'centroid' | 'nearest'; ``point`` 'max' | '1' | '2' | 'thesis'; limits ``n_max`` / ``n_min``
+    (rpm), ``vf_max`` (mm/min), ``accel_rpm_s`` (rpm/s), None = no limit; ``filter_facets`` drop
+    side/bottom facets first; ``workers`` threads of the KD-tree queries (-1: every core).
+    Records and checks (:func:`postprocess_files` only): ``rpm_threshold`` (rpm) / ``vf_threshold``
+    (mm/min) of :func:`insert_spindle_records`; part/path check ``mismatch_tol`` (mm),
+    ``max_off_share`` (0..1), ``allow_mismatch``.
+
+    Examples
+    --------
+    >>> o = SpindleOptions(v_c=63, f_z=0.125, teeth=2, a_p=0.3, tool_diameter=10, n_max=9000)
+    >>> o.point, o.n_max
+    ('max', 9000)
+    """
+
+    v_c: float
+    f_z: float
+    teeth: int
+    a_p: float
+    tool_diameter: float | None = None
+    feed_direction_deg: float | None = None
+    facet_rule: str = "centroid"
+    point: str = "max"
+    n_max: float | None = None
+    n_min: float | None = None
+    vf_max: float | None = None
+    accel_rpm_s: float | None = None
+    filter_facets: bool = True
+    workers: int = -1
+    rpm_threshold: float = 50.0
+    vf_threshold: float = 10.0
+    mismatch_tol: float = 1.0
+    max_off_share: float = 0.2
+    allow_mismatch: bool = False
+
+
+def _options(options: SpindleOptions | None, fields: dict) -> SpindleOptions:
+    """``options`` with the keyword ``fields`` replaced (a new :class:`SpindleOptions` if None)."""
+    if options is None:
+        return SpindleOptions(**fields)
+    if not isinstance(options, SpindleOptions):
+        raise TypeError(f"options must be SpindleOptions, got {type(options).__name__}")
+    return dataclasses.replace(options, **fields) if fields else options
+
+
+def spindle_schedule(mesh: TriMesh, cl: CLPoints | ToolPath, options: SpindleOptions | None = None, *,
+                     locator: FacetLocator | None = None, **fields) -> SpindleSchedule:
     """Compute the point-by-point spindle speed and feed for the feed points of ``cl`` (the CL points
     of an APT program, or any :class:`~cnclab.toolpath.path.ToolPath`: the same schedule).
 
-    Parameters: tool_diameter (mm), a_p (mm), v_c nominal cutting speed (m/min), f_z (mm), teeth;
-    feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule 'centroid' | 'nearest';
-    point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max (mm/min); accel_rpm_s (rpm/s);
-    workers: threads of the KD-tree queries (-1: every core; the result does not depend on it).
+    The settings are a :class:`SpindleOptions` (``tool_diameter`` required) or its fields as keywords
+    (``fields`` replace those of ``options``): tool_diameter (mm), a_p (mm), v_c nominal cutting speed
+    (m/min), f_z (mm), teeth; feed_direction_deg constant A_f (deg) or None for eq 7-3; facet_rule
+    'centroid' | 'nearest'; point 'max' | '1' | '2' | 'thesis'; limits n_max/n_min (rpm), vf_max
+    (mm/min); accel_rpm_s (rpm/s); workers: threads of the KD-tree queries (-1: every core; the result
+    does not depend on it). The record/check fields of the options are not used here. ``locator``: a
+    prepared :class:`~cnclab.geometry.mesh.FacetLocator` of the mesh (built when None).
     """
+    o = _options(options, fields)
+    if o.tool_diameter is None:
+        raise TypeError("spindle_schedule() needs tool_diameter (mm)")
+    tool_diameter, a_p, v_c, f_z, teeth = o.tool_diameter, o.a_p, o.v_c, o.f_z, o.teeth
+    feed_direction_deg, facet_rule, point, workers = o.feed_direction_deg, o.facet_rule, o.point, o.workers
+    n_max, n_min, vf_max, accel_rpm_s = o.n_max, o.n_min, o.vf_max, o.accel_rpm_s
 
     for name, v in (("tool_diameter", tool_diameter), ("a_p", a_p), ("v_c", v_c), ("f_z", f_z)):
         if not (np.isfinite(v) and v > 0):
@@ -145,7 +202,7 @@ def spindle_schedule(mesh: TriMesh, cl: CLPoints | ToolPath, *, tool_diameter: f
         raise ValueError(f"n_min must be <= n_max, got n_min={n_min}, n_max={n_max}")
     cl = _cl_points(cl)
     if locator is None:
-        m = mesh.subset(machined_surface_mask(mesh.normals)) if filter_facets else mesh
+        m = mesh.subset(machined_surface_mask(mesh.normals)) if o.filter_facets else mesh
         if m.n_facets == 0:
             raise ValueError("mesh: no facet left after removing side/bottom facets")
         locator = FacetLocator(m)
@@ -503,10 +560,8 @@ def read_inputs(stl_path, apt_path):
     return out["mesh"], prog, cl
 
 
-def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, teeth: int, a_p: float,
-                      tool_diameter: float | None = None, gcode_path=None, rpm_threshold: float = 50.0,
-                      vf_threshold: float = 10.0, progress: bool = False, mismatch_tol: float = 1.0,
-                      max_off_share: float = 0.2, allow_mismatch: bool = False, **kwargs) -> dict:
+def postprocess_files(stl_path, apt_path, out_path, options: SpindleOptions | None = None, *, gcode_path=None,
+                      progress: bool = False, **fields) -> dict:
     """Read STL + APT, compute the schedule, write the new APT (and G-code) together, atomically.
 
     Inputs are never overwritten (``out_path``/``gcode_path`` equal to an input or to each other is
@@ -517,8 +572,14 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
     (``off_surface_share``); above ``max_off_share`` it is an error unless ``allow_mismatch``.
     (Defaults: 1 mm covers finishing allowances and chordal error; 20 % leaves room for feed moves
     in the air such as lead-ins and links, while a path 50 mm above, 1000 mm away or on a part
-    scaled x0.1 has nearly all points off.) Returns a summary dict.
+    scaled x0.1 has nearly all points off.) The settings are a :class:`SpindleOptions` or its fields as
+    keywords (``fields`` replace those of ``options``); ``tool_diameter`` None takes D from the CUTTER
+    record. Returns a summary dict.
     """
+    o = _options(options, fields)
+    v_c, f_z, teeth, a_p, tool_diameter = o.v_c, o.f_z, o.teeth, o.a_p, o.tool_diameter
+    rpm_threshold, vf_threshold = o.rpm_threshold, o.vf_threshold
+    mismatch_tol, max_off_share, allow_mismatch = o.mismatch_tol, o.max_off_share, o.allow_mismatch
 
     t0 = time.perf_counter()
     check_outputs([out_path, gcode_path], inputs=[stl_path, apt_path],
@@ -565,7 +626,7 @@ def postprocess_files(stl_path, apt_path, out_path, *, v_c: float, f_z: float, t
                 f"{mismatch_tol:g} mm from the surface (ball-end contact check, median gap {np.median(gap):.3g} mm; "
                 f"limit {100 * max_off_share:g} %). Check units, origin and scale, or pass allow_mismatch "
                 "(--allow-mismatch) to process anyway")
-        sched = spindle_schedule(mesh, cl, tool_diameter=D, a_p=a_p, v_c=v_c, f_z=f_z, teeth=teeth, **kwargs)
+        sched = spindle_schedule(mesh, cl, dataclasses.replace(o, tool_diameter=D))
         tick("D_eff")
         new, counts = insert_spindle_records(prog, cl, sched, rpm_threshold, vf_threshold)
         outs = [(out_path, new.to_text())]
