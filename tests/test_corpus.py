@@ -29,16 +29,22 @@ def test_corpus_is_the_frozen_generator_output():
         assert (CORPUS / f"{name}.json").read_text(encoding="utf-8") == json.dumps(d, indent=1) + "\n", name
 
 
-def test_families_named_cases_and_tools():
+@pytest.fixture(scope="module")
+def jobs():
+    """Every corpus job, loaded once for the tests below (cc.job reads and validates a file a call)."""
+    return {n: cc.job(n) for n in cc.job_names()}
+
+
+def test_families_named_cases_and_tools(jobs):
     fams = {n: cc.family(n) for n in cc.job_names()}
     assert {"star", "rectilinear", "islands", "neck", "slot_bulbs", "tapered_channel", "gear", "spiral", "comb",
             "channel_15d", "regions", "drawing"} == set(fams.values())
     assert sum(f == "drawing" for f in fams.values()) >= 10
-    ch, g = cc.job("tapered_channel_30_10"), cc.job("gear10_island")
+    ch, g = jobs["tapered_channel_30_10"], jobs["gear10_island"]
     assert (ch.tool_diameter, ch.theta_deg, g.tool_diameter, g.theta_deg) == (8.0, 30.7, 6.0, 45.6)
     assert len(g.polygon.interiors) == 1                                  # the round island
-    tools = {cc.job(n).tool_diameter for n in cc.job_names()}
-    thetas = [cc.job(n).theta_deg for n in cc.job_names()]
+    tools = {jobs[n].tool_diameter for n in cc.job_names()}
+    thetas = [jobs[n].theta_deg for n in cc.job_names()]
     assert min(tools) == 3 and max(tools) == 12 and min(thetas) >= 20 and max(thetas) <= 120
 
 
@@ -51,9 +57,9 @@ def test_drawing_provenance_and_fixture(name):
     assert len(prov["commit"]) == 40 and prov["licence"]
 
 
-def test_freecad_fixture_for_every_job():
+def test_freecad_fixture_for_every_job(jobs):
     for name in cc.job_names():
         prov = json.loads((cc.FIXTURES / f"{name}.json").read_text())
         assert prov["job"] == f"data/pockets/corpus/{name}.json" and "plan_time_s" in prov
         assert Path(cc.FIXTURES / f"{name}.ngc").exists()
-        assert prov["settings"]["tool_diameter"] == cc.job(name).tool_diameter
+        assert prov["settings"]["tool_diameter"] == jobs[name].tool_diameter
