@@ -38,12 +38,15 @@ Model (units: mm, deg, mm/min, s):
   default :data:`~cnclab.toolpath.motion.SMALL_VMC`: per-axis rate and acceleration, corner and
   centripetal limits, look-ahead; validated against LinuxCNC's planner). It times the path as given:
   a planner's polyline as polyline, a path read from a program with its arcs. The program writer
-  fits arcs (:mod:`cnclab.nc.arcfit`) and writes entries at the job's entry feed, so a written
-  program's machine time differs. Measured on the eight bench pockets (adaptive, small VMC, full
-  resolution, 2026-11-25): the written program's is 0.6-0.9 % longer on the star, rectangle, L and
-  120 x 85 pockets (arc fitting, approach and retract), 2.4 / 4.0 / 7.8 / 55 % on spline,
-  two_islands_neck, two_regions and slot, where the writer's slower entry feed makes the length /
-  feed time longer alike (1.9 / 3.6 / 7.7 / 58 %).
+  writes every feed as the path has it (:func:`cnclab.toolpath.planners.plan` gives helix and ramp
+  entries the job's entry feed, :attr:`Job.entry_feed <cnclab.toolpath.job.Job.entry_feed>`) and fits
+  arcs (:mod:`cnclab.nc.arcfit`), so a planned path's ``time_s`` is the written program's length /
+  feed time (within the written rounding; with fitted arcs within 0.04 %, measured) and its
+  ``time_machine_s`` differs by the arc fitting only: measured on the eight bench pockets (adaptive,
+  small VMC, planned at 0.1 mm, 2026-11-25), the written program's machine time is 0.29-0.72 % longer
+  (before the entry feed was
+  planned: 0.6-0.9 % on the star, rectangle, L and 120 x 85 pockets, 2.4 / 4.0 / 7.8 / 55 % on spline,
+  two_islands_neck, two_regions and slot). Tested: tests/test_entry_feed_times.py.
 * **Feed control** (``feed_control=True``, Jacsó Thesis IV / §4): the cutting level (the lowest z
   of the path, :func:`planar_view`) is cut through one dixel stock of the pocket minus the entry hole
   (:func:`entry_hole`) with segment kinds from the tags (cut / roll-in / roll-out / link); the
