@@ -33,7 +33,7 @@ from ..cutting.spindle_model import working_diameters
 from ..cutting.speeds import spindle_speed
 from .path import Tool, ToolPath, ToolPathBuilder, resample_polyline
 
-__all__ = ["densify", "neighbour_sets", "ReorderResult", "reorder_path", "reordered_path", "path_metrics"]
+__all__ = ["densify", "neighbour_sets", "ReorderOptions", "ReorderResult", "reorder_path", "reordered_path", "path_metrics"]
 
 NEIGHBOUR_RULES = ("knn", "radius", "unvisited")
 
@@ -111,18 +111,41 @@ class ReorderResult:
         return int(self.jump.sum())
 
 
-def reorder_path(points, normals, *, tool_diameter: float, a_p: float, k: int = 4, start: int = 0,
-                 feed_direction_deg: float = 0.0, point: str = "max", tie_tol: float = 1e-6,
-                 direction: str = "move", neighbours: str = "knn", radius_step: float | None = None,
-                 adjacent_mm: float | None = None) -> ReorderResult:
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ReorderOptions:
+    """Settings of the Sec. 9.2 search of :func:`reorder_path`, keyword-only.
+
+    ``tool_diameter``, ``a_p`` (mm); ``k`` neighbours (4 or 8 in the thesis); ``start`` index;
+    ``feed_direction_deg`` initial/tie-break direction (deg); ``point`` tangent-point rule (see
+    spindle_control); ``tie_tol`` D_eff tie tolerance (mm); ``direction`` "move" (default, Sec. 9.2:
+    D_eff of a neighbour evaluated with A_f = direction of the move to it) or "constant" (D_eff of
+    every point at the constant feed_direction_deg of Table 9-1); ``neighbours`` "knn" (default) /
+    "radius" (needs ``radius_step``, mm) / "unvisited" (module docstring); ``adjacent_mm``: also flag
+    moves longer than this (mm) as jumps (None: only empty-set jumps).
+
+    >>> ReorderOptions(tool_diameter=10, a_p=0.3, k=8).neighbours
+    'knn'
+    """
+
+    tool_diameter: float
+    a_p: float
+    k: int = 4
+    start: int = 0
+    feed_direction_deg: float = 0.0
+    point: str = "max"
+    tie_tol: float = 1e-6
+    direction: str = "move"
+    neighbours: str = "knn"
+    radius_step: float | None = None
+    adjacent_mm: float | None = None
+
+
+def reorder_path(points, normals, options: ReorderOptions | None = None, **fields) -> ReorderResult:
     """Reorder CL ``points`` (N, 3, mm) with facet ``normals`` (N, 3) by the Sec. 9.2 search.
 
-    Parameters: tool_diameter, a_p (mm); k neighbours (4 or 8 in the thesis); start index;
-    feed_direction_deg initial/tie-break direction (deg); point tangent-point rule (see spindle_control);
-    direction "move" (default, Sec. 9.2: D_eff of a neighbour evaluated with A_f = direction of the move
-    to it) or "constant" (D_eff of every point at the constant feed_direction_deg of Table 9-1);
-    neighbours "knn" (default) / "radius" (needs radius_step, mm) / "unvisited" (module docstring);
-    adjacent_mm: also flag moves longer than this (mm) as jumps (None: only empty-set jumps).
+    The settings are a :class:`ReorderOptions` or its fields as keywords (``fields`` replace those of
+    ``options``): tool_diameter, a_p (mm), k, start, feed_direction_deg (deg), point, tie_tol (mm),
+    direction, neighbours, radius_step (mm), adjacent_mm (mm).
 
     >>> x, y = np.meshgrid(np.arange(3.0), np.arange(2.0))
     >>> P = np.column_stack([x.ravel(), y.ravel(), np.zeros(6)])
@@ -130,6 +153,10 @@ def reorder_path(points, normals, *, tool_diameter: float, a_p: float, k: int = 
     >>> r.order.tolist(), r.n_jumps                   # flat: along the feed direction, then back
     ([0, 1, 2, 5, 4, 3], 0)
     """
+    o = ReorderOptions(**fields) if options is None else dataclasses.replace(options, **fields)
+    tool_diameter, a_p, k, start, point, tie_tol = o.tool_diameter, o.a_p, o.k, o.start, o.point, o.tie_tol
+    feed_direction_deg, direction, neighbours = o.feed_direction_deg, o.direction, o.neighbours
+    radius_step, adjacent_mm = o.radius_step, o.adjacent_mm
     if direction not in ("move", "constant"):
         raise ValueError(f"direction must be 'move' or 'constant', got {direction!r}")
     if neighbours not in NEIGHBOUR_RULES:
