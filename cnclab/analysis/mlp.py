@@ -27,7 +27,7 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-__all__ = ["MinMaxScaler", "split_indices", "MLPSpec", "TrainedMLP", "train_mlp", "ACTIVATIONS"]
+__all__ = ["MinMaxScaler", "split_indices", "MLPSpec", "TrainedMLP", "TrainConfig", "train_mlp", "ACTIVATIONS"]
 
 ACTIVATIONS = ("logsig", "tansig", "relu")
 TRAINERS = ("lm", "adam", "lbfgs")
@@ -209,15 +209,45 @@ class TrainedMLP:
         return self.y_scaler.inverse_transform(out)
 
 
-def train_mlp(X, Y, hidden: Sequence[int] = (10,), activation: str = "logsig", trainer: str = "lm",
-              seed: int = 0, max_epochs: int = 1000, max_fail: int = 6, fractions=(0.70, 0.15, 0.15),
-              mu: float = 1e-3, mu_dec: float = 0.1, mu_inc: float = 10.0, mu_max: float = 1e10,
-              min_grad: float = 1e-7, lr: float = 1e-2) -> TrainedMLP:
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class TrainConfig:
+    """Training settings of :func:`train_mlp` (the thesis' MATLAB recipe by default), keyword-only.
+
+    ``hidden`` hidden layer widths, e.g. ``(10,)`` (Mgherony's a1) or ``(10, 5)`` (a2); ``activation``
+    ``"logsig"`` (thesis), ``"tansig"`` or ``"relu"`` for the hidden layers; ``trainer`` ``"lm"``
+    (Levenberg–Marquardt, MATLAB trainlm defaults), ``"adam"`` (full batch, ``lr``) or ``"lbfgs"``;
+    ``seed`` fixes the split and the initial weights; ``max_epochs``, ``max_fail`` epoch cap and
+    early-stopping patience (epochs); ``fractions`` train/validation/test shares (sum 1); ``mu``,
+    ``mu_dec``, ``mu_inc``, ``mu_max``, ``min_grad`` trainlm's damping schedule (dimensionless) and
+    gradient stop (scaled units); ``lr`` Adam's learning rate.
+
+    >>> TrainConfig(hidden=(10, 5)).trainer
+    'lm'
+    """
+
+    hidden: Sequence[int] = (10,)
+    activation: str = "logsig"
+    trainer: str = "lm"
+    seed: int = 0
+    max_epochs: int = 1000
+    max_fail: int = 6
+    fractions: tuple = (0.70, 0.15, 0.15)
+    mu: float = 1e-3
+    mu_dec: float = 0.1
+    mu_inc: float = 10.0
+    mu_max: float = 1e10
+    min_grad: float = 1e-7
+    lr: float = 1e-2
+
+
+def train_mlp(X, Y, config: TrainConfig | None = None, **fields) -> TrainedMLP:
     """Min-max scale, split 70/15/15, build ``n_in → hidden… → n_out`` and train with early stopping.
 
     Parameters
     ----------
     X, Y : arrays (n, n_inputs), (n, n_outputs) in original units (e.g. mm, degrees).
+    config : a :class:`TrainConfig` (default: its defaults); ``fields``, its fields as keywords,
+        replace those of ``config``:
     hidden : hidden layer widths, e.g. ``(10,)`` (Mgherony's a1) or ``(10, 5)`` (a2).
     activation : ``"logsig"`` (thesis), ``"tansig"`` or ``"relu"`` for the hidden layers.
     trainer : ``"lm"`` (Levenberg–Marquardt, MATLAB trainlm defaults), ``"adam"`` (full batch, ``lr``)
@@ -232,6 +262,11 @@ def train_mlp(X, Y, hidden: Sequence[int] = (10,), activation: str = "logsig", t
     -------
     TrainedMLP; ``history`` has columns epoch, train_mse, val_mse, test_mse (scaled units), mu.
     """
+    c = TrainConfig(**fields) if config is None else dataclasses.replace(config, **fields)
+    hidden, activation, trainer, seed, max_epochs, max_fail = (c.hidden, c.activation, c.trainer, c.seed,
+                                                               c.max_epochs, c.max_fail)
+    fractions, mu, mu_dec, mu_inc, mu_max, min_grad, lr = (c.fractions, c.mu, c.mu_dec, c.mu_inc, c.mu_max,
+                                                           c.min_grad, c.lr)
     torch = _torch()
     if trainer not in TRAINERS:
         raise ValueError(f"trainer must be one of {TRAINERS}, got {trainer!r}")
