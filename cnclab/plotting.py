@@ -155,7 +155,7 @@ def _layout_texts(fig):
 
 
 def text_clashes(fig, tol_pt: float = 0.5) -> list[str]:
-    """Texts of ``fig`` (titles, axis labels, tick labels in view, legends) that leave the page or overlap
+    """Texts of ``fig``'s 2D axes (titles, axis labels, tick labels in view, legends) that leave the page or overlap
     another title/label/tick label by more than ``tol_pt`` (points) both ways, after laying the figure
     out at its current size. Empty: every text is readable.
 
@@ -201,10 +201,11 @@ def fit_text(fig, min_pt: float = MIN_FONT_PT, step: float = 0.9, max_rounds: in
         if not clashes:
             break
         changed = False
-        ticks = set()
+        ticks = set()          # tick labels shrink through the axis (new ticks take its size), the rest one by one
         for ax in fig.axes:
-            for axis, name in ((ax.xaxis, "x"), (ax.yaxis, "y")):
-                labels = [t for tk in [*axis.get_major_ticks(), *axis.get_minor_ticks()] for t in (tk.label1, tk.label2)]
+            for axis in (ax.xaxis, ax.yaxis):
+                labels = [t for tk in [*axis.get_major_ticks(), *axis.get_minor_ticks()]
+                          for t in (tk.label1, tk.label2)]
                 ticks.update(map(id, labels))
                 size = labels[0].get_fontsize() if labels else None
                 if size is not None and size > min_pt:

@@ -15,6 +15,7 @@ import numpy as np
 
 from ...geometry.mesh import read_stl
 from ...nc import apt
+from ...paths import data_path
 from ...plotting import FIGURES, draw_figure as draw, figsize, register_figure as _register
 from . import ch7_9
 
@@ -207,4 +208,68 @@ def fig9_9_9_12_delta_deff_n():
     axs[1, 0].set(title="Fig 9-11: original", ylabel="|Δn| [rpm]", xlabel="step")
     axs[1, 1].plot(d_opt["dn"], lw=0.4)
     axs[1, 1].set(title="Fig 9-12: reordered (case 1)", xlabel="step")
+    return fig
+
+
+# ------------------------------------------------------------------ 3D views (static versions for papers)
+def _part_3d(ax, mesh):
+    """The sample part (STL triangles, mm) as a light grey surface in a 3D axes."""
+    from matplotlib.ticker import MaxNLocator
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    ax.add_collection3d(Poly3DCollection(np.asarray(mesh.triangles, float), facecolor="0.85", edgecolor="none",
+                                         alpha=0.6))
+    lo, hi = mesh.triangles.reshape(-1, 3).min(axis=0), mesh.triangles.reshape(-1, 3).max(axis=0)
+    ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x [mm]", ylabel="y [mm]",
+           zlabel="z [mm]")
+    ax.set_box_aspect(hi - lo)
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(3))
+
+
+def _path_3d(xyz, values, label: str, title: str):
+    import matplotlib.pyplot as plt
+
+    fig = plt.figure(figsize=figsize(1.0, 1.2), layout="constrained")
+    ax = fig.add_subplot(projection="3d")
+    _part_3d(ax, read_stl(data_path("mgherony2024", "sample_ch8_part.stl")))   # the light 2 mm sample STL
+    sc = ax.scatter(xyz[:, 0], xyz[:, 1], xyz[:, 2] + 0.5, c=values, s=0.3, depthshade=False)   # 0.5 mm lift
+    fig.colorbar(sc, ax=ax, label=label, shrink=0.6)
+    ax.set_title(title)
+    return fig
+
+
+@_register("ch7_3d_cl_path_deff", "mgherony2024",
+           "Mgherony (2024) ch. 7: the A_f = 0 CL path on the part, coloured by the working diameter (3D)")
+def ch7_3d_cl_path_deff():
+    s0 = ch7_9.schedule(0.0)
+    return _path_3d(s0.xyz, s0.d_eff, "D_eff [mm]", "A_f = 0: CL path coloured by D_eff")
+
+
+@_register("ch8_3d_spindle_speed_Af45", "mgherony2024",
+           "Mgherony (2024) ch. 8: the A_f = 45° CL path on the part, coloured by the controlled spindle speed (3D)")
+def ch8_3d_spindle_speed_af45():
+    s45 = ch7_9.schedule(45.0)
+    return _path_3d(s45.xyz, s45.n, "n [rpm]", "A_f = 45°: controlled spindle speed")
+
+
+@_register("ch9_3d_reordered_case1", "mgherony2024",
+           "Mgherony (2024) ch. 9: the case 1 reordered path on the part, feed moves and jumps (3D)")
+def ch9_3d_reordered_case1():
+    import matplotlib.pyplot as plt
+
+    _, dense, orders = ch7_9.reorder_cases()
+    r = orders[1]
+    Q = dense[r.order] + [0.0, 0.0, 0.3]                    # 0.3 mm lift above the surface
+    feed = Q.copy()
+    feed[r.jump] = np.nan                                   # break the line at each jump
+    fig = plt.figure(figsize=figsize(1.0, 1.2), layout="constrained")
+    ax = fig.add_subplot(projection="3d")
+    _part_3d(ax, read_stl(data_path("mgherony2024", "sample_ch8_part.stl")))
+    ax.plot(*feed.T, lw=0.4, label="feed moves")
+    J = [i for i in np.flatnonzero(r.jump) if i > 0]
+    for k, i in enumerate(J):
+        ax.plot(*Q[[i - 1, i]].T, "--", color="C3", lw=0.6, label=f"jumps ({len(J)})" if k == 0 else None)
+    ax.set_title("Case 1 (corner, k = 4): reordered path")
+    ax.legend(loc="upper left", fontsize="small")
     return fig
