@@ -88,3 +88,16 @@ def test_spiral_out_reaches_the_slot_width():
     # at most 0.3 mm gained per turn: 4 turns from 0.5 to 1.5 mm, then a full circle at 1.5
     turn = np.unwrap(np.arctan2(S[:, 1] - 2.0, S[:, 0] - 1.0)) / (2 * math.pi)
     assert turn[-1] == pytest.approx(5.0, abs=1e-9)
+
+
+def test_region_refused_by_the_trochoid_is_left_to_the_planner(monkeypatch):
+    # every width class "crawls" (MIN_STEP_FRAC huge): the region is handed back to the level
+    # planner, which plans the channel its own way (entries by helix) -- safely, and says no region
+    # was cut by the trochoid
+    monkeypatch.setattr(narrow, "MIN_STEP_FRAC", 1e9)
+    job = _job(box(0, 0, 45, 9), "refused")
+    tp = planners.plan(job, "adaptive", H)
+    assert tp.info["narrow_regions"] == []
+    ev = evaluate(tp, job, H)
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0 and ev.wall_gouge_max_mm <= 1e-3
+    assert "narrow region" not in write_program(tp, job)

@@ -88,10 +88,11 @@ SPUR_SLOPE = 0.4
 #: a step of the straight-slot period removing at most this (mm^2 per mm of path) is a return
 #: through air (a link at the link feed)
 AIR_MM2_PER_MM = 1e-3
-#: a width class whose admissible step is below this x r ends the trochoid (Thesis IV's pattern in a
-#: slot barely wider than the tool crawls: 0.03 mm steps measured at c = 0.2 r, theta 101.5 deg);
-#: the rest of the axis is left to the level planner
-MIN_STEP_FRAC = 0.05
+#: a width class whose admissible step is below this x a_e (= r (1 - cos theta)) ends the trochoid
+#: (Thesis IV's pattern in a slot barely wider than the tool crawls: a 0.03 mm step = 0.01 a_e
+#: measured at c = 0.2 r, theta 101.5 deg; 0.098 mm = 0.18 a_e at theta 30.7 deg still pays); the
+#: rest of the axis is left to the level planner
+MIN_STEP_FRAC = 0.1
 #: free cells tried (nearest first) for the start of a trochoid at a mouth onto cleared area
 MOUTH_CANDIDATES = 200
 #: boundary sampling of the Voronoi medial axis, x the planning pixel h (and at most r / 8)
@@ -121,12 +122,12 @@ class NarrowRegion:
         return NarrowRegion(self.index, self.polygon, self.axis[::-1].copy(), self.radius[::-1].copy(),
                             self.dead[::-1])
 
-    def describe(self) -> str:
-        """One line for the program header and the plan result."""
+    def describe(self, r) -> str:
+        """One line for the program header and the plan result (``r`` the tool radius, mm)."""
         a, b = self.axis[0], self.axis[-1]
         return (f"narrow region {self.index}: Thesis IV trochoid along its medial axis "
                 f"({a[0]:.1f}, {a[1]:.1f}) -> ({b[0]:.1f}, {b[1]:.1f}), {self.length:.1f} mm, "
-                f"pocket width {2 * self.c_min:.2f} mm + D")
+                f"narrowest {2 * (self.c_min + r):.2f} mm wide")
 
 
 def _longest_path(G):
@@ -362,7 +363,7 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
         P0, kinds0, F0, step = trochoid_period(round(2.0 * (cc + r), 3), float(r), float(theta_deg), float(h),
                                                round(float(vmax_ratio), 3))
         x_ext = float(P0[:, 0].max())
-        if step < MIN_STEP_FRAC * r:
+        if step < MIN_STEP_FRAC * r * (1.0 - math.cos(math.radians(theta_deg))):
             break           # too slow a crawl: the rest of the axis is left to the level planner
         if x0 is None:
             x0 = hole_mm + step - x_ext
@@ -465,7 +466,7 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
     planner's link), and the trochoid starts there; else it retracts, enters by a helix at the axis
     start (into material) and spirals out to the slot's width. False (nothing emitted) when the axis
     start has no room for a helix of ``prm.helix_min_mm`` or the pattern of its first width class
-    would crawl (step below ``MIN_STEP_FRAC`` r): the region is left to the level planner."""
+    would crawl (step below ``MIN_STEP_FRAC`` a_e): the region is left to the level planner."""
     prm, r, h = lv.prm, lv.r, lv.h
     c_start = float(reg.radius[0]) - h
     rho = min(prm.helix_radius_frac * r, prm.helix_room_frac * float(reg.radius[0]) - h)
@@ -501,7 +502,7 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
                   f"narrow region {reg.index}: Thesis IV trochoid")
     lv.cur = (float(Q[-1, 0]), float(Q[-1, 1]))
     lv.stats["narrow_trochoids"] = lv.stats.get("narrow_trochoids", 0) + 1
-    lv.narrow_done.append(reg.describe() + (" from cleared area" if from_cleared else " from a helix")
+    lv.narrow_done.append(reg.describe(r) + (" from cleared area" if from_cleared else " from a helix")
                           + f", steps {', '.join(f'{s_:.3f}' for s_ in steps)} mm")
     return True
 
@@ -628,10 +629,17 @@ def next_region(lv, banned=None) -> bool:
         need &= ~banned
     if need.any():
         return False
-    k = next((i for i, q in enumerate(st.pending) if q.dead[0]), 0)
-    cut_region(lv, st.restore(k))       # False: no room for its helix; back in the planner's view
-    st.park()
-    return True
+    while st.pending:
+        k = next((i for i, q in enumerate(st.pending) if q.dead[0]), 0)
+        done = cut_region(lv, st.restore(k))
+        st.park()
+        if done:
+            return True
+        # no room for its helix, or its pattern would crawl: the region is back in the planner's
+        # view, and the planner enters it its own way (None: that place is banned, try again)
+        if lv.enter(banned) is not False:
+            return True
+    return False
 
 
 def close(lv) -> None:
