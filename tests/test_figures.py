@@ -4,6 +4,7 @@ import re
 from pathlib import Path
 
 import matplotlib
+import matplotlib.text
 import matplotlib.pyplot as plt
 import pytest
 
@@ -89,12 +90,18 @@ def test_every_recipe_renders_an_85_mm_pdf(name, tmp_path):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             [pdf] = plotting.export_figure(fig, name, tmp_path, width_mm=85, formats=("pdf",))
+        # readable in a column: no text off the page or on another one, none below the 6 pt floor
+        assert plotting.text_clashes(fig) == []
+        sizes = [t.get_fontsize() for t in fig.findobj(matplotlib.text.Text) if t.get_text().strip()]
+        assert min(sizes) >= plotting.MIN_FONT_PT - 1e-9
     finally:
         plt.close(fig)
-    # matplotlib's only sign that a figure does not fit the page: its constrained layout gave up
+    # matplotlib's sign that a figure does not fit the page at all: its constrained layout gave up
     collapsed = [str(w.message) for w in caught if "constrained_layout not applied" in str(w.message)]
     assert not collapsed, f"{name} does not fit 85 mm: {collapsed[0]}"
-    assert abs(plotting.pdf_page_size_pt(pdf)[0] - 85 * PT_PER_MM) < TOL_PT     # 240.94 pt
+    w, h = plotting.pdf_page_size_pt(pdf)
+    assert abs(w - 85 * PT_PER_MM) < TOL_PT     # 240.94 pt
+    assert h >= 0.25 * w                        # not a strip
 
 
 # Works whose notebooks draw every figure through a registered recipe (issue 26 item 5): a figure a

@@ -28,11 +28,11 @@ def table2_fr_printed_vs_consistent():
     axs[0].semilogy(x, printed.Fr_mm, "o-", label="printed F_r (slip)")
     axs[0].semilogy(x, re.Fr_consistent, "s-", label="unit-consistent F_r, eq. 7")
     axs[0].semilogy(x, re.Fr_v2, "^--", label="F_r from V2, eq. 4")
-    axs[0].set(xlabel="Table 2 row", ylabel="forward step F_r [mm]")
+    axs[0].set(xlabel="Table 2 row", ylabel="F_r [mm]", title="forward step")
     th, R = re.theta_rad.to_numpy(), re.RT.to_numpy()
     axs[1].bar(x - 0.2, 0.5 * R**2 * (3.14 * th / 180 - np.sin(th)), 0.4, label="V_RT with slip")
     axs[1].bar(x + 0.2, sv.curvature_volume(th, R), 0.4, label="V_RT consistent")
-    axs[1].set(xlabel="Table 2 row", ylabel="V_RT [mm²]")
+    axs[1].set(xlabel="Table 2 row", ylabel="V_RT [mm²]", title="curvature volume")
     handles, labels = (sum(x, []) for x in zip(*(ax.get_legend_handles_labels() for ax in axs)))
     fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=7, columnspacing=0.8)
     return fig

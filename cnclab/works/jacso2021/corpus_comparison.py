@@ -229,7 +229,7 @@ def distribution_figure(df: pd.DataFrame):
     R = ratio_columns(df)
     fams = sorted(R["family"].unique())
     # three rows of two, the families labelled once under the bottom row: legible at a column width of 85 mm
-    fig, axs = plt.subplots(3, 2, figsize=figsize(1.5, 2.2), sharex=True, layout="constrained")
+    fig, axs = plt.subplots(3, 2, figsize=figsize(1.5, 2.6), sharex=True, layout="constrained")
     for ax, (col, target, yscale) in zip(axs.flat, PANELS):
         for i, f in enumerate(fams):
             v = R.loc[R["family"] == f, col].dropna()
@@ -237,8 +237,11 @@ def distribution_figure(df: pd.DataFrame):
         ax.axhline(target, ls="--", color="k", lw=0.8)
         ax.set_title(col)
         ax.set_yscale(yscale, **({"linthresh": 1.0} if yscale == "symlog" else {}))
+        if yscale == "symlog":          # decades beyond the linear part only: -1, 0, 1 would overlap
+            lo, hi = ax.get_ylim()
+            ax.set_yticks([t for t in (-1e4, -1e3, -1e2, -10, 0, 10, 1e2, 1e3, 1e4) if lo <= t <= hi])
     for ax in axs[-1]:
-        ax.set_xticks(range(len(fams)), fams, rotation=60, ha="right", fontsize=7)
+        ax.set_xticks(range(len(fams)), fams, rotation=90, fontsize=6)
     return fig
 
 
