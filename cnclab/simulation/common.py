@@ -19,6 +19,7 @@ Conventions
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import os
@@ -338,9 +339,27 @@ def default_lag_mm(resolution_mm: float, tool_radius: float) -> float:
     return 2.0 * math.sqrt(2.0 * tool_radius * resolution_mm) + 2.0 * resolution_mm
 
 
-def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None, teeth=None,
-             front_only: bool = True, copy: bool = False, lag_mm: float | None = None,
-             feed_direction: str = "backward", backend: str | None = None, lag_rule: str = "path"):
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class SimOptions:
+    """Measurement settings of :func:`simulate` (see its parameters), keyword-only.
+
+    ``front_only`` measure the front half-circle only; ``lag_mm`` (mm, None: :func:`default_lag_mm`);
+    ``feed_direction`` ``"backward"`` | ``"central"``; ``backend`` ``"numba"`` | ``"numpy"`` | None;
+    ``lag_rule`` ``"path"`` | ``"front"``.
+
+    >>> SimOptions(lag_mm=0.0).feed_direction
+    'backward'
+    """
+
+    front_only: bool = True
+    lag_mm: float | None = None
+    feed_direction: str = "backward"
+    backend: str | None = None
+    lag_rule: str = "path"
+
+
+def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None, teeth=None, *,
+             copy: bool = False, options: SimOptions | None = None, **fields):
     """Move the tool through ``centres`` cutting ``stock``; return a per-step pandas DataFrame.
 
     Works for both stock models (dixel and pixel). At step i the engagement is measured on the
@@ -356,6 +375,10 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     feed_mm_min : feed rate v_f (mm/min).
     f_z : feed per tooth (mm); gives chip-thickness columns (NaN without it).
     teeth : number of teeth z; with f_z gives the spindle speed n = v_f / (z f_z) column (rpm).
+    copy : cut a copy of ``stock`` (the argument is left as it is).
+    options : a :class:`SimOptions`; ``fields``, its fields as keywords (``front_only``, ``lag_mm``,
+        ``feed_direction``, ``backend``, ``lag_rule``), replace those of ``options``:
+    front_only : measure the front half-circle only (default True).
     lag_mm : engagement at step i is measured on the stock with the disks of the last ``lag_mm`` of
         path not yet cut (default :func:`default_lag_mm`; 0 = measure on the fully updated stock).
         The removed area of every step is still exact: disks are cut in path order.
@@ -394,6 +417,8 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     """
     import pandas as pd
 
+    o = SimOptions(**fields) if options is None else dataclasses.replace(options, **fields)
+    lag_mm, feed_direction, lag_rule = o.lag_mm, o.feed_direction, o.lag_rule
     if copy:
         stock = stock.copy()
     P = np.asarray(centres, dtype=float)
@@ -429,14 +454,14 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
         raise ValueError(f"lag_mm must be >= 0, got {lag_mm!r}")
     s_cum = np.cumsum(ds)
     fz = math.nan if f_z is None else float(f_z)
-    be = resolve_backend(backend)
+    be = resolve_backend(o.backend)
     plain = stock._plain()
     compiled = (be == "numba" and plain
-                and stock._simulate_compiled(P, d, ds, s_cum, r, lag, central, front_only, fz,
+                and stock._simulate_compiled(P, d, ds, s_cum, r, lag, central, o.front_only, fz,
                                              (eng, ent, ext, rem, hmax, havg), hold_front))
     if not compiled:
-        _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z,
-                       (eng, ent, ext, rem, hmax, havg), {"backend": be} if plain else {}, hold_front)
+        _simulate_loop(stock, P, d, ds, s_cum, r, lag, f_z, (eng, ent, ext, rem, hmax, havg),
+                       {"backend": be} if plain else {}, o)
     mrr = material_removal_rate(rem, ds, a_p, feed_mm_min)
     df = pd.DataFrame({"x": P[:, 0], "y": P[:, 1], "s": s_cum, "ds": ds,
                        "engagement_deg": eng, "entry_deg": ent, "exit_deg": ext,
@@ -485,10 +510,12 @@ def simulate_runs(stock: StockBase, centres, rapid, tool_radius, a_p, feed_mm_mi
     return pd.concat(tables, ignore_index=True)
 
 
-def _simulate_loop(stock, P, d, ds, s_cum, r, lag, central, front_only, f_z, out, kw, hold_front=False):
+def _simulate_loop(stock, P, d, ds, s_cum, r, lag, f_z, out, kw, opts: SimOptions):
     """The reference loop of :func:`simulate` (a Python loop over the steps calling
-    ``stock.engagement(..., **kw)`` and ``stock.cut_disk(..., **kw)``): fills the arrays ``out``."""
+    ``stock.engagement(..., **kw)`` and ``stock.cut_disk(..., **kw)``): fills the arrays ``out``;
+    ``opts`` gives front_only, the feed-direction rule and the lag rule."""
     eng, ent, ext, rem, hmax, havg = out
+    central, front_only, hold_front = opts.feed_direction == "central", opts.front_only, opts.lag_rule == "front"
     n = len(P)
     s_l, ds_l = s_cum.tolist(), ds.tolist()          # Python floats: cheap scalar access per step
     fdir = d[0]
