@@ -161,7 +161,7 @@ def text_clashes(fig, tol_pt: float = 0.5) -> list[str]:
 
     >>> import matplotlib; matplotlib.use("Agg")
     >>> import matplotlib.pyplot as plt
-    >>> fig, ax = plt.subplots(figsize=(2.0, 2.0), layout="constrained")
+    >>> fig, ax = plt.subplots(layout="constrained"); fig.set_size_inches(2.0, 2.0)   # a 2-inch test page
     >>> _ = ax.set_title("a title much wider than the two inches of this page")
     >>> text_clashes(fig)
     ["axes 0: 'a title much wider than the two inches of this page' leaves the page"]

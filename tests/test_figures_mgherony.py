@@ -3,6 +3,7 @@ re-renders without its notebook to an 85 mm PDF (fast mode: 1 mm STL/CL resoluti
 epochs, shared with the notebooks through the functools and on-disk caches)."""
 import json
 import re
+import warnings
 
 import matplotlib.pyplot as plt
 import matplotlib.text as mtext
@@ -56,7 +57,10 @@ def test_recipe_renders_an_85_mm_pdf(tmp_path, name):
         # Fig 6-3's diagonal carries only the factor name (axis off); a 3D axes draws its own axes (axison False)
         shown = [ax for ax in fig.axes if ax.axison or ax.name == "3d"]
         assert shown and all(ax.has_data() for ax in shown), [ax.get_title() for ax in shown if not ax.has_data()]
-        [p] = plotting.export_figure(fig, name, tmp_path, width_mm=85, formats=("pdf",))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            [p] = plotting.export_figure(fig, name, tmp_path, width_mm=85, formats=("pdf",))
+        assert not [w for w in caught if "constrained_layout not applied" in str(w.message)]
         # readable at column width: no title/label/tick label/legend off the page or on another one,
         # no text below 6 pt unless the recipe drew it so
         assert plotting.text_clashes(fig) == []
