@@ -15,6 +15,10 @@ from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import Job
 from cnclab.toolpath.path import Tool, ToolPath
 
+# one xdist group (make test: --dist loadgroup): all of this module runs in one worker, so that
+# the cached clearing paths (`_run`) are planned once
+pytestmark = pytest.mark.xdist_group("test_ce_clearing")
+
 R, THETA, H = 5.0, math.degrees(math.acos(1 - 3 / 5)), 0.25
 POCKETS = {"plain": box(0, 0, 40, 30), "island": box(0, 0, 60, 40).difference(box(25, 15, 35, 25))}
 

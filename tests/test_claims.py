@@ -18,7 +18,10 @@ COMPUTED = [c for c in LEDGER if c.computed_by or c.reconstructed_by]
 AUDITED = [c for c in LEDGER if c.work in claims.QUOTED_WORKS]
 
 
-@pytest.mark.parametrize("claim", COMPUTED, ids=[c.claim_id for c in COMPUTED])
+# one xdist group per work section (make test: --dist loadgroup): the rows of a section share the
+# in-process caches of their recipes (functools.cache), which are then computed by one worker only
+@pytest.mark.parametrize("claim", [pytest.param(c, id=c.claim_id, marks=pytest.mark.xdist_group(
+    "claims-" + ".".join(c.claim_id.split(".")[:2]))) for c in COMPUTED])
 def test_claim_status_holds(claim):
     res = claims.evaluate(claim)
     assert not res.error, f"{claim.claim_id} ({claim.computed_by or claim.reconstructed_by}) raised: {res.error}"

@@ -12,6 +12,10 @@ import pytest
 from cnclab.paths import REPO_ROOT
 from cnclab.works.jacso2021 import corpus_comparison as cc
 
+# one xdist group (make test: --dist loadgroup): all of this module runs in one worker, so that
+# the module-scoped `jobs` are loaded once
+pytestmark = pytest.mark.xdist_group("test_corpus")
+
 CORPUS = REPO_ROOT / "data" / "pockets" / "corpus"
 
 

@@ -11,6 +11,10 @@ from cnclab.toolpath import pocket as pk
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.works.jacso2021.studies import design_star
 
+# one xdist group (make test: --dist loadgroup): all of this module runs in one worker, so that
+# the module-scoped hybrid plans (`planned`: star and rectangle, ~7 CPU-s) are made once
+pytestmark = pytest.mark.xdist_group("test_pocket")
+
 
 def level(path, job, res, feed_control=False):
     """The one evaluator's cutting-level model: (per-step table, level summary, Evaluation)."""

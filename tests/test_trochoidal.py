@@ -10,6 +10,10 @@ from cnclab.toolpath import trochoidal as tr
 from cnclab.toolpath.evaluate import Evaluation
 from cnclab.works.jacso2021.studies import compare_patterns
 
+# one xdist group (make test: --dist loadgroup): all of this module runs in one worker, so that
+# the module-scoped fixtures (`ce_slot`, `sweep_w12`: ~4 CPU-s) are made once
+pytestmark = pytest.mark.xdist_group("test_trochoidal")
+
 
 @settings(max_examples=30, deadline=None, derandomize=True)
 @given(st.floats(0.2, 3.0), st.floats(7.0, 20.0))
