@@ -4,7 +4,7 @@ repeated at the admissible step (see :mod:`cnclab.toolpath.trochoidal`)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -19,7 +19,7 @@ from ..path import ToolPath, subdivide
 from . import _common
 from .patterns import circle_front_step, evaluate_pattern, pattern_kinds, slot_limit
 
-__all__ = ["disk_has_material", "front_contour", "roll_arc", "linking_arc", "ce_period", "ce_trochoid_iteration", "ce_trochoid", "ce_admissible_step", "fillet_entry", "fillet_exit", "tangent_arc", "CEIteration"]
+__all__ = ["disk_has_material", "front_contour", "roll_arc", "linking_arc", "CEPeriodOptions", "ce_period", "ce_trochoid_iteration", "CEPatternOptions", "ce_trochoid", "ce_admissible_step", "fillet_entry", "fillet_exit", "tangent_arc", "CEIteration"]
 
 
 def front_contour(stock, x_min=-math.inf, every_rows=3, min_points=6):
@@ -121,9 +121,30 @@ def _roll_out_period(roll_in, rho, sweep_deg, step_mm, allowed, feed_mm_min) -> 
     return _period([("roll-in", roll_in), ("roll-out", clamp_to_region(out, allowed))], False, feed_mm_min)
 
 
-def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_min=-math.inf,
-              roll_radius=1.0, roll_sweep_deg=90.0, a_p=1.0, feed_mm_min=1000.0, front_stock=None,
-              fillet_radius_mm=None):
+@dataclass(frozen=True, kw_only=True)
+class CEPeriodOptions:
+    """Settings of one period of :func:`ce_period`, keyword-only.
+
+    ``dt`` Thesis III integration step (mm of contour parameter); ``step_mm`` sampling of the
+    march/arcs/cut (mm); ``x_min`` (mm) the front is read right of it; ``roll_radius`` (mm) and
+    ``roll_sweep_deg`` (deg) of the roll-in/roll-out arcs; ``a_p`` (mm) and ``feed_mm_min`` (mm/min)
+    of the simulated cut; ``fillet_radius_mm`` (mm; None = sharp corners).
+
+    >>> CEPeriodOptions(step_mm=0.1).roll_radius
+    1.0
+    """
+
+    dt: float = 0.1
+    step_mm: float = 0.05
+    x_min: float = -math.inf
+    roll_radius: float = 1.0
+    roll_sweep_deg: float = 90.0
+    a_p: float = 1.0
+    feed_mm_min: float = 1000.0
+    fillet_radius_mm: float | None = None
+
+
+def ce_period(stock, tool_radius, theta_deg, allowed, options=None, *, front_stock=None, **fields) -> ToolPath | None:
     """Plan one constant-engagement trochoidal period with explicit roll-in and roll-out.
 
     Local frame: the period advances along +x, the material front is cut from the lower wall to the
@@ -145,14 +166,16 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
        march and the cut and the one between the cut and the far wall are rounded
        (:func:`fillet_entry`, :func:`fillet_exit`; the entry fillet is tagged roll-in).
 
+    Settings: ``options`` a :class:`CEPeriodOptions` or its fields as keywords (replacing its fields).
     ``front_stock`` (default ``stock``): the stock whose front is followed (e.g. one pocket arm's
     material) while the engagement is simulated on ``stock`` (all the material).
 
     Returns a :class:`ToolPath` of the period (:func:`pattern_kinds` gives roll-in / cut / roll-out),
     or None when no material is left in reach.
     """
-    r = _common.positive("tool_radius", tool_radius)
-    rho = _common.positive("roll_radius", roll_radius)
+    o = CEPeriodOptions(**fields) if options is None else replace(options, **fields)
+    dt, step_mm, x_min, roll_sweep_deg, a_p, feed_mm_min = o.dt, o.step_mm, o.x_min, o.roll_sweep_deg, o.a_p, o.feed_mm_min
+    r, rho = _common.positive("tool_radius", tool_radius), _common.positive("roll_radius", o.roll_radius)
     fs = stock if front_stock is None else front_stock
     c = front_contour(fs, x_min=x_min)
     if c is None or c.t_max < 2 * stock.resolution_mm:
@@ -234,10 +257,10 @@ def ce_period(stock, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05, x_mi
         d = np.hypot(*np.diff(cut, axis=0).T) > 1e-9
         TE = np.diff(cut, axis=0)[d][-1] if d.any() else np.array([1.0, 0.0])
     cut = np.vstack([Ps, cut[1:]])
-    if fillet_radius_mm is not None:
-        roll_in, cut = fillet_entry(roll_in, cut, fillet_radius_mm, rho, roll_sweep_deg, step_mm, allowed)
+    if o.fillet_radius_mm is not None:
+        roll_in, cut = fillet_entry(roll_in, cut, o.fillet_radius_mm, rho, roll_sweep_deg, step_mm, allowed)
         if near_wall and float(np.dot(TE, cut[-1] - cut[-2])) > 0:
-            cut, E, TE = fillet_exit(cut, TE, fillet_radius_mm, step_mm, allowed)
+            cut, E, TE = fillet_exit(cut, TE, o.fillet_radius_mm, step_mm, allowed)
     roll_out, _ = roll_arc(E, TE, rho, roll_sweep_deg, ds=step_mm, into=False)
     roll_out = clamp_to_region(roll_out, allowed)
     return _period([("roll-in", roll_in), ("cut", cut), ("roll-out", roll_out)], True, feed_mm_min)
@@ -544,9 +567,31 @@ def ce_admissible_step(per: ToolPath, theta_max_deg, width, tool_radius, resolut
     return _common.largest_step(emax, theta_max_deg, 0.5 * s0, 1.5 * s0, tol_mm, grow_limit=4 * r)
 
 
-def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, dt=0.1,
-                n_iter=8, roll_radius=1.0, iteration: CEIteration | None = None, feed_mm_min=255.0,
-                link_feed_mm_min=None, step="admissible", theta_max_deg=None) -> ToolPath:
+@dataclass(frozen=True, kw_only=True)
+class CEPatternOptions:
+    """Settings of the repeated pattern of :func:`ce_trochoid`, keyword-only.
+
+    ``dt`` (mm of contour parameter), ``n_iter`` (periods) and ``roll_radius`` (mm): the
+    :func:`ce_trochoid_iteration` run when no ``iteration`` is given; ``feed_mm_min`` (mm/min) of the
+    periods and ``link_feed_mm_min`` (mm/min; None = the feed) of the links; ``step`` ``"admissible"``
+    | ``"shift"`` | a number (mm); ``theta_max_deg`` (deg; None = ``theta_deg``) of the admissible step.
+
+    >>> CEPatternOptions(step="shift").n_iter
+    8
+    """
+
+    dt: float = 0.1
+    n_iter: int = 8
+    roll_radius: float = 1.0
+    feed_mm_min: float = 255.0
+    link_feed_mm_min: float | None = None
+    step: str | float = "admissible"
+    theta_max_deg: float | None = None
+
+
+def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, *,
+                iteration: CEIteration | None = None, options: CEPatternOptions | None = None,
+                **fields) -> ToolPath:
     """Repetitive constant-engagement pattern: the last (converged) period of
     :func:`ce_trochoid_iteration` (roll-in, cut, roll-out) repeated ``n_periods`` times, joined by
     straight linking moves (flagged link) through the cleared slot.
@@ -555,10 +600,13 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
     at ``theta_max_deg`` (default ``theta_deg``; :func:`ce_admissible_step`); ``"shift"`` — the
     iteration's last shift (a dixel-noisy estimate: the roll-in end sits where the engagement climbs
     steeply, so a step a few hundredths of a mm too long shows as an overshoot); or a number (mm).
-    ``info["shift"]`` keeps the iteration's last shift.
+    ``info["shift"]`` keeps the iteration's last shift. Settings: a :class:`CEPatternOptions` or its
+    fields as keywords (``fields`` replace those of ``options``).
     """
-    it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, n_iter, resolution_mm, dt,
-                                            roll_radius=roll_radius)
+    o = CEPatternOptions(**fields) if options is None else replace(options, **fields)
+    step, theta_max_deg = o.step, o.theta_max_deg
+    it = iteration or ce_trochoid_iteration(width, tool_radius, theta_deg, o.n_iter, resolution_mm, o.dt,
+                                            roll_radius=o.roll_radius)
     # the last complete period (roll-in, cut at theta, roll-out); a final period that found no
     # front in reach (Thesis III failed, rolled straight out) is not a pattern period
     good = [k for k, q in enumerate(it.periods)
@@ -584,6 +632,6 @@ def ce_trochoid(width, tool_radius, theta_deg, n_periods=6, resolution_mm=0.05, 
             raise ValueError(f"step must be 'admissible', 'shift' or a number (mm), got {step!r}")
     else:
         s = _common.positive("step", step)
-    p = _repeat_period(per, s, n_periods, resolution_mm, feed_mm_min, link_feed_mm_min)
+    p = _repeat_period(per, s, n_periods, resolution_mm, o.feed_mm_min, o.link_feed_mm_min)
     p.info["shift"] = shift
     return p
