@@ -182,7 +182,6 @@ _NJIT = "numba nopython kernel: arrays and scalars passed positionally (no datac
 #: offender. Sizes: lines for "lines"/"module", a count for "params".
 BUDGET_ALLOWED = {
     ("module", "cnclab/nc/apt.py", ""): (940, "APT reader (bulk + careful parser) and writer: to split reader / writer"),
-    ("lines", "cnclab/nc/gcode.py", "read_gcode"): (183, "the reader's one-pass word state machine: to split per word group"),
     ("module", "cnclab/simulation/_kernels.py", ""): (860, "the numba kernels of both stocks in one module (one JIT cache)"),
     ("params", "cnclab/simulation/_kernels.py", "_refine"): (18, _NJIT),
     ("params", "cnclab/simulation/_kernels.py", "_band"): (14, _NJIT),
@@ -201,8 +200,6 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/toolpath/constant_engagement.py", "multi_pass"): (13, "Thesis II/III integration settings; to take a Job"),
     ("params", "cnclab/toolpath/dropcutter.py", "_grid_drop"): (15, _NJIT),
     ("lines", "cnclab/toolpath/evaluate.py", "evaluate"): (137, "the evaluator's one pass: to split the metric groups into helpers"),
-    ("params", "cnclab/toolpath/trochoidal/ce.py", "ce_period"): (13, "Thesis IV period settings; to take a pattern options object"),
-    ("params", "cnclab/toolpath/trochoidal/ce.py", "ce_trochoid"): (13, "Thesis IV period settings; to take a pattern options object"),
 }
 
 

@@ -212,104 +212,25 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
     """
     moves, lines, comments = [], [], []
     prog = GcodeProgram(moves, lines, comments, source=source)
-    pos = {"X": None, "Y": None, "Z": None} if start is None else dict(zip("XYZ", map(float, start)))
-    motion, feed, spindle, spindle_on = None, None, None, False
-    scale, absolute, arc_absolute = 1.0, True, False
-    selected_tool = None
-    skipped_partial = 0
+    st = _ReaderState({"X": None, "Y": None, "Z": None} if start is None else dict(zip("XYZ", map(float, start))))
     raw_lines = _LINE_END.split(text)
     for ln, raw in enumerate(raw_lines, start=1):
         if prog.end_word is not None or prog.closing_percent_line is not None:
             break  # M2/M30 or the closing % ends the program; later lines are not executed (as in LinuxCNC)
         where = f"{source}:{ln}"
-        body, cmts = _block_body(raw, where, ln, prog, scale)
+        body, cmts = _block_body(raw, where, ln, prog, st.scale)
         if body is None:
             continue
         if prog.moves and _M6.search(body.upper().replace(" ", "")):
             prog.warnings.append(f"{where}: tool change {body.strip()!r} after the program has moved: "
                                  "the moves after it are taken with the same tool as before")
         words = [(a.upper(), b.replace(" ", "")) for a, b in _WORD.findall(body)]
-        coords: dict[str, float] = {}
-        new_motion = None
-        gset = set()
-        for letter, num in words:  # T is selected before M6 acts, wherever it stands in the block
-            if letter == "T":
-                selected_tool = int(float(num))
-        for letter, num in words:
-            if letter == "G":
-                code = _gnum(num)
-                gset.add(code)
-                if code in ("0", "1", "2", "3"):
-                    if new_motion is not None:
-                        raise GcodeError(f"{where}: word G{num}: two motion words in one block")
-                    new_motion = "G" + code
-                elif code == "20":
-                    scale = MM_PER_INCH
-                    if not prog.converted_from_inch:
-                        prog.converted_from_inch = True
-                        prog.warnings.append(f"{where}: G20 (inches): every length and feed converted "
-                                             "to mm (x 25.4)")
-                elif code == "21":
-                    scale = 1.0
-                elif code == "90":
-                    absolute = True
-                elif code == "91":
-                    absolute = False
-                elif code == "90.1":
-                    arc_absolute = True
-                elif code == "91.1":
-                    arc_absolute = False
-                elif code == "80":
-                    motion = None
-                elif code in _CANNED:
-                    raise GcodeError(f"{where}: word G{num}: canned cycles (G73, G76, G81-G89) are not "
-                                     "supported")
-                elif code in _REFUSED_G:
-                    raise GcodeError(f"{where}: word G{num}: {_REFUSED_G[code]}")
-                elif code not in _NOOP_G:
-                    raise GcodeError(f"{where}: unknown or unsupported word G{num}")
-            elif letter == "M":
-                code = _gnum(num)
-                if code in ("3", "4"):
-                    spindle_on = True
-                    if prog.spindle_on_line is None:
-                        prog.spindle_on_line = ln
-                elif code == "5":
-                    spindle_on = False
-                    prog.spindle_stop_line = ln
-                elif code in ("2", "30"):
-                    prog.end_word, prog.end_line = "M" + code, ln
-                elif code == "6":
-                    prog.tool_number = selected_tool
-                elif code not in _NOOP_M:
-                    raise GcodeError(f"{where}: unknown or unsupported word M{num}")
-            elif letter in "XYZIJR":
-                if letter in coords:
-                    raise GcodeError(f"{where}: word {letter}{num} given twice")
-                coords[letter] = float(num) * scale
-            elif letter == "K":
-                raise GcodeError(f"{where}: word K{num}: K belongs to arcs in G18/G19 planes; only G17 (XY) is read")
-            elif letter == "F":
-                if not float(num) > 0:
-                    raise GcodeError(f"{where}: word F{num}: feed must be > 0 mm/min")
-                feed = float(num) * scale
-            elif letter == "S":
-                if float(num) < 0:
-                    raise GcodeError(f"{where}: word S{num}: spindle speed must be >= 0 rpm")
-                spindle = float(num)
-            elif letter == "T":
-                pass
-            elif letter in "NHPDQ":
-                if letter in "PQ" and "64" not in gset:
-                    raise GcodeError(f"{where}: word {letter}{num} only accepted with G64")
-                if letter == "D":
-                    raise GcodeError(f"{where}: word D{num}: cutter compensation is not supported")
-            else:
-                raise GcodeError(f"{where}: unknown word {letter}{num}")
+        coords, new_motion = _block_words(words, st, prog, where, ln)
         if prog.end_word is not None and prog.end_line == ln and any(a in coords for a in "XYZ"):
             raise GcodeError(f"{where}: word {prog.end_word}: motion in the program-end block")
         if new_motion is not None:
-            motion = new_motion
+            st.motion = new_motion
+        motion, pos = st.motion, st.pos
         has_xyz = any(a in coords for a in "XYZ")
         if not has_xyz and not any(a in coords for a in "IJR"):
             if new_motion in ("G2", "G3"):
@@ -319,63 +240,189 @@ def read_gcode(text: str, source: str = "<string>", arc_tolerance: float = 0.002
             w = next(a for a in "XYZIJR" if a in coords)
             raise GcodeError(f"{where}: word {w}: coordinates given with no motion mode (G0/G1/G2/G3) "
                              "in force")
-        startp = dict(pos)
-        for a in "XYZ":
-            if a in coords:
-                if absolute:
-                    pos[a] = coords[a]
-                elif pos[a] is None:
-                    raise GcodeError(f"{where}: word {a}: incremental (G91) move from an unknown {a} position")
-                else:
-                    pos[a] = pos[a] + coords[a]
+        startp = _move_end(coords, st, where)
         unknown = [a for a in "XYZ" if pos[a] is None]
         if unknown:
             if motion == "G0" and not any(a in coords for a in "IJR"):
-                skipped_partial += 1
+                st.skipped_partial += 1
                 continue
             raise GcodeError(f"{where}: word {motion}: position of {'/'.join(unknown)} is unknown "
                              "(state every axis on the first move)")
         if any(startp[a] is None for a in "XYZ"):
             startp = None  # the first fully known position: the start of the path
-        i = j = None
-        if motion in ("G2", "G3"):
-            if startp is None:
-                raise GcodeError(f"{where}: word {motion}: arc start point unknown")
-            sx, sy = startp["X"], startp["Y"]
-            if "R" in coords:
-                if "I" in coords or "J" in coords:
-                    raise GcodeError(f"{where}: word R: give either R or I/J, not both")
-                cx, cy = _center_from_radius((sx, sy), (pos["X"], pos["Y"]), coords["R"], motion == "G3",
-                                             where)
-            else:
-                if "I" not in coords and "J" not in coords:
-                    raise GcodeError(f"{where}: word {motion}: arc needs centre offsets I and J (or R)")
-                if arc_absolute:
-                    cx, cy = coords.get("I", sx), coords.get("J", sy)
-                else:
-                    cx, cy = sx + coords.get("I", 0.0), sy + coords.get("J", 0.0)
-            i, j = cx - sx, cy - sy
-            r0 = math.hypot(i, j)
-            r1 = math.hypot(pos["X"] - cx, pos["Y"] - cy)
-            if r0 == 0 or abs(r0 - r1) > max(arc_tolerance, 1e-3 * r0):
-                w = "R" if "R" in coords else ("I" if "I" in coords else "J")
-                raise GcodeError(f"{where}: word {w}: arc start radius {r0:.6g} and end radius {r1:.6g} mm "
-                                 f"differ by more than {max(arc_tolerance, 1e-3 * r0):.3g} mm")
-        elif any(a in coords for a in "IJR"):
-            w = next(a for a in "IJR" if a in coords)
-            raise GcodeError(f"{where}: word {w}: I/J/R given with {motion} (only arcs G2/G3 take them)")
-        if motion != "G0" and feed is None:
+        i, j = _arc_offsets(motion, coords, startp, st, arc_tolerance, where)
+        if motion != "G0" and st.feed is None:
             raise GcodeError(f"{where}: word {motion}: {motion} feed move with no feed F set")
         moves.append(Move(motion, pos["X"], pos["Y"], pos["Z"], i=i, j=j,
-                          feed=feed if motion != "G0" else None,
-                          spindle=spindle if spindle_on else None))
+                          feed=st.feed if motion != "G0" else None,
+                          spindle=st.spindle if st.spindle_on else None))
         lines.append(ln)
         comments.append(" ".join(cmts))
-    if skipped_partial:
-        prog.warnings.append(f"{source}: {skipped_partial} rapid(s) before X, Y and Z were all known "
+    if st.skipped_partial:
+        prog.warnings.append(f"{source}: {st.skipped_partial} rapid(s) before X, Y and Z were all known "
                              "(start position unknown) were not turned into moves")
     _check_end(prog, raw_lines, text)
     return prog
+
+
+@dataclasses.dataclass
+class _ReaderState:
+    """The modal state of :func:`read_gcode` between blocks: ``pos`` (mm, None = unknown axis),
+    motion mode, feed (mm/min), spindle (rpm) and on/off, length scale (1 or 25.4), G90/G91,
+    G90.1/G91.1, the selected T, and the count of skipped partial rapids."""
+
+    pos: dict
+    motion: str | None = None
+    feed: float | None = None
+    spindle: float | None = None
+    spindle_on: bool = False
+    scale: float = 1.0
+    absolute: bool = True
+    arc_absolute: bool = False
+    selected_tool: int | None = None
+    skipped_partial: int = 0
+
+
+def _block_words(words, st: _ReaderState, prog: GcodeProgram, where: str, ln: int):
+    """Apply the words of one block to ``st`` / ``prog``; return ``(coords, new_motion)``: the
+    X Y Z I J R values (mm, scaled, as written) and the block's motion word (or None)."""
+    coords: dict[str, float] = {}
+    new_motion = None
+    gset = set()
+    for letter, num in words:  # T is selected before M6 acts, wherever it stands in the block
+        if letter == "T":
+            st.selected_tool = int(float(num))
+    for letter, num in words:
+        if letter == "G":
+            code = _gnum(num)
+            gset.add(code)
+            if code in ("0", "1", "2", "3"):
+                if new_motion is not None:
+                    raise GcodeError(f"{where}: word G{num}: two motion words in one block")
+                new_motion = "G" + code
+            else:
+                _g_word(code, num, st, prog, where)
+        elif letter == "M":
+            _m_word(_gnum(num), num, st, prog, where, ln)
+        elif letter in "XYZIJR":
+            if letter in coords:
+                raise GcodeError(f"{where}: word {letter}{num} given twice")
+            coords[letter] = float(num) * st.scale
+        elif letter == "K":
+            raise GcodeError(f"{where}: word K{num}: K belongs to arcs in G18/G19 planes; only G17 (XY) is read")
+        elif letter == "F":
+            if not float(num) > 0:
+                raise GcodeError(f"{where}: word F{num}: feed must be > 0 mm/min")
+            st.feed = float(num) * st.scale
+        elif letter == "S":
+            if float(num) < 0:
+                raise GcodeError(f"{where}: word S{num}: spindle speed must be >= 0 rpm")
+            st.spindle = float(num)
+        elif letter == "T":
+            pass
+        elif letter in "NHPDQ":
+            if letter in "PQ" and "64" not in gset:
+                raise GcodeError(f"{where}: word {letter}{num} only accepted with G64")
+            if letter == "D":
+                raise GcodeError(f"{where}: word D{num}: cutter compensation is not supported")
+        else:
+            raise GcodeError(f"{where}: unknown word {letter}{num}")
+    return coords, new_motion
+
+
+def _g_word(code: str, num: str, st: _ReaderState, prog: GcodeProgram, where: str) -> None:
+    """A non-motion G word (canonical ``code``, as written ``num``): modal state or a refusal."""
+    if code == "20":
+        st.scale = MM_PER_INCH
+        if not prog.converted_from_inch:
+            prog.converted_from_inch = True
+            prog.warnings.append(f"{where}: G20 (inches): every length and feed converted "
+                                 "to mm (x 25.4)")
+    elif code == "21":
+        st.scale = 1.0
+    elif code == "90":
+        st.absolute = True
+    elif code == "91":
+        st.absolute = False
+    elif code == "90.1":
+        st.arc_absolute = True
+    elif code == "91.1":
+        st.arc_absolute = False
+    elif code == "80":
+        st.motion = None
+    elif code in _CANNED:
+        raise GcodeError(f"{where}: word G{num}: canned cycles (G73, G76, G81-G89) are not "
+                         "supported")
+    elif code in _REFUSED_G:
+        raise GcodeError(f"{where}: word G{num}: {_REFUSED_G[code]}")
+    elif code not in _NOOP_G:
+        raise GcodeError(f"{where}: unknown or unsupported word G{num}")
+
+
+def _m_word(code: str, num: str, st: _ReaderState, prog: GcodeProgram, where: str, ln: int) -> None:
+    """An M word (canonical ``code``, as written ``num``) on line ``ln``: spindle, end, tool change."""
+    if code in ("3", "4"):
+        st.spindle_on = True
+        if prog.spindle_on_line is None:
+            prog.spindle_on_line = ln
+    elif code == "5":
+        st.spindle_on = False
+        prog.spindle_stop_line = ln
+    elif code in ("2", "30"):
+        prog.end_word, prog.end_line = "M" + code, ln
+    elif code == "6":
+        prog.tool_number = st.selected_tool
+    elif code not in _NOOP_M:
+        raise GcodeError(f"{where}: unknown or unsupported word M{num}")
+
+
+def _move_end(coords: dict, st: _ReaderState, where: str) -> dict:
+    """Update ``st.pos`` to the block's end point (G90/G91); return the start position (a copy)."""
+    pos = st.pos
+    startp = dict(pos)
+    for a in "XYZ":
+        if a in coords:
+            if st.absolute:
+                pos[a] = coords[a]
+            elif pos[a] is None:
+                raise GcodeError(f"{where}: word {a}: incremental (G91) move from an unknown {a} position")
+            else:
+                pos[a] = pos[a] + coords[a]
+    return startp
+
+
+def _arc_offsets(motion: str, coords: dict, startp, st: _ReaderState, arc_tolerance: float, where: str):
+    """``(i, j)`` centre offsets (mm, from the start) of a G2/G3 block, checked (start and end radius
+    within ``arc_tolerance`` mm or 0.1 %); ``(None, None)`` for G0/G1 (which must not carry I/J/R)."""
+    pos = st.pos
+    i = j = None
+    if motion in ("G2", "G3"):
+        if startp is None:
+            raise GcodeError(f"{where}: word {motion}: arc start point unknown")
+        sx, sy = startp["X"], startp["Y"]
+        if "R" in coords:
+            if "I" in coords or "J" in coords:
+                raise GcodeError(f"{where}: word R: give either R or I/J, not both")
+            cx, cy = _center_from_radius((sx, sy), (pos["X"], pos["Y"]), coords["R"], motion == "G3",
+                                         where)
+        else:
+            if "I" not in coords and "J" not in coords:
+                raise GcodeError(f"{where}: word {motion}: arc needs centre offsets I and J (or R)")
+            if st.arc_absolute:
+                cx, cy = coords.get("I", sx), coords.get("J", sy)
+            else:
+                cx, cy = sx + coords.get("I", 0.0), sy + coords.get("J", 0.0)
+        i, j = cx - sx, cy - sy
+        r0 = math.hypot(i, j)
+        r1 = math.hypot(pos["X"] - cx, pos["Y"] - cy)
+        if r0 == 0 or abs(r0 - r1) > max(arc_tolerance, 1e-3 * r0):
+            w = "R" if "R" in coords else ("I" if "I" in coords else "J")
+            raise GcodeError(f"{where}: word {w}: arc start radius {r0:.6g} and end radius {r1:.6g} mm "
+                             f"differ by more than {max(arc_tolerance, 1e-3 * r0):.3g} mm")
+    elif any(a in coords for a in "IJR"):
+        w = next(a for a in "IJR" if a in coords)
+        raise GcodeError(f"{where}: word {w}: I/J/R given with {motion} (only arcs G2/G3 take them)")
+    return i, j
 
 
 _LINE_END = re.compile(r"\r\n|\n|\r")
