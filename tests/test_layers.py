@@ -187,7 +187,6 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/simulation/_kernels.py", "_band"): (14, _NJIT),
     ("params", "cnclab/simulation/_kernels.py", "_finish"): (17, _NJIT),
     ("params", "cnclab/simulation/_kernels.py", "simulate_path"): (30, _NJIT),
-    ("lines", "cnclab/simulation/dixel.py", "Stock.engagement"): (126, "vectorised engagement of the dixel stock, one pass over rays; to split the ray set-up out"),
     ("params", "cnclab/toolpath/adaptive/control.py", "root_bracket"): (18, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/control.py", "search_heading"): (16, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/links.py", "bow_runs"): (14, _ADAPTIVE),

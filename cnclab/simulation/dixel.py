@@ -349,11 +349,61 @@ class Stock(StockBase):
         psi0 = math.atan2(f[1], f[0])
         h = self.resolution_mm
         lo, hi = (-np.pi / 2, np.pi / 2) if front_only else (-np.pi, np.pi)
+        rays = self._row_crossings(c, r, psi0, lo, hi)
+        if rays is None:
+            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
+        pe, xe, je = rays
+        dist, ex = self._signed_xdist(xe, je, endpoint=True)
+        ins = dist > 0
+        if not ins.any():
+            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
+        if ins.all():
+            return Engagement(math.degrees(hi - lo), math.degrees(lo), math.degrees(hi),
+                              np.array([[lo, hi]]))
+        k = np.flatnonzero(ins[1:] != ins[:-1])
+        d0, d1 = dist[k], dist[k + 1]
+        p0, p1 = pe[k], pe[k + 1]
+        # first estimate: linear interpolation of the signed x-distance along the circle
+        edges = p0 + np.minimum(np.maximum(d0 / (d0 - d1), 0.0), 1.0) * (p1 - p0)
+        empty = np.minimum(d0, d1) <= -_NO_MATERIAL / 2      # an empty row: no position information
+        wide = ((p1 - p0) > 4.0 * h / r) | empty
+        if kw.get("boundary", "polyline") == "polyline":
+            # the material boundary between two adjacent rows is the segment joining the row end
+            # points nearest to the crossings; intersect it with the tool circle (second order in h
+            # for smooth boundaries, where the x-distance interpolation is first order)
+            adj = ~wide & (np.abs(je[k + 1] - je[k]) == 1)
+            if adj.any():
+                edges[adj] = self._segment_edges(c, r, psi0, k[adj], ex, je, edges[adj], p0[adj], p1[adj])
+        # wide brackets (near the top/bottom rows, where rows are sparse in angle) and brackets
+        # next to an empty row: all transitions located on the membership test
+        if wide.any():
+            kw_ = np.flatnonzero(wide)
+            parts = [edges[~wide]]
+            if kw.get("boundary", "polyline") == "polyline":
+                ok, found = self._band_transitions(c, r, psi0, p0[kw_], p1[kw_], je[k[kw_]], je[k[kw_] + 1])
+                parts.append(found)
+                kw_ = kw_[~ok]
+                test = self._contains_interp
+            else:
+                test = self._contains
+            if kw_.size:
+                parts.append(refine_transitions(test, c, r, psi0, p0[kw_], p1[kw_], ins[k[kw_]],
+                                                 kw.get("bisections", 16)))
+            edges = np.sort(np.concatenate(parts))
+        bounds = np.concatenate([pe[:1] if ins[0] else [], edges, pe[-1:] if ins[-1] else []])
+        iv = np.minimum(np.maximum(bounds.reshape(-1, 2), lo), hi)
+        return self._engagement_from_intervals(iv[iv[:, 1] > iv[:, 0]])
+
+    def _row_crossings(self, c, r: float, psi0: float, lo: float, hi: float):
+        """The tool circle's crossings of the row centre lines used by :meth:`engagement`: ``(pe, xe,
+        je)`` polar angle from the feed (rad, unwrapped, increasing), x (mm) and row index of the
+        crossings inside (lo, hi) plus one neighbour on each side; None when no row is crossed."""
+        h = self.resolution_mm
         # every row the circle crosses, also those beyond the grid (they hold no material: air)
         j_lo = int(math.ceil((c[1] - r - self.y0) / h - 0.5))
         j_hi = int(math.floor((c[1] + r - self.y0) / h - 0.5))
         if j_hi < j_lo:
-            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
+            return None
         j = np.arange(j_lo, j_hi + 1)
         dy = self.y0 + (j + 0.5) * h - c[1]
         cx = np.sqrt(np.maximum(r * r - dy * dy, 0.0))
@@ -377,67 +427,33 @@ class Stock(StockBase):
             i0 = i1 = int(np.searchsorted(psi, lo))
         idx = np.arange(i0 - 1, i1 + 1)
         pe = psi[idx % n] + 2 * np.pi * np.floor_divide(idx, n)       # unwrapped, increasing
-        xe = c[0] + cxx[idx % n]
-        je = jj[idx % n]
-        dist, ex = self._signed_xdist(xe, je, endpoint=True)
-        ins = dist > 0
-        if not ins.any():
-            return Engagement(0.0, math.nan, math.nan, np.empty((0, 2)))
-        if ins.all():
-            return Engagement(math.degrees(hi - lo), math.degrees(lo), math.degrees(hi),
-                              np.array([[lo, hi]]))
-        k = np.flatnonzero(ins[1:] != ins[:-1])
-        d0, d1 = dist[k], dist[k + 1]
-        p0, p1 = pe[k], pe[k + 1]
-        # first estimate: linear interpolation of the signed x-distance along the circle
-        edges = p0 + np.minimum(np.maximum(d0 / (d0 - d1), 0.0), 1.0) * (p1 - p0)
-        empty = np.minimum(d0, d1) <= -_NO_MATERIAL / 2      # an empty row: no position information
-        wide = ((p1 - p0) > 4.0 * h / r) | empty
-        if kw.get("boundary", "polyline") == "polyline":
-            # the material boundary between two adjacent rows is the segment joining the row end
-            # points nearest to the crossings; intersect it with the tool circle (second order in h
-            # for smooth boundaries, where the x-distance interpolation is first order)
-            adj = ~wide & (np.abs(je[k + 1] - je[k]) == 1)
-            if adj.any():
-                ka = k[adj]
-                xa = ex[ka] - c[0]
-                ya = self.y0 + (je[ka] + 0.5) * h - c[1]
-                dx = ex[ka + 1] - c[0] - xa
-                dyv = self.y0 + (je[ka + 1] + 0.5) * h - c[1] - ya
-                qa = dx * dx + dyv * dyv
-                qb = xa * dx + ya * dyv
-                qc = xa * xa + ya * ya - r * r
-                disc = qb * qb - qa * qc
-                with np.errstate(invalid="ignore", divide="ignore"):
-                    sq = np.sqrt(disc)
-                    best = np.full(ka.size, np.nan)
-                    lin = edges[adj]
-                    for t in ((-qb - sq) / qa, (-qb + sq) / qa):
-                        ang = np.arctan2(ya + t * dyv, xa + t * dx) - psi0
-                        ang = lin + (np.mod(ang - lin + np.pi, 2 * np.pi) - np.pi)
-                        okt = (t >= 0) & (t <= 1) & (ang >= p0[adj]) & (ang <= p1[adj])
-                        closer = okt & ~(np.abs(best - lin) <= np.abs(ang - lin))
-                        best = np.where(closer, ang, best)
-                edges[adj] = np.where(np.isfinite(best), best, lin)
-        # wide brackets (near the top/bottom rows, where rows are sparse in angle) and brackets
-        # next to an empty row: all transitions located on the membership test
-        if wide.any():
-            kw_ = np.flatnonzero(wide)
-            parts = [edges[~wide]]
-            if kw.get("boundary", "polyline") == "polyline":
-                ok, found = self._band_transitions(c, r, psi0, p0[kw_], p1[kw_], je[k[kw_]], je[k[kw_] + 1])
-                parts.append(found)
-                kw_ = kw_[~ok]
-                test = self._contains_interp
-            else:
-                test = self._contains
-            if kw_.size:
-                parts.append(refine_transitions(test, c, r, psi0, p0[kw_], p1[kw_], ins[k[kw_]],
-                                                 kw.get("bisections", 16)))
-            edges = np.sort(np.concatenate(parts))
-        bounds = np.concatenate([pe[:1] if ins[0] else [], edges, pe[-1:] if ins[-1] else []])
-        iv = np.minimum(np.maximum(bounds.reshape(-1, 2), lo), hi)
-        return self._engagement_from_intervals(iv[iv[:, 1] > iv[:, 0]])
+        return pe, c[0] + cxx[idx % n], jj[idx % n]
+
+    def _segment_edges(self, c, r: float, psi0: float, ka, ex, je, lin, p0, p1):
+        """``boundary="polyline"`` edges of :meth:`engagement` (rad from the feed): for the brackets
+        ``ka`` between adjacent rows, the material boundary is the segment joining the row end points
+        ``ex`` nearest to the crossings; its intersection with the tool circle within (p0, p1), the
+        one closest to the linear estimate ``lin`` (kept where there is none). Second order in h for
+        smooth boundaries, where the x-distance interpolation is first order."""
+        h = self.resolution_mm
+        xa = ex[ka] - c[0]
+        ya = self.y0 + (je[ka] + 0.5) * h - c[1]
+        dx = ex[ka + 1] - c[0] - xa
+        dyv = self.y0 + (je[ka + 1] + 0.5) * h - c[1] - ya
+        qa = dx * dx + dyv * dyv
+        qb = xa * dx + ya * dyv
+        qc = xa * xa + ya * ya - r * r
+        disc = qb * qb - qa * qc
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sq = np.sqrt(disc)
+            best = np.full(ka.size, np.nan)
+            for t in ((-qb - sq) / qa, (-qb + sq) / qa):
+                ang = np.arctan2(ya + t * dyv, xa + t * dx) - psi0
+                ang = lin + (np.mod(ang - lin + np.pi, 2 * np.pi) - np.pi)
+                okt = (t >= 0) & (t <= 1) & (ang >= p0) & (ang <= p1)
+                closer = okt & ~(np.abs(best - lin) <= np.abs(ang - lin))
+                best = np.where(closer, ang, best)
+        return np.where(np.isfinite(best), best, lin)
 
     def _rows_of_disk(self, cy: float, r: float):
         h = self.resolution_mm
