@@ -109,6 +109,24 @@ def test_choose_candidate_lexicographic_rule():
         ch([], 100)
 
 
+def _assert_hybrid_statement(hp, job):
+    """The hybrid strategy's stated behaviour on Jacsó's pockets (planners.HYBRID_JACSO_*): max <=
+    theta + 45 deg and <= 2 % of the cutting length above theta + 5, by the one evaluator at r / 20
+    (the resolution of the constant-engagement promise's check; measured theta + 30.6 / 41.3 / 38.5 deg
+    and 0.88 / 1.49 / 1.53 % on star / rectangle / L)."""
+    from cnclab.toolpath import planners
+
+    ev = evaluate(hp, job, planners.CE_CHECK_TOOL_FRACTION * job.tool_radius)
+    assert ev.engagement_max_deg <= job.theta_deg + planners.HYBRID_JACSO_MAX_DEG
+    assert ev.share_above_5_pct <= planners.HYBRID_JACSO_SHARE_ABOVE_5_PCT
+    assert ev.engagement_max_deg > job.theta_deg + 15      # no CE-style promise: it does exceed theta + 15
+
+
+def test_hybrid_keeps_its_stated_bound_on_jacso_pockets(planned):
+    name, job, hp, T, s = planned
+    _assert_hybrid_statement(hp, job)
+
+
 def test_hybrid_stays_in_region_and_gcode_roundtrips(planned):
     name, job, hp, T, s = planned
     # tool centres never leave the region (1 µm: spline resampling of the clamped laps)
@@ -255,6 +273,7 @@ def test_l_shaped_pocket_from_json():
     assert shapely.distance(shapely.points(hp.xyz[:, :2]), job.allowed()).max() < 1e-3
     dmax, dlen, _ = gcode_roundtrip_error(hp, job)
     assert dmax < 1e-4 and dlen < 1e-2
+    _assert_hybrid_statement(hp, job)
 
 
 def test_plunge_into_the_predrilled_hole_is_marked_cleared():

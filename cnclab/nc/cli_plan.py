@@ -28,7 +28,8 @@ from .program import COOLANT, DIALECTS, check_program, program_path, write_progr
 from ..geometry.drawing import CHORD_TOL_MM
 from ..toolpath.from_drawing import load_job_input
 from ..toolpath.job import load_job
-from ..toolpath.planners import (CE_PROMISE_DEG, CE_SHARE_ABOVE_5_PCT, DEFAULT_STRATEGY, MIN_RESOLUTION_MM,
+from ..toolpath.planners import (CE_PROMISE_DEG, CE_SHARE_ABOVE_5_PCT, DEFAULT_STRATEGY, HYBRID_JACSO_MAX_DEG,
+                                 HYBRID_JACSO_SHARE_ABOVE_5_PCT, MIN_RESOLUTION_MM,
                                  STRATEGIES, plan)
 
 __all__ = ["main", "plan_program", "planned_program", "with_machine_warnings"]
@@ -146,7 +147,10 @@ def main(argv=None) -> int:
                     help=f"planner: {', '.join(sorted(STRATEGIES))} (default: {DEFAULT_STRATEGY}). "
                          f"constant-engagement plans only a pocket on which it keeps the engagement <= theta + "
                          f"{CE_PROMISE_DEG:g} deg and <= theta + 5 deg on all but {CE_SHARE_ABOVE_5_PCT:g} %% of its "
-                         "cutting length (discs; rectangles, wedges and islands are refused with the measured values)")
+                         "cutting length (discs; rectangles, wedges and islands are refused with the measured values); "
+                         "hybrid promises no engagement bound (measured on Jacso's star, rectangle and L: <= theta "
+                         f"+ {HYBRID_JACSO_MAX_DEG:g} deg, {HYBRID_JACSO_SHARE_ABOVE_5_PCT:g} %% above theta + 5; "
+                         "159.5 deg on a keyhole)")
     ap.add_argument("--cutting", default=None, metavar="CUTTING.json",
                     help="with a drawing: every job key except the geometry (JSON)")
     ap.add_argument("--layer", default=None, metavar="NAME", help="with a drawing: read the outlines of this "
