@@ -198,7 +198,6 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (22, "the old clearing planner, to be retired (issue 29 item 1)"),
     ("params", "cnclab/toolpath/constant_engagement.py", "multi_pass"): (13, "Thesis II/III integration settings; to take a Job"),
     ("params", "cnclab/toolpath/dropcutter.py", "_grid_drop"): (15, _NJIT),
-    ("lines", "cnclab/toolpath/evaluate.py", "evaluate"): (137, "the evaluator's one pass: to split the metric groups into helpers"),
 }
 
 

@@ -396,7 +396,6 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     r = job.tool_radius
     rp, src = _samples(path, h, sampling)
     P, K = rp.xyz, rp.kind
-    n = len(P)
     L3 = rp.segment_lengths()
     dxy = np.r_[0.0, np.hypot(*np.diff(P[:, :2], axis=0).T)]
     feed = rp.feed
@@ -408,44 +407,18 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
 
     cutting = np.isin(K, [_K["cut"], _K["link"]]) & (removed > air) & (dxy > 0)
     entry = np.isin(K, [_K["helix"], _K["ramp"], _K["plunge"]])
-    Lc = float(dxy[cutting].sum())
-    e_c = eng[cutting]
-    lim5, lim15 = job.theta_deg + 5.0, job.theta_deg + 15.0
-    share5 = 100.0 * float(dxy[cutting & (eng > lim5)].sum()) / Lc if Lc > 0 else float("nan")
-    share15 = 100.0 * float(dxy[cutting & (eng > lim15)].sum()) / Lc if Lc > 0 else float("nan")
-    # windowed MRR over the cutting samples: volume / time in windows of mrr_window_mm
-    with np.errstate(invalid="ignore", divide="ignore"):
-        dt_min = np.where(cutting, dxy / feed, 0.0)
-    s_cut = np.cumsum(np.where(cutting, dxy, 0.0))
-    win = np.floor(s_cut / mrr_window_mm).astype(int)
-    V = np.bincount(win[cutting], weights=vol[cutting])
-    T = np.bincount(win[cutting], weights=dt_min[cutting])
-    Lw = np.bincount(win[cutting], weights=dxy[cutting])
-    full = (Lw >= 0.5 * mrr_window_mm) & (T > 0)
-    mrr_max = float((V[full] / T[full]).max() / job.mrr_nominal()) if full.any() else float("nan")
-
+    rapid = K == _K["rapid"]
+    mrr_max = _mrr_max(cutting, dxy, feed, vol, mrr_window_mm, job.mrr_nominal())
+    lines = np.asarray(path.info["line"], int) if len(path.info.get("line", ())) == len(path) else None
     # plunges / rapids into material, per original move
     pl = plunge_like & (K != _K["rapid"]) & (removed > air)
-    rapid = K == _K["rapid"]
-    guard = job.allowed().buffer(POSITION_TOL_MM)
-    low = rapid & (P[:, 2] < job.top_z - 1e-9)
-    outside = np.zeros(n, bool)
-    if low.any():
-        outside[low] = ~shapely.contains_xy(guard, P[low, 0], P[low, 1])
-    rp_bad = rapid & ((removed > air) | outside)
-    gouge, g_area, g_mask = wall_gouge(P, job, rapid=rapid)
-    lines = np.asarray(path.info["line"], int) if len(path.info.get("line", ())) == len(path) else None
-    events = _events(P, src, lines, [("rapid into material", rp_bad, removed, "mm^2"),
-                                     ("plunge into material", pl, removed, "mm^2"),
-                                     ("wall gouge", g_mask, gouge, "mm")])
-
+    rp_bad, gouge, g_area, g_mask, events = _material_events(P, src, lines, job, rapid, pl, removed, air)
     air_cut = (K == _K["cut"]) & (removed <= air)
     lengths = path.lengths()
     times = path.time_s(job.rapid_mm_min)
     unreach = unreachable_region(job.polygon, r)
     uncut = float(sum(st.area() for st in stocks))
     beyond = float(sum(st.to_polygon().difference(unreach).area for st in stocks)) if uncut > 0 else 0.0
-    e_entry = eng[entry]
     trace = {"s_mm": np.cumsum(L3), "x": P[:, 0].copy(), "y": P[:, 1].copy(), "z": P[:, 2].copy(),
              "engagement_deg": eng, "removed_mm2": removed,
              "mrr_mm3_min": np.where((dxy > 0) & ~rapid, vol / np.where(dxy > 0, dxy, 1.0) * np.nan_to_num(feed), np.nan),
@@ -454,11 +427,7 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     if lines is not None:
         trace["line"] = lines[src]
     return Evaluation(
-        engagement_p50_deg=weighted_percentile(e_c, dxy[cutting], 50),
-        engagement_p95_deg=weighted_percentile(e_c, dxy[cutting], 95),
-        engagement_max_deg=float(np.nanmax(e_c)) if np.isfinite(e_c).any() else float("nan"),
-        share_above_5_pct=share5, share_above_15_pct=share15,
-        entry_engagement_max_deg=float(np.nanmax(e_entry)) if np.isfinite(e_entry).any() else float("nan"),
+        **_engagement_fields(eng, dxy, cutting, entry, job.theta_deg),
         mrr_max_over_nominal=mrr_max,
         entries_helix=_count_runs(path.kind, "helix"), entries_ramp=_count_runs(path.kind, "ramp"),
         entries_plunge=_count_runs(path.kind, "plunge"),
@@ -475,6 +444,54 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         wall_gouge_max_mm=float(gouge.max(initial=0.0)), wall_gouge_area_mm2=g_area,
         gouges=len(_runs(g_mask)), events=events,
         **_level_fields(times, level, trace))
+
+
+def _engagement_fields(eng, dxy, cutting, entry, theta_deg) -> dict:
+    """The engagement fields of :func:`evaluate` (deg; shares in % of the cutting length ``dxy`` (mm)
+    of the ``cutting`` samples above theta + 5 / + 15 deg; the maximum over the ``entry`` samples)."""
+    Lc = float(dxy[cutting].sum())
+    e_c = eng[cutting]
+    lim5, lim15 = theta_deg + 5.0, theta_deg + 15.0
+    share5 = 100.0 * float(dxy[cutting & (eng > lim5)].sum()) / Lc if Lc > 0 else float("nan")
+    share15 = 100.0 * float(dxy[cutting & (eng > lim15)].sum()) / Lc if Lc > 0 else float("nan")
+    e_entry = eng[entry]
+    return dict(
+        engagement_p50_deg=weighted_percentile(e_c, dxy[cutting], 50),
+        engagement_p95_deg=weighted_percentile(e_c, dxy[cutting], 95),
+        engagement_max_deg=float(np.nanmax(e_c)) if np.isfinite(e_c).any() else float("nan"),
+        share_above_5_pct=share5, share_above_15_pct=share15,
+        entry_engagement_max_deg=float(np.nanmax(e_entry)) if np.isfinite(e_entry).any() else float("nan"))
+
+
+def _mrr_max(cutting, dxy, feed, vol, mrr_window_mm: float, mrr_nominal: float) -> float:
+    """Windowed MRR over the cutting samples (volume / time in windows of ``mrr_window_mm`` of cutting
+    length, windows at least half full) over ``mrr_nominal`` (mm^3/min): its maximum (NaN if none)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dt_min = np.where(cutting, dxy / feed, 0.0)
+    s_cut = np.cumsum(np.where(cutting, dxy, 0.0))
+    win = np.floor(s_cut / mrr_window_mm).astype(int)
+    V = np.bincount(win[cutting], weights=vol[cutting])
+    T = np.bincount(win[cutting], weights=dt_min[cutting])
+    Lw = np.bincount(win[cutting], weights=dxy[cutting])
+    full = (Lw >= 0.5 * mrr_window_mm) & (T > 0)
+    return float((V[full] / T[full]).max() / mrr_nominal) if full.any() else float("nan")
+
+
+def _material_events(P, src, lines, job: Job, rapid, pl, removed, air: float):
+    """Rapids into material or below the top outside the allowed region (``rp_bad`` per sample), the
+    wall gouge (:func:`wall_gouge`) and the events table of the plunges ``pl`` / rapids / gouges:
+    ``(rp_bad, gouge, g_area, g_mask, events)``."""
+    guard = job.allowed().buffer(POSITION_TOL_MM)
+    low = rapid & (P[:, 2] < job.top_z - 1e-9)
+    outside = np.zeros(len(P), bool)
+    if low.any():
+        outside[low] = ~shapely.contains_xy(guard, P[low, 0], P[low, 1])
+    rp_bad = rapid & ((removed > air) | outside)
+    gouge, g_area, g_mask = wall_gouge(P, job, rapid=rapid)
+    events = _events(P, src, lines, [("rapid into material", rp_bad, removed, "mm^2"),
+                                     ("plunge into material", pl, removed, "mm^2"),
+                                     ("wall gouge", g_mask, gouge, "mm")])
+    return rp_bad, gouge, g_area, g_mask, events
 
 
 def _samples(path: ToolPath, h: float, sampling: str):
