@@ -26,6 +26,7 @@ from .paths import build_dir
 from .plotting import FIGURES, WIDTH_PRESETS_MM, FigureRecipe as Recipe, draw_figure as draw, export_figure
 from .works.hoang2024 import figures as _hoang2024  # noqa: F401  (each import registers its recipes)
 from .works.jacso2021 import figures as _jacso2021  # noqa: F401
+from .works.jacso2021 import figures_pockets as _jacso2021_pockets  # noqa: F401
 from .works.kim_yang2006 import figures as _kim_yang2006  # noqa: F401
 from .works.mgherony2024 import figures as _mgherony2024  # noqa: F401
 

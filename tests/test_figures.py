@@ -157,3 +157,17 @@ def test_figure_cli_renders_an_85_mm_pdf(tmp_path, capsys):
         figures.main(["fig3-1_engagement_vs_stepover", "--width-mm", "nan"])
     assert "--width-mm" in capsys.readouterr().err
     assert sorted(p.name for p in Path(tmp_path).iterdir()) == ["fig3-1_engagement_vs_stepover.pdf"]
+
+
+def test_theses_notebooks_do_not_depend_on_the_planners_through_the_recipes():
+    # make reproduce keys a notebook on the modules it imports: the Theses I-III and dixel notebooks
+    # import the light recipes module, so a planner change does not re-run them
+    from cnclab import reproduce
+    from cnclab.paths import PACKAGE_DIR
+
+    for nb in ("thesis1_engagement_formulas", "thesis2_3_constant_engagement_paths", "dixel_simulator_validation"):
+        _, files = reproduce.notebook_inputs(NOTEBOOKS_DIR / "jacso2021" / f"{nb}.ipynb")
+        assert PACKAGE_DIR / "works" / "jacso2021" / "figures.py" in files
+        assert PACKAGE_DIR / "toolpath" / "planners.py" not in files, nb
+    _, files = reproduce.notebook_inputs(NOTEBOOKS_DIR / "jacso2021" / "s4_star_pocket_hybrid_path.ipynb")
+    assert PACKAGE_DIR / "works" / "jacso2021" / "figures_pockets.py" in files
