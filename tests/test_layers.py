@@ -181,7 +181,6 @@ _NJIT = "numba nopython kernel: arrays and scalars passed positionally (no datac
 #: when an entry grows, when an entry already fits (remove it) or no longer exists, and for any new
 #: offender. Sizes: lines for "lines"/"module", a count for "params".
 BUDGET_ALLOWED = {
-    ("module", "cnclab/nc/apt.py", ""): (940, "APT reader (bulk + careful parser) and writer: to split reader / writer"),
     ("module", "cnclab/simulation/_kernels.py", ""): (860, "the numba kernels of both stocks in one module (one JIT cache)"),
     ("params", "cnclab/simulation/_kernels.py", "_refine"): (18, _NJIT),
     ("params", "cnclab/simulation/_kernels.py", "_band"): (14, _NJIT),
