@@ -185,8 +185,10 @@ def _contains_any(kind, A, B, grid, x0, y0, h, x, y):
 
 
 @njit(cache=True)
-def _refine(kind, A, B, grid, x0, y0, h, cx, cy, r, psi0, a_in, b_in, ma_in, nq, bisections, out, n_out):
-    """Port of :func:`.common.refine_transitions` (n_sub = 256); appends the transitions to ``out``."""
+def _refine(kind, A, B, grid, geo, circ, brackets, nq, bisections, out, n_out):
+    """Port of :func:`.common.refine_transitions` (n_sub = 256); appends the transitions to ``out``.
+    ``geo`` (x0, y0, h) mm; ``circ`` (cx, cy, r) mm, psi0 rad; ``brackets`` (a, b, inside at a), nq used."""
+    (x0, y0, h), (cx, cy, r, psi0), (a_in, b_in, ma_in) = geo, circ, brackets
     n_sub = 256
     rounds = int(math.ceil(bisections / math.log2(n_sub))) - 1
     # first round: every transition in every bracket
@@ -266,8 +268,9 @@ def _dixel_signed_xdist(A, B, x, j):
 
 
 @njit(cache=True)
-def _band(A, B, y0, h, cx, cy, r, psi0, p0, p1, j0, j1, out, n_out):
+def _band(A, B, y0, h, circ, p0, p1, j0, j1, out, n_out):
     """Port of ``Stock._band_transitions`` for one bracket: (ok, n_out) with the angles appended."""
+    cx, cy, r, psi0 = circ
     K, n_rows = A.shape
     if j0 == j1:
         ym = cy + r * math.sin(psi0 + 0.5 * (p0 + p1))
@@ -416,7 +419,7 @@ def _dixel_engagement_front(A, B, y0, h, cx, cy, r, psi0, m, j_lo, polyline, bis
             elif q == ne - 1 and p < pl:
                 p += _TWO_PI
             pe[q] = p
-    return True, _finish(A, B, y0, h, cx, cy, r, psi0, pe, je, dist, ex, ne, lo, hi, polyline, bisections)
+    return True, _finish(A, B, y0, h, (cx, cy, r, psi0), (pe, je, dist, ex), ne, lo, hi, polyline, bisections)
 
 
 @njit(cache=True)
@@ -480,13 +483,14 @@ def dixel_engagement(A, B, y0, h, cx, cy, r, f0, f1, front_only, polyline, bisec
         xe[q] = cx + cxx[o]
         je[q] = jj[o]
         dist[q], ex[q] = _dixel_signed_xdist(A, B, xe[q], je[q])
-    return _finish(A, B, y0, h, cx, cy, r, psi0, pe, je, dist, ex, ne, lo, hi, polyline, bisections)
+    return _finish(A, B, y0, h, (cx, cy, r, psi0), (pe, je, dist, ex), ne, lo, hi, polyline, bisections)
 
 
 @njit(cache=True)
-def _finish(A, B, y0, h, cx, cy, r, psi0, pe, je, dist, ex, ne, lo, hi, polyline, bisections):
-    """Engaged intervals from the crossings' angles ``pe`` (needed only at the ends and at brackets
-    with a transition), rows ``je``, signed x-distances ``dist`` and nearest end points ``ex``."""
+def _finish(A, B, y0, h, circ, crossings, ne, lo, hi, polyline, bisections):
+    """Engaged intervals from ``crossings`` (pe, je, dist, ex): angles ``pe`` (needed only at the ends and
+    at brackets with a transition), rows, signed x-distances, nearest end points; ``circ`` (cx, cy, r, psi0)."""
+    (cx, cy, r, psi0), (pe, je, dist, ex) = circ, crossings
     n_rows = A.shape[1]
     empty = np.empty((0, 2))
     n_in = 0
@@ -564,7 +568,7 @@ def _finish(A, B, y0, h, cx, cy, r, psi0, pe, je, dist, ex, ne, lo, hi, polyline
                 edges = e2
             ok = False
             if polyline:
-                ok, n_e = _band(A, B, y0, h, cx, cy, r, psi0, pe[k], pe[k + 1], je[k], je[k + 1], edges, n_e)
+                ok, n_e = _band(A, B, y0, h, circ, pe[k], pe[k + 1], je[k], je[k + 1], edges, n_e)
             if not ok:
                 ra[n_r] = pe[k]
                 rb[n_r] = pe[k + 1]
@@ -572,8 +576,8 @@ def _finish(A, B, y0, h, cx, cy, r, psi0, pe, je, dist, ex, ne, lo, hi, polyline
                 n_r += 1
         if n_r:
             buf = np.empty(256 * n_r)
-            n_b = _refine(1 if polyline else 0, A, B, np.zeros((1, 1), np.bool_), 0.0, y0, h, cx, cy, r,
-                          psi0, ra, rb, rm, n_r, bisections, buf, 0)
+            n_b = _refine(1 if polyline else 0, A, B, np.zeros((1, 1), np.bool_), (0.0, y0, h), circ,
+                          (ra, rb, rm), n_r, bisections, buf, 0)
             e2 = np.empty(n_e + n_b)
             e2[:n_e] = edges[:n_e]
             e2[n_e:] = buf[:n_b]
@@ -706,7 +710,7 @@ def pixel_engagement(grid, x0, y0, h, cx, cy, r, f0, f1, front_only, n_samples, 
             rm[q] = m[i]
             q += 1
     buf = np.empty(256 * nq)
-    n_b = _refine(2, A, A, grid, x0, y0, h, cx, cy, r, psi0, ra, rb, rm, nq, bisections, buf, 0)
+    n_b = _refine(2, A, A, grid, (x0, y0, h), (cx, cy, r, psi0), (ra, rb, rm), nq, bisections, buf, 0)
     edges = np.sort(buf[:n_b])
     return _bounds_to_intervals(lo, hi, m[0], m[n_samples - 1], edges, n_b, lo, hi, False)
 
@@ -774,17 +778,13 @@ def reaches_front(qx, qy, px, py, g0, g1, r, margin):
 
 
 @njit(cache=True)
-def simulate_path(model, A, B, grid, x0, y0, h, P, d, ds, s, r, lag, central, front_only, polyline,
-                  bisections, n_samples, f_z, i_start, k_start, fd0, fd1, eng, ent, ext, rem, hmax, havg,
-                  hold_front=False):
-    """Port of the loop of :func:`.common.simulate` (model 0 dixel, 1 pixel); ``hold_front``: the
-    ``lag_rule="front"`` of :func:`.common.simulate` (held-back disks reaching the front half-circle
-    are cut before the engagement is measured).
-
-    Fills the per-step arrays from step ``i_start`` / cut ``k_start`` on. Returns (i, k, fd0, fd1):
-    i = k = N when done; otherwise a dixel row ran out of interval capacity at cut k (the caller
-    grows ``A``, ``B`` and calls again with the returned state).
+def simulate_path(A, B, grid, P, d, ds, s, cfg, state, out):
+    """Port of the loop of :func:`.common.simulate`, settings ``cfg`` (:class:`.common.PathSettings`): fills
+    ``out`` (eng, ent, ext, rem, hmax, havg) from ``state`` (step i, cut k, feed fd0, fd1) on. Returns the
+    state: i = k = N when done; else a dixel row ran out of interval capacity at cut k (grow, call again).
     """
+    model, x0, y0, h, r, lag, central, front_only, polyline, bisections, n_samples, f_z, hold_front = cfg
+    (i_start, k_start, fd0, fd1), (eng, ent, ext, rem, hmax, havg) = state, out
     n = P.shape[0]
     k = k_start
     for i in range(i_start, n):

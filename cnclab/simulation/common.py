@@ -327,6 +327,32 @@ class StockBase:
         return self.engagement(center_xy, tool_radius, feed_direction_xy, **kw).angle_deg
 
 
+class PathSettings(NamedTuple):
+    """The scalar settings of :func:`._kernels.simulate_path` (one tuple argument of the compiled kernel).
+
+    ``model`` 0 dixel, 1 pixel; ``x0``, ``y0`` grid origin and ``h`` resolution (mm); ``r`` tool
+    radius (mm); ``lag`` (mm) of :func:`.common.simulate`; ``central`` feed direction rule "central";
+    ``front_only`` measure the front half-circle; ``polyline`` the dixel boundary rule; ``bisections``
+    and ``n_samples`` of the engagement search (pixel: samples of the circle); ``f_z`` (mm; NaN: no
+    chip thickness); ``hold_front`` the ``lag_rule="front"`` (held-back disks reaching the front
+    half-circle are cut before the engagement is measured).
+    """
+
+    model: int
+    x0: float
+    y0: float
+    h: float
+    r: float
+    lag: float
+    central: bool
+    front_only: bool
+    polyline: bool
+    bisections: int
+    n_samples: int
+    f_z: float
+    hold_front: bool
+
+
 def default_lag_mm(resolution_mm: float, tool_radius: float) -> float:
     """Distance (mm) behind the tool whose cuts are not yet applied when engagement is measured.
 

@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from .common import (Engagement, StockBase, check_radius, check_xy, refine_transitions, resolve_backend,
+from .common import (Engagement, PathSettings, StockBase, check_radius, check_xy, refine_transitions, resolve_backend,
                      simulate, simulate_runs)
 
 __all__ = ["Stock", "simulate", "simulate_runs", "Engagement", "scanline_intervals"]
@@ -305,9 +305,9 @@ class Stock(StockBase):
         i, k, f0, f1 = 0, 0, float(d[0, 0]), float(d[0, 1])
         dummy = np.zeros((1, 1), np.bool_)
         while True:
-            i, k, f0, f1 = K.simulate_path(0, self._A, self._B, dummy, 0.0, self.y0, self.resolution_mm,
-                                           P, d, ds, s, r, lag, central, front_only, True, 16, 0, f_z,
-                                           i, k, f0, f1, *out, hold_front)
+            cfg = PathSettings(0, 0.0, self.y0, self.resolution_mm, r, lag, central, front_only, True, 16, 0, f_z,
+                                 hold_front)
+            i, k, f0, f1 = K.simulate_path(self._A, self._B, dummy, P, d, ds, s, cfg, (i, k, f0, f1), tuple(out))
             if i == n and k == n:
                 return True
             self._grow(2 * self._A.shape[0])          # a row ran out of interval slots: grow, resume

@@ -152,7 +152,7 @@ def _drop_grid(mesh: TriMesh, xy: np.ndarray, R: float) -> np.ndarray:
     ny = int(min((y1 - y0) / h, 4096)) + 1
     hx, hy = max((x1 - x0) / nx, 1e-12), max((y1 - y0) / ny, 1e-12)
     start, items = _grid_build(lo, hi, order, x0, y0, hx, hy, nx, ny)
-    return _grid_drop(xy, T, n, lo, hi, zmax, start, items, x0, y0, hx, hy, nx, ny, R)
+    return _grid_drop(xy, T, n, lo, hi, zmax, start, items, (x0, y0, hx, hy, nx, ny), R)
 
 
 @njit(cache=True)
@@ -238,7 +238,11 @@ def _facet_height(px, py, T, n, f, R):
 
 
 @njit(cache=True, parallel=True)
-def _grid_drop(xy, T, n, lo, hi, zmax, start, items, x0, y0, hx, hy, nx, ny, R):
+def _grid_drop(xy, T, n, lo, hi, zmax, start, items, grid, R):
+    """Ball-centre height (mm) at every point ``xy`` over the facets listed per cell (``start``,
+    ``items``: :func:`_grid_build`); ``grid`` = (x0, y0, hx, hy, nx, ny): origin and cell size (mm),
+    cell counts; R ball radius (mm)."""
+    x0, y0, hx, hy, nx, ny = grid
     out = np.full(len(xy), -np.inf)
     grow = R + 1e-9
     RR = R * R * (1 + 1e-12) + 1e-12
