@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 
 from .control import GUARD_LEVEL, replay
 from .entries import PlanningError
@@ -41,17 +42,21 @@ def finish_part(lv, part):
             jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
             ii = np.clip(((Rs[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
             dm = D[jj, ii]
-            # material in reach: any (the first lap takes the wall skin), or a rest deeper than
-            # max(finish_rest_min_mm, finish_rest_frac_ae a_e) (a further lap: the corner wedges)
-            reach = lv.r + lv.g.hc if lap == 0 and ring_key not in skinned else lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e)
-            if dm.min() > reach:
+            # the ring points with material in reach: any (the first lap takes the wall skin), or a rest
+            # deeper than max(finish_rest_min_mm, finish_rest_frac_ae a_e) (further laps: the corner
+            # wedges; in a clean-up round also the skin along the stretches where its passes cut)
+            skin = lap == 0 and ring_key not in skinned
+            mat = dm < (lv.r + lv.g.hc if skin else lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e))
+            if lap == 0 and not skin:
+                mat |= _cut_near(lv, Rs)
+            if not mat.any():
                 break                # nothing (more) to take along this ring
             # start where the ring is free of material (the farthest from it, the field being
             # capped: any point at the cap): at the end of the longest stretch without material in
             # reach (the lap skips it), or where there is none, the nearest such point to the tool
             free = dm >= min(dm.max(), lv.r_free + lv.g.hc)
             free_k = np.flatnonzero(free)
-            k0 = _gap_start(dm < reach, free, lv.ds, lv.prm.finish_skip_gap_frac * lv.r)
+            k0 = None if skin else _gap_start(mat, free, lv.ds, lv.prm.finish_skip_gap_frac * lv.r)
             if k0 is None:
                 if lv.cur is not None and len(free_k) > 1:
                     k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - lv.cur[0], Rs[free_k, 1] - lv.cur[1]))])
@@ -80,9 +85,8 @@ def finish_part(lv, part):
             # the wall-following pass: the same engagement control, sliding along the wall;
             # it ends 2 r past the last ring point that still has material within reach
             sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
-            dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
-            mat = np.flatnonzero(dml < reach)
-            L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + lv.prm.finish_run_on_frac * lv.r)
+            mat_l = np.flatnonzero(np.r_[mat[k0:], mat[:k0], mat[k0:k0 + 1]])
+            L_ring = float(sl[-1]) if len(mat_l) == 0 else min(float(sl[-1]), float(sl[mat_l[-1]]) + lv.prm.finish_run_on_frac * lv.r)
             hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
             snap = lv.g.snapshot()
             M_before = snap[0]
@@ -152,3 +156,18 @@ def _gap_start(mat, free, ds, min_gap):
         if free[order[q]]:
             return int(order[q])
     return None
+
+
+def _cut_near(lv, Rs):
+    """Ring points (Rs, (n, 2) mm) within r + 2 coarse cells of a pixel the current clean-up round cut
+    (the planning stock against its copy at the round's start): where its passes may have left a
+    new wall skin; all False in round 0."""
+    if lv.round_start_M is None:
+        return np.zeros(len(Rs), bool)
+    J, I = np.nonzero(lv.round_start_M != lv.g.M)
+    if len(J) == 0:
+        return np.zeros(len(Rs), bool)
+    xy = np.c_[lv.g.x0 + (I + 0.5) * lv.h, lv.g.y0 + (J + 0.5) * lv.h]
+    reach = lv.r + 2.0 * lv.g.hc
+    d, _ = cKDTree(xy).query(Rs, distance_upper_bound=reach)
+    return d <= reach
