@@ -68,6 +68,20 @@ def test_clamped_laps_cut_wedges_that_the_gate_avoids():
     assert _share(e_c, ds_c, THETA + 5) > 0.1 > 0.05 > _share(e_g, ds_g, THETA + 5)
 
 
+def test_roll_in_arcs_lower_the_share_above_theta_plus_5_and_stay_safe():
+    """wall="roll-in" (the runs resuming from the wall entered by roll-in arcs tangent to them, Jacsó
+    §4) on the plain pocket: less cutting length above theta + 5 deg than "gate" (the head-on links
+    into those runs go), the arcs inside the allowed region, no plunge or rapid into material, and
+    the pocket still cleared (what an arc skips is cut by later laps or the final pass)."""
+    job, _, ev_g = _run("plain")
+    _, path, ev = _run("plain", "roll-in")
+    assert ev.share_above_5_pct < ev_g.share_above_5_pct
+    xy = path.xyz[:, :2]
+    assert shapely.contains_xy(job.allowed().buffer(1e-6), xy[:, 0], xy[:, 1]).all()
+    assert ev.uncut_beyond_unreachable_mm2 < 1.0
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+
+
 @pytest.mark.parametrize("name", ["plain", "island"])
 def test_path_stays_in_the_allowed_region_clears_the_pocket_and_is_machine_safe(name):
     """Tool centres inside the allowed region; uncut only the unreachable corners; no plunge and no

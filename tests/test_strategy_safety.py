@@ -127,7 +127,8 @@ def test_the_generator_makes_what_it_says():
 def test_constant_engagement_keeps_its_promise_or_names_the_breach():
     """The constant-engagement strategy plans a disc (its laps are circles: measured max theta + 6 deg,
     0.08 % above theta + 5) and keeps the promise there, two levels deep; on a 28 x 18 mm rectangle its
-    links and laps break it (5.6 % above theta + 5, max ~120 deg; Jacso's own 40 x 24 mm: 4.7 %, 128 deg)
+    links and laps break it (5.6 % above theta + 5, max ~120 deg, before the roll-in arcs; Jacso's own 40 x 24
+    mm: 2.8 %, 128 deg with them)
     and it refuses, naming the measured maximum, where it is, and the share by part of the path."""
     disc = Job(Point(0, 0).buffer(20, 64), Tool(D), THETA, 1.0, depth=2.0, v_c=100, f_z=0.05, source="disc.json")
     path = planners.plan(disc, "constant-engagement")
