@@ -386,7 +386,7 @@ def _roll_in(stock, P, r, limits_deg, guard, free, a_p, feed_mm_min, step, at, a
     Returns ``(arc (n, 2) from its start to P[j], j)``, or ``(None, 0)``.
 
     Measured at r/20 (strategy constant-engagement, which uses it): share of the cutting length above
-    theta + 5 on Jacsó's rectangle 4.68 -> 2.76 %, two_regions 2.37 -> 1.56 %, L 6.48 -> 2.23 %, star
+    theta + 5 on Jacsó's rectangle 4.81 -> 2.76 %, two_regions 2.37 -> 1.56 %, L 6.48 -> 2.23 %, star
     6.83 -> 6.45 %, long_slot 36.2 % unchanged; the maximum is not lowered (127.7 deg on the rectangle:
     a lap stretch and the runs no arc reaches). Not the default: on the island pocket of
     tests/test_ce_clearing.py it leaves 13.4 mm² uncut (0.75 without) and reaches 180 deg."""

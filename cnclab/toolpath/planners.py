@@ -113,8 +113,10 @@ def register(name: str, description: str):
 #: Jacso's rectangle does not (4.65 % above theta + 5, max theta + 68: links that cut into material
 #: 3.3 %, laps resuming from the wall 2.0 %, cleanup 0.35 %), nor do the bench pockets: they are refused.
 #: With roll-in arcs onto the runs resuming from the wall (ce_clearing ``wall="roll-in"``, on for this
-#: strategy): rectangle 2.76 % (laps 1.50, links cutting 0.97, cleanup 0.29), max still theta + 68;
-#: two_regions 1.56 %, L 2.23 %, star 6.45 %, long_slot 36.2 %: all still refused.
+#: strategy; measured on main before them: 4.81 %, links cutting 2.93 %): rectangle 2.76 % (laps 1.50,
+#: links cutting 0.97, cleanup 0.29), max still theta + 68 (a lap stretch at (19.2, 5.0));
+#: two_regions 2.37 -> 1.56 %, L 6.48 -> 2.23 %, star 6.83 -> 6.45 % (max 121 -> 129 deg), long_slot 36.2 %
+#: unchanged: all still refused.
 CE_PROMISE_DEG = 15.0
 CE_SHARE_ABOVE_5_PCT = 1.0
 #: the evaluation dixel of that check, as a fraction of the tool radius (r / 20: 0.15 mm for D 6;
