@@ -91,15 +91,21 @@ def test_getting_started_blocks_run(tmp_path):
     script = "set -euo pipefail\n" + "".join(runnable(b)[0] for b in shell_blocks(getting_started()))
     # its own process group: the Dask scheduler and worker the README starts in the background are
     # ended with the group even when a line fails before the README's own `kill`
-    proc = subprocess.Popen(["bash", "-c", script], cwd=tmp_path, env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
-    try:
-        out, err = proc.communicate(timeout=1800)
-    finally:
+    # output to files, not pipes: a background process left running (a Dask worker) keeps a pipe open
+    # and would hold communicate() until the timeout; with files the test waits for bash only
+    with open(tmp_path / "readme.out", "w+") as fo, open(tmp_path / "readme.err", "w+") as fe:
+        proc = subprocess.Popen(["bash", "-c", script], cwd=tmp_path, env=env, stdout=fo, stderr=fe,
+                                text=True, start_new_session=True)
         try:
-            os.killpg(proc.pid, signal.SIGTERM)
-        except ProcessLookupError:
-            pass
+            proc.wait(timeout=1800)
+        finally:
+            for sig in (signal.SIGTERM, signal.SIGKILL):
+                try:
+                    os.killpg(proc.pid, sig)
+                except ProcessLookupError:
+                    break
+        fo.seek(0), fe.seek(0)
+        out, err = fo.read(), fe.read()
     res = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
     assert res.returncode == 0, f"README Getting started failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}"
     start = tmp_path / "build" / "start"

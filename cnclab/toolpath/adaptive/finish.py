@@ -10,7 +10,6 @@ import math
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 
 from .control import GUARD_LEVEL, replay
 from .entries import PlanningError
@@ -24,44 +23,25 @@ def finish_part(lv, part):
     # the tool-centre limit (as the evaluator and Job.allowed() draw it: 64 segments a quarter circle),
     # 1 um inside it: the chords of its arcs never put the tool centre past the true limit
     wall = shapely.boundary(lv.allowed.buffer(-1e-3))
-    # the region farther than the snap band from the wall (1e-4 of its offset + 1e-6 mm more: the
-    # sagitta of buffer's 64-segment arcs): its points need no exact distance to the wall
-    off = 1e-3 + lv.prm.finish_snap_band_h * lv.h
-    inner = lv.allowed.buffer(-(off * (1.0 + 1e-4) + 1e-6), quad_segs=64)
-    shapely.prepare(inner)
     for ring in [part.exterior, *part.interiors]:
         R = np.asarray(ring.coords)[:-1]
         if len(R) < 3:
             continue
         Rs = resample_polyline(np.vstack([R, R[:1]]), lv.ds, uniform=True)[:-1]
-        # a ring whose skin lap ran (in round 0) gets only rest laps in the clean-up rounds
-        ring_key = (round(float(R[0, 0]), 6), round(float(R[0, 1]), 6), len(R))
-        skinned = lv.skinned_rings
         for lap in range(lv.finish_laps):   # repeated while the corner wedges are peeled
             D, Ac = lv.g.free_field()
             jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
             ii = np.clip(((Rs[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
             dm = D[jj, ii]
-            # the ring points with material in reach: any (the first lap takes the wall skin), or a rest
-            # deeper than max(finish_rest_min_mm, finish_rest_frac_ae a_e) (further laps: the corner
-            # wedges; in a clean-up round also the skin along the stretches where its passes cut)
-            skin = lap == 0 and ring_key not in skinned
-            mat = dm < (lv.r + lv.g.hc if skin else lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e))
-            if lap == 0 and not skin:
-                mat |= _cut_near(lv, Rs)
-            if not mat.any():
+            if dm.min() > (lv.r + lv.g.hc if lap == 0 else lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e)):
                 break                # nothing (more) to take along this ring
             # start where the ring is free of material (the farthest from it, the field being
-            # capped: any point at the cap): at the end of the longest stretch without material in
-            # reach (the lap skips it), or where there is none, the nearest such point to the tool
-            free = dm >= min(dm.max(), lv.r_free + lv.g.hc)
-            free_k = np.flatnonzero(free)
-            k0 = None if skin else _gap_start(mat, free, lv.ds, lv.prm.finish_skip_gap_frac * lv.r)
-            if k0 is None:
-                if lv.cur is not None and len(free_k) > 1:
-                    k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - lv.cur[0], Rs[free_k, 1] - lv.cur[1]))])
-                else:
-                    k0 = int(free_k[0])
+            # capped: any point at the cap), the nearest such point to the tool
+            free_k = np.flatnonzero(dm >= min(dm.max(), lv.r_free + lv.g.hc))
+            if lv.cur is not None and len(free_k) > 1:
+                k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - lv.cur[0], Rs[free_k, 1] - lv.cur[1]))])
+            else:
+                k0 = int(free_k[0])
             Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
             if lv.cur is not None:
                 e = lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
@@ -85,23 +65,22 @@ def finish_part(lv, part):
             # the wall-following pass: the same engagement control, sliding along the wall;
             # it ends 2 r past the last ring point that still has material within reach
             sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
-            mat_l = np.flatnonzero(np.r_[mat[k0:], mat[:k0], mat[k0:k0 + 1]])
-            L_ring = float(sl[-1]) if len(mat_l) == 0 else min(float(sl[-1]), float(sl[mat_l[-1]]) + lv.prm.finish_run_on_frac * lv.r)
+            dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
+            mat = np.flatnonzero(dml < lv.r + lv.g.hc)
+            L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + lv.prm.finish_run_on_frac * lv.r)
             hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
             snap = lv.g.snapshot()
             M_before = snap[0]
-            n_before = int(np.count_nonzero(M_before))
             P, _, _, E, _ = lv.g.run_pass(Rl[0], hd, lv.target_finish, lv.pass_step, int(2 * L_ring / lv.ds) + 100, 1e18,
                                           min(lv.turn, lv.ds / lv.turn_radius), 1.02 * L_ring + lv.ds, lv.guard_finish)
             # points the grid kept within 2 h of the wall go onto the exact wall
             # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
-            band = lv.prm.finish_snap_band_h * lv.h
-            near = ~shapely.contains_xy(inner, P[:, 0], P[:, 1])       # the others are farther than band
-            near[near] = shapely.distance(wall, shapely.points(P[near])) < band
+            pp = shapely.points(P)
+            near = shapely.distance(wall, pp) < lv.prm.finish_snap_band_h * lv.h
             if near.any():
                 # the nearest wall point (not locate + interpolate along the multi-ring wall: a
                 # point nearest to a ring's closing vertex would land on the next ring's start)
-                snapped = shapely.get_coordinates(shapely.shortest_line(shapely.points(P[near]), wall))[1::2]
+                snapped = shapely.get_coordinates(shapely.shortest_line(pp[near], wall))[1::2]
                 Q = P.copy()
                 Q[near] = snapped
                 # the snap moves points up to 2 h outwards: near a concave corner that can
@@ -128,46 +107,3 @@ def finish_part(lv, part):
             lv.b.add(P[1:], np.where(ai, "link", "cut").astype(object), np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min),
                      "finish", z=lv.z)
             lv.cur = (float(P[-1, 0]), float(P[-1, 1]))
-            skinned.add(ring_key)
-            if lap > 0 and (n_before - int(np.count_nonzero(lv.g.M))) * lv.h * lv.h < lv.prm.pass_min_removed_rh * lv.r * lv.h:
-                break                # a further lap took (almost) nothing: the rests left are out of its reach
-
-
-def _gap_start(mat, free, ds, min_gap):
-    """Start index of a finishing lap along a ring of points ``ds`` mm apart: the free point (``free``)
-    nearest before the end of the longest circular run of points without material in reach (``~mat``)
-    when that run is at least ``min_gap`` mm long (the lap then skips it: it ends ``finish_run_on``
-    past the last material before the gap); None when there is no such gap (every point has material
-    in reach, or the gaps are short)."""
-    n = len(mat)
-    if mat.all() or not mat.any():
-        return None
-    k = int(np.flatnonzero(mat)[-1])
-    order = (np.arange(n) + k + 1) % n          # from just after the last material point, circularly
-    m = mat[order]
-    best, best_end, run = 0, -1, 0
-    for q in range(n):
-        run = 0 if m[q] else run + 1
-        if run > best:
-            best, best_end = run, q
-    if best * ds < min_gap:
-        return None
-    for q in range(best_end, best_end - best, -1):   # the free point nearest the gap's end
-        if free[order[q]]:
-            return int(order[q])
-    return None
-
-
-def _cut_near(lv, Rs):
-    """Ring points (Rs, (n, 2) mm) within r + 2 coarse cells of a pixel the current clean-up round cut
-    (the planning stock against its copy at the round's start): where its passes may have left a
-    new wall skin; all False in round 0."""
-    if lv.round_start_M is None:
-        return np.zeros(len(Rs), bool)
-    J, I = np.nonzero(lv.round_start_M != lv.g.M)
-    if len(J) == 0:
-        return np.zeros(len(Rs), bool)
-    xy = np.c_[lv.g.x0 + (I + 0.5) * lv.h, lv.g.y0 + (J + 0.5) * lv.h]
-    reach = lv.r + 2.0 * lv.g.hc
-    d, _ = cKDTree(xy).query(Rs, distance_upper_bound=reach)
-    return d <= reach

@@ -82,10 +82,6 @@ class AdaptiveParams:
     #: max(finish_rest_min_mm, finish_rest_frac_ae a_e) is left along the ring
     finish_rest_min_mm: float = 0.3
     finish_rest_frac_ae: float = 0.25
-    #: fraction of r: a finishing lap starts at the end of the longest stretch of its ring with no
-    #: material in reach when that stretch is at least this long (the lap skips it instead of
-    #: running through air along finished walls); shorter stretches: it starts nearest the tool
-    finish_skip_gap_frac: float = 2.0
     #: fraction of r: a finishing lap runs on this far past the last ring point with material in reach
     finish_run_on_frac: float = 2.0
     #: pixels (h): finishing points planned within this distance of the wall are snapped onto it

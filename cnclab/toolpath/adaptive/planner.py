@@ -37,8 +37,6 @@ class _Level:
         self.cur = None   # current xy at depth (None: at clearance)
         self.entered = set()   # coarse cells of the entries at this level
         self.todo_parts = []
-        self.skinned_rings = set()   # finish rings whose first (skin) lap ran: later rounds take rests only
-        self.round_start_M = None    # planning stock at the start of a clean-up round (None in round 0)
         self.r_free = np.nan
 
     def retract(self):
@@ -191,7 +189,6 @@ class _Level:
                     break
                 self.todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
                 saved = (self.b.mark(), self.g.snapshot(), self.cur, dict(self.stats))
-                self.round_start_M = saved[1][0]     # the finish re-takes the skin only where this round cut
             banned = np.zeros((self.g.ny // self.g.k, self.g.nx // self.g.k), bool)
             for _ in range(self.max_passes):
                 D, Ac = self.g.free_field()
