@@ -28,9 +28,18 @@ def _stop_before_start(signum, frame):
 
 _SIGNAL_NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
 if __name__ == "__main__":
+    import faulthandler as _faulthandler
+
+    # a crash (SIGSEGV, SIGBUS, SIGABRT, ...) prints every thread's Python stack on stderr: a test or a
+    # user that sees one then has the place, not an empty stderr (one rare SIGSEGV after a SIGINT 1 s
+    # into `plan` under a loaded CI machine is not yet explained)
+    _faulthandler.enable()
     for _name in _SIGNAL_NAMES:
         if hasattr(_signal, _name):
             _signal.signal(getattr(_signal, _name), _stop_before_start)
+            # restart system calls the signal interrupts (SA_RESTART): Python retries its own calls
+            # on EINTR (PEP 475), C libraries in other threads (numba/LLVM, BLAS) may not
+            _signal.siginterrupt(getattr(_signal, _name), False)
 
 import importlib  # noqa: E402  (after the handlers: everything below may be interrupted)
 
@@ -102,6 +111,7 @@ class _interrupts_raise:
                 if sig is not None:
                     self.old[sig] = _signal.signal(sig, _signal.default_int_handler if sig == _signal.SIGINT
                                                    else self._raise)
+                    _signal.siginterrupt(sig, False)     # as at start-up: no EINTR in C code
         return self
 
     @staticmethod
