@@ -32,6 +32,16 @@ _hyp_settings.register_profile("ci", derandomize=True, database=None)
 if os.environ.get("CI"):
     _hyp_settings.load_profile("ci")
 
+# Hypothesis (>= 6.131) mixes "local constants" of every module loaded in the process into 5 % of its
+# draws, so the examples a derandomized test gets depended on what earlier tests in the same xdist
+# worker had imported: two fresh-clone runs of one commit drew a star pocket that a third run and
+# every single-file run did not. With no local constants the examples depend only on the test.
+from hypothesis.internal.conjecture import providers as _hyp_providers  # noqa: E402
+
+if hasattr(_hyp_providers, "_get_local_constants"):
+    _NO_LOCAL_CONSTANTS = _hyp_providers._local_constants      # still the empty set built at import
+    _hyp_providers._get_local_constants = lambda: _NO_LOCAL_CONSTANTS
+
 
 # Longest tests first: pytest-xdist hands tests out in collection order, so a long test collected
 # last runs alone at the end while the other worker idles (about a minute of the `make test` wall
