@@ -109,13 +109,19 @@ class _interrupts_raise:
             for name in _SIGNAL_NAMES:
                 sig = getattr(_signal, name, None)
                 if sig is not None:
-                    self.old[sig] = _signal.signal(sig, _signal.default_int_handler if sig == _signal.SIGINT
-                                                   else self._raise)
+                    self.old[sig] = _signal.signal(sig, self._raise)
                     _signal.siginterrupt(sig, False)     # as at start-up: no EINTR in C code
         return self
 
     @staticmethod
     def _raise(signum, frame):
+        from cnclab.fileio import in_native_callback, redeliver_later
+
+        if in_native_callback(frame):      # inside a callback from native code: raise after it returns
+            redeliver_later(signum)
+            return
+        if signum == _signal.SIGINT:
+            raise KeyboardInterrupt
         raise _Interrupted(signum)
 
     def __exit__(self, *exc):

@@ -24,7 +24,8 @@ from pathlib import Path
 from typing import Iterator
 
 __all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "deferred_signals",
-           "same_file", "check_outputs", "live_temporary_files", "InterruptReport"]
+           "same_file", "check_outputs", "live_temporary_files", "InterruptReport", "in_native_callback",
+           "redeliver_later"]
 
 _LIVE_TMP: set = set()
 _LOCK = threading.Lock()
@@ -248,6 +249,9 @@ def deferred_signals(signals=("SIGINT", "SIGTERM", "SIGHUP")):
 def _raise_exit(signum, frame):
     # the exception unwinds through atomic_output / atomic_write_many, which remove their temporary
     # files and roll back renames already made (deleting files here could break that rollback)
+    if in_native_callback(frame):
+        redeliver_later(signum)
+        return
     raise SystemExit(128 + signum)
 
 
@@ -286,6 +290,36 @@ def _identity(path):
     return st.st_ino, st.st_mtime_ns, st.st_size
 
 
+#: path parts of Python code that native code calls back into (llvmlite's object-cache notifications
+#: while numba compiles): an exception raised there is printed and dropped by ctypes, and the native
+#: code goes on in a state it did not expect (a rare SIGSEGV was seen after one)
+_NATIVE_CALLBACK_PARTS = (f"{os.sep}llvmlite{os.sep}", f"{os.sep}ctypes{os.sep}")
+
+
+def in_native_callback(frame) -> bool:
+    """True when ``frame`` (a signal handler's frame argument) runs inside a callback from native code
+    (see ``_NATIVE_CALLBACK_PARTS``), where an exception must not be raised.
+
+    >>> import sys
+    >>> in_native_callback(sys._getframe())
+    False
+    """
+    while frame is not None:
+        if any(part in frame.f_code.co_filename for part in _NATIVE_CALLBACK_PARTS):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def redeliver_later(signum: int, delay_s: float = 0.05) -> None:
+    """Send ``signum`` to this process again after ``delay_s`` seconds (s), from a daemon timer
+    thread: a handler that must not raise now (:func:`in_native_callback`) gets the signal again once
+    the native code has returned."""
+    t = threading.Timer(delay_s, os.kill, (os.getpid(), signum))
+    t.daemon = True
+    t.start()
+
+
 class InterruptReport:
     """For a command-line run writing ``outputs``: SIGINT / SIGTERM / SIGHUP at any moment end it with a
     message that says what is on disk, and an exit code that follows it.
@@ -320,6 +354,9 @@ class InterruptReport:
 
     def _handler(self, signum, frame):
         self.signum = self.signum or signum
+        if in_native_callback(frame):
+            redeliver_later(signum)      # raised once the native code has returned (see the function)
+            return
         self._raise(signum)
 
     @staticmethod
