@@ -115,14 +115,10 @@ class _interrupts_raise:
 
     @staticmethod
     def _raise(signum, frame):
-        from cnclab.fileio import in_native_callback, redeliver_later
+        from cnclab.fileio import raise_outside_native_code
 
-        if in_native_callback(frame):      # inside a callback from native code: raise after it returns
-            redeliver_later(signum)
-            return
-        if signum == _signal.SIGINT:
-            raise KeyboardInterrupt
-        raise _Interrupted(signum)
+        raise_outside_native_code(signum, frame, KeyboardInterrupt() if signum == _signal.SIGINT
+                                  else _Interrupted(signum))
 
     def __exit__(self, *exc):
         for sig, h in self.old.items():      # after the command, "nothing written" would be a lie: ignore

@@ -25,7 +25,7 @@ from typing import Iterator
 
 __all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "deferred_signals",
            "same_file", "check_outputs", "live_temporary_files", "InterruptReport", "in_native_callback",
-           "redeliver_later"]
+           "redeliver_later", "raise_outside_native_code"]
 
 _LIVE_TMP: set = set()
 _LOCK = threading.Lock()
@@ -249,10 +249,7 @@ def deferred_signals(signals=("SIGINT", "SIGTERM", "SIGHUP")):
 def _raise_exit(signum, frame):
     # the exception unwinds through atomic_output / atomic_write_many, which remove their temporary
     # files and roll back renames already made (deleting files here could break that rollback)
-    if in_native_callback(frame):
-        redeliver_later(signum)
-        return
-    raise SystemExit(128 + signum)
+    raise_outside_native_code(signum, frame, SystemExit(128 + signum))
 
 
 def live_temporary_files() -> list:
@@ -320,6 +317,16 @@ def redeliver_later(signum: int, delay_s: float = 0.05) -> None:
     t.start()
 
 
+def raise_outside_native_code(signum: int, frame, exc: BaseException) -> None:
+    """What every signal handler here does: raise ``exc`` now, or -- when ``frame`` runs inside a
+    callback from native code (:func:`in_native_callback`) -- send ``signum`` again shortly
+    (:func:`redeliver_later`) so the handler raises once the native code has returned."""
+    if in_native_callback(frame):
+        redeliver_later(signum)
+        return
+    raise exc
+
+
 class InterruptReport:
     """For a command-line run writing ``outputs``: SIGINT / SIGTERM / SIGHUP at any moment end it with a
     message that says what is on disk, and an exit code that follows it.
@@ -354,10 +361,8 @@ class InterruptReport:
 
     def _handler(self, signum, frame):
         self.signum = self.signum or signum
-        if in_native_callback(frame):
-            redeliver_later(signum)      # raised once the native code has returned (see the function)
-            return
-        self._raise(signum)
+        raise_outside_native_code(signum, frame, KeyboardInterrupt() if signum == signal.SIGINT
+                                  else SystemExit(128 + signum))
 
     @staticmethod
     def _raise(signum):

@@ -104,7 +104,8 @@ def test_getting_started_blocks_run(tmp_path):
                     os.killpg(proc.pid, sig)
                 except ProcessLookupError:
                     break
-        fo.seek(0), fe.seek(0)
+        fo.seek(0)
+        fe.seek(0)
         out, err = fo.read(), fe.read()
     res = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
     assert res.returncode == 0, f"README Getting started failed:\n{res.stdout[-3000:]}\n{res.stderr[-3000:]}"
