@@ -25,8 +25,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import re
 import shutil
+import signal
 import subprocess
 import tempfile
 from pathlib import Path
@@ -170,8 +172,15 @@ def run_rs274(program, timeout_s: float = 120.0) -> str:
     with tempfile.TemporaryDirectory() as tmp:
         tbl = Path(tmp) / "tools.tbl"
         tbl.write_text(tool_table())
+        # rs274 keeps its tool data in $HOME/.tool.mmap, opened with O_TRUNC and mapped shared: two
+        # runs with one HOME truncate each other's map and one dies of SIGBUS (seen with 2 xdist
+        # workers). Each run gets its own HOME, the temporary directory it runs in.
+        env = {**os.environ, "HOME": tmp}
         proc = subprocess.run([exe, "-t", str(tbl), "-g", str(program.resolve())], capture_output=True,
-                              text=True, timeout=timeout_s, cwd=tmp)
+                              text=True, timeout=timeout_s, cwd=tmp, env=env)
+    if proc.returncode < 0:
+        raise OSError(f"{program}: rs274 was killed by signal {-proc.returncode} "
+                      f"({signal.Signals(-proc.returncode).name}); that is a crash, not a verdict on the program")
     if proc.returncode != 0:
         msg = " | ".join(s.strip() for s in proc.stderr.splitlines() if s.strip() and s.strip() != "executing")
         raise Rs274Error(f"{program}: rs274 refused the program (exit {proc.returncode}): {msg}")
