@@ -189,9 +189,6 @@ BUDGET_ALLOWED = {
     ("params", "cnclab/toolpath/adaptive/control.py", "pass_kernel"): (26, _ADAPTIVE),
     ("lines", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (127, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (20, _ADAPTIVE),
-    ("lines", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (185, "the old clearing planner, to be retired (issue 29 item 1)"),
-    ("params", "cnclab/toolpath/ce_clearing.py", "ce_clearing"): (22, "the old clearing planner, to be retired (issue 29 item 1)"),
-    ("params", "cnclab/toolpath/constant_engagement.py", "multi_pass"): (13, "Thesis II/III integration settings; to take a Job"),
 }
 
 

@@ -64,6 +64,7 @@ True
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 
@@ -83,7 +84,7 @@ from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
 from .path import ToolPath, helix_ring, resample_polyline
 
 __all__ = ["PLAN_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "helical_entry",
-           "ce_clearing", "clearing_path"]
+           "ClearingSettings", "CutSettings", "ce_clearing", "clearing_path"]
 
 #: Planning labels of the clearing's points (written as ToolPath kinds/tags, see the module docstring).
 PLAN_KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
@@ -431,47 +432,26 @@ def _roll_in(stock, P, r, limits_deg, guard, free, a_p, feed_mm_min, step, at, a
     return None, 0
 
 
-def _check_steps(resolution_mm, step_mm, dt, wall, gate_margin_deg) -> float:
-    """Check :func:`ce_clearing`'s steps and wall options (ValueError naming the parameter); returns the
-    sample step (mm)."""
-    if not (isinstance(resolution_mm, (int, float)) and resolution_mm > 0):
-        raise ValueError(f"resolution_mm must be > 0 mm, got {resolution_mm!r}")
-    step = 2.0 * resolution_mm if step_mm is None else float(step_mm)
-    if not step > 0:
-        raise ValueError(f"step_mm must be > 0 mm, got {step_mm!r}")
-    if not dt > 0:
-        raise ValueError(f"dt must be > 0 mm, got {dt!r}")
-    if wall not in ("gate", "trim", "clamp", "roll-in"):
-        raise ValueError(f"wall must be 'gate', 'trim', 'clamp' or 'roll-in', got {wall!r}")
-    if not gate_margin_deg >= 0:
-        raise ValueError(f"gate_margin_deg must be >= 0 deg, got {gate_margin_deg!r}")
-    return step
+WALLS = ("gate", "trim", "clamp", "roll-in")
 
 
-def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_radius_mm=None,
-                resolution_mm: float = 0.1, step_mm=None, dt: float = 0.2, max_laps: int = MAX_LAPS,
-                min_removed_mm2=None, seed_clearance_ratio: float = 0.6, cleanup: bool = True,
-                link_grid_mm: float = 1.0, wall: str = "gate", gate_margin_deg: float = 5.0,
-                a_p: float = 1.0, feed_mm_min: float = 1000.0, clearance_z: float = 5.0, top_z: float = 0.0,
-                link_feed_mm_min: float = LINK_FEED_MM_MIN, spindle_rpm=None, tool=None) -> ToolPath:
-    """Constant-engagement clearing of ``pocket`` (see the module docstring).
+@dataclasses.dataclass(frozen=True)
+class ClearingSettings:
+    """Planning settings of :func:`ce_clearing` (every field has a default; lengths in mm).
 
-    Parameters
+    Attributes
     ----------
-    pocket : shapely Polygon (mm); holes are islands.
-    tool_radius : flat end mill radius r (mm).
-    theta_deg : target engagement angle (deg), e.g. arccos(1 - a_e/r) for a straight cut at a_e.
-    seeds : start points (mm), one per part; default :func:`default_seeds`.
-    entry_radius_mm : radius of the helical-entry hole (mm, > r); default 1.6 r, reduced to fit.
+    seeds : start points ((x, y) mm), one per part; None: :func:`default_seeds`.
+    entry_radius_mm : radius of the helical-entry hole (mm, > r); None: 1.6 r, reduced to fit.
     resolution_mm : dixel row height of the planning stock (mm).
-    step_mm : spacing of the tool-centre samples (mm); default ``2 * resolution_mm``.
+    step_mm : spacing of the tool-centre samples (mm); None: ``2 * resolution_mm``.
     dt : Thesis III contour-parameter step (mm of boundary).
     max_laps : cap on the total number of laps.
-    min_removed_mm2 : a seed's laps end when a lap removes less (mm²); default ``r * step_mm``.
-    seed_clearance_ratio : see :func:`default_seeds`.
+    min_removed_mm2 : a seed's laps end when a lap removes less (mm²); None: ``r * step_mm``.
+    seed_clearance_ratio : see :func:`default_seeds` (dimensionless, in (0, 1)).
+    cleanup : add the final contour pass.
     link_grid_mm : grid spacing (mm) of the seed cells (:func:`geodesic_cells`) and of the shortest
         links through the cleared region.
-    cleanup : add the final contour pass.
     wall : how a lap is limited by the final contour (the boundary of the seed's cell):
         ``"gate"`` (default) — centres outside the cell are put on its boundary, but every such
         wall stretch whose simulated engagement exceeds ``theta_deg + gate_margin_deg`` is left out:
@@ -482,156 +462,287 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, seeds=None, entry_
         dragged along the wall and cuts full-width wedges, up to 180 deg); ``"roll-in"`` — ``"gate"``
         with the runs resuming from the wall entered by roll-in arcs (:func:`_roll_in`).
     gate_margin_deg : engagement margin (deg) above ``theta_deg`` tolerated on a wall stretch.
-    a_p, feed_mm_min : axial depth (mm; the cutting level is ``top_z - a_p``) and cutting feed
-        (mm/min), also used by the planning simulation.
-    clearance_z, top_z, link_feed_mm_min, spindle_rpm, tool : the program's clearance plane and
-        stock top (mm), linking feed (mm/min), spindle speed (rpm) and :class:`Tool`.
+
+    >>> ClearingSettings(wall="roll-in").sample_step_mm()
+    0.2
+    """
+    seeds: tuple | None = None
+    entry_radius_mm: float | None = None
+    resolution_mm: float = 0.1
+    step_mm: float | None = None
+    dt: float = 0.2
+    max_laps: int = MAX_LAPS
+    min_removed_mm2: float | None = None
+    seed_clearance_ratio: float = 0.6
+    cleanup: bool = True
+    link_grid_mm: float = 1.0
+    wall: str = "gate"
+    gate_margin_deg: float = 5.0
+
+    def sample_step_mm(self) -> float:
+        """Check the steps and wall options (ValueError naming the parameter); the sample step (mm)."""
+        if not (isinstance(self.resolution_mm, (int, float)) and self.resolution_mm > 0):
+            raise ValueError(f"resolution_mm must be > 0 mm, got {self.resolution_mm!r}")
+        step = 2.0 * self.resolution_mm if self.step_mm is None else float(self.step_mm)
+        if not step > 0:
+            raise ValueError(f"step_mm must be > 0 mm, got {self.step_mm!r}")
+        if not self.dt > 0:
+            raise ValueError(f"dt must be > 0 mm, got {self.dt!r}")
+        if self.wall not in WALLS:
+            raise ValueError(f"wall must be 'gate', 'trim', 'clamp' or 'roll-in', got {self.wall!r}")
+        if not self.gate_margin_deg >= 0:
+            raise ValueError(f"gate_margin_deg must be >= 0 deg, got {self.gate_margin_deg!r}")
+        return step
+
+
+@dataclasses.dataclass(frozen=True)
+class CutSettings:
+    """Cutting data and program planes of :func:`ce_clearing`.
+
+    Attributes
+    ----------
+    a_p : axial depth (mm; the cutting level is ``top_z - a_p``), also used by the planning simulation.
+    feed_mm_min : cutting feed (mm/min).
+    clearance_z, top_z : the program's clearance plane and stock top (mm).
+    link_feed_mm_min : linking feed (mm/min).
+    spindle_rpm : spindle speed (rpm), or None.
+    tool : the :class:`~cnclab.toolpath.path.Tool`, or None.
+
+    >>> CutSettings(a_p=3.0).z_cut
+    -3.0
+    """
+    a_p: float = 1.0
+    feed_mm_min: float = 1000.0
+    clearance_z: float = 5.0
+    top_z: float = 0.0
+    link_feed_mm_min: float = LINK_FEED_MM_MIN
+    spindle_rpm: float | None = None
+    tool: object = None
+
+    @property
+    def z_cut(self) -> float:
+        """The cutting level (mm): ``top_z - a_p``."""
+        return self.top_z - self.a_p
+
+
+def _settings(settings, cut, options):
+    """(:class:`ClearingSettings`, :class:`CutSettings`) from the given ones (or defaults) and keyword
+    ``options`` naming their fields (TypeError for any other name)."""
+    settings, cut = settings or ClearingSettings(), cut or CutSettings()
+    names = {f.name for f in dataclasses.fields(ClearingSettings)}, {f.name for f in dataclasses.fields(CutSettings)}
+    bad = sorted(set(options) - names[0] - names[1])
+    if bad:
+        raise TypeError(f"ce_clearing() got an unexpected keyword argument {bad[0]!r}")
+    settings = dataclasses.replace(settings, **{k: v for k, v in options.items() if k in names[0]})
+    return settings, dataclasses.replace(cut, **{k: v for k, v in options.items() if k in names[1]})
+
+
+def ce_clearing(pocket, tool_radius: float, theta_deg: float, settings: ClearingSettings | None = None,
+                cut: CutSettings | None = None, **options) -> ToolPath:
+    """Constant-engagement clearing of ``pocket`` (see the module docstring).
+
+    Parameters
+    ----------
+    pocket : shapely Polygon (mm); holes are islands.
+    tool_radius : flat end mill radius r (mm).
+    theta_deg : target engagement angle (deg), e.g. arccos(1 - a_e/r) for a straight cut at a_e.
+    settings : :class:`ClearingSettings` (planning: seeds, steps, wall handling ...); default all defaults.
+    cut : :class:`CutSettings` (a_p, feeds, planes, spindle, tool); default all defaults.
+    options : any field of either, by name (e.g. ``resolution_mm=0.25, wall="trim", a_p=2.0``),
+        overriding ``settings`` / ``cut``.
 
     Returns a :class:`~cnclab.toolpath.path.ToolPath` whose ``info`` holds the seeds, laps per seed,
     the entry radius and the planning stock's uncut area.
     """
+    settings, cut = _settings(settings, cut, options)
+    return _Clearing(pocket, tool_radius, theta_deg, settings, cut).run()
 
-    allowed = _check_common(pocket, tool_radius, theta_deg)
-    if not (clearance_z > top_z and a_p > 0):
-        raise ValueError(f"need clearance_z > top_z > z_cut = top_z - a_p (mm), got {clearance_z}, {top_z}, {a_p}")
-    r = float(tool_radius)
-    step = _check_steps(resolution_mm, step_mm, dt, wall, gate_margin_deg)
-    roll_in, wall = wall == "roll-in", "gate" if wall == "roll-in" else wall
-    min_removed = r * step if min_removed_mm2 is None else float(min_removed_mm2)
-    air_tol = 0.5 * resolution_mm * resolution_mm    # mm²: half a row² = air
-    seeds = default_seeds(allowed, seed_clearance_ratio) if seeds is None else [tuple(map(float, s)) for s in seeds]
-    if not seeds:
-        raise ValueError("seeds must hold at least one (x, y) point in mm")
-    for s in seeds:
-        if len(s) != 2 or not allowed.contains(Point(s)):
-            raise ValueError(f"seeds: {s!r} is not inside the allowed region (pocket shrunk by tool_radius)")
-    guard = allowed.buffer(1e-6)
-    stock = dixel.Stock.from_polygon(pocket, resolution_mm)
-    domain = pocket.buffer(-2 * resolution_mm)          # wall slivers must not join the cleared region
-    segs: list = []                                       # (points, kinds, region)
 
-    def emit(P, K, reg):
-        segs.append((np.asarray(P, float), np.asarray(K, dtype=object), reg))
+class _Clearing:
+    """The state of one :func:`ce_clearing` run: the planning stock, the emitted segments
+    ``(points, labels, seed)``, and the steps (entries, laps, links, cleanup) that extend them."""
 
-    cells = geodesic_cells(allowed, seeds, link_grid_mm)
+    def __init__(self, pocket, tool_radius, theta_deg, settings: ClearingSettings, cut: CutSettings):
+        self.allowed = _check_common(pocket, tool_radius, theta_deg)
+        if not (cut.clearance_z > cut.top_z and cut.a_p > 0):
+            raise ValueError(f"need clearance_z > top_z > z_cut = top_z - a_p (mm), got {cut.clearance_z}, "
+                             f"{cut.top_z}, {cut.a_p}")
+        self.s, self.cut, self.r, self.theta = settings, cut, float(tool_radius), float(theta_deg)
+        self.step = settings.sample_step_mm()
+        self.roll_in = settings.wall == "roll-in"
+        self.wall = "gate" if self.roll_in else settings.wall
+        self.min_removed = self.r * self.step if settings.min_removed_mm2 is None else float(settings.min_removed_mm2)
+        res = settings.resolution_mm
+        self.air_tol = 0.5 * res * res                    # mm²: half a row² = air
+        seeds = default_seeds(self.allowed, settings.seed_clearance_ratio) if settings.seeds is None else \
+            [tuple(map(float, s)) for s in settings.seeds]
+        if not seeds:
+            raise ValueError("seeds must hold at least one (x, y) point in mm")
+        for s in seeds:
+            if len(s) != 2 or not self.allowed.contains(Point(s)):
+                raise ValueError(f"seeds: {s!r} is not inside the allowed region (pocket shrunk by tool_radius)")
+        self.seeds = seeds
+        self.guard = self.allowed.buffer(1e-6)
+        self.stock = dixel.Stock.from_polygon(pocket, res)
+        self.domain = pocket.buffer(-2 * res)              # wall slivers must not join the cleared region
+        self.segs: list = []
+        self.cells = geodesic_cells(self.allowed, seeds, settings.link_grid_mm)
 
-    def free_region():
+    def emit(self, P, K, reg):
+        self.segs.append((np.asarray(P, float), np.asarray(K, dtype=object), reg))
+
+    def sim(self, P, copy=False):
+        """Cut the tool centres ``P`` (mm) through the planning stock (a copy with ``copy``): the table."""
+        return simulate(self.stock, P, self.r, self.cut.a_p, self.cut.feed_mm_min, copy=copy)
+
+    def free_region(self):
         """Material now, and (computed on demand) the region where the tool centre misses it."""
-        mat = stock.to_polygon()
-        return mat, functools.cache(lambda: allowed.difference(mat.buffer(r - resolution_mm, quad_segs=16)))
+        mat = self.stock.to_polygon()
+        r, res = self.r, self.s.resolution_mm
+        return mat, functools.cache(lambda: self.allowed.difference(mat.buffer(r - res, quad_segs=16)))
 
-    def link(R, k, kind="link"):
+    def link(self, R, k, kind="link"):
         """Emit the link ``R`` after cutting it through the stock: steps that remove material -> linkcut."""
-        R = _resample(np.asarray(R, float), step)
-        rem = simulate(stock, R, r, a_p, feed_mm_min).removed_mm2.to_numpy()
-        emit(R, np.where(rem > air_tol, "linkcut", kind), k)
+        R = _resample(np.asarray(R, float), self.step)
+        rem = self.sim(R).removed_mm2.to_numpy()
+        self.emit(R, np.where(rem > self.air_tol, "linkcut", kind), k)
 
-    def go_to(Q0, k, material, free):
+    def go_to(self, Q0, k, material, free):
         """Link from the current tool position to Q0: straight, shortest through the cleared region, or rapid."""
-        a = segs[-1][0][-1]
+        a, r, res = self.segs[-1][0][-1], self.r, self.s.resolution_mm
         if np.hypot(*(Q0 - a)) < 1e-9:
             return
         # material the tool already touches at either end (it cuts there anyway) is not an obstacle
         material = material.difference(Point(a).buffer(r, quad_segs=16))
-        if _chord_clear(a, Q0, material, guard, r, resolution_mm):
-            link(np.vstack([a, Q0]), k)
+        if _chord_clear(a, Q0, material, self.guard, r, res):
+            self.link(np.vstack([a, Q0]), k)
             return
-        route = _geodesic(a, Q0, free, link_grid_mm, guard, material, r, resolution_mm)
+        route = _geodesic(a, Q0, free, self.s.link_grid_mm, self.guard, material, r, res)
         if route is not None:
-            link(route, k)
+            self.link(route, k)
             return
         # no route at depth: jump (retract, rapid) to the cleared point nearest to Q0, plunge there
         # (into air) and link at depth to Q0 (its steps that touch material become linkcut)
         fr = free()
-        safe = fr.buffer(-2.0 * resolution_mm)
+        safe = fr.buffer(-2.0 * res)
         F, landing = Q0, "rapid"
         for g in (safe, fr):
             if not g.is_empty:
                 F = np.asarray(shapely.get_coordinates(nearest_points(g, Point(Q0))[0])[0])
                 landing = CLEARED_LANDING           # F is in the cleared region: the plunge meets air
                 break
-        emit(np.vstack([a, F]), ["rapid", landing], k)
+        self.emit(np.vstack([a, F]), ["rapid", landing], k)
         if np.hypot(*(F - Q0)) > 1e-9:
-            link(np.vstack([F, Q0]), k)
+            self.link(np.vstack([F, Q0]), k)
 
-    entry_r, laps, n_laps = [], [0] * len(seeds), 0
-    for k, s in enumerate(seeds):
-        # 1. helical entry (skipped when an earlier seed's laps already cleared this part)
-        clear = float(allowed.boundary.distance(Point(s)))
-        er = min(1.6 * r if entry_radius_mm is None else float(entry_radius_mm), r + clear)
-        if er <= r + 0.5 * step:
+    def split(self, P, removed, material, free, kind):
+        """:func:`_split_runs` of a simulated stretch with this run's settings, emitted when not empty."""
+        return _split_runs(P, removed, material, self.guard, self.r, self.air_tol, kind, 3, self.s.resolution_mm,
+                           free, self.s.link_grid_mm)
+
+    def entry(self, k, s):
+        """The helical entry at seed ``s``: its radius, and its first point (None when an earlier seed's
+        laps already cleared this part)."""
+        r = self.r
+        clear = float(self.allowed.boundary.distance(Point(s)))
+        er = min(1.6 * r if self.s.entry_radius_mm is None else float(self.s.entry_radius_mm), r + clear)
+        if er <= r + 0.5 * self.step:
             raise ValueError(f"seeds: {s!r} is too close to the final contour for a helical entry")
-        entry_r.append(er)
-        material = stock.to_polygon()
+        material = self.stock.to_polygon()
         if material.intersection(Point(s).buffer(er)).area < 0.05 * math.pi * er * er:
-            continue
-        H = helical_entry(s, er, r, step)
-        if segs:
-            emit(np.vstack([segs[-1][0][-1], H[0]]), ["rapid", "rapid"], k)
-        simulate(stock, H, r, a_p, feed_mm_min)
-        emit(H, ["entry"] * len(H), k)
-        E = H[0]
-        # 2. constant-engagement laps limited by this seed's cell of the allowed region
-        while n_laps < max_laps:
-            runs = _lap(stock, domain, s, E, r, theta_deg, cells[k], dt, step, wall)
+            return er, None
+        H = helical_entry(s, er, r, self.step)
+        if self.segs:
+            self.emit(np.vstack([self.segs[-1][0][-1], H[0]]), ["rapid", "rapid"], k)
+        self.sim(H)
+        self.emit(H, ["entry"] * len(H), k)
+        return er, H[0]
+
+    def cut_runs(self, runs, k) -> float:
+        """Link to each run of a lap (rolling in where :func:`_roll_in` finds an arc), cut and emit it;
+        returns the area removed (mm²)."""
+        removed, lim = 0.0, (self.theta + self.s.gate_margin_deg, self.theta + 2 * self.s.gate_margin_deg)
+        for P in runs:
+            material, free = self.free_region()
+            A, j = _roll_in(self.stock, P, self.r, lim, self.guard, free, self.cut.a_p, self.cut.feed_mm_min,
+                            self.step, self.segs[-1][0][-1], self.allowed) if self.roll_in else (None, 0)
+            if A is not None:                        # link to the arc's start (in air), roll in
+                self.go_to(A[0], k, material, free)
+                removed += float(self.sim(A).removed_mm2.sum())
+                self.emit(A, ["cut"] * len(A), k)
+                P, (material, free) = P[j:], self.free_region()
+            self.go_to(P[0], k, material, free)
+            rem = self.sim(P).removed_mm2.to_numpy()
+            removed += float(rem.sum())
+            run = self.split(P, rem, material, free, "cut")
+            if run is not None:
+                self.emit(*run, k)
+        return removed
+
+    def laps(self, k, s, E, n_laps) -> tuple[int, int]:
+        """Constant-engagement laps about seed ``s`` from ``E``, limited by its cell; (laps cut, total)."""
+        done = 0
+        while n_laps < self.s.max_laps:
+            runs = _lap(self.stock, self.domain, s, E, self.r, self.theta, self.cells[k], self.s.dt, self.step,
+                        self.wall)
             if not runs:
                 break
-            if wall == "gate":
-                runs = _gate(stock, *runs, r, theta_deg + gate_margin_deg, a_p, feed_mm_min)
+            if self.wall == "gate":
+                runs = _gate(self.stock, *runs, self.r, self.theta + self.s.gate_margin_deg, self.cut.a_p,
+                             self.cut.feed_mm_min)
                 if not runs:
                     break
-            pre, n_segs = stock.copy(), len(segs)
-            removed = 0.0
-            for P in runs:                               # link to the run, cut it, next run
-                material, free = free_region()
-                A, j = _roll_in(stock, P, r, (theta_deg + gate_margin_deg, theta_deg + 2 * gate_margin_deg), guard,
-                                free, a_p, feed_mm_min, step, segs[-1][0][-1], allowed) if roll_in else (None, 0)
-                if A is not None:                        # link to the arc's start (in air), roll in
-                    go_to(A[0], k, material, free)
-                    removed += float(simulate(stock, A, r, a_p, feed_mm_min).removed_mm2.sum())
-                    emit(A, ["cut"] * len(A), k)
-                    P, (material, free) = P[j:], free_region()
-                go_to(P[0], k, material, free)
-                rem = simulate(stock, P, r, a_p, feed_mm_min).removed_mm2.to_numpy()
-                removed += float(rem.sum())
-                run = _split_runs(P, rem, material, guard, r, air_tol, "cut", 3, resolution_mm, free, link_grid_mm)
-                if run is not None:
-                    emit(*run, k)
-            if removed < min_removed or len(segs) == n_segs:
-                stock = pre
-                del segs[n_segs:]
+            pre, n_segs = self.stock.copy(), len(self.segs)
+            removed = self.cut_runs(runs, k)
+            if removed < self.min_removed or len(self.segs) == n_segs:
+                self.stock = pre
+                del self.segs[n_segs:]
                 break
-            E = segs[-1][0][-1]
-            laps[k] += 1
+            E = self.segs[-1][0][-1]
+            done += 1
             n_laps += 1
-    # 3. cleanup: final contour pass on every ring of the allowed region
-    if cleanup:
+        return done, n_laps
+
+    def cleanup(self):
+        """The final contour pass on every ring of the allowed region (outer ring counter-clockwise,
+        islands clockwise), its air stretches linked; rings it would not cut are left out."""
         rings = []
-        for p in _polys(orient(allowed, 1.0) if isinstance(allowed, Polygon) else allowed):
+        for p in _polys(orient(self.allowed, 1.0) if isinstance(self.allowed, Polygon) else self.allowed):
             p = orient(p, 1.0)
             rings += [np.asarray(p.exterior.coords)] + [np.asarray(i.coords) for i in p.interiors]
         for ring in rings:
-            cur = segs[-1][0][-1]
+            cur = self.segs[-1][0][-1]
             i0 = int(np.argmin(np.hypot(*(ring[:-1] - cur).T)))
             R = np.vstack([np.roll(ring[:-1], -i0, axis=0), ring[:-1][i0:i0 + 1]])
-            R = _resample(R, step)
-            if not (simulate(stock, R, r, a_p, feed_mm_min, copy=True).removed_mm2.to_numpy() > air_tol).any():
+            R = _resample(R, self.step)
+            if not (self.sim(R, copy=True).removed_mm2.to_numpy() > self.air_tol).any():
                 continue
-            material, free = free_region()
-            go_to(R[0], -1, material, free)
-            df = simulate(stock, R, r, a_p, feed_mm_min)
-            run = _split_runs(R, df.removed_mm2.to_numpy(), material, guard, r, air_tol, "cleanup", 3,
-                              resolution_mm, free, link_grid_mm)
+            material, free = self.free_region()
+            self.go_to(R[0], -1, material, free)
+            run = self.split(R, self.sim(R).removed_mm2.to_numpy(), material, free, "cleanup")
             if run is not None:
-                emit(*run, -1)
-    info = {"seeds": seeds, "laps_per_seed": laps, "entry_radius_mm": entry_r,
-            "planning_uncut_area_mm2": stock.area(), "theta_deg": float(theta_deg),
-            "resolution_mm": float(resolution_mm), "step_mm": step, "name": "constant-engagement clearing"}
-    out, landed = _segments(segs)
-    path = ToolPath.from_segments(out, z_cut=top_z - a_p, feed=feed_mm_min, clearance_z=clearance_z,
-                                  top_z=top_z, link_feed=link_feed_mm_min, spindle=spindle_rpm, tool=tool,
-                                  info=info)
-    return _tag_cleared_plunges(path, out, landed, top_z)
+                self.emit(*run, -1)
+
+    def run(self) -> ToolPath:
+        """Entries and laps seed after seed, the cleanup, and the ToolPath of it all."""
+        entry_r, laps, n_laps = [], [0] * len(self.seeds), 0
+        for k, s in enumerate(self.seeds):
+            er, E = self.entry(k, s)
+            entry_r.append(er)
+            if E is not None:
+                laps[k], n_laps = self.laps(k, s, E, n_laps)
+        if self.s.cleanup:
+            self.cleanup()
+        info = {"seeds": self.seeds, "laps_per_seed": laps, "entry_radius_mm": entry_r,
+                "planning_uncut_area_mm2": self.stock.area(), "theta_deg": self.theta,
+                "resolution_mm": float(self.s.resolution_mm), "step_mm": self.step,
+                "name": "constant-engagement clearing"}
+        c = self.cut
+        out, landed = _segments(self.segs)
+        path = ToolPath.from_segments(out, z_cut=c.z_cut, feed=c.feed_mm_min, clearance_z=c.clearance_z,
+                                      top_z=c.top_z, link_feed=c.link_feed_mm_min, spindle=c.spindle_rpm,
+                                      tool=c.tool, info=info)
+        return _tag_cleared_plunges(path, out, landed, c.top_z)
 
 
 def _tag_cleared_plunges(path: ToolPath, segments, landed, top_z: float) -> ToolPath:

@@ -24,7 +24,6 @@ The paper prints no number for such a comparison: nothing here is a ledger claim
 from __future__ import annotations
 
 import functools
-import inspect
 import math
 import time
 
@@ -202,7 +201,7 @@ def wall_modes(modes: tuple = ("clamp", "gate")) -> pd.DataFrame:
     laps, of the whole path (entries excluded), retracts, total time. Each mode plans and evaluates anew,
     except the planner's default ("gate"), which is :func:`ce_path` and its evaluation."""
     rows = {}
-    default_wall = inspect.signature(cc.ce_clearing).parameters["wall"].default
+    default_wall = cc.ClearingSettings().wall
     for w in modes:
         if w == default_wall:
             ev = evaluation("constant engagement")
