@@ -101,6 +101,23 @@ def figsize(width: float = 1.0, height: float = 1.0) -> tuple[float, float]:
     return (round(float(width) * w, 6), round(float(height) * h, 6))
 
 
+def plan_view(*axes, **props):
+    """Set each axis up as a plan view of the xy plane: equal aspect, ``x [mm]`` / ``y [mm]`` labels,
+    then any further ``Axes.set`` properties (``title=...``). Accepts axes or arrays of axes.
+
+    >>> import matplotlib; matplotlib.use("Agg"); import matplotlib.pyplot as plt
+    >>> fig, axs = plt.subplots(1, 2)
+    >>> plan_view(axs, title="pocket")
+    >>> axs[1].get_xlabel(), axs[1].get_aspect(), axs[0].get_title()
+    ('x [mm]', 1.0, 'pocket')
+    >>> plt.close(fig)
+    """
+    import numpy as np
+
+    for ax in np.ravel(np.array(axes, dtype=object)):
+        ax.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]", **props)
+
+
 def with_style(func=None, *, style=None):
     """Decorator: draw a figure function under a style sheet (``style``, default the collection's
     ``paper.mplstyle``), so fonts and :func:`figsize` follow the style outside a notebook too (the

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..plotting import figsize
+from ..plotting import figsize, plan_view
 
 __all__ = ["thesis1", "ce_growth", "trochoid", "kim_yang", "hoang", "working_diameter", "cusp", "spindle"]
 
@@ -48,7 +48,7 @@ def ce_growth(sc):
     P, r = sc["P"][-1], sc["tool_radius_mm"]
     t = np.linspace(0, 2 * np.pi, 90)
     a.plot(P[0] + r * np.cos(t), P[1] + r * np.sin(t), "C3", lw=1, label="tool")
-    a.set_aspect("equal"); a.set(xlabel="x [mm]", ylabel="y [mm]"); a.legend(fontsize=7, loc="lower left")
+    plan_view(a); a.legend(fontsize=7, loc="lower left")
     b.plot(sc["s_mm"], sc["engagement_deg"], "C0", lw=1, label="simulated (dixel)")
     b.axhline(sc["theta_deg"], color="k", ls=":", label="θ target")
     b.set(xlabel="path length [mm]", ylabel="engagement [deg]", ylim=(0, max(100, sc["theta_deg"] + 20)))
@@ -64,7 +64,7 @@ def trochoid(sc):
     a.plot(*P.T, "C0", lw=0.8, label="tool centre")
     if link.any():
         a.plot(*np.where(link[:, None], P, np.nan).T, "C1", lw=0.8, label="link")
-    a.set_aspect("equal"); a.set(xlabel="x [mm]", ylabel="y [mm]", title=f"{sc['pattern']}, step {sc['step_mm']:.3f} mm")
+    plan_view(a, title=f"{sc['pattern']}, step {sc['step_mm']:.3f} mm")
     a.legend(fontsize=7)
     b.plot(sc["s_mm"], sc["engagement_deg"], "C0", lw=0.8)
     if np.isfinite(sc["front_engagement_deg"]):
@@ -85,7 +85,7 @@ def kim_yang(sc):
     for p, f in zip(sc["modified"], sc["inserted"]):
         a.plot(*np.where(f[:, None], p, np.nan).T, "C3", lw=0.9)
     a.plot([], [], "0.6", label="contour-parallel"); a.plot([], [], "C3", label="inserted segments")
-    a.set_aspect("equal"); a.set(xlabel="x [mm]", ylabel="y [mm]"); a.legend(fontsize=7, loc="upper right")
+    plan_view(a); a.legend(fontsize=7, loc="upper right")
     k = np.ones(5) / 5.0                                  # 5-sample moving mean (pixel noise)
     for key, st, lab in (("mrr_modified", "C3", "modified"), ("mrr_original", "0.3", "original")):
         x, y = sc[key].T
@@ -161,7 +161,7 @@ def spindle(sc):
     xyz = sc["xyz"]
     m = a.scatter(xyz[:, 0], xyz[:, 1], c=sc["n_rpm"], s=3, cmap="viridis")
     fig.colorbar(m, ax=a, label="n [rpm]")
-    a.set_aspect("equal"); a.set(xlabel="x [mm]", ylabel="y [mm]", title=f"A_f = {sc['feed_angle_deg']:g}°")
+    plan_view(a, title=f"A_f = {sc['feed_angle_deg']:g}°")
     b.plot(sc["s_mm"], sc["n_rpm"], "C0", lw=0.6, label="controlled n")
     b.axhline(sc["n_nominal_rpm"], color="k", ls=":", label="constant n (Table 7-1)")
     b.set(xlabel="feed path length [mm]", ylabel="spindle speed n [rpm]"); b.legend(fontsize=7)

@@ -13,7 +13,7 @@ import numpy as np
 from . import ce_comparison as cx
 from . import constant_mrr_pocket as ky
 from ...nc import gcode
-from ...plotting import FIGURES, draw_figure as draw, figsize, register_figure as _register
+from ...plotting import FIGURES, draw_figure as draw, figsize, plan_view, register_figure as _register
 from ...toolpath import constant_mrr as cm
 
 __all__ = ["draw"]
@@ -36,8 +36,7 @@ def fig2_offsets_pocket_120x85():
     for k, loops in enumerate(levels):
         for lp in loops:
             ax.plot(lp[:, 0], lp[:, 1], color=plt.cm.viridis(k / len(levels)), lw=1)
-    ax.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]",
-           title=f"{len(levels)} offset levels, loops per level {[len(lv) for lv in levels]}")
+    plan_view(ax, title=f"{len(levels)} offset levels, loops per level {[len(lv) for lv in levels]}")
     return fig
 
 

@@ -17,7 +17,7 @@ from ...cutting.roughness import ideal_cusp_profile
 from ...geometry import ball_end as be
 from ...geometry import cusp
 from ...geometry.cylinder_parts import MEASURING_POSITIONS_MM, CylinderPart
-from ...plotting import FIGURES, draw_figure as draw, figsize, register_figure as _register
+from ...plotting import FIGURES, draw_figure as draw, figsize, plan_view, register_figure as _register
 from . import ch3, ch4_5
 
 __all__ = ["FIGURES", "draw"]
@@ -210,7 +210,7 @@ def fig5_3_transformed_circle_tangent_points():
         ax.plot(*P[:2], "o")
         ax.annotate(name, P[:2], xytext=(4, 4), textcoords="offset points")
     ax.arrow(0, 0, 2 * np.cos(np.radians(Af)), 2 * np.sin(np.radians(Af)), width=0.03, color="k")
-    ax.set(aspect="equal", xlabel="x [mm]", ylabel="y [mm]", title="tangent points (Fig 5-3), feed arrow A_f")
+    plan_view(ax, title="tangent points (Fig 5-3), feed arrow A_f")
     ax.legend(fontsize=7)
     return fig
 

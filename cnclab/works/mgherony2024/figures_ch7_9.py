@@ -16,7 +16,7 @@ import numpy as np
 from ...geometry.mesh import read_stl
 from ...nc import apt
 from ...paths import data_path
-from ...plotting import FIGURES, draw_figure as draw, figsize, register_figure as _register
+from ...plotting import FIGURES, draw_figure as draw, figsize, plan_view, register_figure as _register
 from . import ch7_9
 
 __all__ = ["FIGURES", "draw"]
@@ -37,8 +37,7 @@ def fig7_10_7_11_stl_apt():
     f = ~cl.rapid
     axs[1].scatter(cl.xyz[f, 0], cl.xyz[f, 1], c=cl.xyz[f, 2], s=0.5)
     axs[1].set(title="APT feed points (Fig 7-11)")
-    for a in axs:
-        a.set(xlabel="x [mm]", ylabel="y [mm]", aspect="equal")
+    plan_view(axs)
     return fig
 
 
@@ -91,7 +90,7 @@ def fig8_1_test_part_reconstruction():
     fig, ax = plt.subplots(figsize=figsize(0.75, 1), layout="constrained")
     cs = ax.contourf(x, y, part.height_at(x, y), 20)
     fig.colorbar(cs, label="z [mm]")
-    ax.set(xlabel="x [mm]", ylabel="y [mm]", title="Reconstructed test part (Fig 8-1)", aspect="equal")
+    plan_view(ax, title="Reconstructed test part (Fig 8-1)")
     return fig
 
 
@@ -141,8 +140,7 @@ def fig9_5_9_6_points_original_path():
     axs[1].set(title="Fig 9-5b\nextended point cloud")
     axs[2].plot(dense[:, 0], dense[:, 1], lw=0.3)
     axs[2].set(title="Fig 9-6\noriginal path")
-    for a in axs:
-        a.set(xlabel="x [mm]", ylabel="y [mm]", aspect="equal")
+    plan_view(axs)
     return fig
 
 
