@@ -142,3 +142,24 @@ def test_simulated_engagement_deviation_shrinks_with_dt():
 def test_convergence_study_bad_input():
     with pytest.raises(ValueError, match="dts"):
         ce.convergence_study(Line((0, 0), (10, 0)), R, TH, [0.1])
+
+
+def test_thin_ring_closes_a_ring_whose_last_point_nearly_repeats_the_first():
+    """issue 29: on the 60 x 40 mm deep pocket a cleared-region ring thinned to 0.3 mm ended 1.3e-4 mm
+    from its first point (at y = 39.75 mm): np.allclose calls them equal, so SplineContour did not close
+    the ring, and scipy's periodic spline refused the unequal ends (the constant-engagement strategy
+    failed on the job). thin_ring drops that point; the ring's spline is then periodic."""
+    from cnclab.geometry.contours import SplineContour
+
+    phi = np.linspace(0.0, 2 * np.pi, 1201)[:-1]
+    ring = np.c_[20 + 20 * np.cos(phi), 19.75 + 20 * np.sin(phi)]
+    ring = np.vstack([ring, ring[0] + [1.3e-4, 0.0]])
+    raw = ring[::12]                                     # what thinning kept before: the near-duplicate last
+    assert np.allclose(raw[0], raw[-1]) and not np.array_equal(raw[0], raw[-1])
+    with pytest.raises(ValueError, match="periodic"):
+        SplineContour(raw, closed=True)
+    pts = ce.thin_ring(ring, 1.0)
+    gaps = np.hypot(*np.diff(np.vstack([pts, pts[:1]]), axis=0).T)
+    assert gaps.min() >= 0.5 and gaps.max() < 1.2           # thinned to ~1 mm, the closing gap included
+    c = SplineContour(pts, closed=True)
+    assert np.allclose(c.point(0.0), c.point(c.t_max))     # closed: one full turn back to the start

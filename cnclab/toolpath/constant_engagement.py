@@ -360,7 +360,27 @@ def cleared_boundary_contour(stock, seed_xy, domain_polygon, min_spacing_mm=None
     a, b = ring, np.roll(ring, -1, axis=0)
     mid = 0.5 * (a + b)
     # keep the midpoints of all staircase edges (vertical: row centre samples; horizontal: chords)
-    pts = mid
+    pts = thin_ring(mid, min_spacing_mm)
+    area2 = np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
+    if area2 < 0:
+        pts = pts[::-1]
+    return SplineContour(pts, closed=True)
+
+
+def thin_ring(points, min_spacing_mm: float):
+    """The points of a closed ring (n, 2) (mm; not repeating the first), thinned to at least
+    ``min_spacing_mm`` apart along the ring, for a periodic spline through them. The last point kept
+    is dropped while it lies within half that spacing of the first: the ring closes there, and a
+    near-duplicate (1.3e-4 mm apart at y = 39.75 mm on the 60 x 40 mm deep pocket of issue 29, "equal"
+    to np.allclose but not identical) made the periodic spline refuse the ring.
+
+    >>> ring = np.c_[np.cos(np.linspace(0, 2 * np.pi, 400)), np.sin(np.linspace(0, 2 * np.pi, 400))][:-1] * 40
+    >>> ring = np.vstack([ring, ring[0] + [1.3e-4, 0.0]])          # a near-duplicate of the first point
+    >>> p = thin_ring(ring, 1.0)
+    >>> bool(np.hypot(*(p[-1] - p[0])) >= 0.5)
+    True
+    """
+    pts = np.asarray(points, float)
     seg = np.hypot(*np.diff(np.vstack([pts, pts[:1]]), axis=0).T)
     keep = [0]
     acc = 0.0
@@ -370,15 +390,9 @@ def cleared_boundary_contour(stock, seed_xy, domain_polygon, min_spacing_mm=None
             keep.append(i)
             acc = 0.0
     pts = pts[keep]
-    # the last kept point may fall just short of the first (the ring closes there): a gap of 1e-4 mm
-    # at 40 mm from the origin is "close" to np.allclose but not identical, and the periodic spline
-    # then refuses the ring (the 60 x 40 mm deep pocket of issue 29); drop such a point
     while len(pts) > 4 and np.hypot(*(pts[-1] - pts[0])) < 0.5 * min_spacing_mm:
         pts = pts[:-1]
-    area2 = np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1])
-    if area2 < 0:
-        pts = pts[::-1]
-    return SplineContour(pts, closed=True)
+    return pts
 
 
 def lap_start(contour, start_xy, tool_radius, spacing: float = 0.02):

@@ -116,7 +116,15 @@ def register(name: str, description: str):
 #: strategy; measured on main before them: 4.81 %, links cutting 2.93 %): rectangle 2.76 % (laps 1.50,
 #: links cutting 0.97, cleanup 0.29), max still theta + 68 (a lap stretch at (19.2, 5.0));
 #: two_regions 2.37 -> 1.56 %, L 6.48 -> 2.23 %, star 6.83 -> 6.45 % (max 121 -> 129 deg), long_slot 36.2 %
-#: unchanged: all still refused.
+#: unchanged: all still refused. The 60 x 40 mm deep pocket of issue 29 (D8, a_p 3, no start hole;
+#: tests/test_constant_engagement_deep.py) is refused on its first level: 1.24 % above theta + 5 (laps
+#: 0.40, links cutting 0.52, cleanup 0.32), max theta + 61.9 in a link at (6.29, 36.00).
+#: What breaks it (issue 28, measured on a 28 x 18 mm rectangle, D6, theta 60: 3.61 %, laps 0.40, links
+#: 2.15, cleanup 1.06): a lap run resuming from the wall, where no roll-in arc fits (tried up to 8 r,
+#: sweeps to 120 deg, theta + 15), is reached by a link straight into the material (99-122 deg);
+#: starting such runs where a link reaches them within theta + 10 leaves wedges that the cleanup then
+#: cuts in the corners at up to theta + 89 (5.47 %); clipping every lap stretch above theta + 12 leaves
+#: the short ends uncut (34-46 mm^2). Not yet solved: the strategy keeps refusing these pockets.
 CE_PROMISE_DEG = 15.0
 CE_SHARE_ABOVE_5_PCT = 1.0
 #: the evaluation dixel of that check, as a fraction of the tool radius (r / 20: 0.15 mm for D 6;
