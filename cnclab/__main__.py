@@ -9,7 +9,8 @@ the process at once with one line "interrupted (SIG...): nothing written ..." an
 start-up). While the command runs, SIGINT raises ``KeyboardInterrupt`` and SIGTERM/SIGHUP
 ``SystemExit(128 + signum)`` (temporary files of atomic writes are removed on the way out); the
 commands that write files say what is on disk (:class:`cnclab.fileio.InterruptReport`), and an
-interrupt no command handled is reported here.
+interrupt no command handled (e.g. during its argument parsing) is reported here, naming the outputs
+the atomic writers committed (:func:`cnclab.fileio.committed_outputs`; usually none: "nothing written").
 """
 import os as _os
 import signal as _signal
@@ -28,18 +29,18 @@ def _stop_before_start(signum, frame):
 
 _SIGNAL_NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
 if __name__ == "__main__":
-    import faulthandler as _faulthandler
-
-    # a crash (SIGSEGV, SIGBUS, SIGABRT, ...) prints every thread's Python stack on stderr: a test or a
-    # user that sees one then has the place, not an empty stderr (one rare SIGSEGV after a SIGINT 1 s
-    # into `plan` under a loaded CI machine is not yet explained)
-    _faulthandler.enable()
     for _name in _SIGNAL_NAMES:
         if hasattr(_signal, _name):
             _signal.signal(getattr(_signal, _name), _stop_before_start)
             # restart system calls the signal interrupts (SA_RESTART): Python retries its own calls
             # on EINTR (PEP 475), C libraries in other threads (numba/LLVM, BLAS) may not
             _signal.siginterrupt(getattr(_signal, _name), False)
+    import faulthandler as _faulthandler
+
+    # a crash (SIGSEGV, SIGBUS, SIGABRT, ...) prints every thread's Python stack on stderr: a test or a
+    # user that sees one then has the place, not an empty stderr (one rare SIGSEGV after a SIGINT 1 s
+    # into `plan` under a loaded CI machine is not yet explained)
+    _faulthandler.enable()
 
 import importlib  # noqa: E402  (after the handlers: everything below may be interrupted)
 
@@ -79,12 +80,23 @@ def main(argv=None) -> int:
             return int(mod.main(argv[1:]) or 0)
         except (KeyboardInterrupt, _Interrupted) as exc:
             _ignore_signals()     # a second interrupt cannot cut this message
-            # the command did not handle it: its outputs are written atomically (each one complete or
-            # not created), so say which of them
             signum = exc.signum if isinstance(exc, _Interrupted) else _signal.SIGINT
-            print(f"\ninterrupted ({_signal.Signals(signum).name}): {argv[0]} stopped before it finished; its outputs "
-                  "are written atomically, each one is complete or was not written", file=sys.stderr)
+            print("\n" + _unhandled_interrupt_message(argv[0], signum), file=sys.stderr)
             return 128 + signum
+
+
+def _unhandled_interrupt_message(command: str, signum: int) -> str:
+    """What an interrupt the command did not report (e.g. during its argument parsing, before its
+    :class:`cnclab.fileio.InterruptReport`) leaves on disk: every output goes through the atomic
+    writers, which record what they committed (:func:`cnclab.fileio.committed_outputs`)."""
+    from cnclab.fileio import committed_outputs
+
+    name = _signal.Signals(signum).name
+    done = list(dict.fromkeys(str(p) for p in committed_outputs()))
+    if not done:
+        return f"interrupted ({name}): nothing written ({command} stopped before it wrote any output)"
+    return (f"interrupted ({name}): {command} stopped after writing {', '.join(done)} (each complete, written "
+            "atomically); no other output was written")
 
 
 class _Interrupted(SystemExit):

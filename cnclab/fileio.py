@@ -25,9 +25,10 @@ from typing import Iterator
 
 __all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "deferred_signals",
            "same_file", "check_outputs", "live_temporary_files", "InterruptReport", "in_native_callback",
-           "redeliver_later", "raise_outside_native_code"]
+           "redeliver_later", "raise_outside_native_code", "committed_outputs"]
 
 _LIVE_TMP: set = set()
+_COMMITTED: list = []      # every output this process moved into place (committed_outputs)
 _LOCK = threading.Lock()
 
 
@@ -123,6 +124,7 @@ def atomic_output(path, mode: str = "w", inputs=(), **open_kwargs) -> Iterator:
         os.replace(tmp, dest)
         with _LOCK:
             _LIVE_TMP.discard(tmp)
+            _COMMITTED.append(dest)
     except BaseException:
         _discard(tmp)
         raise
@@ -203,6 +205,8 @@ def _commit(items, tmps, backups, done) -> None:
     for b in backups:
         if b:
             _discard(b)
+    with _LOCK:
+        _COMMITTED.extend(done)
 
 
 @contextlib.contextmanager
@@ -252,6 +256,21 @@ def _raise_exit(signum, frame):
     raise_outside_native_code(signum, frame, SystemExit(128 + signum))
 
 
+def committed_outputs() -> list:
+    """The outputs (paths) this process has written completely so far, in the order they were moved
+    into place by :func:`atomic_output`, :func:`atomic_write` or :func:`atomic_write_many`: what an
+    interrupt leaves on disk (``python -m cnclab`` names them when a command did not say it).
+
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "a.txt"
+    >>> _ = atomic_write(p, "A")
+    >>> committed_outputs()[-1] == p
+    True
+    """
+    with _LOCK:
+        return list(_COMMITTED)
+
+
 def live_temporary_files() -> list:
     """Temporary files of atomic writes in progress (for diagnostics and tests)."""
     with _LOCK:
@@ -287,22 +306,28 @@ def _identity(path):
     return st.st_ino, st.st_mtime_ns, st.st_size
 
 
-#: path parts of Python code that native code calls back into (llvmlite's object-cache notifications
-#: while numba compiles): an exception raised there is printed and dropped by ctypes, and the native
-#: code goes on in a state it did not expect (a rare SIGSEGV was seen after one)
-_NATIVE_CALLBACK_PARTS = (f"{os.sep}llvmlite{os.sep}", f"{os.sep}ctypes{os.sep}")
+#: Python functions that native code calls back into, as (file name ending, function name): llvmlite's
+#: object-cache hooks (``llvmlite/binding/executionengine.py``, wrapped by ``ctypes.CFUNCTYPE`` and
+#: called by LLVM while numba compiles). An exception raised in them (or in anything they call) is
+#: printed and dropped by ctypes ("Exception ignored on calling ctypes callback function"), and the
+#: native code goes on in a state it did not expect (a rare SIGSEGV was seen after one). Only these
+#: frames: stdlib ``ctypes`` code and the rest of llvmlite are ordinary Python called from Python,
+#: where an interrupt is raised at once.
+_NATIVE_CALLBACKS = tuple((os.path.join("llvmlite", "binding", "executionengine.py"), name)
+                          for name in ("_raw_object_cache_notify", "_raw_object_cache_getbuffer"))
 
 
 def in_native_callback(frame) -> bool:
-    """True when ``frame`` (a signal handler's frame argument) runs inside a callback from native code
-    (see ``_NATIVE_CALLBACK_PARTS``), where an exception must not be raised.
+    """True when ``frame`` (a signal handler's frame argument) or a caller of it runs inside a callback
+    from native code (one of ``_NATIVE_CALLBACKS``), where an exception must not be raised.
 
     >>> import sys
     >>> in_native_callback(sys._getframe())
     False
     """
     while frame is not None:
-        if any(part in frame.f_code.co_filename for part in _NATIVE_CALLBACK_PARTS):
+        code = frame.f_code
+        if any(code.co_name == name and code.co_filename.endswith(os.sep + tail) for tail, name in _NATIVE_CALLBACKS):
             return True
         frame = frame.f_back
     return False

@@ -5,11 +5,14 @@ over random small pockets, scored on the dixel simulator at 0.05 mm by the packa
 Tolerances: the planner controls the engagement on its own pixel stock (0.05 mm here) and the
 scorer measures it on the dixel stock at 0.05 mm; one pixel of radial depth at r = 1.5 mm changes
 the engagement by up to ~ h / (r sin theta) = 2.2 deg at theta = 60 deg, so the engagement bound is
-asserted as theta + 10 deg + 2 pixels' worth (4.4 deg). Coverage: the area left beyond the
-unreachable corners must be below 1 % of the pocket area + 1 mm^2 (dixel rows of 0.05 mm along the
-walls contribute ~ perimeter x h / 2) + one more unreachable-corner area per corner below 180 deg
-(the engagement bound keeps the tool centre short of such corners of the tool-centre region:
-``_corner_allowance_mm2``).
+asserted as theta + 10 deg + 2 pixels' worth (4.4 deg). Coverage (:func:`_uncut_allowance_mm2`):
+the area left beyond the unreachable corners must be below 1 % of the pocket area + 1 mm^2 (dixel
+rows of 0.05 mm along the walls contribute ~ perimeter x h / 2) + about one more unreachable-corner
+area per corner below 180 deg (the engagement bound keeps the tool centre short of such corners of
+the tool-centre region: ``_corner_allowance_mm2``, at most the pocket's unreachable area) + the
+material only a slot barely wider than the tool reaches (``_slot_only_mm2``: no pass enters a strip
+of the tool-centre region thinner than 0.4 r under the engagement bound; ``plan`` refuses such a
+plan by its uncut report, :func:`test_tapered_slot_is_left_and_plan_says_so`).
 """
 import math
 from pathlib import Path
@@ -17,14 +20,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import HealthCheck, Phase, example, given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Polygon, box
 from shapely.ops import unary_union
 
 from cnclab.toolpath.adaptive import PlanningError, adaptive_clearing
 from cnclab.nc.gcode import read_gcode
-from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.evaluate import evaluate, unreachable_region
 from cnclab.toolpath.job import Job
 from cnclab.toolpath.path import Tool
 
@@ -72,7 +75,7 @@ def pockets(draw):
     return poly
 
 
-_SETTINGS = dict(max_examples=4, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck),
+_SETTINGS = dict(max_examples=6, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck),
                  phases=[Phase.explicit, Phase.generate])   # no shrinking: each example plans a pocket
 
 
@@ -81,11 +84,16 @@ def _corner_allowance_mm2(poly) -> float:
     180 deg, island corners above 180 deg) of the unreachable corner area R^2 (cot(a/2) - (pi - a)/2). The planner may leave about as much again at each such
     corner: the tool centre cannot reach the corner of the tool-centre region without its front
     half-circle touching the unreachable corner over ~(pi - a) -- more than theta + 10 deg -- so
-    under the engagement bound it stops short (the bench compares what is left with FreeCAD's)."""
+    under the engagement bound it stops short (the bench compares what is left with FreeCAD's).
+    A corner where the ring doubles back (a = 0: a spike of no width) has no area to leave: 0.
+    (Until 2026-11 the outline was recognised by ``ring is poly.exterior``, never true -- shapely
+    makes a new ring object on each access --, so outline corners counted as island corners: the
+    allowance was 0 on every pocket without islands, and the test stricter than it said.)"""
     tot = 0.0
-    for ring in [poly.exterior, *poly.interiors]:
+    for k_ring, ring in enumerate([poly.exterior, *poly.interiors]):
         P = np.asarray(ring.coords)[:-1]
-        ccw = ring.is_ccw
+        # orientation by the signed area (GEOS's is_ccw looks at the highest vertex: wrong on a spike)
+        ccw = float(np.sum(P[:, 0] * np.roll(P[:, 1], -1) - np.roll(P[:, 0], -1) * P[:, 1])) > 0
         for k in range(len(P)):
             a, b, c = P[k - 1], P[k], P[(k + 1) % len(P)]
             u, v = b - a, c - b
@@ -94,9 +102,9 @@ def _corner_allowance_mm2(poly) -> float:
             left = cross > 0
             # the pocket lies left of an outline walked counter-clockwise and right of an island
             # walked counter-clockwise: a convex corner of the free region turns towards it
-            convex = (left == ccw) if ring is poly.exterior else (left != ccw)
-            if convex and turn > 1e-6:
-                alpha = math.pi - turn
+            convex = (left == ccw) if k_ring == 0 else (left != ccw)
+            alpha = math.pi - turn
+            if convex and turn > 1e-6 and alpha > 1e-9:
                 tot += R * R * (1.0 / math.tan(alpha / 2) - (math.pi - alpha) / 2)
     return tot
 
@@ -117,21 +125,112 @@ def _scored(poly, theta):
     return tp, evaluate(tp, _job(poly, theta), H)
 
 
-@settings(**_SETTINGS)
-@given(pockets(), st.sampled_from([45.0, 60.0]))
-def test_random_pockets_are_safe_and_covered(poly, theta):
-    """Zero plunges into material, zero rapids through material (rapids below the top only as links
-    marked cleared), full coverage beyond the unreachable corners up to the stated discretisation
-    tolerance and one more unreachable-corner area per convex corner (:func:`_corner_allowance_mm2`)."""
-    tp, s = _scored(poly, theta)
-    if tp is None:
-        return
-    assert s.plunges_into_material == 0
-    assert s.rapids_into_material == 0
-    assert s.uncut_beyond_unreachable_mm2 <= 0.01 * poly.area + 1.0 + _corner_allowance_mm2(poly)
-    K = tp.kinds()
-    assert np.all((K != "rapid") | (tp.xyz[:, 2] >= 0.0) | tp.cleared)   # below the top: proven links only
-    assert _wall_gouge(tp, poly) <= 1e-3
+def _slot_only_mm2(poly, frac=0.2) -> float:
+    """Pocket area (mm^2) that only tool centres in strips of the tool-centre region thinner than
+    2 frac R reach (the region less its morphological opening by a disc of radius frac R): a slot
+    less than 2 frac R wider than the tool, a channel tapering to the tool's diameter. Moving along
+    such a strip the front half of the tool meets material over nearly 180 deg; under the engagement
+    bound a pass, a finishing lap or a trochoid advances there only by steps far below the planning
+    pixel (a loop of radius c advances c (1/cos(theta/2) - 1): 0.02 mm at c = 0.2 R, theta 45 deg), so
+    the planner stops where the strip's half-width falls to ~0.15 R (measured on random pockets:
+    frac 0.2 bounds what is left on each of them; narrow.NARROW_MIN_HALF_WIDTH_FRAC is the same 0.2)."""
+    allowed = poly.buffer(-R, quad_segs=64)
+    c = frac * R
+    wide = allowed.buffer(-c, quad_segs=32).buffer(c, quad_segs=32)
+    # strips, not the rounded-off corners of the tool-centre region: a rest of at least c R mm^2 (a
+    # corner of angle a leaves c^2 (cot(a/2) - (pi - a)/2): 0.02 mm^2 at 90 deg; c R below ~22 deg)
+    strips = [q for q in shapely.get_parts(allowed.difference(wide)) if q.area >= c * R]
+    if not strips:
+        return 0.0
+    only = shapely.union_all(strips).buffer(R, quad_segs=64).difference(wide.buffer(R, quad_segs=64))
+    return only.intersection(poly).area
+
+
+def _uncut_allowance_mm2(poly) -> float:
+    """What the planner may leave beyond the unreachable corners (mm^2): see the module docstring."""
+    corners = min(_corner_allowance_mm2(poly), unreachable_region(poly, R).area)
+    return 0.01 * poly.area + 1.0 + corners + _slot_only_mm2(poly)
+
+
+#: a channel tapering from 4 mm to the tool's 3 mm over 10 mm (the minimal pocket of the class that
+#: random stars drew, e.g. the 102 mm^2 star of two fresh-clone CI runs, 10.8 mm^2 uncut): its
+#: tool-centre region is a 10 mm wedge at most 1 mm wide
+TAPERED = Polygon([(0, 0), (10, 0), (10, 4), (0, 3)])
+#: a star the fuzz drew (benchmarks/fuzz_random_pockets.py, seed 1): 11.7 mm^2 left at theta 45 deg,
+#: 13.2 mm^2 reachable only through a strip thinner than 0.4 r
+STAR_TAPER = Polygon([(7.845249487397951, 0), (7.097828378873946, -3.3568791045564064),
+                      (6.388173760961252, -4.564979848621672), (-6.326017799425355, -4.639982577647401),
+                      (-7.659842916314508, -1.6955075985982098)])
+#: each property run must plan at least this many of its pockets (the drawn ones and the explicit
+#: examples, 7 in all, all planned now: a refusal is checked for its reason in _scored, but a run
+#: cannot pass by refusing)
+MIN_PLANNED = 6
+
+
+def test_random_pockets_are_safe_covered_and_bounded():
+    """On every pocket drawn (and the explicit examples): zero plunges into material, zero rapids
+    through material (rapids below the top only as links marked cleared), no wall gouge, full
+    coverage beyond the unreachable corners up to :func:`_uncut_allowance_mm2`, and the engagement
+    within theta + 10 deg + 2 pixels' worth. At least MIN_PLANNED pockets are planned."""
+    planned = []
+
+    @settings(**_SETTINGS)
+    @example(STAR_TAPER, 45.0)
+    @given(pockets(), st.sampled_from([45.0, 60.0]))
+    def check(poly, theta):
+        tp, s = _scored(poly, theta)
+        if tp is None:
+            return
+        assert s.plunges_into_material == 0
+        assert s.rapids_into_material == 0
+        assert s.uncut_beyond_unreachable_mm2 <= _uncut_allowance_mm2(poly)
+        K = tp.kinds()
+        assert np.all((K != "rapid") | (tp.xyz[:, 2] >= 0.0) | tp.cleared)   # below the top: proven links only
+        assert _wall_gouge(tp, poly) <= 1e-3
+        assert s.engagement_max_deg <= theta + 10 + 2 * math.degrees(H / (R * math.sin(math.radians(theta))))
+        planned.append(poly.area)
+
+    check()
+    assert len(planned) >= MIN_PLANNED, planned
+
+
+def test_corner_allowance_hand_cases():
+    """A 9 x 7 box: four right-angle corners, 4 R^2 (1 - pi/4); a square island adds nothing (its
+    corners are reflex for the free region); a spike of no width (the ring doubles back) adds 0."""
+    four = 4 * R * R * (1 - math.pi / 4)
+    assert _corner_allowance_mm2(box(0, 0, 9, 7)) == pytest.approx(four, rel=1e-12)
+    assert _corner_allowance_mm2(box(0, 0, 30, 30).difference(box(10, 10, 12, 12))) == pytest.approx(four, rel=1e-12)
+    spike = Polygon([(0, 0), (9, 0), (9, 7), (5, 7), (5, 12), (5, 7), (0, 7)])
+    assert _corner_allowance_mm2(spike) == pytest.approx(four, rel=1e-12)
+    assert _slot_only_mm2(box(0, 0, 9, 7)) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_tapered_slot_is_left_and_plan_says_so():
+    """The class of the random pockets the planner leaves most of (a channel narrowing to the tool's
+    diameter, :data:`TAPERED`): the planner plans it safely within the engagement bound and leaves
+    the strip it cannot enter -- more than the corner allowance, at most the slot-only area --, and
+    :func:`cnclab.toolpath.planners.plan` does not pass it silently: it refuses it (UncutError naming
+    the job and the region), and with ``allow_uncut`` it plans with the same words as a warning."""
+    from cnclab.toolpath.planners import UncutError, plan
+
+    tp, s = _scored(TAPERED, 45.0)
+    assert s.plunges_into_material == 0 and s.rapids_into_material == 0 and _wall_gouge(tp, TAPERED) <= 1e-3
+    assert s.engagement_max_deg <= 45.0 + 10 + 2 * math.degrees(H / (R * math.sin(math.radians(45.0))))
+    slot = _slot_only_mm2(TAPERED)
+    assert slot > 10.0                                       # 14.7 mm^2: most of the 35 mm^2 pocket
+    assert 0.01 * TAPERED.area + 1.0 + _corner_allowance_mm2(TAPERED) < s.uncut_beyond_unreachable_mm2 \
+        <= _uncut_allowance_mm2(TAPERED)
+    job = _job(TAPERED, 45.0, source="tapered.json")
+    with pytest.raises(UncutError, match=r"tapered.json: strategy adaptive leaves material uncut .*region 0"):
+        plan(job, resolution_mm=H)
+    ok = plan(job, resolution_mm=H, allow_uncut=True)
+    assert ok.info["warnings"] and "region 0" in ok.info["warnings"][0]
+    # the report says what the evaluator measures on that plan (plan() plans at r/60 = 0.025 mm, a
+    # finer pixel than the 0.05 mm above: it gets further into the strip, 7.3 against 11.6 mm^2);
+    # 0.5 mm^2: the report's r/25 pixels and dropped fringes against the 0.05 mm dixels
+    left = evaluate(ok, job, H).uncut_beyond_unreachable_mm2
+    assert ok.info["uncut"]["uncut_mm2"][0] == pytest.approx(left, abs=0.5)
+    assert ok.info["uncut"]["uncut_mm2"][0] > ok.info["uncut"]["limit_mm2"][0]
 
 
 #: seeded pockets of the two families (the property tests' shapes) that must all be planned and safe:
@@ -195,15 +294,6 @@ def test_finish_snap_stays_on_its_ring():
     poly = box(0, 0, 30, 14).difference(box(8, 5, 11, 9)).difference(box(19, 5, 22, 9))
     tp = adaptive_clearing(_job(poly, 60.0, source="islands"), resolution_mm=H)
     assert _wall_gouge(tp, poly) <= 1e-3
-
-
-@settings(**_SETTINGS)
-@given(pockets(), st.sampled_from([45.0, 60.0]))
-def test_random_pockets_engagement_bounded(poly, theta):
-    tp, s = _scored(poly, theta)
-    if tp is None:
-        return
-    assert s.engagement_max_deg <= theta + 10 + 2 * math.degrees(H / (R * math.sin(math.radians(theta))))
 
 
 def test_refuses_pocket_narrower_than_the_tool():

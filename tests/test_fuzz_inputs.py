@@ -40,6 +40,7 @@ from cnclab.geometry.freeform_part import tessellate_heightfield
 from cnclab.geometry.mesh import STLError, STLWarning, TriMesh, read_stl, write_stl
 from cnclab.nc import apt
 from cnclab.nc import spindle_control as sc
+from tests._fuzz_support import SAMPLE, check_complete, classify_interrupt, run_cli, startup_s
 
 OUTCOMES: collections.Counter = collections.Counter()
 FUZZ = settings(max_examples=120, deadline=None,
@@ -950,44 +951,13 @@ def test_sigterm_to_cli_process_leaves_complete_outputs_or_none(tmp_path):
         OUTCOMES[("cli", "correct" if out_p.exists() else "error")] += 1
 
 
-SAMPLE = Path(__file__).resolve().parents[1] / "data" / "mgherony2024"
-_CRASH = {-signal.SIGSEGV, -signal.SIGABRT, -signal.SIGBUS, -signal.SIGILL, -signal.SIGFPE}
-
-
 def _spindle_process(tmp_path, tag, sig=None, delay=None):
     """``python -m cnclab spindle`` on the sample part and path (APT + G-code outputs), interrupted by
-    ``sig`` after ``delay`` s; returns (rc, stdout, stderr, outputs)."""
+    ``sig`` after ``delay`` s (the shared runner, tests/_fuzz_support.py); (rc, stderr, outputs)."""
     outs = [tmp_path / f"{tag}.apt", tmp_path / f"{tag}.ngc"]
-    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
-    proc = subprocess.Popen([sys.executable, "-m", "cnclab", "spindle", str(SAMPLE / "sample_ch8_part.stl"),
-                             str(SAMPLE / "sample_ch8_zigzag_Af0.apt"), *BASE, "-o", str(outs[0]), "--gcode",
-                             str(outs[1])], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    if sig is not None:
-        try:
-            proc.wait(timeout=delay)
-        except subprocess.TimeoutExpired:
-            proc.send_signal(sig)
-    out, err = proc.communicate(timeout=300)
-    return proc.returncode, out, err, outs
-
-
-def _interrupt_outcome(rc, out, err, outs, sig, tmp_path) -> str:
-    """The message says what is on disk and the exit code follows it; no crash, no temporary file."""
-    assert rc not in _CRASH, (rc, err[-2000:])
-    assert not [f for f in os.listdir(tmp_path) if f.endswith(".tmp") or ".tmp." in f]
-    assert outs[0].exists() == outs[1].exists(), err
-    if rc == 0:             # finished, or interrupted after the outputs were committed (then it says so)
-        assert "wrote" in out or "after the outputs were written: complete" in err, (out, err)
-        apt.read_apt(outs[0]).cl_points()
-        assert outs[1].read_text().rstrip().endswith("%")
-        return "complete"
-    assert not outs[0].exists(), (rc, err)
-    if rc == 128 + sig:
-        assert re.search(r"interrupted(?: \(SIG[A-Z]+\))?: nothing written", err), err
-        return "nothing written"
-    # before cnclab's own code runs (interpreter start-up, ``import cnclab``): Python's default action
-    assert rc == -sig, (rc, err[-2000:])
-    return "killed at start-up"
+    rc, out, err, _ = run_cli(["spindle", SAMPLE / "sample_ch8_part.stl", SAMPLE / "sample_ch8_zigzag_Af0.apt", *BASE,
+                               "-o", outs[0], "--gcode", outs[1]], sig, delay, timeout=300)
+    return rc, out, err, outs
 
 
 def test_interrupt_at_any_moment_says_what_is_on_disk(tmp_path):
@@ -1001,11 +971,13 @@ def test_interrupt_at_any_moment_says_what_is_on_disk(tmp_path):
     rc, out, err, outs = _spindle_process(tmp_path, "full")
     full = time.perf_counter() - t0
     assert rc == 0, err
+    assert "wrote" in out
+    start = startup_s()
     kinds = collections.Counter()
     for k, frac in enumerate(np.linspace(0.1, 1.05, 8)):
         sig = signal.SIGINT if k % 2 == 0 else signal.SIGTERM
-        res = _spindle_process(tmp_path, f"i{k}", sig, frac * full)
-        kind = _interrupt_outcome(*res, sig, tmp_path)
+        rc, _, err, outs = _spindle_process(tmp_path, f"i{k}", sig, frac * full)
+        kind = classify_interrupt(rc, err, outs, sig, frac * full, start, tmp_path, check_complete("spindle"))
         kinds[kind] += 1
         OUTCOMES[("signal", "correct" if kind == "complete" else "error")] += 1
     print("interrupt outcomes:", dict(kinds))

@@ -2,20 +2,12 @@
 spindle | finish-path`` at offsets from 0.05 s (while the interpreter is still importing: the
 handlers at the top of ``cnclab/__main__.py``) to past the end of an uninterrupted run.
 
-Every outcome is classified:
-
-* ``complete`` -- exit 0, every output on disk and readable (finished, or interrupted after the
-  outputs were committed: then stderr says "complete ... on disk");
-* ``nothing written`` -- exit 128 + signal, one line "interrupted (SIG...): nothing written" on
-  stderr, no traceback, no output and no temporary file;
-* ``interpreter start-up`` -- the signal arrived before any cnclab code ran (Python's own start-up:
-  ``site`` and its ``.pth`` files, runpy locating the package); Python's default action (killed,
-  or "Fatal Python error: init_import_site" / a traceback with no frame in the cnclab package). Accepted only for offsets below twice the measured start-up time
-  of the bare interpreter (``python -c pass``), and never with a cnclab frame in the traceback.
-
-Anything else (a crash by SIGSEGV/SIGABRT..., a traceback through cnclab, a message that does not
-match the disk, a leftover temporary file) fails. The offsets are fixed (early ones) plus fractions
-of a measured uninterrupted run, so all phases are hit whatever the machine's speed.
+Every outcome is classified by :func:`tests._fuzz_support.classify_interrupt` (complete / nothing
+written / interpreter start-up; a crash, a traceback through cnclab, "Exception ignored", a message
+that does not match the disk or a leftover temporary file fails). The offsets are fixed (early ones)
+plus fractions of a measured uninterrupted run, so all phases are hit whatever the machine's speed.
+The long run (hundreds of random offsets, an empty numba cache in a share of them) is
+``benchmarks/fuzz_interrupts.py``.
 """
 from __future__ import annotations
 
@@ -25,104 +17,29 @@ import re
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from cnclab.nc import apt
 from cnclab.runtime import pick
+from tests._fuzz_support import ROOT, check_complete, classify_interrupt, commands, run_cli, startup_s
 
-ROOT = Path(__file__).resolve().parents[1]
-SAMPLE = ROOT / "data" / "mgherony2024"
 EARLY = (0.05, 0.1, 0.2, 0.3)
 #: fractions of an uninterrupted run (after the early offsets; slow mode only)
 FRACTIONS = (0.4, 0.7, 0.95, 1.1)
-_CRASH = {-signal.SIGSEGV, -signal.SIGABRT, -signal.SIGBUS, -signal.SIGILL, -signal.SIGFPE}
 OUTCOMES = collections.Counter()
-
-
-def _commands(d: Path) -> dict:
-    """command -> (argv after ``python -m cnclab``, output files)."""
-    an = d / "an"
-    return {
-        "plan": (["plan", str(ROOT / "data/pockets/two_regions.json"), "-o", str(d / "p.ngc")], [d / "p.ngc"]),
-        "analyze": (["analyze", str(ROOT / "tests/fixtures/freecad/two_regions.ngc"), "--job",
-                     str(ROOT / "data/pockets/two_regions.json"), "--resolution", "0.25", "-o", str(an)],
-                    [an / n for n in ("summary.csv", "trace.csv", "events.csv", "trace.png", "trace.pdf",
-                                      "engagement_map.png")]),
-        "spindle": (["spindle", str(SAMPLE / "sample_ch8_part.stl"), str(SAMPLE / "sample_ch8_zigzag_Af0.apt"),
-                     "--vc", "63", "--fz", "0.125", "--teeth", "2", "--ap", "0.3", "-o", str(d / "s.apt"),
-                     "--gcode", str(d / "s.ngc")], [d / "s.apt", d / "s.ngc"]),
-        "finish-path": (["finish-path", str(SAMPLE / "sample_ch8_part.stl"), "-o", str(d / "f.apt"),
-                         "--tool-diameter", "10", "--stepover", "5", "--step", "2", "--quiet"], [d / "f.apt"]),
-    }
-
-
-def _run(argv, sig=None, delay=None):
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "cnclab", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=env)
-    if sig is not None:
-        try:
-            proc.wait(timeout=delay)
-        except subprocess.TimeoutExpired:
-            proc.send_signal(sig)
-    out, err = proc.communicate(timeout=600)
-    return proc.returncode, out, err, time.perf_counter() - t0
-
-
-def _startup_s() -> float:
-    """Wall time of the bare interpreter's start-up (``python -c pass``, worst of 3)."""
-    best = 0.0
-    for _ in range(3):
-        t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-c", "pass"], check=True)
-        best = max(best, time.perf_counter() - t0)
-    return best
-
-
-def _check_complete(cmd, outs):
-    if cmd in ("spindle", "finish-path"):
-        apt.read_apt(outs[0]).cl_points()
-    if cmd in ("plan", "spindle"):
-        assert outs[-1].read_text().rstrip().endswith("%")
-    if cmd == "analyze":
-        assert "metric" in outs[0].read_text()
-
-
-def classify(cmd, rc, out, err, outs, sig, delay, startup_s, d: Path) -> str:
-    assert rc not in _CRASH, (cmd, delay, rc, err[-2000:])
-    assert not [f for f in os.listdir(d) if f.endswith(".tmp") or ".tmp." in f]
-    on_disk = [o.exists() for o in outs]
-    assert all(on_disk) or not any(on_disk), (cmd, delay, on_disk, err[-1000:])
-    if rc == 0:
-        assert "Traceback" not in err, err[-2000:]
-        _check_complete(cmd, outs)
-        return "complete"
-    if rc == 128 + sig:
-        assert "Traceback" not in err, (cmd, delay, err[-2000:])
-        assert not any(on_disk), (cmd, delay, err)
-        lines = [ln for ln in err.splitlines() if ln.strip()]
-        assert lines and re.fullmatch(r"interrupted \(SIG[A-Z]+\): nothing written.*", lines[-1]), (cmd, delay, err)
-        return "nothing written"
-    # Python's default action: only before cnclab's first line can run
-    assert delay < 2.0 * startup_s, (cmd, delay, rc, startup_s, err[-2000:])
-    assert not re.search(r'File "[^"]*/cnclab/', err) and rc in (-sig, 1, 128 + sig), (cmd, delay, rc, err[-2000:])
-    return "interpreter start-up"
 
 
 @pytest.mark.parametrize("cmd", ["plan", "analyze", "spindle", "finish-path"])
 def test_interrupt_at_any_offset(tmp_path, cmd):
-    argv, outs = _commands(tmp_path)[cmd]
-    startup = _startup_s()
+    argv, outs = commands(tmp_path)[cmd]
+    startup = startup_s()
     offsets = list(EARLY)
     if pick(True, False):       # slow mode: fractions of an uninterrupted run (fast mode: 1 s, mid-import)
-        rc, out, err, full = _run(argv)
+        rc, out, err, full = run_cli(argv)
         assert rc == 0, err[-2000:]
-        assert classify(cmd, rc, out, err, outs, signal.SIGINT, 1e9, startup, tmp_path) == "complete"
+        assert classify_interrupt(rc, err, outs, signal.SIGINT, 1e9, startup, tmp_path, check_complete(cmd)) == "complete"
         for o in outs:
             o.unlink()
         offsets += [f * full for f in FRACTIONS]
@@ -131,8 +48,8 @@ def test_interrupt_at_any_offset(tmp_path, cmd):
     kinds = collections.Counter()
     for k, delay in enumerate(offsets):
         sig = signal.SIGINT if k % 2 == 0 else signal.SIGTERM
-        rc, out, err, _ = _run(argv, sig, delay)
-        kind = classify(cmd, rc, out, err, outs, sig, delay, startup, tmp_path)
+        rc, out, err, _ = run_cli(argv, sig, delay)
+        kind = classify_interrupt(rc, err, outs, sig, delay, startup, tmp_path, check_complete(cmd))
         kinds[kind] += 1
         OUTCOMES[(cmd, kind)] += 1
         for o in outs:
@@ -155,3 +72,39 @@ def test_handlers_installed_before_heavy_imports():
     first_install = body.index("_signal.signal(")
     assert re.findall(r"^(?:import|from) \S+", body[:first_install], re.M) == ["import os", "import signal",
                                                                                  "import sys"]
+
+
+@pytest.mark.parametrize("writes", [False, True])
+def test_interrupt_no_command_reported_names_what_is_on_disk(tmp_path, monkeypatch, capsys, writes):
+    """An interrupt the command did not report itself (its argument parsing, before its
+    InterruptReport) is reported by ``__main__`` with what the atomic writers committed: "nothing
+    written" when none, else the complete files by name (a fuzz run once got "plan stopped before it
+    finished; ... each one is complete or was not written", which does not say which)."""
+    import cnclab.__main__ as cm
+    from cnclab import fileio
+
+    out = tmp_path / "o.txt"
+    mod = tmp_path / f"fake_cnclab_cmd_{int(writes)}.py"
+    mod.write_text("from cnclab.fileio import atomic_write\n"
+                   "def main(argv):\n"
+                   f"    if {writes}:\n"
+                   f"        atomic_write({str(out)!r}, 'complete')\n"
+                   "    raise KeyboardInterrupt\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setitem(cm.COMMANDS, "fake", (mod.stem, "test"))
+    monkeypatch.setattr(fileio, "_COMMITTED", [])
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    try:
+        rc = cm.main(["fake"])
+    finally:
+        for s, h in handlers.items():
+            signal.signal(s, h)
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert rc == 130
+    if writes:
+        assert out.read_text() == "complete"
+        assert last == f"interrupted (SIGINT): fake stopped after writing {out} (each complete, written atomically); " \
+                       "no other output was written"
+    else:
+        assert not out.exists()
+        assert last == "interrupted (SIGINT): nothing written (fake stopped before it wrote any output)"

@@ -1,0 +1,138 @@
+"""Shared by the process-level fuzz tests (``test_fuzz_interrupts.py``, ``test_fuzz_inputs.py``) and the
+long interrupt fuzz (``benchmarks/fuzz_interrupts.py``): run ``python -m cnclab ...`` in a child
+process, interrupt it after a delay, and classify what it did.
+
+Outcomes of an interrupted run (:func:`classify_interrupt`):
+
+* ``complete`` -- exit 0, every output on disk and readable (finished, or interrupted after the
+  outputs were committed: then stderr says "complete ... on disk");
+* ``nothing written`` -- exit 128 + signal, the last line "interrupted (SIG...): nothing written ...",
+  no traceback, no output and no temporary file;
+* ``interpreter start-up`` -- the signal arrived before any cnclab code ran (Python's own start-up:
+  ``site`` and its ``.pth`` files, runpy locating the package): Python's default action (killed by the
+  signal, or a ``KeyboardInterrupt`` traceback with no frame in the cnclab package). Accepted only for
+  delays below twice the measured start-up time of the bare interpreter (``python -c pass``).
+
+Anything else raises :class:`BadOutcome` (a crash by SIGSEGV/SIGABRT..., a traceback through cnclab,
+"Exception ignored" -- an exception a callback or finalizer dropped --, a message that does not match
+the disk, a leftover temporary file).
+"""
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+#: exit codes of a process killed by a crash signal
+CRASH = {-signal.SIGSEGV, -signal.SIGABRT, -signal.SIGBUS, -signal.SIGILL, -signal.SIGFPE}
+
+
+class BadOutcome(AssertionError):
+    """An interrupted run that crashed, lied about the disk or printed a traceback; ``kind`` names the
+    class (``crash``, ``temporary file left``, ``partial outputs``, ``traceback``, ``exception ignored``,
+    ``lying message``, ``early default action``)."""
+
+    def __init__(self, kind: str, detail):
+        super().__init__(f"{kind}: {detail}")
+        self.kind = kind
+
+
+def run_cli(argv, sig=None, delay=None, env=None, timeout=600.0):
+    """``python -m cnclab *argv`` in a child process (this checkout first on ``PYTHONPATH``; ``env``:
+    extra variables), sent ``sig`` after ``delay`` s unless it has ended; (rc, stdout, stderr, wall s)."""
+    full_env = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
+    t0 = time.perf_counter()
+    proc = subprocess.Popen([sys.executable, "-m", "cnclab", *map(str, argv)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=full_env)
+    if sig is not None:
+        try:
+            proc.wait(timeout=delay)
+        except subprocess.TimeoutExpired:
+            proc.send_signal(sig)
+    out, err = proc.communicate(timeout=timeout)
+    return proc.returncode, out, err, time.perf_counter() - t0
+
+
+def startup_s() -> float:
+    """Wall time (s) of the bare interpreter's start-up (``python -c pass``, worst of 3)."""
+    worst = 0.0
+    for _ in range(3):
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "pass"], check=True)
+        worst = max(worst, time.perf_counter() - t0)
+    return worst
+
+
+def temporary_files(d: Path) -> list:
+    return [f for f in os.listdir(d) if f.endswith(".tmp") or ".tmp." in f]
+
+
+def classify_interrupt(rc, err, outs, sig, delay, startup, d: Path, check_complete=None) -> str:
+    """The outcome class of a run of a command writing ``outs`` (in folder ``d``) sent ``sig`` after
+    ``delay`` s (see the module docstring); ``check_complete(outs)`` reads complete outputs back.
+    Raises :class:`BadOutcome` for anything else."""
+    def bad(kind, ok):
+        if not ok:
+            raise BadOutcome(kind, (delay, rc, err[-2000:]))
+
+    bad("crash", rc not in CRASH and "Fatal Python error: Segmentation" not in err)
+    bad("temporary file left", not temporary_files(d))
+    on_disk = [Path(o).exists() for o in outs]
+    bad("partial outputs", all(on_disk) or not any(on_disk))
+    bad("exception ignored", "Exception ignored" not in err)
+    if rc == 0:
+        bad("traceback", "Traceback" not in err)
+        bad("lying message", all(on_disk) and "nothing written" not in err)
+        if check_complete is not None:
+            check_complete(outs)
+        return "complete"
+    if rc == 128 + sig:
+        bad("traceback", "Traceback" not in err)
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        bad("lying message", not any(on_disk) and bool(lines)
+            and re.fullmatch(r"interrupted \(SIG[A-Z]+\): nothing written.*", lines[-1]) is not None)
+        return "nothing written"
+    # Python's default action: only before cnclab's first line can run
+    bad("early default action", delay < 2.0 * startup and not any(on_disk)
+        and not re.search(r'File "[^"]*/cnclab/', err) and rc in (-sig, 1, 128 + sig))
+    return "interpreter start-up"
+
+
+SAMPLE = ROOT / "data" / "mgherony2024"
+
+
+def commands(d: Path) -> dict:
+    """command -> (argv after ``python -m cnclab``, its output files in ``d``): a run of each command
+    on the repository's sample inputs (a few seconds each)."""
+    an = d / "an"
+    return {
+        "plan": (["plan", str(ROOT / "data/pockets/two_regions.json"), "-o", str(d / "p.ngc")], [d / "p.ngc"]),
+        "analyze": (["analyze", str(ROOT / "tests/fixtures/freecad/two_regions.ngc"), "--job",
+                     str(ROOT / "data/pockets/two_regions.json"), "--resolution", "0.25", "-o", str(an)],
+                    [an / n for n in ("summary.csv", "trace.csv", "events.csv", "trace.png", "trace.pdf",
+                                      "engagement_map.png")]),
+        "spindle": (["spindle", str(SAMPLE / "sample_ch8_part.stl"), str(SAMPLE / "sample_ch8_zigzag_Af0.apt"),
+                     "--vc", "63", "--fz", "0.125", "--teeth", "2", "--ap", "0.3", "-o", str(d / "s.apt"),
+                     "--gcode", str(d / "s.ngc")], [d / "s.apt", d / "s.ngc"]),
+        "finish-path": (["finish-path", str(SAMPLE / "sample_ch8_part.stl"), "-o", str(d / "f.apt"),
+                         "--tool-diameter", "10", "--stepover", "5", "--step", "2", "--quiet"], [d / "f.apt"]),
+    }
+
+
+def check_complete(cmd: str):
+    """A function reading back the complete outputs of ``cmd`` (see :func:`commands`)."""
+    def check(outs):
+        from cnclab.nc import apt
+
+        if cmd in ("spindle", "finish-path"):
+            apt.read_apt(outs[0]).cl_points()
+        if cmd in ("plan", "spindle"):
+            assert Path(outs[-1]).read_text().rstrip().endswith("%")
+        if cmd == "analyze":
+            assert "metric" in Path(outs[0]).read_text()
+    return check
