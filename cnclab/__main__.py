@@ -2,7 +2,8 @@
 
 Commands are imported lazily, so ``python -m cnclab claims`` does not import torch.
 
-Interrupts: the first statements below (before any other import) make SIGINT, SIGTERM and SIGHUP end
+Interrupts: the first statements below (before any other import; ``_signal``, the built-in C module,
+not ``signal``, whose enum set-up takes ~1 ms) make SIGINT, SIGTERM and SIGHUP end
 the process at once with one line "interrupted (SIG...): nothing written ..." and exit code
 128 + signal number (130, 143, 129), until the command's ``main`` starts; nothing is on disk then
 (``cnclab/__init__.py`` imports nothing, so this is reached ~1 ms after the interpreter's own
@@ -12,29 +13,31 @@ commands that write files say what is on disk (:class:`cnclab.fileio.InterruptRe
 interrupt no command handled (e.g. during its argument parsing) is reported here, naming the outputs
 the atomic writers committed (:func:`cnclab.fileio.committed_outputs`; usually none: "nothing written").
 """
-import os as _os
-import signal as _signal
+import _signal as _csignal      # the C module (built in: no import work), so the handlers are in first
+import os as _os                # (os and sys are loaded by the interpreter's start-up already)
 import sys
+
+#: the signals an interrupt arrives by, and their names (the C module has no ``Signals`` enum)
+_SIGNAL_NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
+_NAME_OF = {getattr(_csignal, n): n for n in _SIGNAL_NAMES if hasattr(_csignal, n)}
 
 
 def _stop_before_start(signum, frame):
     """Signal handler until the command starts: one line on stderr, exit 128 + signum, no traceback and no
     interpreter finalization (an import cut in the middle cannot crash a finalizer)."""
     try:
-        _os.write(2, f"\ninterrupted ({_signal.Signals(signum).name}): nothing written (the command had not "
+        _os.write(2, f"\ninterrupted ({_NAME_OF.get(signum, signum)}): nothing written (the command had not "
                      "started)\n".encode())
     finally:
         _os._exit(128 + signum)
 
 
-_SIGNAL_NAMES = ("SIGINT", "SIGTERM", "SIGHUP")
 if __name__ == "__main__":
-    for _name in _SIGNAL_NAMES:
-        if hasattr(_signal, _name):
-            _signal.signal(getattr(_signal, _name), _stop_before_start)
-            # restart system calls the signal interrupts (SA_RESTART): Python retries its own calls
-            # on EINTR (PEP 475), C libraries in other threads (numba/LLVM, BLAS) may not
-            _signal.siginterrupt(getattr(_signal, _name), False)
+    for _sig in _NAME_OF:
+        _csignal.signal(_sig, _stop_before_start)
+        # restart system calls the signal interrupts (SA_RESTART): Python retries its own calls
+        # on EINTR (PEP 475), C libraries in other threads (numba/LLVM, BLAS) may not
+        _csignal.siginterrupt(_sig, False)
     import faulthandler as _faulthandler
 
     # a crash (SIGSEGV, SIGBUS, SIGABRT, ...) prints every thread's Python stack on stderr: a test or a
@@ -42,6 +45,7 @@ if __name__ == "__main__":
     # into `plan` under a loaded CI machine is not yet explained)
     _faulthandler.enable()
 
+import signal as _signal  # noqa: E402  (the Python module: its enum set-up takes ~1 ms, after the handlers)
 import importlib  # noqa: E402  (after the handlers: everything below may be interrupted)
 
 #: command -> (module, one-line help). Each module has ``main(argv) -> int``.

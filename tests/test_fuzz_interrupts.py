@@ -69,8 +69,8 @@ def test_handlers_installed_before_heavy_imports():
     assert res.stdout.strip() == "[]", res.stdout
     src = (ROOT / "cnclab" / "__main__.py").read_text()
     body = src[src.index('"""', 3) + 3:]
-    first_install = body.index("_signal.signal(")
-    assert re.findall(r"^(?:import|from) \S+", body[:first_install], re.M) == ["import os", "import signal",
+    first_install = body.index("_csignal.signal(")
+    assert re.findall(r"^(?:import|from) \S+", body[:first_install], re.M) == ["import _signal", "import os",
                                                                                  "import sys"]
 
 
