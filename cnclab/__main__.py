@@ -32,8 +32,14 @@ def _stop_before_start(signum, frame):
         _os._exit(128 + signum)
 
 
+#: the signals this process was started with ignored (SIG_IGN survives exec: ``nohup`` ignores SIGHUP,
+#: a non-interactive shell starts a background job with SIGINT ignored): left ignored throughout
+_IGNORED_AT_START = set()
 if __name__ == "__main__":
     for _sig in _NAME_OF:
+        if _csignal.getsignal(_sig) == _csignal.SIG_IGN:
+            _IGNORED_AT_START.add(_sig)
+            continue
         _csignal.signal(_sig, _stop_before_start)
         # restart system calls the signal interrupts (SA_RESTART): Python retries its own calls
         # on EINTR (PEP 475), C libraries in other threads (numba/LLVM, BLAS) may not
@@ -78,6 +84,9 @@ def main(argv=None) -> int:
             print(f"\nerror: unknown command {argv[0]!r}")
             return 2
         return 0
+    from cnclab import fileio
+
+    fileio.INHERITED_IGNORED.update(_IGNORED_AT_START)       # InterruptReport & co. leave them ignored
     mod = importlib.import_module(COMMANDS[argv[0]][0])   # an interrupt here: _stop_before_start
     with _interrupts_raise():
         try:
@@ -124,7 +133,7 @@ class _interrupts_raise:
         if threading.current_thread() is threading.main_thread():
             for name in _SIGNAL_NAMES:
                 sig = getattr(_signal, name, None)
-                if sig is not None:
+                if sig is not None and sig not in _IGNORED_AT_START:
                     self.old[sig] = _signal.signal(sig, self._raise)
                     _signal.siginterrupt(sig, False)     # as at start-up: no EINTR in C code
         return self

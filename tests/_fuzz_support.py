@@ -42,13 +42,24 @@ class BadOutcome(AssertionError):
         self.kind = kind
 
 
-def run_cli(argv, sig=None, delay=None, env=None, timeout=600.0):
+def _dispositions(ignored):
+    """In the child before exec: SIGINT/SIGTERM/SIGHUP at their default action (a handler is reset by
+    exec anyway, but SIG_IGN survives it: a test run as a background job of a non-interactive shell
+    has SIGINT ignored), except ``ignored``, which the child is started with ignored."""
+    def reset():
+        for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            signal.signal(s, signal.SIG_IGN if s in ignored else signal.SIG_DFL)
+    return reset
+
+
+def run_cli(argv, sig=None, delay=None, env=None, timeout=600.0, ignored=()):
     """``python -m cnclab *argv`` in a child process (this checkout first on ``PYTHONPATH``; ``env``:
-    extra variables), sent ``sig`` after ``delay`` s unless it has ended; (rc, stdout, stderr, wall s)."""
+    extra variables; ``ignored``: signals it starts with ignored, as under ``nohup``), sent ``sig`` after
+    ``delay`` s unless it has ended; (rc, stdout, stderr, wall s)."""
     full_env = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
     t0 = time.perf_counter()
     proc = subprocess.Popen([sys.executable, "-m", "cnclab", *map(str, argv)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=full_env)
+                            stderr=subprocess.PIPE, text=True, env=full_env, preexec_fn=_dispositions(set(ignored)))
     if sig is not None:
         try:
             proc.wait(timeout=delay)
