@@ -10,7 +10,9 @@ One JSON line per pocket (WKT, theta, status, uncut beyond the unreachable corne
 allowance and its parts, plunges, rapids into material, engagement max, wall gouge); at the end the
 counts: planned, refused, and failing each bound -- ``base`` (1 % + 1 mm^2, no corners), ``corners``
 (+ the corner allowance, capped at the unreachable area), ``full`` (+ the slot-only area: what the
-test asserts). Not a test (about 1 s a pocket).
+test asserts). ``--slot-narrow``: plan with ``AdaptiveParams(slot_narrow=True)`` (the thin strips cut
+by slotting: then ``corners`` is the bound that matters and the engagement bound does not hold).
+Not a test (about 1 s a pocket).
 """
 from __future__ import annotations
 
@@ -28,16 +30,17 @@ from hypothesis import HealthCheck, Phase, given, seed, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
 import tests.test_adaptive_clearing as T  # noqa: E402
-from cnclab.toolpath.adaptive import PlanningError  # noqa: E402
+from cnclab.toolpath.adaptive import AdaptiveParams, PlanningError, adaptive_clearing  # noqa: E402
 from cnclab.toolpath.evaluate import evaluate, unreachable_region  # noqa: E402
 
 
-def score(poly, theta) -> dict:
+def score(poly, theta, slot_narrow=False) -> dict:
     rec = {"wkt": poly.wkt, "theta": theta, "area": poly.area}
     if not poly.is_valid or poly.buffer(-T.R).is_empty:
         return rec | {"status": "invalid or no room for the tool"}
     try:
-        tp = T._plan(poly, theta)
+        tp = adaptive_clearing(T._job(poly, theta, source="hypothesis"), AdaptiveParams(slot_narrow=slot_narrow),
+                               resolution_mm=T.H, step_mm=0.05)
     except PlanningError as exc:
         return rec | {"status": "refused", "msg": str(exc)[:300]}
     s = evaluate(tp, T._job(poly, theta), T.H)
@@ -54,6 +57,7 @@ def main(argv=None) -> int:
     ap.add_argument("--examples", type=int, default=300)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--family", choices=("pockets", "stars"), default="pockets")
+    ap.add_argument("--slot-narrow", action="store_true", help="AdaptiveParams(slot_narrow=True)")
     ap.add_argument("--out", type=Path, required=True)
     a = ap.parse_args(argv)
     gen = T.pockets() if a.family == "pockets" else T.star_pockets()
@@ -66,7 +70,7 @@ def main(argv=None) -> int:
         @given(gen, st.sampled_from([45.0, 60.0]))
         def run(poly, theta):
             t0 = time.perf_counter()
-            rec = score(poly, theta)
+            rec = score(poly, theta, a.slot_narrow)
             rec["t_s"] = round(time.perf_counter() - t0, 3)
             counts[rec["status"]] += 1
             if rec["status"] == "planned":

@@ -225,6 +225,16 @@ def test_tapered_slot_is_left_and_plan_says_so():
         plan(job, resolution_mm=H)
     ok = plan(job, resolution_mm=H, allow_uncut=True)
     assert ok.info["warnings"] and "region 0" in ok.info["warnings"][0]
+    # with slot_narrow the strip is cut by slotting (stated in the notes: engagement up to 180 deg) and
+    # the pocket is covered up to the corner allowance; plan() then accepts it
+    from cnclab.toolpath.adaptive import AdaptiveParams
+
+    slotted = adaptive_clearing(_job(TAPERED, 45.0), AdaptiveParams(slot_narrow=True), resolution_mm=H, step_mm=0.05)
+    s2 = evaluate(slotted, _job(TAPERED, 45.0), H)
+    assert s2.plunges_into_material == 0 and s2.rapids_into_material == 0 and _wall_gouge(slotted, TAPERED) <= 1e-3
+    assert s2.uncut_beyond_unreachable_mm2 <= 0.01 * TAPERED.area + 1.0 + _corner_allowance_mm2(TAPERED)   # 1.0 of 3.3
+    assert slotted.info["slots"] >= 1 and any("slotting at up to" in n for n in slotted.info["notes"])
+    assert "uncut" in plan(job, resolution_mm=H, params=AdaptiveParams(slot_narrow=True)).info
     # the report says what the evaluator measures on that plan (plan() plans at r/60 = 0.025 mm, a
     # finer pixel than the 0.05 mm above: it gets further into the strip, 7.3 against 11.6 mm^2);
     # 0.5 mm^2: the report's r/25 pixels and dropped fringes against the 0.05 mm dixels

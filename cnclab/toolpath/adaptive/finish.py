@@ -13,13 +13,21 @@ import shapely
 
 from .control import GUARD_LEVEL, replay
 from .entries import PlanningError
+from .narrow import NARROW_MIN_HALF_WIDTH_FRAC, medial_axis, medial_graph
 from ..path import resample_polyline
 
-__all__ = ["finish_part"]
+__all__ = ["finish_part", "slot_strips"]
 
 
 def finish_part(lv, part):
-    """The wall-following finish laps along every ring of one part of the tool-centre region."""
+    """The wall-following finish laps along every ring of one part of the tool-centre region (then,
+    with ``AdaptiveParams.slot_narrow``, :func:`slot_strips`)."""
+    _laps(lv, part)
+    if lv.prm.slot_narrow:
+        slot_strips(lv, part)
+
+
+def _laps(lv, part):
     # the tool-centre limit (as the evaluator and Job.allowed() draw it: 64 segments a quarter circle),
     # 1 um inside it: the chords of its arcs never put the tool centre past the true limit
     wall = shapely.boundary(lv.allowed.buffer(-1e-3))
@@ -107,3 +115,79 @@ def finish_part(lv, part):
             lv.b.add(P[1:], np.where(ai, "link", "cut").astype(object), np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min),
                      "finish", z=lv.z)
             lv.cur = (float(P[-1, 0]), float(P[-1, 1]))
+
+
+def slot_strips(lv, part) -> None:
+    """Opt-in (``AdaptiveParams.slot_narrow``): the strips of the part of the tool-centre region
+    thinner than 2 c (c = ``narrow.NARROW_MIN_HALF_WIDTH_FRAC`` r: a slot less than 0.4 r wider than
+    the tool, a channel tapering to the tool's diameter) that still hold material within the tool's
+    reach are cut by slotting: one feed move along the strip's medial axis from its cleared end to
+    its tip and back through the slot it cut. No pass, lap or trochoid enters such a strip under the
+    engagement bound (each step ahead meets nearly the whole front half of the tool), so what it
+    holds is left otherwise (``plan`` refuses that as uncut). The slot is cut at the feed that keeps
+    the nominal removal rate (``feed_mm_min`` x a_e / 2 r: the full tool width is engaged); its
+    engagement (up to 180 deg) is stated in the result's notes (the program header)."""
+    c_lim = NARROW_MIN_HALF_WIDTH_FRAC * lv.r
+    wide = part.buffer(-c_lim, quad_segs=16).buffer(c_lim, quad_segs=16)
+    strips = [q for q in shapely.get_parts(part.difference(wide)) if q.area >= c_lim * lv.r]
+    if not strips:
+        return
+    spacing = min(2.0 * lv.h, lv.r / 8.0)
+    G = medial_graph(part, spacing)
+    if G.number_of_nodes() == 0:
+        return
+    nodes = np.array(list(G.nodes), float)
+    cn = np.array([G.nodes[tuple(p)]["c"] for p in nodes])
+    inside = lv.allowed.buffer(-1e-3)
+    for q in strips:
+        keep = shapely.contains_xy(q.buffer(2.0 * lv.h), nodes[:, 0], nodes[:, 1]) & (cn <= 1.5 * c_lim)
+        ax = medial_axis(part, spacing, G, [tuple(p) for p in nodes[keep]])
+        if ax is not None:
+            P, c = ax
+            _slot_along(lv, P if c[0] >= c[-1] else P[::-1], inside)
+
+
+def _slot_along(lv, P, inside) -> None:
+    """One slot along the axis ``P`` (from its wide end): from the last point before the first one
+    with material within reach whose tool disc is free, to the last axis point inside the region."""
+    P = resample_polyline(P[shapely.contains_xy(inside, P[:, 0], P[:, 1])], lv.ds, uniform=True)
+    if len(P) < 2:
+        return
+    D, Ac = lv.g.free_field()
+    jj = np.clip(((P[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
+    ii = np.clip(((P[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
+    dm = D[jj, ii]
+    mat = np.flatnonzero(dm < lv.r)
+    if len(mat) == 0:
+        return                                   # nothing left along this strip
+    free = np.flatnonzero(dm[:mat[0] + 1] >= lv.r_free)
+    if len(free) == 0:
+        return                                   # no cleared place to start from
+    k0 = int(free[-1])
+    Q = P[k0:]
+    if lv.cur is not None:
+        e = lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Q[0, 0], Q[0, 1]))
+        if e is not None and math.hypot(Q[0, 0] - lv.cur[0], Q[0, 1] - lv.cur[1]) > 1e-9:
+            lv.b.link([Q[0]], lv.link_feed_mm_min, z=lv.z)
+    else:
+        e = None
+    if e is None:
+        lv.retract()
+        lv.b.rapid([Q[0]], z=lv.clearance_z)
+        lv.b.plunge(Q[0], lv.z, lv.feed_mm_min, tag="cleared", cleared=True)   # dm[k0] >= r_free: free
+    lv.cur = (float(Q[0, 0]), float(Q[0, 1]))
+    slot_feed = lv.feed_mm_min * min(1.0, lv.a_e / (2.0 * lv.r))
+    E = lv.g.replay(Q, lv.lag, lv.n_samp)
+    back = np.ascontiguousarray(Q[::-1])
+    Eb = lv.g.replay(back, lv.lag, lv.n_samp)
+    for pts, eng in ((Q, E), (back, Eb)):
+        ai = eng[1:] < lv.air_rad
+        lv.b.add(pts[1:], np.where(ai, "link", "cut").astype(object), np.where(ai, lv.link_feed_mm_min, slot_feed),
+                 "slot", z=lv.z)
+    lv.cur = (float(back[-1, 0]), float(back[-1, 1]))
+    lv.stats["slots"] = lv.stats.get("slots", 0) + 1
+    L = float(np.hypot(*np.diff(Q, axis=0).T).sum())
+    lv.narrow_done.append(f"slot along ({Q[0, 0]:.1f}, {Q[0, 1]:.1f}) -> ({Q[-1, 0]:.1f}, {Q[-1, 1]:.1f}), {L:.1f} mm: "
+                          f"a strip narrower than the engagement bound admits, cut by slotting at up to "
+                          f"{math.degrees(float(np.nanmax(E))):.0f} deg engagement, feed {slot_feed:.0f} mm/min "
+                          "(slot_narrow)")

@@ -41,6 +41,11 @@ class AdaptiveParams:
     #: whether narrow regions (tool-centre half-width <= narrow.NARROW_HALF_WIDTH_FRAC r) are cut by
     #: Thesis IV's trochoid along their medial axis before the passes (issue 29 item 5, narrow.py)
     narrow_trochoid: bool = True
+    #: whether the strips of the tool-centre region thinner than 2 x narrow.NARROW_MIN_HALF_WIDTH_FRAC r
+    #: (a slot less than 0.4 r wider than the tool: no step under the engagement bound enters it) are cut
+    #: by slotting along their medial axis, their engagement (up to 180 deg) stated in the notes
+    #: (finish.slot_strips; off: they are left, and ``plan`` reports them as uncut)
+    slot_narrow: bool = False
     #: deg: the finish is held at theta + finish_margin_deg (the simulator measures up to ~3 deg more
     #: than the planning stock on thin wall rests; theta + 10 is the bound)
     finish_margin_deg: float = 6.0
