@@ -583,14 +583,14 @@ class LevelRegions:
                 J, I = J + max(j0 - w, 0), I + max(i0 - w, 0)
                 C = np.c_[g.x0 + (I + 0.5) * g.hc, g.y0 + (J + 0.5) * g.hc]
                 # the nearest from which the first periods' returns, swinging c to either side across
-                # the axis, meet no material (the capsule of radius r + h about that swing is free)
+                # the axis, meet no material (the capsule of radius r + mouth_capsule_margin_h h about that swing is free)
                 ax = reg.axis if rev == 0 else reg.axis[::-1]
                 t = ax[min(3, len(ax) - 1)] - ax[0]
                 n = np.array([-t[1], t[0]]) / max(float(np.hypot(*t)), 1e-12)
                 sw = float(reg.radius[0 if rev == 0 else -1]) * n
                 m = next((int(q) for q in np.argsort(np.hypot(*(C - end).T))[:MOUTH_CANDIDATES]
                           if capsule_free(g.M, g.x0, g.y0, g.h, C[q, 0] - sw[0], C[q, 1] - sw[1], C[q, 0] + sw[0],
-                                          C[q, 1] + sw[1], lv.r + g.h)), None)
+                                          C[q, 1] + sw[1], lv.r + lv.prm.mouth_capsule_margin_h * g.h)), None)
                 if m is None:
                     continue
                 route = g.route(lv.cur, lv.r_free, -np.inf, None, (int(J[m]), int(I[m])))

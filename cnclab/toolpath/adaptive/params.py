@@ -105,3 +105,29 @@ class AdaptiveParams:
     #: coarse cells: a cell is free when its distance to material is at least r + this many cells
     #: (the cell half-diagonal margin of the coarse grid)
     free_margin_hc: float = 0.75
+
+    # -- pass loop and narrow regions (helper "passes", issues 29/24: program time) ---------------
+    #: fraction of r: a pass that left the tool-centre region at its first step
+    #: bans the coarse cells within this (Chebyshev) distance of its start cell; any other pass that
+    #: removes (almost) nothing bans those within r. Was r for both: at the fillet where the arm of an
+    #: L (a band about a tool radius wide) leaves the wide part, one such start banned the arm's face,
+    #: and its end was taken by a lift and a helix entry (rectilinear_0: 0.665 -> 0.588 min); in the
+    #: second chance (second_chance_min_yield) every failed start bans this much
+    pass_ban_frac: float = 0.5
+    #: pixels (h): a narrow region's mouth is entered from cleared area (narrow.py) at a free point
+    #: from which the first periods' swing across the axis meets no material pixel centre within
+    #: r + this (a capsule). Was +1: the pixel centres along the walls that no pass clears (a tool
+    #: centre on the tool-centre boundary, itself shrunk by h/sqrt(2), leaves them within about h)
+    #: were always within reach, so every open region was entered by a lift and a helix at its closed
+    #: end (tapered_channel_2: 2.415 -> 2.29 min at +0.5). +0.5 is measured, not derived: at -1
+    #: (r - h) slot_bulbs_2 reaches theta + 22 deg (the mouth point then chosen has its first return
+    #: meet material), at 0 the islands-neck case of test_adaptive_clearing theta + 11 in a later pass
+    mouth_capsule_margin_h: float = 0.5
+    #: fraction of a_e: before the tool lifts for another helix entry (at the entry feed, a slot's
+    #: chip), the pass bans are lifted once (a second chance: the places a failed start closed with
+    #: its r-wide ban are tried again through cleared area, a failed start then banning only
+    #: pass_ban_frac r); a pass of that second chance is kept only where it removes this much area
+    #: per mm of its length (a_e wide: the nominal cut), else it and its link are undone. Measured:
+    #: dwg_example008 3.26 -> 2.16 min (12 -> 3 entries), regions_1 3.21 -> 2.82; without the
+    #: yield rule the slivers it takes cost more than they save (dwg_polygons +5.6 %)
+    second_chance_min_yield: float = 0.3

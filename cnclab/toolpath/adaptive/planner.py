@@ -157,6 +157,24 @@ class _Level:
                 return True
         return False
 
+    def undo_pass(self, undo, E, free):
+        """A second-chance pass that only cuts slivers is not worth its link and its feed time: the
+        link and the pass are undone (``undo``: the builder mark, stock snapshot, tool point and link
+        count before the link); the (P, removed, E, free) of an empty pass."""
+        self.b.rollback(undo[0])
+        self.g.restore(undo[1])
+        self.cur, self.stats["links"] = undo[2], undo[3]
+        return np.array([self.cur], float), 0.0, E[:1], free[:1]
+
+    def ban_start(self, banned, j, i, frac):
+        """Ban the coarse cells within ``frac`` r (Chebyshev) of the failed start cell (j, i). A pass
+        that left the tool-centre region at its first step failed on the local shape of the region's
+        boundary (a fillet, the mouth of a band), not for want of material: it bans only
+        ``pass_ban_frac`` r, so that the passes still reach a band beside it (as every failed start
+        of the second chance)."""
+        rad = int(math.ceil(frac * self.r / self.g.hc))
+        banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+
     def finish_if_done(self, D, Ac, banned):
         """Before the tool leaves its part of the tool-centre region (a retract and a new entry),
         finish that part if its clearing is done (no material within reach of its free cells)."""
@@ -190,8 +208,11 @@ class _Level:
                 self.todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
                 saved = (self.b.mark(), self.g.snapshot(), self.cur, dict(self.stats))
             banned = np.zeros((self.g.ny // self.g.k, self.g.nx // self.g.k), bool)
+            fine = False     # second chance (see below): failed passes ban only pass_ban_frac r
             for _ in range(self.max_passes):
                 D, Ac = self.g.free_field()
+                if fine:
+                    undo = (self.b.mark(), self.g.snapshot(), self.cur, self.stats["links"])
                 end = self.link_to(self.r_free, self.r_free + 1.5 * self.g.hc, banned)
                 if end is None and narrow.next_region(self, banned):
                     continue
@@ -200,6 +221,12 @@ class _Level:
                     if not (Ac & (D < self.r) & ~banned).any():
                         break
                     if self.sweep_remnant():
+                        continue
+                    if not fine:
+                        # before a lift and a helix entry (at the entry feed), the places the coarse
+                        # bans (r about a failed start) closed get a second chance through cleared area
+                        fine = True
+                        banned[:] = False
                         continue
                     self.finish_if_done(D, Ac, banned)
                     if self.enter(banned) is False:
@@ -235,9 +262,10 @@ class _Level:
                     if len(P) >= 2 and removed < self.prm.narrow_min_yield * self.a_e * self.ds * (len(P) - 1):
                         self.g.restore(snap_try)        # not worth its air: the place is banned after all
                         P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
+                if fine and len(P) >= 2 and removed < self.prm.second_chance_min_yield * self.a_e * self.ds * (len(P) - 1):
+                    P, removed, E, free = self.undo_pass(undo, E, free)
                 if removed < self.prm.pass_min_removed_rh * self.r * self.h or len(P) < 2:
-                    rad = int(math.ceil(self.r / self.g.hc))
-                    banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+                    self.ban_start(banned, j, i, self.prm.pass_ban_frac if (len(P) < 2 and reason == 0) or fine else 1.0)
                 air = E < self.air_rad                # nothing in front of the tool: a link at the link feed, or
                                                  # a G0 where the chord is proven clear (``free``, see pass_kernel)
                 fr, ai = free[1:], air[1:]
