@@ -43,6 +43,8 @@ def score(poly, theta, slot_narrow=False) -> dict:
                                resolution_mm=T.H, step_mm=0.05)
     except PlanningError as exc:
         return rec | {"status": "refused", "msg": str(exc)[:300]}
+    except Exception as exc:                      # a crash: counted, the run goes on
+        return rec | {"status": "error", "msg": f"{type(exc).__name__}: {exc}"[:300]}
     s = evaluate(tp, T._job(poly, theta), T.H)
     corners = min(T._corner_allowance_mm2(poly), unreachable_region(poly, T.R).area)
     eng_bound = theta + 10 + 2 * math.degrees(T.H / (T.R * math.sin(math.radians(theta))))
