@@ -270,9 +270,17 @@ def trochoid_period(width, r, theta_deg, h, vmax_ratio=1.0):
     steady period of :func:`cnclab.toolpath.trochoidal.evaluate_pattern`).
 
     Returns (points (m, 2) with min x = 0, kinds (m,) ``cut`` or ``link`` (a step of the steady
-    period that removes nothing), feed factors (m,) x the nominal feed (NaN on links), step mm).
-    Cached: a corpus of jobs repeats widths."""
-    p = ce_trochoid(width, r, theta_deg, n_periods=5, resolution_mm=h)
+    period that removes nothing), feed factors (m,) x the nominal feed (NaN on links), step mm), or
+    None when Thesis IV has no pattern for this slot at ``theta_deg``: in a slot barely wider than
+    the tool the converged period's engagement exceeds theta at every step down to the step search's
+    tolerance (``ce_admissible_step``: "below the engagement of the smallest step"), or the
+    iteration finds fewer than three complete periods -- :func:`ce_trochoid` raises ValueError for
+    both (its arguments are valid here: a positive width, radius and pixel), and such a width is
+    left to the level planner like a crawl (``MIN_STEP_FRAC``). Cached: a corpus of jobs repeats widths."""
+    try:
+        p = ce_trochoid(width, r, theta_deg, n_periods=5, resolution_mm=h)
+    except ValueError:
+        return None
     per = period_index(p)
     k0, k3 = per == 0, per == 3
     P = p.xyz[k0, :2]
@@ -360,11 +368,12 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
     X, Y, K, F, steps = [], [], [], [], []
     x0 = s_start
     for (a, b, cc) in width_classes(region, q, 2.0 * r):
-        P0, kinds0, F0, step = trochoid_period(round(2.0 * (cc + r), 3), float(r), float(theta_deg), float(h),
-                                               round(float(vmax_ratio), 3))
+        period = trochoid_period(round(2.0 * (cc + r), 3), float(r), float(theta_deg), float(h),
+                                 round(float(vmax_ratio), 3))
+        if period is None or period[3] < MIN_STEP_FRAC * r * (1.0 - math.cos(math.radians(theta_deg))):
+            break           # no step at theta, or too slow a crawl: the rest of the axis is left to the level planner
+        P0, kinds0, F0, step = period
         x_ext = float(P0[:, 0].max())
-        if step < MIN_STEP_FRAC * r * (1.0 - math.cos(math.radians(theta_deg))):
-            break           # too slow a crawl: the rest of the axis is left to the level planner
         if x0 is None:
             x0 = hole_mm + step - x_ext
         stop = s_end if b >= region.length - 1e-9 else b
