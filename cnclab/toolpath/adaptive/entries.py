@@ -56,6 +56,9 @@ def enter(lv, banned=None):
     if (rho < rho_min or again) and banned is not None and not (lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0):
         rad = int(math.ceil(lv.prm.entry_ban_frac * lv.r / lv.g.hc))
         banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+        fine = getattr(lv, "banned_fine", None)
+        if fine is not None and fine.shape == banned.shape:
+            fine[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
         return None
     lv.retract()
     if lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0:

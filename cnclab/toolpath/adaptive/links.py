@@ -254,6 +254,34 @@ def shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
     return out[:n]
 
 
+@njit(cache=True)
+def solid_within(M, x0, y0, h, cx, cy, rr):
+    """(area mm^2, centroid x, y mm) of the material pixels of ``M`` within ``rr`` mm of (cx, cy) whose
+    four neighbours are material too (the stock eroded by one pixel: the one- and two-pixel-wide
+    skins and seams a pass's 1/2-contour engagement does not see count for nothing); the centroid is
+    (cx, cy) when there are none."""
+    ny, nx = M.shape
+    i0 = max(int(math.floor((cx - rr - x0) / h)), 1)
+    i1 = min(int(math.ceil((cx + rr - x0) / h)), nx - 2)
+    j0 = max(int(math.floor((cy - rr - y0) / h)), 1)
+    j1 = min(int(math.ceil((cy + rr - y0) / h)), ny - 2)
+    n = 0
+    sx = 0.0
+    sy = 0.0
+    for j in range(j0, j1 + 1):
+        py = y0 + (j + 0.5) * h - cy
+        for i in range(i0, i1 + 1):
+            if M[j, i] and M[j - 1, i] and M[j + 1, i] and M[j, i - 1] and M[j, i + 1]:
+                px = x0 + (i + 0.5) * h - cx
+                if px * px + py * py <= rr * rr:
+                    n += 1
+                    sx += px
+                    sy += py
+    if n == 0:
+        return 0.0, cx, cy
+    return n * h * h, cx + sx / n, cy + sy / n
+
+
 def rapid_legs(g, p, q):
     """A G0 for the chord p -> q at depth: ``(None, q)`` when the chord is proven clear on the rapid
     stock (:func:`capsule_free`); else ``(p', q')`` with feed legs p -> p' and q' -> q of 2 h or 4 h

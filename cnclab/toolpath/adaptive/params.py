@@ -131,3 +131,24 @@ class AdaptiveParams:
     #: dwg_example008 3.26 -> 2.16 min (12 -> 3 entries), regions_1 3.21 -> 2.82; without the
     #: yield rule the slivers it takes cost more than they save (dwg_polygons +5.6 %)
     second_chance_min_yield: float = 0.3
+
+    # -- links and entries (helper "links", issue 29: lifts) --------------------------------------
+    #: fraction of r: before an entry (a lift), once the second chance has found no start either, the
+    #: starts within the pass bans that lie farther than this from every failed start (banned_fine)
+    #: are tried (:meth:`_Level.rescue_start`): at the end of a slot opening into a wider part the
+    #: passes from its upper corner head out of the region, and the bans cover the slot end
+    failed_start_ban_frac: float = 0.25
+    #: passes: that rescue gives up after so many failed passes in a row (each a Dijkstra search over
+    #: the free cells; a ring of seams the engagement does not see can hold hundreds of such starts)
+    rescue_max_fails: int = 16
+    #: fraction of r: ... and tries only starts with solid material (:func:`.links.solid_within`, at least
+    #: a pass's minimum removal) within this reach (the wall skins a slot's trochoid leaves are none)
+    rescue_reach_frac: float = 1.5
+    #: deg: a rescued start (tangent to the solid material, on the right) whose pass removes nothing is
+    #: tried again turned so far towards the material (a mouth narrower than the turning circle: the
+    #: tangent heading leaves the region before the pass can turn into the face)
+    rescue_turns_deg: tuple = (30.0, 60.0)
+    #: fraction of r: ... where the tool-centre region is at least this half-wide (Grid.half_width;
+    #: narrower, no pass can turn: the crawl limit of the narrow regions' trochoid,
+    #: narrow.NARROW_MIN_HALF_WIDTH_FRAC; a channel that narrow is left to the entries)
+    rescue_min_half_width_frac: float = 0.2

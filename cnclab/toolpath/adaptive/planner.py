@@ -17,7 +17,7 @@ from . import entries, finish, narrow
 from .entries import PlanningError
 from .grid import Grid, PassStep
 from .params import AdaptiveParams
-from .links import rapid_legs, shortcut
+from .links import rapid_legs, shortcut, solid_within
 from .stock import capsule_free, component_discs, label8, segment_inside
 
 _RAPID, _PLUNGE = KINDS.index("rapid"), KINDS.index("plunge")
@@ -111,6 +111,72 @@ class _Level:
                 self.cur = (float(q[0]), float(q[1]))
         self.stats["links"] += 1
         return route[-1]
+
+    def next_start(self, banned):
+        """Link at depth to the start of the next clearing pass (:meth:`link_to`): the nearest cell
+        through cleared area whose tool disc touches material, outside ``banned``; (its cell, the
+        pass's start heading (rad) or None: along the material boundary), or (None, None) when none
+        is left (the loop then cuts a narrow region, sweeps a remnant, tries :meth:`rescue_start`
+        and enters anew). During a rescue (``rescue_fails`` >= 0): :meth:`rescue_start`'s next start."""
+        if self.rescue_fails >= 0:
+            return self.rescue_start()
+        end = self.link_to(self.r_free, self.r_free + 1.5 * self.g.hc, banned)
+        return end, None
+
+    def rescue_start(self):
+        """Before an entry (a lift): a pass start within the r-bans of failed passes, farther than
+        ``failed_start_ban_frac`` r from every failed start (``banned_fine``), with solid material within
+        ``rescue_reach_frac`` r (:func:`.links.solid_within`, at least a pass's minimum removal: not the
+        wall skins along a cleared slot), where the tool-centre region is at least
+        ``rescue_min_half_width_frac`` r half-wide, linked to at depth; its heading along that material, on the
+        right. The end of a slot opening into a wider part: the passes from its upper corner head out
+        of the region, the bans of r cover the slot end, and the far part took a helix and a lift. Up
+        to ``rescue_max_fails`` failed passes in a row (``rescue_fails``: -1 outside a rescue), once
+        between two passes that cut (``rescue_spent``); (cell, heading rad) or (None, None)."""
+        if self.rescue_spent:
+            return None, None
+        band_hi = self.r_free + 1.5 * self.g.hc
+        self.rescue_fails = max(self.rescue_fails, 0)
+        min_solid = self.prm.pass_min_removed_rh * self.r * self.h
+        rad = int(math.ceil(self.prm.failed_start_ban_frac * self.r / self.g.hc))
+        while self.rescue_fails < self.prm.rescue_max_fails and self.cur is not None:
+            route = self.g.route(self.cur, self.r_free, band_hi, self.banned_fine)
+            if route is None or isinstance(route, str):
+                break
+            j, i = (int(v) for v in route[-1])
+            x, y = self.g.centre(j, i)
+            area, sx, sy = solid_within(self.g.M, self.g.x0, self.g.y0, self.h, x, y, self.prm.rescue_reach_frac * self.r)
+            if area < min_solid or self.g.half_width[j, i] < self.prm.rescue_min_half_width_frac * self.r:
+                # only skins and seams within reach, or a band too narrow for any pass to turn: no pass tried
+                self.banned_fine[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+                continue
+            if self.link_to(self.r_free, -np.inf, self.banned_fine, cell=(j, i)) is None:
+                break
+            self.stats["rescued_starts"] += 1
+            # along that solid material, on the right (the distance field's gradient there may point
+            # away from a skin instead)
+            return (j, i), math.atan2(sy - y, sx - x) + 0.5 * math.pi
+        self.rescue_fails, self.rescue_spent = -1, True
+        return None, None
+
+    def rescue_turns(self, heading, P, removed, reason, E, free):
+        """A rescued start (:meth:`rescue_start`) whose pass removed nothing (the stock unchanged;
+        nothing kept): once more per ``rescue_turns_deg``, turned so far towards the material (a
+        narrow mouth: along it the pass leaves the region); the last pass's (P, removed, reason, E, free)."""
+        for turn in self.prm.rescue_turns_deg:
+            if removed > 0.0:
+                break
+            P, removed, reason, E, free = self.clearing_pass(heading - math.radians(turn), self.air_stop)
+            self.stats["passes"] += 1
+        return P, removed, reason, E, free
+
+    def note_pass(self, failed, j, i):
+        """After a pass from the start cell (j, i): a failed one bans ``failed_start_ban_frac`` r of
+        ``banned_fine`` and counts against a rescue; one that cut ends a rescue and renews it."""
+        if failed:
+            self.ban_start(self.banned_fine, j, i, self.prm.failed_start_ban_frac)
+        self.rescue_fails = self.rescue_fails + 1 if failed and self.rescue_fails >= 0 else -1
+        self.rescue_spent = self.rescue_spent and failed
 
     def finish_part(self, part):
         """The wall-following finish laps of one part (:func:`.finish.finish_part`)."""
@@ -209,11 +275,13 @@ class _Level:
                 saved = (self.b.mark(), self.g.snapshot(), self.cur, dict(self.stats))
             banned = np.zeros((self.g.ny // self.g.k, self.g.nx // self.g.k), bool)
             fine = False     # second chance (see below): failed passes ban only pass_ban_frac r
+            self.banned_fine = banned.copy()     # the bans, a failed start's only failed_start_ban_frac r
+            self.rescue_fails, self.rescue_spent = -1, False
             for _ in range(self.max_passes):
                 D, Ac = self.g.free_field()
                 if fine:
                     undo = (self.b.mark(), self.g.snapshot(), self.cur, self.stats["links"])
-                end = self.link_to(self.r_free, self.r_free + 1.5 * self.g.hc, banned)
+                end, heading = self.next_start(banned)
                 if end is None and narrow.next_region(self, banned):
                     continue
                 if end is None:
@@ -228,6 +296,8 @@ class _Level:
                         fine = True
                         banned[:] = False
                         continue
+                    end, heading = self.rescue_start()
+                if end is None:
                     self.finish_if_done(D, Ac, banned)
                     if self.enter(banned) is False:
                         break
@@ -236,12 +306,14 @@ class _Level:
                 j, i = end
                 gy = D[min(j + 1, D.shape[0] - 1), i] - D[max(j - 1, 0), i]
                 gx = D[j, min(i + 1, D.shape[1] - 1)] - D[j, max(i - 1, 0)]
-                if not (np.isfinite(gx) and np.isfinite(gy)) or gx == gy == 0:
-                    banned[j, i] = True
+                if heading is None and (not (np.isfinite(gx) and np.isfinite(gy)) or gx == gy == 0):
+                    banned[j, i] = self.banned_fine[j, i] = True
                     continue
-                heading = math.atan2(gy, gx) - 0.5 * math.pi
+                rescued, heading = heading is not None, math.atan2(gy, gx) - 0.5 * math.pi if heading is None else heading
                 P, removed, reason, E, free = self.clearing_pass(heading, self.air_stop)
                 self.stats["passes"] += 1
+                if rescued:
+                    P, removed, reason, E, free = self.rescue_turns(heading, P, removed, reason, E, free)
                 if len(P) < 2 and self.g.half_width[j, i] < self.turn_radius:
                     # nothing emitted (the pass ran into air and was dropped: the stock is unchanged). In a band
                     # narrower than the turning circle, where the material lies behind the start heading (the
@@ -264,8 +336,10 @@ class _Level:
                         P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
                 if fine and len(P) >= 2 and removed < self.prm.second_chance_min_yield * self.a_e * self.ds * (len(P) - 1):
                     P, removed, E, free = self.undo_pass(undo, E, free)
-                if removed < self.prm.pass_min_removed_rh * self.r * self.h or len(P) < 2:
+                failed = removed < self.prm.pass_min_removed_rh * self.r * self.h or len(P) < 2
+                if failed:
                     self.ban_start(banned, j, i, self.prm.pass_ban_frac if (len(P) < 2 and reason == 0) or fine else 1.0)
+                self.note_pass(failed, j, i)
                 air = E < self.air_rad                # nothing in front of the tool: a link at the link feed, or
                                                  # a G0 where the chord is proven clear (``free``, see pass_kernel)
                 fr, ai = free[1:], air[1:]
@@ -383,7 +457,8 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
     # the moves (shared with the level planners: _Level.b)
     b = ToolPathBuilder(tool=tool, spindle=spindle, info={"planner": "adaptive_clearing", "theta_deg": theta_deg,
                                                           "resolution_mm": h, "step_mm": ds})
-    stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0}
+    stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0,
+             "rescued_starts": 0}
     allowed_parts = list(shapely.get_parts(allowed))
     part_wide = {}        # part index -> inscribed radius of that part of the tool-centre region (mm)
     hole = None if start_hole is None else tuple(float(v) for v in start_hole)

@@ -1,0 +1,77 @@
+"""Links and entries of the adaptive planner (cnclab.toolpath.adaptive: links.py, entries.py, the
+level loop's choice of the next pass start; issue 29).
+
+A slot between two round bulbs (D = 6 mm, theta = 60 deg; a pocket of this test, not of the corpus):
+the first bulb is entered by one helix, the slot is cut by the narrow-region trochoid from that
+bulb, and the far bulb must be cleared from the end of the slot, linked at depth through cleared
+area -- before the failed-start rescue (AdaptiveParams.failed_start_ban_frac) the passes from the
+upper corner of the slot end headed out of the region, their bans of r covered the whole slot end
+and the far bulb took a second helix and a lift. Bounds: one entry and one lift (FreeCAD Adaptive
+lifts once on such a slot), the issue-29 engagement targets (p95 <= theta + 2 deg, max <= theta +
+10 deg), 0 plunges or rapids into material, no wall gouge beyond 1 um (the evaluator's position
+tolerance), every rapid at depth of the plan through area the evaluator finds cleared, and the
+written program passes the static safety check. Scored by the package's one evaluator at h = r / 30
+(the corpus benchmark's resolution).
+"""
+import numpy as np
+import pytest
+from shapely.geometry import Point, box
+
+from cnclab.nc.program import check_program, write_program
+from cnclab.toolpath import planners
+from cnclab.toolpath.adaptive import AdaptiveParams
+from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.job import Job
+from cnclab.toolpath.path import Tool
+from cnclab.works.jacso2021.freecad_comparison import lifts
+
+R = 3.0
+THETA = 60.0
+H = R / 30.0
+
+
+def _two_bulb_slot():
+    # bulbs of radius 7 mm at x = 8 and x = 60, joined by a slot 7.4 mm wide (1.23 D: a narrow region)
+    return Point(8.0, 8.0).buffer(7.0, quad_segs=32).union(box(8.0, 4.3, 60.0, 11.7)).union(
+        Point(60.0, 8.0).buffer(7.0, quad_segs=32))
+
+
+def _job(poly, source):
+    return Job(poly, Tool(2 * R), THETA, 3.0, feed_mm_min=764.0, spindle_rpm=5968.0, rapid_mm_min=10000.0,
+               link_feed_mm_min=1500.0, v_fmax=1146.0, source=source)
+
+
+@pytest.fixture(scope="module")
+def planned():
+    job = _job(_two_bulb_slot(), "two-bulb slot")
+    tp = planners.plan(job, "adaptive", H)
+    return job, tp, evaluate(tp, job, H)
+
+
+def test_far_bulb_is_reached_at_depth_not_by_a_second_entry(planned):
+    job, tp, ev = planned
+    assert tp.info["entries"] == 1
+    assert lifts(ev, job.top_z) == 1
+    assert ev.entries_helix == 1
+
+
+def test_two_bulb_slot_is_safe_and_within_the_engagement_bounds(planned):
+    job, tp, ev = planned
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    assert ev.wall_gouge_max_mm <= 1e-3
+    assert ev.engagement_p95_deg <= THETA + 2
+    assert ev.engagement_max_deg <= THETA + 10
+    # every G0 at depth removes nothing in the evaluator's exact stock
+    rapid = np.asarray(ev.trace["kind"]) == "rapid"
+    deep = np.asarray(ev.trace["z"]) < job.top_z - 1e-9
+    assert rapid[deep].any()
+    assert float(np.asarray(ev.trace["removed_mm2"])[rapid & deep].sum()) <= 0.5 * H * H
+    assert check_program(write_program(tp, job), clearance_z=job.clearance_z, top_z=job.top_z).errors == []
+
+
+def test_without_the_rescue_the_far_bulb_takes_a_second_entry():
+    # the mechanism this file tests: with the failed-start bans as wide as the pass bans (r), no start
+    # at the slot end is left and the far bulb is entered by a helix
+    job = _job(_two_bulb_slot(), "two-bulb slot, no rescue")
+    tp = planners.plan(job, "adaptive", H, params=AdaptiveParams(failed_start_ban_frac=1.0))
+    assert tp.info["entries"] >= 2
