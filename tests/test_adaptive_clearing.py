@@ -207,10 +207,12 @@ STAR_ISLAND_TROCHOID = Polygon(
       (0.3839191913015273, -1.5305891647648544), (1.8393711718172212, -1.5305891647648544)]])
 
 
-@pytest.mark.xfail(strict=True, reason="issue 28/29: the narrow-region trochoid (narrow.py) exceeds theta + 10 "
-                                       "at a bend of the channel round an island (124.6 deg at theta 60); strict: "
-                                       "a fix makes this XPASS, then drop the mark")
 def test_star_island_trochoid_engagement_bounded():
+    """Was 124.6-131.9 deg at theta 60: the trochoid started at a mouth's free point 4 mm from the axis
+    end, its straight leg along the island's edge (the pattern clamped onto the region's boundary, a
+    slot cut through uncleared material) and joined to the axis at a 67 deg kink. Now a mouth's leg
+    must hold the pattern's band inside the tool-centre region, a leg is joined by a rounded bend
+    (narrow.join_axis) and periods are laid closer on bends (narrow.bend_step)."""
     tp, s = _scored(STAR_ISLAND_TROCHOID, 60.0)
     assert s.plunges_into_material == 0 and s.rapids_into_material == 0      # safe all the same
     assert s.engagement_max_deg <= 60.0 + 10 + 2 * math.degrees(H / (R * math.sin(math.radians(60.0))))

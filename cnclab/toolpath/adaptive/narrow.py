@@ -70,7 +70,7 @@ from ...cutting.feed_control import controlled_feed
 from ..trochoidal import ce_trochoid, evaluate_pattern, pattern_kinds, period_index
 
 __all__ = ["NarrowRegion", "narrow_regions", "medial_graph", "medial_axis", "trochoid_period", "axis_trochoid",
-           "width_classes", "along", "spiral_out", "helix_entry", "emit_trochoid", "cut_region", "LevelRegions",
+           "width_classes", "along", "bend_step", "join_axis", "spiral_out", "helix_entry", "emit_trochoid", "cut_region", "LevelRegions",
            "next_region", "close",
            "NARROW_HALF_WIDTH_FRAC", "NARROW_MIN_LENGTH_FRAC"]
 
@@ -93,6 +93,13 @@ AIR_MM2_PER_MM = 1e-3
 #: measured at c = 0.2 r, theta 101.5 deg; 0.098 mm = 0.18 a_e at theta 30.7 deg still pays); the
 #: rest of the axis is left to the level planner
 MIN_STEP_FRAC = 0.1
+#: on a bend the periods are laid closer (:func:`bend_step`) so that their spacing on the outer side
+#: stays at the straight-slot step; never closer than this x that step (a kink of angle a then still
+#: spaces the outer side by c a more: the axis is smoothed, see :func:`join_axis`)
+MIN_BEND_STEP_FRAC = 0.1
+#: a mouth's free point is joined to the axis by a curve of radius at least this x the half-width c
+#: (:func:`join_axis`): on a tighter bend the pattern's inner side folds over the bend's centre
+JOIN_RADIUS_C = 1.5
 #: free cells tried (nearest first) for the start of a trochoid at a mouth onto cleared area
 MOUTH_CANDIDATES = 200
 #: boundary sampling of the Voronoi medial axis, x the planning pixel h (and at most r / 8)
@@ -354,6 +361,37 @@ def width_classes(region: NarrowRegion, q, span):
     return [tuple(r_) for r_ in runs]
 
 
+def bend_step(s, ang, x0, x_ext, y_ext, step, h):
+    """Arc-length step (mm) from the period at ``x0`` to the next along an axis of arc length ``s``
+    (n,) mm and unwrapped tangent angle ``ang`` (n,) rad, for a pattern spanning local x in [0,
+    ``x_ext``] and |y| <= ``y_ext`` (mm) whose straight-slot step is ``step`` (mm).
+
+    :func:`along` moves the point (x, y) of the next period by ``|C(u + d) - C(u)| + |y| |ang(u + d)
+    - ang(u)|`` at most (u = x0 + x, d the step): on a bend the outer side of the pattern is spaced
+    wider than the axis (by 1 + kappa c on an arc of curvature kappa), and the engagement there
+    exceeds theta (measured: 124.6-131.9 deg at theta 60 where a mouth's link joined the axis at 67
+    deg). The largest d with ``d + y_ext max_u |ang(u + d) - ang(u)| <= step`` (u sampled every
+    ``h`` mm) keeps every point of the pattern within the straight-slot step of the previous period
+    (fixed-point iteration from d = step, decreasing), at least ``MIN_BEND_STEP_FRAC`` step.
+
+    >>> s = np.linspace(0.0, 10.0, 101)
+    >>> round(bend_step(s, np.zeros(101), 2.0, 2.0, 1.0, 0.2, 0.05), 9)     # straight: the step
+    0.2
+    >>> round(bend_step(s, 0.5 * s, 2.0, 2.0, 1.0, 0.2, 0.05), 3)          # kappa 0.5, c 1: step / 1.5
+    0.133
+    """
+    u = np.arange(x0, x0 + x_ext + h, h)
+    a0 = np.interp(u, s, ang)
+    d = step
+    for _ in range(8):
+        spread = float(np.abs(np.interp(u + d, s, ang) - a0).max())
+        nd = max(step * d / (d + y_ext * spread), MIN_BEND_STEP_FRAC * step)
+        if nd >= d - 1e-6:
+            break
+        d = nd
+    return d
+
+
 def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, s_end=None, q=None, hole_mm=0.0,
                   vmax_ratio=1.0):
     """The trochoid of ``region`` (module docstring): (points (m, 2) mm, kinds (m,) of cut / link
@@ -367,6 +405,8 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
     q = 0.1 * r if q is None else q
     X, Y, K, F, steps = [], [], [], [], []
     x0 = s_start
+    s_ax, T_ax = _frame(region.axis)
+    ang_ax = np.unwrap(np.arctan2(T_ax[:, 1], T_ax[:, 0]))
     for (a, b, cc) in width_classes(region, q, 2.0 * r):
         period = trochoid_period(round(2.0 * (cc + r), 3), float(r), float(theta_deg), float(h),
                                  round(float(vmax_ratio), 3))
@@ -393,7 +433,7 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
             X.append(P0[j:, 0] + x0); Y.append(P0[j:, 1]); K.append(kinds0[j:]); F.append(F0[j:])
             # the period's own return already ends at the next period's start: drop the duplicate
             X[-1], Y[-1], K[-1], F[-1] = X[-1][:-1], Y[-1][:-1], K[-1][:-1], F[-1][:-1]
-            x0 += step
+            x0 += bend_step(s_ax, ang_ax, x0, x_ext, float(np.abs(P0[:, 1]).max()), step, h)
     if not X:
         return np.zeros((0, 2)), np.zeros(0, dtype=object), np.zeros(0), steps, 0
     X, Y, K, F = np.concatenate(X), np.concatenate(Y), np.concatenate(K), np.concatenate(F)
@@ -408,6 +448,42 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
         Q = clamp_to_region(Q, allowed.buffer(-1e-4))
     keep = np.r_[True, np.hypot(*np.diff(Q, axis=0).T) > 1e-6]
     return Q[keep], K[keep], F[keep], steps, n_out
+
+
+def join_axis(reg: NarrowRegion, p) -> NarrowRegion:
+    """``reg`` with its axis starting at the point ``p`` (2,) mm (a mouth's free point the tool
+    stands at): the straight leg from ``p`` to the axis start and the axis resampled at the axis's
+    own spacing, the corner between them rounded by a moving average over ``JOIN_RADIUS_C c a`` mm
+    (a the corner's turn, c the half-width there: a bend of radius about ``JOIN_RADIUS_C`` c, so
+    that the pattern's inner side does not fold over the bend's centre and :func:`bend_step` has a
+    finite curvature to space the periods by); the ends are kept. The start is open (the tool
+    reached it through cleared area).
+
+    >>> reg = NarrowRegion(0, None, np.c_[np.linspace(0, 5, 26), np.zeros(26)], np.full(26, 1.0), (True, True))
+    >>> j = join_axis(reg, (0.0, -3.0))
+    >>> j.axis[0].tolist(), j.axis[-1].tolist(), j.dead, bool(j.length < 8.0)
+    ([0.0, -3.0], [5.0, 0.0], (False, True), True)
+    """
+    p = np.asarray(p, float)
+    A, c = reg.axis, reg.radius
+    P = np.vstack([p[None], A])
+    s_old = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+    sp = float(np.median(np.hypot(*np.diff(A, axis=0).T))) if len(A) > 1 else 0.1
+    n = max(int(math.ceil(s_old[-1] / sp)), 2)
+    sq = np.linspace(0.0, s_old[-1], n + 1)
+    Q = np.c_[np.interp(sq, s_old, P[:, 0]), np.interp(sq, s_old, P[:, 1])]
+    cq = np.interp(sq, s_old, np.r_[c[0], c])
+    if len(A) > 1 and s_old[1] > 1e-9:
+        t0, t1 = A[0] - p, A[min(2, len(A) - 1)] - A[0]
+        turn = abs(math.atan2(t0[0] * t1[1] - t0[1] * t1[0], float(t0 @ t1)))
+        k = int(math.ceil(0.5 * JOIN_RADIUS_C * float(c[0]) * turn / sp))
+        if k >= 1:
+            S = Q.copy()
+            for i in np.flatnonzero(np.abs(sq - s_old[1]) <= (k + 1) * sp):
+                w = min(k, i, n - i)
+                S[i] = Q[i - w:i + w + 1].mean(axis=0)
+            Q = S
+    return NarrowRegion(reg.index, reg.polygon, Q, cq, (False, reg.dead[1]))
 
 
 def spiral_out(c_xy, rho0, rho1, pitch, ds, start_rad=0.0):
@@ -516,6 +592,13 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
     return True
 
 
+def _leg_fits(allowed, p, q, c) -> bool:
+    """The straight leg from ``p`` to ``q`` (mm) with a band of half-width ``c`` (mm) about it lies
+    inside the tool-centre region ``allowed`` (the trochoid's periods along it fit unclamped)."""
+    leg = LineString([p, q]) if float(np.hypot(*(np.asarray(p) - np.asarray(q)))) > 1e-9 else Point(*p)
+    return bool(allowed.contains(leg.buffer(max(c, 0.0), quad_segs=8)))
+
+
 class LevelRegions:
     """The narrow regions of one level while the level planner runs (see :func:`next_region`).
 
@@ -597,9 +680,15 @@ class LevelRegions:
                 t = ax[min(3, len(ax) - 1)] - ax[0]
                 n = np.array([-t[1], t[0]]) / max(float(np.hypot(*t)), 1e-12)
                 sw = float(reg.radius[0 if rev == 0 else -1]) * n
+                # ... and the leg from it to the axis end, where the pattern swings c to either side
+                # too, lies inside the tool-centre region (else the pattern is clamped onto its boundary
+                # along the leg and cuts as a slot: 124-152 deg at theta 60 where a leg ran 4 mm along an
+                # island's edge through uncleared material)
+                c_end = float(reg.radius[0 if rev == 0 else -1])
                 m = next((int(q) for q in np.argsort(np.hypot(*(C - end).T))[:MOUTH_CANDIDATES]
                           if capsule_free(g.M, g.x0, g.y0, g.h, C[q, 0] - sw[0], C[q, 1] - sw[1], C[q, 0] + sw[0],
-                                          C[q, 1] + sw[1], lv.r + lv.prm.mouth_capsule_margin_h * g.h)), None)
+                                          C[q, 1] + sw[1], lv.r + lv.prm.mouth_capsule_margin_h * g.h)
+                          and _leg_fits(lv.allowed, C[q], end, c_end - 2 * g.h)), None)
                 if m is None:
                     continue
                 route = g.route(lv.cur, lv.r_free, -np.inf, None, (int(J[m]), int(I[m])))
@@ -627,8 +716,7 @@ def next_region(lv, banned=None) -> bool:
         if lv.link_to(lv.r_free, -np.inf, None, cell, end_xy=tuple(pt)) is not None:
             st.restore(k)
             # the axis starts at the free point the link reached (its tool disc is free of material)
-            reg = NarrowRegion(reg.index, reg.polygon, np.vstack([np.asarray(lv.cur, float)[None], reg.axis]),
-                               np.r_[reg.radius[0], reg.radius], (False, reg.dead[1]))
+            reg = join_axis(reg, lv.cur)
             cut_region(lv, reg, from_cleared=True)
             st.park()
             return True
