@@ -101,3 +101,44 @@ def test_region_refused_by_the_trochoid_is_left_to_the_planner(monkeypatch):
     ev = evaluate(tp, job, H)
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0 and ev.wall_gouge_max_mm <= 1e-3
     assert "narrow region" not in write_program(tp, job)
+
+
+@pytest.mark.parametrize("radius", [1.5, 3.0, 10.0])
+def test_bend_step_keeps_the_outer_side_at_the_slot_step(radius):
+    """On an axis that runs straight, turns 90 deg on an arc of ``radius`` mm, then runs straight,
+    every point (x, y) of a pattern spanning x in [0, 2], |y| <= 1 mm, mapped by :func:`narrow.along`
+    at the period positions that :func:`narrow.bend_step` lays, moves from one period to the next by
+    at most BEND_STRETCH x the straight step (+ 2 % for the polyline's chords: the arc is sampled at
+    0.05 mm, its angle interpolated linearly), and on the straight parts the step is the slot's."""
+    t = np.linspace(0.0, math.pi / 2, int(radius * math.pi / 2 / 0.05) + 2)
+    arc = np.c_[radius * np.sin(t), radius * (1 - np.cos(t))]
+    axis = np.vstack([np.c_[np.linspace(-5, 0, 101)[:-1], np.zeros(100)], arc,
+                      arc[-1] + np.c_[np.zeros(100), np.linspace(0, 5, 101)[1:]]])
+    s, T = narrow._frame(axis)
+    ang = np.unwrap(np.arctan2(T[:, 1], T[:, 0]))
+    step, x_ext, y_ext, h = 0.2, 2.0, 1.0, 0.05
+    xs, ys = np.meshgrid(np.linspace(0, x_ext, 41), np.linspace(-y_ext, y_ext, 9))
+    x0, worst, steps = 0.0, 0.0, []
+    while x0 + x_ext < s[-1]:
+        d = narrow.bend_step(s, ang, x0, x_ext, y_ext, step, h)
+        a = narrow.along(axis, x0 + xs.ravel(), ys.ravel())
+        b = narrow.along(axis, x0 + d + xs.ravel(), ys.ravel())
+        worst = max(worst, float(np.hypot(*(b - a).T).max()))
+        steps.append(d)
+        x0 += d
+    assert worst <= narrow.BEND_STRETCH * step * 1.02
+    assert steps[0] == step and steps[-1] == step                     # straight: the slot's step
+    assert min(steps) < step or y_ext / radius * step <= (narrow.BEND_STRETCH - 1) * step
+
+
+def test_join_axis_rounds_the_mouth_corner():
+    """A leg joining a straight axis at 90 deg: the joined axis keeps its ends and turns on a bend of
+    radius at least ~JOIN_RADIUS_C c / 2 (the moving average spreads the turn over JOIN_RADIUS_C c a
+    mm; half of it measured as the curvature's peak of a triangular window, less 10 % for sampling)."""
+    ax = np.c_[np.linspace(0, 6, 61), np.zeros(61)]
+    reg = narrow.NarrowRegion(0, None, ax, np.full(61, 1.0), (False, True))
+    j = narrow.join_axis(reg, (0.0, -4.0))
+    assert np.allclose(j.axis[0], [0.0, -4.0]) and np.allclose(j.axis[-1], [6.0, 0.0])
+    s, T = narrow._frame(j.axis)
+    kappa = np.abs(np.gradient(np.unwrap(np.arctan2(T[:, 1], T[:, 0])), s))
+    assert 1.0 / kappa.max() >= 0.9 * narrow.JOIN_RADIUS_C * 1.0 / 2

@@ -97,8 +97,14 @@ MIN_STEP_FRAC = 0.1
 #: stays at the straight-slot step; never closer than this x that step (a kink of angle a then still
 #: spaces the outer side by c a more: the axis is smoothed, see :func:`join_axis`)
 MIN_BEND_STEP_FRAC = 0.1
-#: a mouth's free point is joined to the axis by a curve of radius at least this x the half-width c
-#: (:func:`join_axis`): on a tighter bend the pattern's inner side folds over the bend's centre
+#: ... and only as close as needed for the outer side's spacing to stay at most this x that step: a
+#: 15 % wider spacing on the outer side of a bend costs a few degrees (the 1.5 D spiral channel of the
+#: corpus, theta 60: max 64.4 deg at 1.15, 62.0 at 1.0, 65.4 without bend_step) where 1.0 costs 3-5 %
+#: program time on the corpus's curved and spiral channels (1.15: none)
+BEND_STRETCH = 1.15
+#: a mouth's free point is joined to the axis by a moving average over this x c a mm (c the
+#: half-width, a the corner's turn; :func:`join_axis`): a bend of tightest radius ~0.6 x this x c
+#: (0.89 mm at c = 1 mm, a 90 deg corner), so the pattern's inner side hardly folds over its centre
 JOIN_RADIUS_C = 1.5
 #: free cells tried (nearest first) for the start of a trochoid at a mouth onto cleared area
 MOUTH_CANDIDATES = 200
@@ -377,15 +383,15 @@ def bend_step(s, ang, x0, x_ext, y_ext, step, h):
     >>> s = np.linspace(0.0, 10.0, 101)
     >>> round(bend_step(s, np.zeros(101), 2.0, 2.0, 1.0, 0.2, 0.05), 9)     # straight: the step
     0.2
-    >>> round(bend_step(s, 0.5 * s, 2.0, 2.0, 1.0, 0.2, 0.05), 3)          # kappa 0.5, c 1: step / 1.5
-    0.133
+    >>> round(bend_step(s, 0.5 * s, 2.0, 2.0, 1.0, 0.2, 0.05), 3)          # kappa 0.5, c 1: 1.15 step / 1.5
+    0.153
     """
     u = np.arange(x0, x0 + x_ext + h, h)
     a0 = np.interp(u, s, ang)
     d = step
     for _ in range(8):
         spread = float(np.abs(np.interp(u + d, s, ang) - a0).max())
-        nd = max(step * d / (d + y_ext * spread), MIN_BEND_STEP_FRAC * step)
+        nd = max(min(BEND_STRETCH * step * d / (d + y_ext * spread), step), MIN_BEND_STEP_FRAC * step)
         if nd >= d - 1e-6:
             break
         d = nd
@@ -454,9 +460,9 @@ def join_axis(reg: NarrowRegion, p) -> NarrowRegion:
     """``reg`` with its axis starting at the point ``p`` (2,) mm (a mouth's free point the tool
     stands at): the straight leg from ``p`` to the axis start and the axis resampled at the axis's
     own spacing, the corner between them rounded by a moving average over ``JOIN_RADIUS_C c a`` mm
-    (a the corner's turn, c the half-width there: a bend of radius about ``JOIN_RADIUS_C`` c, so
-    that the pattern's inner side does not fold over the bend's centre and :func:`bend_step` has a
-    finite curvature to space the periods by); the ends are kept. The start is open (the tool
+    (a the corner's turn, c the half-width there: a bend of tightest radius about 0.6
+    ``JOIN_RADIUS_C`` c, so that the pattern's inner side hardly folds over the bend's centre and
+    :func:`bend_step` has a finite curvature to space the periods by); the ends are kept. The start is open (the tool
     reached it through cleared area).
 
     >>> reg = NarrowRegion(0, None, np.c_[np.linspace(0, 5, 26), np.zeros(26)], np.full(26, 1.0), (True, True))
