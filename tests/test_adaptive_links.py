@@ -75,3 +75,25 @@ def test_without_the_rescue_the_far_bulb_takes_a_second_entry():
     job = _job(_two_bulb_slot(), "two-bulb slot, no rescue")
     tp = planners.plan(job, "adaptive", H, params=AdaptiveParams(failed_start_ban_frac=1.0))
     assert tp.info["entries"] >= 2
+
+
+def test_a_band_too_narrow_for_a_pass_is_entered_by_one_ramp():
+    # a 14 mm square with a channel 40 mm long and 7 mm wide for a 6 mm tool: the channel's
+    # tool-centre band is 1 mm wide (half-width 0.17 r, below the 0.2 r where a pass could turn or the
+    # trochoid would not crawl). The square is entered by a helix, the channel by one ramp along it
+    # (entries.ramp_entry) instead of a helix every r or so (20 entries); the ramp's engagement is an
+    # entry's (reported apart, as a helix's); 0 plunges or rapids into material, no gouge beyond
+    # 1 um, the static check clean
+    job = _job(box(0.0, 0.0, 14.0, 14.0).union(box(13.0, 3.5, 54.0, 10.5)), "thin channel")
+    tp = planners.plan(job, "adaptive", H, allow_uncut=True)
+    ev = evaluate(tp, job, H)
+    assert tp.info["entries"] == 2 and tp.info["ramp_entries"] == 1
+    assert ev.entries_helix == 1 and ev.entries_ramp == 1
+    assert lifts(ev, job.top_z) == 2
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    assert ev.wall_gouge_max_mm <= 1e-3
+    assert ev.engagement_max_deg <= THETA + 10
+    assert check_program(write_program(tp, job), clearance_z=job.clearance_z, top_z=job.top_z).errors == []
+    # the helix chain it replaces
+    tp0 = planners.plan(job, "adaptive", H, allow_uncut=True, params=AdaptiveParams(ramp_half_width_frac=0.0))
+    assert tp0.info["entries"] >= 10

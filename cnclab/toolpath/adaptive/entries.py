@@ -10,11 +10,13 @@ import math
 
 import numpy as np
 import shapely
-from shapely.geometry import Point, Polygon
+from shapely.geometry import LineString, Point, Polygon
 
 from ..helix import helix_entry
+from ..path import resample_polyline
+from .stock import segment_inside
 
-__all__ = ["PlanningError", "enter"]
+__all__ = ["PlanningError", "enter", "ramp_segment", "ramp_entry"]
 
 
 class PlanningError(ValueError):
@@ -60,6 +62,12 @@ def enter(lv, banned=None):
         if fine is not None and fine.shape == banned.shape:
             fine[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
         return None
+    if lv.lev == 0 and banned is not None and lv.g.half_width[j, i] < lv.prm.ramp_half_width_frac * lv.r \
+            and not (lv.hole is not None and lv.stats["entries"] == 0):
+        seg = ramp_segment(lv, c, D)
+        if seg is not None:
+            ramp_entry(lv, *seg)
+            return True
     lv.retract()
     if lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0:
         c = np.array(lv.hole[:2])
@@ -87,3 +95,90 @@ def enter(lv, banned=None):
     lv.stats["entries"] += 1
     lv.cur = (c[0] + rho, c[1])
     return True
+
+
+def _extents(lv, c, u, D, reach):
+    """How far (mm) the band runs from ``c`` along +u and -u: inside the tool-centre mask with
+    material within reach (coarse distance ``D`` < r), at most ``reach`` each way; where the mask
+    ends, on to the exact tool-centre limit (1 um inside it, as the finishing laps), so that the end
+    face is cut, not left as a skin."""
+    g = lv.g
+    ext = []
+    for sgn in (1.0, -1.0):
+        t = 0.0
+        while t < reach:
+            p = c + sgn * (t + g.hc) * u
+            jj, ii = g.cell(*p)
+            if not (0 <= jj < D.shape[0] and 0 <= ii < D.shape[1]) or not D[jj, ii] < lv.r:
+                break
+            if not segment_inside(g.A, g.x0, g.y0, g.h, c[0], c[1], p[0], p[1], 0.0):
+                piece = _piece(lv, c, c + sgn * (t + 2.0 * g.hc) * u)
+                t = t if piece is None else max(t, piece.length)
+                break
+            t += g.hc
+        ext.append(t)
+    return ext
+
+
+def _piece(lv, a, b):
+    """The part of the segment a-b inside the tool-centre region (1 um in) that holds ``a``, or None."""
+    if getattr(lv, "wall_in", None) is None:
+        lv.wall_in = lv.allowed.buffer(-1e-3)
+    cut = LineString([a, b]).intersection(lv.wall_in)
+    return next((q for q in shapely.get_parts(cut) if q.distance(Point(*a)) < 1e-9), None)
+
+
+def ramp_segment(lv, c, D):
+    """The longest straight segment through ``c`` (mm) inside the tool-centre region whose points all
+    have material within reach (coarse distance ``D`` < r), among directions every
+    ``ramp_direction_step_deg``, each way at most ``ramp_max_frac`` x the 5 deg ramp length of the
+    level, moved across the band onto the middle of its chord through ``c`` (the skins either side
+    equal): (a, b) mm, or None when it is shorter than ``ramp_min_frac`` r."""
+    prm = lv.prm
+    dz = lv.z_prev - lv.z
+    reach = prm.ramp_max_frac * dz / math.tan(math.radians(lv.helix_angle_deg))
+    best, best_len = None, prm.ramp_min_frac * lv.r
+    for ang in np.radians(np.arange(0.0, 180.0, prm.ramp_direction_step_deg)):
+        u = np.array([math.cos(ang), math.sin(ang)])
+        ext = _extents(lv, c, u, D, reach)
+        if ext[0] + ext[1] > best_len:
+            best, best_len = u, ext[0] + ext[1]
+    if best is None:
+        return None
+    u, n = best, np.array([-best[1], best[0]])
+    w = prm.ramp_half_width_frac * lv.r + lv.g.hc
+    lo, hi = _piece(lv, c, c - 2 * w * n), _piece(lv, c, c + 2 * w * n)
+    if lo is not None and hi is not None:
+        c = c + 0.5 * (hi.length - lo.length) * n
+    ext = _extents(lv, c, u, D, reach)
+    if ext[0] + ext[1] < prm.ramp_min_frac * lv.r:
+        return None
+    return c - ext[1] * u, c + ext[0] * u
+
+
+def ramp_entry(lv, a, b):
+    """A ramp entry along the segment a-b (mm) of a band too narrow for a pass to turn (tool-centre
+    half-width below ``ramp_half_width_frac`` r, where helix after helix was entered a few r apart):
+    down from the level's top to its floor back and forth along a-b (the package's one ramp,
+    :meth:`ToolPathBuilder.ramp`) at the helix angle, or in one leg at a shallower angle where a-b is
+    longer than the 5 deg ramp, then back to ``a`` at depth (``ramp-return``). The tool disc swept
+    along a-b is cut from the stock; the tool stays down at ``a``. Its moves are ``ramp`` (the job's
+    entry feed; the evaluator reports their engagement apart, as a helix's)."""
+    L = float(math.hypot(b[0] - a[0], b[1] - a[1]))
+    dz = lv.z_prev - lv.z
+    deg = min(lv.helix_angle_deg, math.degrees(math.atan2(dz, L)))
+    lv.retract()
+    lv.b.rapid([a], z=lv.clearance_z)
+    lv.b.rapid([a], z=lv.z_prev + lv.prm.approach_above_mm, tag="cleared: above the level", cleared=True)
+    lv.b.ramp(np.array([a, b]), lv.z_prev, lv.z, lv.feed_mm_min, ramp_deg=deg, max_mm=L)
+    Q = np.ascontiguousarray(resample_polyline(np.array([a, b]), lv.ds, uniform=True))
+    lv.g.cut_path(Q)
+    lv.cur = (float(a[0]), float(a[1]))
+    # the band along it counts as entered (its wall skins are the finishing laps', not new entries)
+    w = lv.prm.ramp_half_width_frac * lv.r + 2.0 * lv.g.hc
+    for q in Q[::max(1, int(lv.g.hc / lv.ds))]:
+        j0, i0 = lv.g.cell(q[0] - w, q[1] - w)
+        j1, i1 = lv.g.cell(q[0] + w, q[1] + w)
+        lv.entered.update((jj, ii) for jj in range(j0, j1 + 1) for ii in range(i0, i1 + 1))
+    lv.stats["entries"] += 1
+    lv.stats["ramp_entries"] = lv.stats.get("ramp_entries", 0) + 1

@@ -152,3 +152,16 @@ class AdaptiveParams:
     #: narrower, no pass can turn: the crawl limit of the narrow regions' trochoid,
     #: narrow.NARROW_MIN_HALF_WIDTH_FRAC; a channel that narrow is left to the entries)
     rescue_min_half_width_frac: float = 0.2
+    #: fraction of r: an entry place in a band of tool-centre half-width below this (no pass can turn
+    #: there, and the narrow regions' trochoid would crawl: narrow.NARROW_MIN_HALF_WIDTH_FRAC) is entered
+    #: by a ramp along the band (entries.ramp_entry: one entry for the band where helix after helix was
+    #: entered about 2 r apart); level 0 only (a deeper level's ramp start would need the level above's
+    #: proof)
+    ramp_half_width_frac: float = 0.2
+    #: fraction of r: ... when the straight segment through the place inside the band, with material
+    #: within reach all along, is at least this long (else the helix)
+    ramp_min_frac: float = 2.0
+    #: ... each way at most this x the 5 deg ramp length of the level (a longer band: one shallower leg)
+    ramp_max_frac: float = 4.0
+    #: deg: the directions tried for that segment
+    ramp_direction_step_deg: float = 5.0
