@@ -161,6 +161,53 @@ def test_bad_input_names_the_parameter():
         cc.default_seeds(pk, 1.5)
     with pytest.raises(ValueError, match="z_cut"):
         cc.ce_clearing(pk, R, THETA, top_z=0.0, clearance_z=-1.0)
+    with pytest.raises(TypeError, match="'wal'"):                  # a field of neither settings class
+        cc.ce_clearing(pk, R, THETA, wal="gate")
+    with pytest.raises(ValueError, match="resolution_mm"):          # the same check through the dataclass
+        cc.ce_clearing(pk, R, THETA, cc.ClearingSettings(resolution_mm=-1.0))
+
+
+def test_keyword_options_and_settings_objects_plan_the_same_path():
+    """The keyword options are the fields of ClearingSettings / CutSettings: both spellings give one path."""
+    pk = box(0, 0, 24, 18)
+    a = cc.ce_clearing(pk, 3.0, 60.0, resolution_mm=0.25, max_laps=3, a_p=2.0, top_z=1.0)
+    b = cc.ce_clearing(pk, 3.0, 60.0, cc.ClearingSettings(resolution_mm=0.25, max_laps=3),
+                       cc.CutSettings(a_p=2.0, top_z=1.0))
+    assert np.array_equal(a.xyz, b.xyz) and a.kinds().tolist() == b.kinds().tolist()
+    assert a.xyz[:, 2].min() == pytest.approx(-1.0)                 # top_z - a_p
+
+
+def _shares(path, job):
+    """Share (%) of the cutting length above theta + 5 deg, whole path and per part, at r / 20."""
+    ev = evaluate(path, job, job.tool_radius / 20)
+    t = ev.trace
+    e = np.nan_to_num(np.asarray(t["engagement_deg"], float), nan=-1.0)
+    cut, ds = np.asarray(t["cutting"], bool), np.asarray(t["ds_mm"], float)
+    tag = np.asarray(t["tag"], object)
+    over = cut & (e > job.theta_deg + 5)
+    part = {"cleanup": np.array(["cleanup" in g for g in tag]), "linkcut": np.array(["linkcut" in g for g in tag])}
+    L = ds[cut].sum()
+    return ev, {k: 100 * ds[over & m].sum() / L for k, m in part.items()}
+
+
+def test_link_limit_and_offset_rings_lower_the_engagement_above_theta():
+    """issue 28 (constant-engagement strategy): on a 28 x 18 mm rectangle (D6, theta 60 deg) the runs
+    resuming from the wall that no roll-in arc reaches were linked straight into the material, and the
+    one final contour pass cut the corners' wedges. With ``link_limit_deg`` (such runs start where a
+    link reaches them within theta + 10) and ``cleanup_step_mm`` (contour-parallel passes 0.375 mm
+    apart over what the laps leave) the cutting length above theta + 5 deg drops -- measured: links
+    2.15 -> 0.61 %, cleanup 1.06 -> 0.72 %, whole path 3.61 -> 1.44 % -- still with nothing plunged
+    or rapid into material and only the corner cusps uncut."""
+    job = Job(box(0, 0, 28, 18), Tool(6.0), 60.0, 1.0, v_c=100, f_z=0.05)
+    before = cc.clearing_path(job, resolution_mm=0.1, wall="roll-in")
+    after = cc.clearing_path(job, resolution_mm=0.1, wall="roll-in", link_limit_deg=10.0,
+                             cleanup_step_mm=0.25 * 3.0 * (1 - math.cos(math.radians(60.0))))
+    ev0, p0 = _shares(before, job)
+    ev1, p1 = _shares(after, job)
+    assert ev1.share_above_5_pct < 0.6 * ev0.share_above_5_pct
+    assert p1["linkcut"] < 0.5 * p0["linkcut"] and p1["cleanup"] < p0["cleanup"]
+    assert ev1.plunges_into_material == 0 and ev1.rapids_into_material == 0
+    assert ev1.uncut_beyond_unreachable_mm2 < 1.0
 
 
 @pytest.mark.parametrize("name", ["plain", "island"])

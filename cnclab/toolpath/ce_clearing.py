@@ -26,13 +26,13 @@ Algorithm (:func:`ce_clearing`):
    the previous lap and the wall (that wedge is cut by later laps or the final pass). Links are cut
    through the planning stock too: a link step that removes material is labelled ``"linkcut"``.
    With ``wall="roll-in"`` a run that resumes from the final contour (the wall) is entered by a
-   **roll-in arc** (Jacsó §4; :func:`_roll_in`): an arc of radius >= r tangent to the run, from a
+   **roll-in arc** (Jacsó §4; :func:`roll_in`): an arc of radius >= r tangent to the run, from a
    point where the tool misses the material, found by trial cuts so that the engagement ramps up
    from 0 (at most ``theta_deg + gate_margin_deg``, else the lowest found up to ``theta_deg +
    2 gate_margin_deg``) instead of the tool being linked head-on into the lap (up to 2 theta).
    The lap is cut into the stock; stretches that remove nothing become links:
    straight when the tool swept along the chord misses the material, else the shortest grid route
-   through the cleared region (:func:`_geodesic`, scipy Dijkstra), else the lap's own air stretch.
+   through the cleared region (:func:`geodesic`, scipy Dijkstra), else the lap's own air stretch.
    A seed's laps stop when a lap removes less than ``min_removed_mm2``; a seed whose entry hole is
    already cleared is skipped.
 3. **cleanup** — leftovers the laps do not reach (material enclosed between the cleared region and
@@ -70,8 +70,6 @@ import math
 
 import numpy as np
 import shapely
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 from shapely.ops import nearest_points
@@ -80,6 +78,7 @@ from ..simulation import dixel
 from ..simulation.common import simulate
 from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
                                   resample_path, thesis3_path)
+from .ce_routes import chord_clear, geodesic, geodesic_cells, roll_in, split_runs
 from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
 from .path import ToolPath, helix_ring, resample_polyline
 
@@ -236,202 +235,6 @@ def _gate(stock, Q, moved, r, limit_deg, a_p, feed_mm_min):
     return runs
 
 
-def _chord_clear(a, b, material, guard, r, margin_mm):
-    """Is the straight move a -> b inside ``guard`` and its swept disk (radius r - margin) free of
-    ``material`` (shapely geometry)?"""
-    line = LineString([a, b])
-    if line.length < 1e-9:
-        return True
-    if not guard.contains(line):
-        return False
-    return material.is_empty or not line.buffer(r - margin_mm, quad_segs=16).intersects(material)
-
-
-def _grid_graph(free, grid_mm):
-    """8-connected grid graph of the points of ``free`` (spacing ``grid_mm``): (csr, points (n, 2))."""
-    x0, y0, x1, y1 = free.bounds
-    X, Y = np.meshgrid(np.arange(x0, x1 + grid_mm, grid_mm), np.arange(y0, y1 + grid_mm, grid_mm))
-    ok = shapely.contains_xy(free, X, Y)
-    idx = np.full((ok.shape[0] + 2, ok.shape[1] + 2), -1)
-    idx[1:-1, 1:-1][ok] = np.arange(ok.sum())
-    A = idx[1:-1, 1:-1]
-    rows, cols, w = [], [], []
-    for dj, di in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        B = idx[1 + dj:idx.shape[0] - 1 + dj, 1 + di:idx.shape[1] - 1 + di]
-        m = (A >= 0) & (B >= 0)
-        rows.append(A[m])
-        cols.append(B[m])
-        w.append(np.full(int(m.sum()), grid_mm * math.hypot(di, dj)))
-    n = int(ok.sum())
-    G = coo_matrix((np.concatenate(w), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
-    return G, np.c_[X[ok], Y[ok]]
-
-
-def _geodesic(a, b, free, grid_mm, guard, material=None, r=0.0, margin_mm=0.0):
-    """Shortest 8-connected grid path (spacing ``grid_mm``) from a to b inside the polygon ``free``
-    (scipy Dijkstra), simplified; (n, 2) points a ... b inside ``guard`` (and, when ``material`` is
-    given, whose swept disk of radius ``r - margin_mm`` misses it), or None."""
-    free = free() if callable(free) else free
-    if free.is_empty:
-        return None
-    G, pts = _grid_graph(free, grid_mm)
-    if len(pts) == 0:
-        return None
-    ia = int(np.argmin(np.hypot(*(pts - a).T)))
-    ib = int(np.argmin(np.hypot(*(pts - b).T)))
-    dist, pred = dijkstra(G, directed=False, indices=ia, return_predecessors=True)
-    if not np.isfinite(dist[ib]):
-        return None
-    chain = [ib]
-    while chain[-1] != ia:
-        chain.append(pred[chain[-1]])
-    route = np.vstack([a, pts[chain[::-1]], b])
-    simp = LineString(route).simplify(0.5 * grid_mm, preserve_topology=False)
-
-    def ok(line):
-        if not guard.contains(line):
-            return False
-        return material is None or material.is_empty or not line.buffer(r - margin_mm, quad_segs=8).intersects(material)
-
-    if free.buffer(0.5 * grid_mm).contains(simp) and ok(simp):
-        return np.asarray(simp.coords)
-    return route if ok(LineString(route)) else None
-
-
-def geodesic_cells(allowed, seeds, grid_mm: float = 1.0):
-    """Split ``allowed`` (mm) into one cell per seed: the points geodesically nearest (inside
-    ``allowed``, 8-connected grid of ``grid_mm``) to that seed; the cells tile ``allowed`` (their
-    interfaces are straightened to within ``grid_mm``). Returns a list of polygons."""
-    G, pts = _grid_graph(allowed, grid_mm)
-    src = [int(np.argmin(np.hypot(*(pts - np.asarray(s)).T))) for s in seeds]
-    D = np.atleast_2d(dijkstra(G, directed=False, indices=src))
-    lab = np.argmin(D, axis=0)
-    if len(seeds) == 1:
-        return [allowed]
-    cells, taken = [], Polygon()
-    for k in range(len(seeds)):
-        q = pts[lab == k]
-        sq = shapely.union_all(shapely.box(q[:, 0] - grid_mm / 2, q[:, 1] - grid_mm / 2,
-                                           q[:, 0] + grid_mm / 2, q[:, 1] + grid_mm / 2))
-        # grow by one grid step to cover the boundary strip, simplify the staircase, no overlaps
-        cell = sq.buffer(2 * grid_mm).simplify(0.5 * grid_mm).intersection(allowed).difference(taken)
-        if k == len(seeds) - 1:
-            cell = allowed.difference(taken)
-        cells.append(cell)
-        taken = taken.union(cell)
-    return cells
-
-
-def _split_runs(P, removed, material, guard, r, air_tol_mm2, kind, min_run, margin_mm, free=None,
-                grid_mm=1.0):
-    """Label the points of a simulated stretch ``P`` (``removed[i]``: area cut at point i, mm²).
-    Cutting points keep ``kind``; an air run between cutting points becomes one straight link when
-    the tool swept along the chord stays in ``guard`` and misses the material left at that time
-    (``material`` before the stretch minus the stretch swept so far), otherwise it stays as an air
-    link along ``P``. Trailing air is dropped. Returns ``(points, kinds)`` or None."""
-    cutting = removed > air_tol_mm2
-    if not cutting.any():
-        return None
-    last = int(np.flatnonzero(cutting)[-1])
-    out_p, out_k = [P[0]], [kind if cutting[0] else "link"]
-    i = 1
-    while i <= last:
-        if cutting[i]:
-            out_p.append(P[i])
-            out_k.append(kind)
-            i += 1
-            continue
-        j = i
-        while not cutting[j]:
-            j += 1                                        # P[i:j] air, P[j] cuts (j <= last)
-        ok = False
-        if j - i >= min_run and np.hypot(*(P[j - 1] - out_p[-1])) < 0.9 * np.sum(np.hypot(*np.diff(P[i - 1:j], axis=0).T)):
-            swept = LineString(P[:i]).buffer(r, quad_segs=16) if i > 1 else Point(P[0]).buffer(r, quad_segs=16)
-            ok = _chord_clear(out_p[-1], P[j - 1], material.difference(swept), guard, r, margin_mm)
-        route = None
-        if not ok and free is not None and j - i >= min_run:
-            swept = LineString(P[:j]).buffer(r, quad_segs=16)
-            route = _geodesic(out_p[-1], P[j - 1], free, grid_mm, guard, material.difference(swept), r, margin_mm)
-            if route is not None and LineString(route).length >= 0.9 * LineString(P[i - 1:j]).length:
-                route = None
-        if ok:
-            out_p.append(P[j - 1])                        # straight link to the last air point
-            out_k.append("link")
-        elif route is not None:                           # shortest link through the cleared region
-            out_p.extend(route[1:])
-            out_k.extend(["link"] * (len(route) - 1))
-        else:
-            out_p.extend(P[i:j])
-            out_k.extend(["link"] * (j - i))
-        i = j
-    return np.asarray(out_p), np.asarray(out_k, dtype=object)
-
-
-#: roll-in candidates (:func:`_roll_in`): where along the run (x r), arc radii (x r), swept angles (deg)
-ROLL_IN_OFFSETS, ROLL_IN_RADII, ROLL_IN_SWEEPS_DEG = (0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0), (1.0, 2.0, 3.0, 4.0), \
-    (90.0, 45.0, 30.0)
-
-
-def _roll_in(stock, P, r, limits_deg, guard, free, a_p, feed_mm_min, step, at, allowed):
-    """A roll-in arc (Jacsó §4) onto the run ``P`` (mm): a circular arc of radius rho >= r
-    (:data:`ROLL_IN_RADII` x r) tangent to ``P`` at ``P[j]``, :data:`ROLL_IN_OFFSETS` x r along the run
-    (a run resuming from the wall leaves it at an angle, and no tangent arc inside the final contour
-    reaches its first point), swept back :data:`ROLL_IN_SWEEPS_DEG`, whose start lies in ``free`` (the
-    tool there misses the material), inside ``guard`` (the allowed region). Each candidate is cut, with
-    the first tool radius of ``P[j:]``, through a copy of ``stock`` (``a_p``, ``feed_mm_min``); the first
-    offset with a candidate at or below ``limits_deg[0]`` (deg) gives the arc of lowest maximum
-    engagement, else the lowest over all offsets if at or below ``limits_deg[1]``:
-    the engagement ramps up from air instead of the tool entering the run head-on (what ``P[:j]``
-    leaves is cut by later laps or the final pass). Only a run resuming from the final contour (``P[0]``
-    within ``step`` of the boundary of ``allowed``, away from the tool position ``at``) is entered so.
-    Returns ``(arc (n, 2) from its start to P[j], j)``, or ``(None, 0)``.
-
-    Measured at r/20 (strategy constant-engagement, which uses it): share of the cutting length above
-    theta + 5 on Jacsó's rectangle 4.81 -> 2.76 %, two_regions 2.37 -> 1.56 %, L 6.48 -> 2.23 %, star
-    6.83 -> 6.45 %, long_slot 36.2 % unchanged; the maximum is not lowered (127.7 deg on the rectangle:
-    a lap stretch and the runs no arc reaches). Not the default: on the island pocket of
-    tests/test_ce_clearing.py it leaves 13.4 mm² uncut (0.75 without) and reaches 180 deg."""
-    P = np.asarray(P, float)
-    if np.hypot(*(P[0] - np.asarray(at))) < 1e-9 or allowed.boundary.distance(Point(P[0])) > step:
-        return None, 0
-    s_run = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
-    fr, best = None, (math.inf, None, 0)
-    for off in ROLL_IN_OFFSETS:
-        j = int(np.searchsorted(s_run, off * r))
-        if j >= len(P) - 2:
-            break
-        jt = min(len(P) - 1, max(j + 1, int(np.searchsorted(s_run, s_run[j] + 0.5 * step))))
-        u = P[jt] - P[j]
-        if np.hypot(*u) < 1e-9:
-            continue
-        u = u / np.hypot(*u)
-        n = np.array([-u[1], u[0]])
-        head = P[j + 1:max(j + 2, int(np.searchsorted(s_run, s_run[j] + r)) + 1)]
-        for k_r in ROLL_IN_RADII:
-            rho = k_r * r
-            for sw in ROLL_IN_SWEEPS_DEG:
-                for side in (1.0, -1.0):
-                    C = P[j] + side * rho * n
-                    m = max(int(math.ceil(rho * math.radians(sw) / step)), 4)
-                    phi = -side * np.linspace(math.radians(sw), 0.0, m + 1)   # start -> P[j]
-                    v = P[j] - C
-                    A = C + np.c_[np.cos(phi) * v[0] - np.sin(phi) * v[1], np.sin(phi) * v[0] + np.cos(phi) * v[1]]
-                    if not guard.contains(LineString(A)):
-                        continue
-                    fr = free() if fr is None else fr
-                    if not fr.contains(Point(A[0])):
-                        continue
-                    eng = simulate(stock, np.vstack([A, head]), r, a_p, feed_mm_min, copy=True).engagement_deg.to_numpy()
-                    e = float(np.nanmax(np.r_[eng, 0.0]))
-                    if e < best[0]:
-                        best = (e, A, j)
-        if best[0] <= limits_deg[0]:
-            break
-    if best[0] <= limits_deg[1]:
-        return best[1], best[2]
-    return None, 0
-
-
 WALLS = ("gate", "trim", "clamp", "roll-in")
 
 
@@ -460,8 +263,20 @@ class ClearingSettings:
         ``"trim"`` — every outside stretch is left out (the lap never follows the wall);
         ``"clamp"`` — centres pushed onto the boundary, all kept (earlier behaviour: the tool is
         dragged along the wall and cuts full-width wedges, up to 180 deg); ``"roll-in"`` — ``"gate"``
-        with the runs resuming from the wall entered by roll-in arcs (:func:`_roll_in`).
+        with the runs resuming from the wall entered by roll-in arcs (:func:`roll_in`).
     gate_margin_deg : engagement margin (deg) above ``theta_deg`` tolerated on a wall stretch.
+    link_limit_deg : None (default), or an engagement (deg above ``theta_deg``) above which a link
+        that cuts material (tried on a copy of the planning stock) is replaced by the jump to the
+        cleared point nearest to its end when that jump's final link cuts less.
+    cleanup_step_mm : None (default), or the radial step (mm) of contour-parallel passes outwards from
+        the cleared region over what the laps left, before the final contour pass
+        (``_Clearing.offset_rings``).
+    clip_deg : None (default), or an engagement (deg above ``theta_deg``): a lap run is cut only up to
+        its first step above it in a trial cut, and resumes after that stretch (``_Clearing.clip``),
+        the material skipped left to later laps and the cleanup.
+    wall_margin_mm : the tool centres at depth (not the jumps, not the entries) are kept this far (mm)
+        inside the allowed region, projected onto it when outside (data/pockets/spline_pocket.json:
+        the tool 0.006 mm past the wall with 0 mm, 0.002 mm with 0.005 mm).
 
     >>> ClearingSettings(wall="roll-in").sample_step_mm()
     0.2
@@ -478,6 +293,10 @@ class ClearingSettings:
     link_grid_mm: float = 1.0
     wall: str = "gate"
     gate_margin_deg: float = 5.0
+    link_limit_deg: float | None = None
+    cleanup_step_mm: float | None = None
+    clip_deg: float | None = None
+    wall_margin_mm: float = 0.0
 
     def sample_step_mm(self) -> float:
         """Check the steps and wall options (ValueError naming the parameter); the sample step (mm)."""
@@ -558,6 +377,16 @@ def ce_clearing(pocket, tool_radius: float, theta_deg: float, settings: Clearing
     return _Clearing(pocket, tool_radius, theta_deg, settings, cut).run()
 
 
+def _rings(region) -> list:
+    """The rings ((n, 2) mm, closed) of the polygons of ``region``: outer rings counter-clockwise,
+    holes clockwise (climb milling with an M3 spindle: the material on the right)."""
+    rings = []
+    for p in _polys(region):
+        p = orient(p, 1.0)
+        rings += [np.asarray(p.exterior.coords)] + [np.asarray(i.coords) for i in p.interiors]
+    return rings
+
+
 class _Clearing:
     """The state of one :func:`ce_clearing` run: the planning stock, the emitted segments
     ``(points, labels, seed)``, and the steps (entries, laps, links, cleanup) that extend them."""
@@ -583,13 +412,20 @@ class _Clearing:
                 raise ValueError(f"seeds: {s!r} is not inside the allowed region (pocket shrunk by tool_radius)")
         self.seeds = seeds
         self.guard = self.allowed.buffer(1e-6)
+        m = settings.wall_margin_mm
+        self.inner = self.allowed.buffer(-m, quad_segs=64) if m > 0 else None
         self.stock = dixel.Stock.from_polygon(pocket, res)
         self.domain = pocket.buffer(-2 * res)              # wall slivers must not join the cleared region
         self.segs: list = []
         self.cells = geodesic_cells(self.allowed, seeds, settings.link_grid_mm)
 
     def emit(self, P, K, reg):
-        self.segs.append((np.asarray(P, float), np.asarray(K, dtype=object), reg))
+        """Append a planning segment; with ``wall_margin_mm`` its points at depth (not the jumps, not the
+        entries) are kept that far inside the allowed region (projected onto it when outside)."""
+        P, K = np.asarray(P, float), np.asarray(K, dtype=object)
+        if self.inner is not None and not np.isin(K, ("rapid", CLEARED_LANDING, "entry")).any():
+            P = clamp_to_region(P, self.inner)
+        self.segs.append((P, K, reg))
 
     def sim(self, P, copy=False):
         """Cut the tool centres ``P`` (mm) through the planning stock (a copy with ``copy``): the table."""
@@ -607,22 +443,25 @@ class _Clearing:
         rem = self.sim(R).removed_mm2.to_numpy()
         self.emit(R, np.where(rem > self.air_tol, "linkcut", kind), k)
 
-    def go_to(self, Q0, k, material, free):
-        """Link from the current tool position to Q0: straight, shortest through the cleared region, or rapid."""
+    def route(self, Q0, material, free) -> list:
+        """How to get from the current tool position to Q0 (mm): ``[("link", points)]`` straight or along
+        the shortest route through the cleared region, else :meth:`jump_route`; [] when already there."""
         a, r, res = self.segs[-1][0][-1], self.r, self.s.resolution_mm
         if np.hypot(*(Q0 - a)) < 1e-9:
-            return
+            return []
         # material the tool already touches at either end (it cuts there anyway) is not an obstacle
         material = material.difference(Point(a).buffer(r, quad_segs=16))
-        if _chord_clear(a, Q0, material, self.guard, r, res):
-            self.link(np.vstack([a, Q0]), k)
-            return
-        route = _geodesic(a, Q0, free, self.s.link_grid_mm, self.guard, material, r, res)
+        if chord_clear(a, Q0, material, self.guard, r, res):
+            return [("link", np.vstack([a, Q0]))]
+        route = geodesic(a, Q0, free, self.s.link_grid_mm, self.guard, material, r, res)
         if route is not None:
-            self.link(route, k)
-            return
-        # no route at depth: jump (retract, rapid) to the cleared point nearest to Q0, plunge there
-        # (into air) and link at depth to Q0 (its steps that touch material become linkcut)
+            return [("link", route)]
+        return self.jump_route(Q0, free)
+
+    def jump_route(self, Q0, free) -> list:
+        """Jump (retract, rapid) to the cleared point nearest to Q0, plunge there (into air) and link at
+        depth to Q0 (its steps that touch material become linkcut): ``[("jump", [a, F], landing), ("link", [F, Q0])]``."""
+        a, res = self.segs[-1][0][-1], self.s.resolution_mm
         fr = free()
         safe = fr.buffer(-2.0 * res)
         F, landing = Q0, "rapid"
@@ -631,13 +470,48 @@ class _Clearing:
                 F = np.asarray(shapely.get_coordinates(nearest_points(g, Point(Q0))[0])[0])
                 landing = CLEARED_LANDING           # F is in the cleared region: the plunge meets air
                 break
-        self.emit(np.vstack([a, F]), ["rapid", landing], k)
+        out = [("jump", np.vstack([a, F]), landing)]
         if np.hypot(*(F - Q0)) > 1e-9:
-            self.link(np.vstack([F, Q0]), k)
+            L = _resample(np.vstack([F, Q0]), self.step)
+            if not self.guard.contains(LineString(L)):        # across a bulge of the wall: kept 0.01 mm inside
+                L = np.vstack([F, clamp_to_region(L[1:-1], self.allowed.buffer(-0.01)), Q0])
+            out.append(("link", L))
+        return out
+
+    def emit_route(self, route, k):
+        """Emit the moves of a :meth:`route` (links cut through the stock, :meth:`link`)."""
+        for m in route:
+            if m[0] == "jump":
+                self.emit(m[1], ["rapid", m[2]], k)
+            else:
+                self.link(m[1], k)
+
+    def go_to(self, Q0, k, material, free):
+        """Link from the current tool position to Q0: straight, shortest through the cleared region, or rapid.
+        With ``link_limit_deg``: the link is cut on a copy of the stock first, and when it exceeds
+        ``theta + link_limit_deg`` the jump to the cleared point nearest to Q0 replaces it if that cuts less."""
+        route = self.route(Q0, material, free)
+        if self.s.link_limit_deg is not None and route and route[0][0] != "jump":
+            e = self.trial_max(route)
+            if e > self.theta + self.s.link_limit_deg:
+                jump = self.jump_route(Q0, free)
+                if self.trial_max(jump) < e:
+                    route = jump
+        self.emit_route(route, k)
+
+    def trial_max(self, route) -> float:
+        """Max engagement (deg) of cutting the links of ``route`` through a copy of the planning stock."""
+        st, e_max = self.stock.copy(), 0.0
+        for m in route:
+            if m[0] == "link":
+                e = simulate(st, _resample(np.asarray(m[1], float), self.step), self.r, self.cut.a_p,
+                             self.cut.feed_mm_min).engagement_deg.to_numpy()
+                e_max = max(e_max, float(np.nanmax(np.r_[e, 0.0])))
+        return e_max
 
     def split(self, P, removed, material, free, kind):
-        """:func:`_split_runs` of a simulated stretch with this run's settings, emitted when not empty."""
-        return _split_runs(P, removed, material, self.guard, self.r, self.air_tol, kind, 3, self.s.resolution_mm,
+        """:func:`split_runs` of a simulated stretch with this run's settings, emitted when not empty."""
+        return split_runs(P, removed, material, self.guard, self.r, self.air_tol, kind, 3, self.s.resolution_mm,
                            free, self.s.link_grid_mm)
 
     def entry(self, k, s):
@@ -659,25 +533,75 @@ class _Clearing:
         return er, H[0]
 
     def cut_runs(self, runs, k) -> float:
-        """Link to each run of a lap (rolling in where :func:`_roll_in` finds an arc), cut and emit it;
+        """Link to each run of a lap (rolling in where :func:`roll_in` finds an arc), cut and emit it;
         returns the area removed (mm²)."""
         removed, lim = 0.0, (self.theta + self.s.gate_margin_deg, self.theta + 2 * self.s.gate_margin_deg)
-        for P in runs:
+        queue = list(runs)
+        while queue:
+            P = queue.pop(0)
             material, free = self.free_region()
-            A, j = _roll_in(self.stock, P, self.r, lim, self.guard, free, self.cut.a_p, self.cut.feed_mm_min,
+            A, j = roll_in(self.stock, P, self.r, lim, self.guard, free, self.cut.a_p, self.cut.feed_mm_min,
                             self.step, self.segs[-1][0][-1], self.allowed) if self.roll_in else (None, 0)
             if A is not None:                        # link to the arc's start (in air), roll in
                 self.go_to(A[0], k, material, free)
                 removed += float(self.sim(A).removed_mm2.sum())
                 self.emit(A, ["cut"] * len(A), k)
                 P, (material, free) = P[j:], self.free_region()
+            elif self.s.link_limit_deg is not None:
+                P = self.reachable_tail(P, material, free)
+                if P is None:
+                    continue
             self.go_to(P[0], k, material, free)
+            if self.s.clip_deg is not None:
+                P, rest = self.clip(P)
+                if rest is not None:
+                    queue.insert(0, rest)
+                if len(P) < 2:
+                    continue
             rem = self.sim(P).removed_mm2.to_numpy()
             removed += float(rem.sum())
             run = self.split(P, rem, material, free, "cut")
             if run is not None:
                 self.emit(*run, k)
         return removed
+
+    def clip(self, P):
+        """``(head, rest)``: the run ``P`` up to its first step above ``theta + clip_deg`` in a trial cut
+        on a copy of the stock (its first two samples, the approach, excepted), and what follows the
+        stretch above ``theta + gate_margin_deg`` there (None if nothing; P and None if no step is above)."""
+        e = np.nan_to_num(self.sim(P, copy=True).engagement_deg.to_numpy(), nan=0.0)
+        over = np.flatnonzero(e[2:] > self.theta + self.s.clip_deg)
+        if not len(over):
+            return P, None
+        i0 = int(over[0]) + 2
+        back = np.flatnonzero(e[i0:] <= self.theta + self.s.gate_margin_deg)
+        rest = P[i0 + int(back[0]):] if len(back) else None
+        return P[:i0], (rest if rest is not None and len(rest) >= 3 else None)
+
+    def reachable_tail(self, P, material, free):
+        """``P`` from its first sample (every 0.5 mm over its first 3 r) that the :meth:`route` or the
+        jump reaches with the link and the run's first tool radius within ``theta + link_limit_deg``
+        (a trial cut on a copy of the stock); the stretch before it is left to later laps or the
+        cleanup (or the offset rings, ``cleanup_step_mm``). None when the run is shorter than that
+        and none does (the run is left out); ``P`` itself when a longer run has none (linked head-on)."""
+        lim = self.theta + self.s.link_limit_deg
+        s_run = np.r_[0.0, np.cumsum(np.hypot(*np.diff(P, axis=0).T))]
+        for d in np.arange(0.0, 3 * self.r + 1e-9, 0.5):
+            j = int(np.searchsorted(s_run, d))
+            if j >= len(P) - 2:
+                return None if j > 0 else P
+            head = P[j:max(j + 2, int(np.searchsorted(s_run, s_run[j] + self.r)))]
+            route = self.route(P[j], material, free)
+            for moves in ([route] if route and route[0][0] == "jump" else [route, self.jump_route(P[j], free)]):
+                st, e_max = self.stock.copy(), 0.0
+                for m in moves + [("link", head)]:
+                    if m[0] == "link":
+                        e = simulate(st, _resample(np.asarray(m[1], float), self.step), self.r, self.cut.a_p,
+                                     self.cut.feed_mm_min).engagement_deg.to_numpy()
+                        e_max = max(e_max, float(np.nanmax(np.r_[e, 0.0])))
+                if e_max <= lim:
+                    return P[j:]
+        return P
 
     def laps(self, k, s, E, n_laps) -> tuple[int, int]:
         """Constant-engagement laps about seed ``s`` from ``E``, limited by its cell; (laps cut, total)."""
@@ -705,23 +629,51 @@ class _Clearing:
 
     def cleanup(self):
         """The final contour pass on every ring of the allowed region (outer ring counter-clockwise,
-        islands clockwise), its air stretches linked; rings it would not cut are left out."""
-        rings = []
-        for p in _polys(orient(self.allowed, 1.0) if isinstance(self.allowed, Polygon) else self.allowed):
-            p = orient(p, 1.0)
-            rings += [np.asarray(p.exterior.coords)] + [np.asarray(i.coords) for i in p.interiors]
-        for ring in rings:
-            cur = self.segs[-1][0][-1]
-            i0 = int(np.argmin(np.hypot(*(ring[:-1] - cur).T)))
-            R = np.vstack([np.roll(ring[:-1], -i0, axis=0), ring[:-1][i0:i0 + 1]])
-            R = _resample(R, self.step)
-            if not (self.sim(R, copy=True).removed_mm2.to_numpy() > self.air_tol).any():
-                continue
+        islands clockwise), its air stretches linked; rings it would not cut are left out. With
+        ``cleanup_step_mm``, :meth:`offset_rings` first."""
+        if self.s.cleanup_step_mm is not None:
+            self.offset_rings(self.s.cleanup_step_mm)
+        for ring in _rings(self.allowed):
+            self.ring_pass(ring)
+
+    def offset_rings(self, step_mm):
+        """Contour-parallel passes outwards from the cleared region over what the laps left: the
+        boundary of the region where the tool misses the material grown by ``step_mm`` (mm, round
+        joins) within the allowed region, recomputed after each round, until a round removes nothing
+        (each pass cuts a layer about ``step_mm`` thick, the corners included)."""
+        for _ in range(int(math.ceil(2 * self.r / step_mm)) + 2):
             material, free = self.free_region()
-            self.go_to(R[0], -1, material, free)
-            run = self.split(R, self.sim(R).removed_mm2.to_numpy(), material, free, "cleanup")
-            if run is not None:
-                self.emit(*run, -1)
+            if material.is_empty:
+                return
+            region = free().buffer(step_mm, quad_segs=16).intersection(self.allowed)
+            removed = sum(self.ring_pass(ring) for ring in _rings(region))
+            if removed <= self.air_tol:
+                return
+
+    def ring_pass(self, ring) -> float:
+        """Cut the closed ring (mm) from its point nearest to the tool where the tool misses the
+        material (else its nearest point), linked to and split into cutting runs (kind cleanup); a
+        ring that would cut nothing is left out. Returns the area removed (mm²)."""
+        R0 = np.asarray(ring, float)[:-1]
+        if len(R0) < 3:
+            return 0.0
+        cur = self.segs[-1][0][-1]
+        d = np.hypot(*(R0 - cur).T)
+        material, free = self.free_region()
+        if self.s.cleanup_step_mm is not None:
+            in_air = shapely.contains_xy(free(), R0[:, 0], R0[:, 1])
+            if in_air.any():
+                d = np.where(in_air, d, np.inf)
+        i0 = int(np.argmin(d))
+        R = _resample(np.vstack([np.roll(R0, -i0, axis=0), R0[i0:i0 + 1]]), self.step)
+        if not (self.sim(R, copy=True).removed_mm2.to_numpy() > self.air_tol).any():
+            return 0.0
+        self.go_to(R[0], -1, material, free)
+        rem = self.sim(R).removed_mm2.to_numpy()
+        run = self.split(R, rem, material, free, "cleanup")
+        if run is not None:
+            self.emit(*run, -1)
+        return float(rem.sum())
 
     def run(self) -> ToolPath:
         """Entries and laps seed after seed, the cleanup, and the ToolPath of it all."""

@@ -109,27 +109,39 @@ def register(name: str, description: str):
 #: :data:`CE_CHECK_TOOL_FRACTION` x r): the engagement never above theta + CE_PROMISE_DEG, and at most
 #: CE_SHARE_ABOVE_5_PCT % of the cutting length above theta + 5 deg; a path that breaks it is refused
 #: (message: the measured values, where, and in which part: laps, links cutting material, cleanup).
-#: Measured (issue 28): discs hold it (D 6 in a 40 mm disc: max theta + 6, 0.08 % above theta + 5);
-#: Jacso's rectangle does not (4.65 % above theta + 5, max theta + 68: links that cut into material
-#: 3.3 %, laps resuming from the wall 2.0 %, cleanup 0.35 %), nor do the bench pockets: they are refused.
-#: With roll-in arcs onto the runs resuming from the wall (ce_clearing ``wall="roll-in"``, on for this
-#: strategy; measured on main before them: 4.81 %, links cutting 2.93 %): rectangle 2.76 % (laps 1.50,
-#: links cutting 0.97, cleanup 0.29), max still theta + 68 (a lap stretch at (19.2, 5.0));
-#: two_regions 2.37 -> 1.56 %, L 6.48 -> 2.23 %, star 6.83 -> 6.45 % (max 121 -> 129 deg), long_slot 36.2 %
-#: unchanged: all still refused. The 60 x 40 mm deep pocket of issue 29 (D8, a_p 3, no start hole;
-#: tests/test_constant_engagement_deep.py) is refused on its first level: 1.24 % above theta + 5 (laps
-#: 0.40, links cutting 0.52, cleanup 0.32), max theta + 61.9 in a link at (6.29, 36.00).
-#: What breaks it (issue 28, measured on a 28 x 18 mm rectangle, D6, theta 60: 3.61 %, laps 0.40, links
-#: 2.15, cleanup 1.06): a lap run resuming from the wall, where no roll-in arc fits (tried up to 8 r,
-#: sweeps to 120 deg, theta + 15), is reached by a link straight into the material (99-122 deg);
-#: starting such runs where a link reaches them within theta + 10 leaves wedges that the cleanup then
-#: cuts in the corners at up to theta + 89 (5.47 %); clipping every lap stretch above theta + 12 leaves
-#: the short ends uncut (34-46 mm^2). Not yet solved: the strategy keeps refusing these pockets.
+#: Measured at r / 20 (issue 28), max - theta and share above theta + 5, before -> with the strategy's
+#: link limit, lap clip and offset-ring cleanup (:data:`CE_LINK_LIMIT_DEG`, :data:`CE_CLIP_DEG`,
+#: :data:`CE_CLEANUP_STEP_FRACTION`; the clip measured on the rectangle only):
+#: discs hold it (D 6 in a 40 mm disc: max theta + 6, 0.08 %);
+#: data/pockets/spline_pocket: 51.9 deg, 0.09 % (one link into material) -> 6.1 deg, 0.03 %: the promise
+#: kept, but plan() refuses it for its tool 0.002-0.006 mm past the wall (see CE_WALL_MARGIN_MM);
+#: Jacso's rectangle: 67.7, 2.76 % (laps 1.50, links 0.97, cleanup 0.29) -> 34.6, 0.90 % (laps 0.15,
+#: links 0.21, cleanup 0.53): refused for its maximum (a link and the cleanup in the corners);
+#: Jacso's L: 68.4, 2.15 % -> 68.2, 1.38 % (before the clip); star: 69.6, 6.13 % -> 46.8, 3.37 % (cleanup
+#: 2.39 % in the star's inner corners; before the clip); the 60 x 40 mm D8 deep pocket of issue 29
+#: (first level, tests/test_constant_engagement_deep.py): 61.9, 1.24 % -> 32.7, 0.62 % (before the clip);
+#: two_regions 102.3, 2.42 %; long_slot (a slot 1.2 D wide) 87.4, 36.2 %: refused. What remains above
+#: theta + 15 is in the pocket's corners: the last contour-parallel passes turning there (theta + 15-29)
+#: and links onto runs that start in a corner (theta + 30-35).
 CE_PROMISE_DEG = 15.0
 CE_SHARE_ABOVE_5_PCT = 1.0
 #: the evaluation dixel of that check, as a fraction of the tool radius (r / 20: 0.15 mm for D 6;
 #: the engagement it reports is within ~2 deg of the exact one away from the first contact)
 CE_CHECK_TOOL_FRACTION = 0.05
+#: the strategy's links: a run the link or jump reaches only above theta + this (deg) is started
+#: further on (ce_clearing ``link_limit_deg``: twice the roll-in's gate margin)
+CE_LINK_LIMIT_DEG = 10.0
+#: the radial step of its contour-parallel passes over what the laps leave, as a fraction of the radial
+#: depth of a straight cut at theta (ce_clearing ``cleanup_step_mm``; 28 x 18 mm rectangle, D6, theta 60:
+#: 0.75 -> 3.56 %, 0.4 -> 1.40 %, 0.25 -> 0.72 % of the cutting length above theta + 5 in the cleanup)
+CE_CLEANUP_STEP_FRACTION = 0.25
+#: a lap run is cut up to its first step above theta + this (deg) in a trial cut and resumes after
+#: that stretch (ce_clearing ``clip_deg``; Jacso's rectangle: a lap stretch at theta + 68 left out)
+CE_CLIP_DEG = 12.0
+#: its tool centres at depth stay this far (mm) inside the final contour (ce_clearing ``wall_margin_mm``):
+#: the wall check (GOUGE_TOL_MM) found the tool 0.006 mm past the wall near (29.8, 25.0) on
+#: data/pockets/spline_pocket with none, 0.002 mm with 0.005 mm (the cause not yet found)
+CE_WALL_MARGIN_MM = 0.02
 
 
 def _has_islands(job: Job) -> bool:
@@ -160,7 +172,8 @@ def _ce_breach(path: ToolPath, job: Job) -> str | None:
 
 @register("constant-engagement", "Jacsó Thesis III constant-engagement laps from helical entries (ce_clearing); "
           f"plans only jobs on which it keeps the engagement <= theta + {CE_PROMISE_DEG:g} deg and <= theta + 5 deg "
-          f"on all but {CE_SHARE_ABOVE_5_PCT:g} % of its cutting length (else refuses: e.g. discs yes, rectangles no)")
+          f"on all but {CE_SHARE_ABOVE_5_PCT:g} % of its cutting length (else refuses: e.g. discs yes; rectangles, "
+          "L, star no)")
 def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
     """The Thesis III laps (:func:`cnclab.toolpath.ce_clearing.clearing_path`), refused on a job with
     islands, or when the planned level breaks the promise (:data:`CE_PROMISE_DEG`,
@@ -172,8 +185,12 @@ def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
                          "engagement around islands (issue 28: 176-180 deg beside a hole near a wall); use the "
                          "adaptive strategy")
     # runs resuming from the wall entered by roll-in arcs (islands are refused above: with islands the
-    # arcs leave material, see ce_clearing._roll_in)
-    path = ce_clearing.clearing_path(job, resolution_mm=_res(resolution_mm), **{"wall": "roll-in", **options})
+    # arcs leave material, see ce_routes.roll_in)
+    a_e = job.tool_radius * (1.0 - math.cos(math.radians(job.theta_deg)))     # radial depth at theta, mm
+    path = ce_clearing.clearing_path(job, resolution_mm=_res(resolution_mm),
+                                     **{"wall": "roll-in", "link_limit_deg": CE_LINK_LIMIT_DEG,
+                                        "clip_deg": CE_CLIP_DEG, "cleanup_step_mm": CE_CLEANUP_STEP_FRACTION * a_e,
+                                        "wall_margin_mm": CE_WALL_MARGIN_MM, **options})
     breach = _ce_breach(path, job)
     if breach:
         raise ValueError(f"{job.source}: the constant-engagement strategy promises an engagement <= theta + "
