@@ -21,8 +21,10 @@ Steps (one role: the narrow regions, from detection to their moves):
 * **trochoid along the axis** (:func:`axis_trochoid`): the straight-slot period for the pocket
   width ``2 (c_min + r)`` (the narrowest place of the axis, less one planning pixel), repeated at
   its admissible step in arc length along the axis, each local point (x, y) mapped to
-  ``C(s0 + x) + y N(s0 + x)`` (C the axis, N its left normal: the pattern's climb side kept),
-  points that a bend or an end pushes outside the tool-centre region projected back on it;
+  ``C(s0 + x) + y N(s0 + x)`` (C the axis, N its left normal: the pattern's climb side kept), the
+  periods laid closer on bends (:func:`bend_step`: the outer side of a bend is spaced 1 + kappa c
+  wider than the axis; at most ``BEND_STRETCH`` x the slot's step), points that a bend or an end
+  pushes outside the tool-centre region projected back on it;
 * **order** (:class:`LevelRegions`, :func:`next_region`): at the start of a level every region
   leaves the level planner's view (its tool-centre pixels leave the grid's mask, the material only
   centres inside it can reach leaves the planning stock, the finish parts holding it wait), so the
@@ -30,7 +32,8 @@ Steps (one role: the narrow regions, from detection to their moves):
   reach through cleared area, a region whose open end (a mouth) the tool reaches through cleared
   area is put back and cut from there -- the tool linked to the free point nearest the mouth from
   which the first periods' returns, swinging c to either side across the axis, meet no material
-  (a free capsule) -- with no lift;
+  (a free capsule) and whose leg to the mouth holds the pattern's band inside the tool-centre
+  region, the leg joined to the axis by a rounded bend (:func:`join_axis`) -- with no lift;
   the wide part behind it is then reached through the cleared slot. Only when no place is left to
   enter is a region entered by a helix at its axis start (a closed end first), opened to the slot's
   width by a spiral out (radial pitch a_e / 2) and a circle;
@@ -70,7 +73,8 @@ from ...cutting.feed_control import controlled_feed
 from ..trochoidal import ce_trochoid, evaluate_pattern, pattern_kinds, period_index
 
 __all__ = ["NarrowRegion", "narrow_regions", "medial_graph", "medial_axis", "trochoid_period", "axis_trochoid",
-           "width_classes", "along", "bend_step", "join_axis", "spiral_out", "helix_entry", "emit_trochoid", "cut_region", "LevelRegions",
+           "width_classes", "along", "bend_step", "join_axis", "spiral_out", "helix_entry", "emit_trochoid",
+           "cut_region", "LevelRegions",
            "next_region", "close",
            "NARROW_HALF_WIDTH_FRAC", "NARROW_MIN_LENGTH_FRAC"]
 
@@ -94,7 +98,7 @@ AIR_MM2_PER_MM = 1e-3
 #: rest of the axis is left to the level planner
 MIN_STEP_FRAC = 0.1
 #: on a bend the periods are laid closer (:func:`bend_step`) so that their spacing on the outer side
-#: stays at the straight-slot step; never closer than this x that step (a kink of angle a then still
+#: stays near the straight-slot step; never closer than this x that step (a kink of angle a then still
 #: spaces the outer side by c a more: the axis is smoothed, see :func:`join_axis`)
 MIN_BEND_STEP_FRAC = 0.1
 #: ... and only as close as needed for the outer side's spacing to stay at most this x that step: a
@@ -402,7 +406,8 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
                   vmax_ratio=1.0):
     """The trochoid of ``region`` (module docstring): (points (m, 2) mm, kinds (m,) of cut / link
     (the pattern's return through the slot), feed factors (m,) x the nominal feed (NaN: link, see
-    :func:`trochoid_period`), the steps used (mm), number of points projected back into ``allowed``). Periods start at arc length ``s_start`` (mm) and follow each other while the
+    :func:`trochoid_period`), the steps used (mm), number of points projected back into ``allowed``).
+    Periods start at arc length ``s_start`` (mm) and follow each other (:func:`bend_step` apart) while the
     period's front (its largest local x) stays at most ``s_end`` (default: the axis end); each run of
     :func:`width_classes` (``q`` mm, default r/10) with the period made for its width. ``s_start``
     None: the first period's front one step beyond a hole of radius ``hole_mm`` (the helix's, tool
