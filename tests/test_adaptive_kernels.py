@@ -146,7 +146,7 @@ def test_air_run_along_a_wall_moved_off_it_is_truly_swept(gap, wobble, h):
     assert not capsule_free(g.Mr, g.x0, g.y0, h, 6.0, y0, 11.9, y0, g.r_capsule)   # on the line: never
     E, F = np.zeros(len(run)), np.zeros(len(run), np.bool_)
     P = run.copy()
-    bow_runs(g.Mr, g.A, g.x0, g.y0, h, P, E, F, 1, len(P), 1e-3, g.r_capsule, 2 * h, 4)
+    bow_runs(g.Mr, g.A, (g.x0, g.y0, h), P, E, F, 1, len(P), 1e-3, g.r_capsule, 2 * h, 4)
     assert F[2:-1].all() and not F[1] and not F[-1]          # not vacuous: the inner steps are G0
     np.testing.assert_array_equal(P[[0, -1]], run[[0, -1]])
     np.testing.assert_allclose(P[1:-1, 1], y0 + 2 * h)       # moved left of the heading (+x): +y

@@ -184,11 +184,8 @@ BUDGET_ALLOWED = {
     ("module", "cnclab/simulation/_kernels.py", ""): (860, "the numba kernels of both stocks in one module: cache=True does not see changes in other files (numba caching limits), a split would leave simulate_path stale"),
     ("params", "cnclab/toolpath/adaptive/control.py", "root_bracket"): (18, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/control.py", "search_heading"): (16, _ADAPTIVE),
-    ("params", "cnclab/toolpath/adaptive/links.py", "bow_runs"): (14, _ADAPTIVE),
     ("lines", "cnclab/toolpath/adaptive/control.py", "pass_kernel"): (133, _ADAPTIVE),
     ("params", "cnclab/toolpath/adaptive/control.py", "pass_kernel"): (26, _ADAPTIVE),
-    ("lines", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (127, _ADAPTIVE),
-    ("params", "cnclab/toolpath/adaptive/links.py", "dijkstra"): (20, _ADAPTIVE),
 }
 
 

@@ -346,7 +346,7 @@ def pass_kernel(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_st
         else:
             if air > 0.0 and r_capsule > 0.0:
                 mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
-                bow_runs(Mr, Amask, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
+                bow_runs(Mr, Amask, (x0, y0, h), P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
             air = 0.0
         P[n, 0] = qx
         P[n, 1] = qy
@@ -357,7 +357,7 @@ def pass_kernel(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_st
         phi = psi
     if air > 0.0 and reason != 2 and r_capsule > 0.0:
         mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
-        bow_runs(Mr, Amask, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
+        bow_runs(Mr, Amask, (x0, y0, h), P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
     while k_cut < n:
         removed += cut_disc_both(M, Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, r_rapid, span, rows)
         k_cut += 1

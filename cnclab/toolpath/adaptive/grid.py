@@ -165,9 +165,9 @@ class Grid:
         D, Ac = self.free_field()
         if banned is None:
             banned = np.zeros((1, 1), bool)
-        route = dijkstra(D, Ac, banned, float(r_free), float(band_hi), int(cell[0]), int(cell[1]), float(cur[0]),
-                             float(cur[1]), float(self.x0), float(self.y0), float(self.hc), 2.0 * self.r, self._dist,
-                             self._prev, self._hk, self._hv, self._touched, self.A, float(self.h))
+        route = dijkstra(D, Ac, banned, float(r_free), float(band_hi), (int(cell[0]), int(cell[1])),
+                         (float(cur[0]), float(cur[1])), (float(self.x0), float(self.y0), float(self.hc), float(self.h)),
+                         2.0 * self.r, (self._dist, self._prev, self._hk, self._hv, self._touched), self.A)
         if len(route) == 1 and route[0, 0] < 0:
             return "off"        # no free cell within 2 r that a straight chord inside the region reaches
         return None if len(route) == 0 else route

@@ -41,7 +41,7 @@ def chain_clear(Mr, Amask, x0, y0, h, Q, r_capsule):
 
 
 @njit(cache=True)
-def bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, min_steps):
+def bow_runs(Mr, Amask, geo, P, E, F, k0, k1, air_eng, r_capsule, delta, min_steps):
     """For the air steps k0 <= k < k1 (engagement < ``air_eng``) not proven free one by one: a run of
     at least ``min_steps`` of them (steps a..b, from P[a-1] to P[b]) that slides along the last
     cut boundary (a wall-following pass left its skin there: the rapid stock keeps a band of it
@@ -51,7 +51,9 @@ def bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, m
     inside the mask, its inner steps become G0 (``F``) and the first and last steps stay feed links
     (the legs of ``delta`` off the line and back). Called before the run's discs are cut: the rapid
     stock holds what each step meets; the shifted discs remove nothing (proven), the discs at the
-    shifted points that the pass cuts later remove nothing either."""
+    shifted points that the pass cuts later remove nothing either. ``geo``: (x0, y0, h) the pixel
+    grid's origin and pixel size (mm)."""
+    x0, y0, h = geo
     k = max(k0, 1)
     while k < k1:
         if not (E[k] < air_eng) or F[k]:
@@ -87,54 +89,118 @@ def bow_runs(Mr, Amask, x0, y0, h, P, E, F, k0, k1, air_eng, r_capsule, delta, m
 
 
 @njit(cache=True)
-def dijkstra(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, dist, prev, hk, hv, touched,
-                 A, h):
-    """8-neighbour Dijkstra (binary heap, lazy deletion) over the free cells (Ac and D >= r_free, or
-    (gj, gi)) from the cell of (cx, cy) (off the free set: from the nearest free cell centre within
-    ``reach`` mm that a straight chord from (cx, cy) inside the fine tool-centre mask ``A`` (pixels of
-    ``h``, origin x0, y0) reaches; none: [[-1, -1]]) to the nearest goal cell (free, and D < band_hi and
-    not banned, or (gj, gi));
-    the route as (n, 2) cell indices (empty when none). ``dist``/``prev`` are all inf/-1 on entry
-    and are left so (the cells touched are reset)."""
+def _start_cell(D, Ac, r_free, goal, start, geo, reach, A):
+    """The coarse cell a search from ``start`` (x, y) mm begins at: its own when free (Ac and D >=
+    r_free, or ``goal``), else the nearest free cell (first in row order among equals) within
+    ``reach`` mm whose centre a straight chord inside the fine tool-centre mask ``A`` reaches;
+    (j, i), or (-1, -1) when none. ``geo``: (x0, y0, hc, h) grid origin, cell and pixel size (mm)."""
     ny, nx = D.shape
-    nb = banned.shape[0] > 1
+    x0, y0, hc, h = geo
+    cx, cy = start
+    gj, gi = goal
     j0 = min(max(int((cy - y0) // hc), 0), ny - 1)
     i0 = min(max(int((cx - x0) // hc), 0), nx - 1)
-    if not ((Ac[j0, i0] and D[j0, i0] >= r_free) or (j0 == gj and i0 == gi)):
-        # step off the material: the nearest free cell (first in row order among equals) within reach
-        # whose centre a straight chord inside the tool-centre mask reaches
-        jlo = max(int(math.floor((cy - reach - y0) / hc)) - 1, 0)
-        jhi = min(int(math.ceil((cy + reach - y0) / hc)) + 1, ny - 1)
-        size = max(jhi - jlo + 1, 0) * nx
-        cand = np.empty(size)
-        cj = np.empty(size, np.int64)
-        ci = np.empty(size, np.int64)
-        m = 0
-        for j in range(jlo, jhi + 1):
-            ycc = y0 + (j + 0.5) * hc
-            for i in range(nx):
-                if (Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi):
-                    xcc = x0 + (i + 0.5) * hc
-                    d2 = (xcc - cx) ** 2 + (ycc - cy) ** 2
-                    if d2 <= reach * reach:
-                        cand[m] = d2
-                        cj[m] = j
-                        ci[m] = i
-                        m += 1
-        cand = cand[:m]
-        bj = -1
-        bi = -1
-        for q in np.argsort(cand, kind="mergesort"):
-            xcc = x0 + (ci[q] + 0.5) * hc
-            ycc = y0 + (cj[q] + 0.5) * hc
-            if segment_inside(A, x0, y0, h, cx, cy, xcc, ycc, 2.0 * h):
-                bj = cj[q]
-                bi = ci[q]
-                break
-        if bj < 0:
-            return np.full((1, 2), -1, np.int64)     # no free cell reachable by a straight chord
-        j0 = bj
-        i0 = bi
+    if (Ac[j0, i0] and D[j0, i0] >= r_free) or (j0 == gj and i0 == gi):
+        return j0, i0
+    jlo = max(int(math.floor((cy - reach - y0) / hc)) - 1, 0)
+    jhi = min(int(math.ceil((cy + reach - y0) / hc)) + 1, ny - 1)
+    size = max(jhi - jlo + 1, 0) * nx
+    cand = np.empty(size)
+    cj = np.empty(size, np.int64)
+    ci = np.empty(size, np.int64)
+    m = 0
+    for j in range(jlo, jhi + 1):
+        ycc = y0 + (j + 0.5) * hc
+        for i in range(nx):
+            if (Ac[j, i] and D[j, i] >= r_free) or (j == gj and i == gi):
+                xcc = x0 + (i + 0.5) * hc
+                d2 = (xcc - cx) ** 2 + (ycc - cy) ** 2
+                if d2 <= reach * reach:
+                    cand[m] = d2
+                    cj[m] = j
+                    ci[m] = i
+                    m += 1
+    cand = cand[:m]
+    for q in np.argsort(cand, kind="mergesort"):
+        if segment_inside(A, x0, y0, h, cx, cy, x0 + (ci[q] + 0.5) * hc, y0 + (cj[q] + 0.5) * hc, 2.0 * h):
+            return cj[q], ci[q]
+    return -1, -1
+
+
+@njit(cache=True)
+def _heap_pop(hk, hv, n):
+    """Pop the least key of the binary heap hk/hv of ``n`` entries: (key, value); the heap then holds n - 1."""
+    d = hk[0]
+    v = hv[0]
+    n -= 1
+    hk[0] = hk[n]
+    hv[0] = hv[n]
+    p = 0
+    while True:
+        c = 2 * p + 1
+        if c >= n:
+            break
+        if c + 1 < n and hk[c + 1] < hk[c]:
+            c += 1
+        if hk[c] < hk[p]:
+            hk[c], hk[p] = hk[p], hk[c]
+            hv[c], hv[p] = hv[p], hv[c]
+            p = c
+        else:
+            break
+    return d, v
+
+
+@njit(cache=True)
+def _heap_push(hk, hv, n, key, val):
+    """Push (key, val) onto the binary heap hk/hv of ``n`` entries (it then holds n + 1)."""
+    hk[n] = key
+    hv[n] = val
+    c = n
+    while c > 0:
+        p = (c - 1) // 2
+        if hk[c] < hk[p]:
+            hk[c], hk[p] = hk[p], hk[c]
+            hv[c], hv[p] = hv[p], hv[c]
+            c = p
+        else:
+            break
+
+
+@njit(cache=True)
+def _route_to(prev, found, nx):
+    """The cells (n, 2) from the search's start to ``found`` (flat index) along ``prev``."""
+    m = 0
+    v = found
+    while v >= 0:
+        m += 1
+        v = prev[v]
+    out = np.empty((m, 2), np.int64)
+    v = found
+    for k in range(m - 1, -1, -1):
+        out[k, 0] = v // nx
+        out[k, 1] = v % nx
+        v = prev[v]
+    return out
+
+
+@njit(cache=True)
+def dijkstra(D, Ac, banned, r_free, band_hi, goal, start, geo, reach, buf, A):
+    """8-neighbour Dijkstra (binary heap, lazy deletion) over the free cells (Ac and D >= r_free, or
+    the cell ``goal`` (j, i)) from the cell of ``start`` (x, y) mm (off the free set: from the nearest
+    free cell centre within ``reach`` mm that a straight chord from it inside the fine tool-centre mask
+    ``A`` reaches, :func:`_start_cell`; none: [[-1, -1]]) to the nearest goal cell (free, and D <
+    band_hi and not banned, or ``goal``); the route as (n, 2) cell indices (empty when none).
+    ``geo``: (x0, y0, hc, h) grid origin, coarse cell and pixel size (mm); ``buf``: (dist, prev, hk,
+    hv, touched) work arrays, ``dist``/``prev`` all inf/-1 on entry and left so (the cells touched
+    are reset)."""
+    ny, nx = D.shape
+    dist, prev, hk, hv, touched = buf
+    gj, gi = goal
+    nb = banned.shape[0] > 1
+    j0, i0 = _start_cell(D, Ac, r_free, goal, start, geo, reach, A)
+    if j0 < 0:
+        return np.full((1, 2), -1, np.int64)     # no free cell reachable by a straight chord
     s0 = j0 * nx + i0
     dist[s0] = 0.0
     touched[0] = s0
@@ -147,24 +213,8 @@ def dijkstra(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, 
     ww = (1.4142, 1.0, 1.4142, 1.0, 1.0, 1.4142, 1.0, 1.4142)
     found = -1
     while n > 0:
-        d = hk[0]
-        v = hv[0]
+        d, v = _heap_pop(hk, hv, n)
         n -= 1
-        hk[0] = hk[n]
-        hv[0] = hv[n]
-        p = 0
-        while True:
-            c = 2 * p + 1
-            if c >= n:
-                break
-            if c + 1 < n and hk[c + 1] < hk[c]:
-                c += 1
-            if hk[c] < hk[p]:
-                hk[c], hk[p] = hk[p], hk[c]
-                hv[c], hv[p] = hv[p], hv[c]
-                p = c
-            else:
-                break
         if d > dist[v]:
             continue
         j = v // nx
@@ -184,32 +234,9 @@ def dijkstra(D, Ac, banned, r_free, band_hi, gj, gi, cx, cy, x0, y0, hc, reach, 
                         nt += 1
                     dist[u] = nd
                     prev[u] = v
-                    hk[n] = nd
-                    hv[n] = u
-                    c = n
+                    _heap_push(hk, hv, n, nd, u)
                     n += 1
-                    while c > 0:
-                        p = (c - 1) // 2
-                        if hk[c] < hk[p]:
-                            hk[c], hk[p] = hk[p], hk[c]
-                            hv[c], hv[p] = hv[p], hv[c]
-                            c = p
-                        else:
-                            break
-    if found < 0:
-        out = np.empty((0, 2), np.int64)
-    else:
-        m = 0
-        v = found
-        while v >= 0:
-            m += 1
-            v = prev[v]
-        out = np.empty((m, 2), np.int64)
-        v = found
-        for k in range(m - 1, -1, -1):
-            out[k, 0] = v // nx
-            out[k, 1] = v % nx
-            v = prev[v]
+    out = np.empty((0, 2), np.int64) if found < 0 else _route_to(prev, found, nx)
     for t in range(nt):
         dist[touched[t]] = np.inf
         prev[touched[t]] = -1
