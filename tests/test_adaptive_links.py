@@ -97,3 +97,19 @@ def test_a_band_too_narrow_for_a_pass_is_entered_by_one_ramp():
     # the helix chain it replaces
     tp0 = planners.plan(job, "adaptive", H, allow_uncut=True, params=AdaptiveParams(ramp_half_width_frac=0.0))
     assert tp0.info["entries"] >= 10
+
+
+def test_ramp_entries_on_every_level_of_a_deep_job():
+    # the same square and channel 7.5 mm deep in levels of 3 mm (3 levels, each planned as a one-level
+    # job whose top is the floor above): each level enters the square by a helix and the channel by a
+    # ramp from the floor above (join_levels proves the approach through the levels above); safe, and
+    # the written program passes the static check
+    import dataclasses
+    job = dataclasses.replace(_job(box(0.0, 0.0, 14.0, 14.0).union(box(13.0, 3.5, 54.0, 10.5)), "thin channel, deep"),
+                              a_p=3.0, depth=7.5)
+    tp = planners.plan(job, "adaptive", H, allow_uncut=True)
+    ev = evaluate(tp, job, H)
+    assert ev.entries_helix == 3 and ev.entries_ramp == 3
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    assert ev.wall_gouge_max_mm <= 1e-3
+    assert check_program(write_program(tp, job), clearance_z=job.clearance_z, top_z=job.top_z).errors == []
