@@ -53,8 +53,15 @@ Design (the ideas and where they come from; the code is cnclab's own)
   the cell route is shortened to straight chords that stay in that free set and written as rapids
   at depth marked ``cleared`` (the ToolPath's proof column; FreeCAD writes its keep-tool-down links as G0 too; the evaluator
   counts any rapid that removes material) or, with ``rapid_links=False``, as feed moves (``link``,
-  link feed). Only when no free route exists (a disjoint region, material
-  closing the way) does the tool retract, rapid at clearance and enter again.
+  link feed). A pass that cuts too little bans the cells within r of its start (r/2 where it left the
+  region at once, or in the second chance: before a lift the bans are lifted once). Before the tool
+  lifts for a new entry, the *rescue* (``_Level.rescue_start``) tries the starts inside those bans
+  that lie farther than ``failed_start_ban_frac`` r from every failed start, where solid material lies
+  within reach (the stock eroded by one pixel: no wall skins or seams) and the band is at least
+  0.2 r half-wide, heading along that material (turned 30 and 60 deg towards it when that pass
+  removes nothing): the end of a slot opening into a bulb is cut from the slot, not by a second
+  helix. Only when no free route exists (a disjoint region, material closing the way) does the tool
+  retract, rapid at clearance and enter again.
 * **Remnants**: where no border cell can be reached through cleared area but a free-standing remnant
   of material is left (a pillar the passes around it could not take), one straight feed move from a
   free point to where the tool disc holds the whole remnant takes it, if the remnant lies within
@@ -67,7 +74,12 @@ Design (the ideas and where they come from; the code is cnclab's own)
   ``min(0.75 r, 0.9 x inscribed radius - h)`` (FreeCAD's is 0.75 r too), then a floor circle;
   each entry's engagement is reported apart by the evaluator. A place that allows less than
   ``0.1 r`` (a helix of a few hundredths of a mm is a plunge) is banned unless its part of the
-  tool-centre region is that narrow everywhere.
+  tool-centre region is that narrow everywhere. In a band of tool-centre half-width below 0.2 r
+  (no pass turns there, the narrow regions' trochoid would crawl) the entry is a **ramp** along the
+  longest straight segment of the band through the place (``entries.ramp_entry``: the package's one
+  ramp generator, ToolPathBuilder.ramp, at the helix angle or one shallower leg, then back at depth;
+  its ends at the exact tool-centre limit): one entry for the band where helix after helix was
+  entered about r apart; its band counts as entered (the wall skins are the finishing laps').
 * **Finish**: one contour pass along every ring of the tool-centre region (outer rings
   counter-clockwise, islands clockwise: climb milling), started where the ring is already free of
   material, takes the thin rests the passes left against the walls (thinner than ``a_e`` where the
