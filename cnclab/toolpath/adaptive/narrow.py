@@ -564,7 +564,7 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
     start has no room for a helix of ``prm.helix_min_mm`` or the pattern of its first width class
     would crawl (step below ``MIN_STEP_FRAC`` a_e): the region is left to the level planner."""
     prm, r, h = lv.prm, lv.r, lv.h
-    c_start = float(reg.radius[0]) - h
+    c_start = float(reg.radius[0])      # the hole opened to the half-width c: the pattern swings to c
     rho = min(prm.helix_radius_frac * r, prm.helix_room_frac * float(reg.radius[0]) - h)
     if not from_cleared and rho < prm.helix_min_mm:
         return False
