@@ -276,7 +276,7 @@ class ClearingSettings:
         the material skipped left to later laps and the cleanup.
     wall_margin_mm : the tool centres at depth (not the jumps, not the entries) are kept this far (mm)
         inside the allowed region, projected onto it when outside (data/pockets/spline_pocket.json:
-        the tool 0.006 mm past the wall with 0 mm, 0.002 mm with 0.005 mm).
+        the tool 0.006 mm past the wall with 0 mm, 0.002 mm with 0.005 mm, none with 0.02 mm).
 
     >>> ClearingSettings(wall="roll-in").sample_step_mm()
     0.2
