@@ -14,6 +14,13 @@ from .links import dijkstra
 from .stock import coarse_any, cut_disc, cut_path, dist_window, max_filter, raster
 
 
+def _union(a, b):
+    """The bounding box (x0, y0, x1, y1) of two boxes (None: empty)."""
+    if a is None:
+        return b
+    return (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
+
+
 class PassStep(NamedTuple):
     """How a pass steps (:func:`pass_kernel`'s settings that stay fixed for a plan): ``ds`` step (mm),
     ``lag`` the look-back of the engagement sampling (mm), ``n_samp`` samples on the arc, ``turn``
@@ -69,6 +76,7 @@ class Grid:
         self.mat = np.zeros(self.Ac.shape, bool)
         self.D = np.empty(self.Ac.shape)
         self._dirty = (-np.inf, -np.inf, np.inf, np.inf)
+        self._since, self._shadow = None, None      # see checkpoint()
         n = self.Ac.size            # Dijkstra buffers, reset after each search
         self._dist = np.full(n, np.inf)
         self._prev = -np.ones(n, np.int64)
@@ -87,9 +95,8 @@ class Grid:
         P = np.asarray(P, float).reshape(-1, 2)
         lo = P.min(axis=0) - rad
         hi = P.max(axis=0) + rad
-        d = self._dirty
-        self._dirty = (lo[0], lo[1], hi[0], hi[1]) if d is None else \
-            (min(d[0], lo[0]), min(d[1], lo[1]), max(d[2], hi[0]), max(d[3], hi[1]))
+        self._dirty = _union(self._dirty, (lo[0], lo[1], hi[0], hi[1]))
+        self._since = _union(self._since, (lo[0], lo[1], hi[0], hi[1]))
 
     def _cut_rapid(self, P):
         cut_path(self.Mr, self.x0, self.y0, self.h, np.ascontiguousarray(P, float), self.r_rapid)
@@ -128,7 +135,40 @@ class Grid:
         """Set the stocks back to a :meth:`snapshot`."""
         self.M[:] = snap[0]
         self.Mr[:] = snap[1]
-        self._dirty = (-np.inf, -np.inf, np.inf, np.inf)
+        self._dirty = self._since = (-np.inf, -np.inf, np.inf, np.inf)
+
+    def _window(self, box):
+        """Pixel slices (rows, columns) of the box (x0, y0, x1, y1) mm, one pixel grown, clipped."""
+        if box is None:
+            return slice(0, 0), slice(0, 0)
+        h = self.h
+        i0 = 0 if not np.isfinite(box[0]) else max(int(math.floor((box[0] - self.x0) / h)) - 1, 0)
+        j0 = 0 if not np.isfinite(box[1]) else max(int(math.floor((box[1] - self.y0) / h)) - 1, 0)
+        i1 = self.nx if not np.isfinite(box[2]) else min(int(math.ceil((box[2] - self.x0) / h)) + 2, self.nx)
+        j1 = self.ny if not np.isfinite(box[3]) else min(int(math.ceil((box[3] - self.y0) / h)) + 2, self.ny)
+        return slice(j0, max(j1, j0)), slice(i0, max(i1, i0))
+
+    def checkpoint(self):
+        """Remember the stocks as they are now, for :meth:`rollback`. Cheap: a shadow copy of both
+        stocks is kept, and only the window changed since the last checkpoint (every change goes
+        through :meth:`touch`) is copied into it."""
+        if self._shadow is None:
+            self._shadow = (self.M.copy(), self.Mr.copy())
+        else:
+            w = self._window(self._since)
+            self._shadow[0][w] = self.M[w]
+            self._shadow[1][w] = self.Mr[w]
+        self._since = None
+
+    def rollback(self):
+        """Set the stocks back to the last :meth:`checkpoint` (only the window changed since)."""
+        box = self._since
+        w = self._window(box)
+        self.M[w] = self._shadow[0][w]
+        self.Mr[w] = self._shadow[1][w]
+        if box is not None:
+            self._dirty = _union(self._dirty, box)
+        self._since = None
 
     def free_field(self):
         """(distance from each coarse cell centre to the nearest material, mm, capped at ``cap``;

@@ -663,6 +663,11 @@ class LevelRegions:
         self._refresh()
         return self.pending.pop(k)
 
+    def open_mouth_pending(self) -> bool:
+        """Whether a pending region has an open end (a mouth the planner must clear completely,
+        slivers too, for :meth:`reachable_mouth` to find its swing free)."""
+        return any(not all(reg.dead) for reg in self.pending)
+
     def reachable_mouth(self):
         """(k, reversed?, cell, point) of a pending region whose open end the tool reaches through
         cleared area: ``point`` the centre of the free coarse cell (its tool disc free of material)

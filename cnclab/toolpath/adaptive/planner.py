@@ -223,13 +223,27 @@ class _Level:
                 return True
         return False
 
+    def min_yield(self, fine, P):
+        """The least area (fraction of a_e per mm of the pass) the pass through the points P (n, 2)
+        must remove to be kept: ``second_chance_min_yield`` in the second chance, else
+        ``sliver_pass_min_yield``; none while a narrow region with an open end waits (its mouth must
+        be cleared, slivers too) or where the pass runs where the tool-centre region is narrower than
+        ``sliver_min_half_width_frac`` r (a band where the passes are the way in)."""
+        if self.narrow_state.open_mouth_pending():
+            return 0.0
+        J = np.clip(((P[:, 1] - self.g.y0) // self.g.hc).astype(int), 0, self.g.half_width.shape[0] - 1)
+        I = np.clip(((P[:, 0] - self.g.x0) // self.g.hc).astype(int), 0, self.g.half_width.shape[1] - 1)
+        if self.g.half_width[J, I].min() < self.prm.sliver_min_half_width_frac * self.r:
+            return 0.0
+        return self.prm.second_chance_min_yield if fine else self.prm.sliver_pass_min_yield
+
     def undo_pass(self, undo, E, free):
-        """A second-chance pass that only cuts slivers is not worth its link and its feed time: the
-        link and the pass are undone (``undo``: the builder mark, stock snapshot, tool point and link
-        count before the link); the (P, removed, E, free) of an empty pass."""
+        """A pass that only cuts slivers is not worth its link and its feed time: the link and the
+        pass are undone (``undo``: the builder mark, tool point and link count before the link; the
+        stocks go back to the grid's checkpoint); the (P, removed, E, free) of an empty pass."""
         self.b.rollback(undo[0])
-        self.g.restore(undo[1])
-        self.cur, self.stats["links"] = undo[2], undo[3]
+        self.g.rollback()
+        self.cur, self.stats["links"] = undo[1], undo[2]
         return np.array([self.cur], float), 0.0, E[:1], free[:1]
 
     def ban_start(self, banned, j, i, frac):
@@ -279,8 +293,8 @@ class _Level:
             self.rescue_fails, self.rescue_spent = -1, False
             for _ in range(self.max_passes):
                 D, Ac = self.g.free_field()
-                if fine:
-                    undo = (self.b.mark(), self.g.snapshot(), self.cur, self.stats["links"])
+                self.g.checkpoint()          # for undo_pass (only the window changed since is copied)
+                undo = (self.b.mark(), self.cur, self.stats["links"])
                 end, heading = self.next_start(banned)
                 if end is None and narrow.next_region(self, banned):
                     continue
@@ -334,7 +348,7 @@ class _Level:
                     if len(P) >= 2 and removed < self.prm.narrow_min_yield * self.a_e * self.ds * (len(P) - 1):
                         self.g.restore(snap_try)        # not worth its air: the place is banned after all
                         P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
-                if fine and len(P) >= 2 and removed < self.prm.second_chance_min_yield * self.a_e * self.ds * (len(P) - 1):
+                if len(P) >= 2 and removed < self.min_yield(fine, P) * self.a_e * self.ds * (len(P) - 1):
                     P, removed, E, free = self.undo_pass(undo, E, free)
                 failed = removed < self.prm.pass_min_removed_rh * self.r * self.h or len(P) < 2
                 if failed:
