@@ -101,11 +101,13 @@ MIN_STEP_FRAC = 0.1
 #: stays near the straight-slot step; never closer than this x that step (a kink of angle a then still
 #: spaces the outer side by c a more: the axis is smoothed, see :func:`join_axis`)
 MIN_BEND_STEP_FRAC = 0.1
-#: ... and only as close as needed for the outer side's spacing to stay at most this x that step: a
-#: 15 % wider spacing on the outer side of a bend costs a few degrees (the 1.5 D spiral channel of the
-#: corpus, theta 60: max 64.4 deg at 1.15, 62.0 at 1.0, 65.4 without bend_step) where 1.0 costs 3-5 %
-#: program time on the corpus's curved and spiral channels (1.15: none)
-BEND_STRETCH = 1.15
+#: ... and only as close as needed for the outer side's spacing to stay at most this x that step:
+#: tight bends only (kappa c > 0.3: a mouth's joined leg, kappa c ~ 1). Measured on the corpus (one run
+#: each): 1.0 costs 3-5 % program time on the curved/spiral 1.5 D channels; 1.15 none, but leaves more
+#: uncut where the periods' spacing changes (slot_bulbs_0 1.37 -> 1.75 mm^2, FreeCAD 0.90; comb_3
+#: 5.54 -> 6.48) for 1-3 deg less max; 1.3: slot_bulbs_0 1.37, comb_3 5.71 mm^2 (max 101.9, 103.0
+#: without bend_step, theta 94.9), the spiral channel as without bend_step
+BEND_STRETCH = 1.3
 #: a mouth's free point is joined to the axis by a moving average over this x c a mm (c the
 #: half-width, a the corner's turn; :func:`join_axis`): a bend of tightest radius ~0.6 x this x c
 #: (0.89 mm at c = 1 mm, a 90 deg corner), so the pattern's inner side hardly folds over its centre
@@ -387,8 +389,8 @@ def bend_step(s, ang, x0, x_ext, y_ext, step, h):
     >>> s = np.linspace(0.0, 10.0, 101)
     >>> round(bend_step(s, np.zeros(101), 2.0, 2.0, 1.0, 0.2, 0.05), 9)     # straight: the step
     0.2
-    >>> round(bend_step(s, 0.5 * s, 2.0, 2.0, 1.0, 0.2, 0.05), 3)          # kappa 0.5, c 1: 1.15 step / 1.5
-    0.153
+    >>> round(bend_step(s, 0.5 * s, 2.0, 2.0, 1.0, 0.2, 0.05), 3)          # kappa 0.5, c 1: 1.3 step / 1.5
+    0.173
     """
     u = np.arange(x0, x0 + x_ext + h, h)
     a0 = np.interp(u, s, ang)
