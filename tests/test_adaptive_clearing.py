@@ -195,9 +195,9 @@ def test_random_pockets_are_safe_covered_and_bounded():
 
 
 #: a star with an island the fuzz drew (benchmarks/fuzz_random_pockets.py --seed 2, 1 of 207 planned):
-#: the channel round the island is a narrow region cut by narrow.py's trochoid, which reaches 124.6 deg
-#: at theta 60 (bound 74.4; 131.9 with the drawn 6e-237 written as 0) where the channel bends near
-#: (3.4-3.8, 1.3-1.5)
+#: the channel round the island is a narrow region cut by narrow.py's trochoid, which reached 124.6 deg
+#: at theta 60 (bound 74.4; 131.9 with the drawn 6e-237 written as 0) near (3.4-3.8, 1.3-1.5), where a
+#: mouth's leg along the island's edge joined the channel's axis (64.4 deg since the leg check)
 STAR_ISLAND_TROCHOID = Polygon(
     [(5.011582845372573, -4.594407262504043), (0.2819898780318265, -6.79301276448603),
      (-6.694578638050897, -2.36790653453732), (-5.926326582395415, 0.9072695465015134),
