@@ -113,3 +113,20 @@ def test_ramp_entries_on_every_level_of_a_deep_job():
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
     assert ev.wall_gouge_max_mm <= 1e-3
     assert check_program(write_program(tp, job), clearance_z=job.clearance_z, top_z=job.top_z).errors == []
+
+
+def test_an_idle_entry_is_undone():
+    # corpus job islands_2 (D 6, theta 105.7): a second helix entry on slivers the passes had failed
+    # on took almost nothing and led to no pass; undone (AdaptiveParams.idle_entry_frac), the job
+    # plans with one entry and one lift (FreeCAD's one), safe and within the engagement bounds
+    from cnclab.works.jacso2021 import corpus_comparison as cc
+    jb = cc.job("islands_2")
+    h = cc.resolution_mm(jb, False)
+    tp = planners.plan(jb, "adaptive", h, allow_uncut=True)
+    ev = evaluate(tp, jb, h)
+    assert tp.info["entries"] == 1 and tp.info["idle_entries_undone"] >= 1
+    assert lifts(ev, jb.top_z) == 1
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0 and ev.wall_gouge_max_mm <= 1e-3
+    assert ev.engagement_max_deg <= jb.theta_deg + 10
+    tp0 = planners.plan(jb, "adaptive", h, allow_uncut=True, params=AdaptiveParams(idle_entry_frac=0.0))
+    assert tp0.info["entries"] == 2

@@ -68,6 +68,8 @@ def enter(lv, banned=None):
         if seg is not None:
             ramp_entry(lv, *seg)
             return True
+    # (before the retract: an idle entry is undone with it, the tool still down)
+    undo = (lv.b.mark(), lv.g.snapshot(), lv.cur, dict(lv.stats)) if banned is not None and lv.cur is not None else None
     lv.retract()
     if lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0:
         c = np.array(lv.hole[:2])
@@ -91,6 +93,18 @@ def enter(lv, banned=None):
         lv.g.cut_path(circ)
         lv.stats["entries"] += 1
         lv.cur = (float(pe[0]), float(pe[1]))
+        if undo is not None and _idle_entry(lv, undo, rho, banned):
+            # an entry that took hardly anything and from which no pass start is reachable (every
+            # start about it banned: slivers the passes already failed on) is a lift for nothing:
+            # undone, its place banned (the finishing laps take what is left there)
+            lv.b.rollback(undo[0])
+            lv.g.restore(undo[1])
+            lv.cur = undo[2]
+            lv.stats.clear(); lv.stats.update(undo[3])
+            lv.stats["idle_entries_undone"] = lv.stats.get("idle_entries_undone", 0) + 1
+            rad = int(math.ceil(lv.prm.entry_ban_frac * lv.r / lv.g.hc))
+            banned[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
+            return None
         return True
     lv.stats["entries"] += 1
     lv.cur = (c[0] + rho, c[1])
@@ -182,3 +196,14 @@ def ramp_entry(lv, a, b):
         lv.entered.update((jj, ii) for jj in range(j0, j1 + 1) for ii in range(i0, i1 + 1))
     lv.stats["entries"] += 1
     lv.stats["ramp_entries"] = lv.stats.get("ramp_entries", 0) + 1
+
+
+def _idle_entry(lv, undo, rho, banned):
+    """Whether the helix just made (``undo[1]``: the stock before it) removed less than
+    ``idle_entry_frac`` of its disc (radius r + rho) and no pass start outside ``banned`` is
+    reachable from it through cleared area (:meth:`Grid.route`)."""
+    took = float(undo[1][0].sum() - lv.g.M.sum()) * lv.h * lv.h
+    if took >= lv.prm.idle_entry_frac * math.pi * (lv.r + rho) ** 2:
+        return False
+    route = lv.g.route(lv.cur, lv.r_free, lv.r_free + 1.5 * lv.g.hc, banned)
+    return route is None

@@ -181,3 +181,7 @@ class AdaptiveParams:
     ramp_max_frac: float = 4.0
     #: deg: the directions tried for that segment
     ramp_direction_step_deg: float = 5.0
+    #: fraction of the helix's disc (radius r + helix radius): a helix entry that removes less than
+    #: this and from which no pass start outside the bans is reachable is undone and its place banned
+    #: (dwg_forms_4: three entries in a row, each followed by no pass, on slivers the passes had failed on)
+    idle_entry_frac: float = 0.1
