@@ -139,9 +139,11 @@ class AdaptiveParams:
     #: and the wall skins such passes leave included (tapered_channel_2: else a lift, a helix at the
     #: closed end and 0.71 % of the samples above theta + 5). Measured (program time, min): star_3
     #: 0.847 -> 0.809 (uncut 3.40 both; FreeCAD 8.99 mm^2), islands_3 1.874 -> 1.840, rectilinear_2
-    #: 0.571 -> 0.561; on 38 corpus jobs with the next field: median ratio to FreeCAD 1.054, all
-    #: within the engagement targets (bench_corpus.py, /tmp)
-    sliver_pass_min_yield: float = 0.2
+    #: 0.571 -> 0.561 at 0.2. OFF by default (0): on the whole corpus it left spiral_0 11.4 mm^2 uncut
+    #: (1.4 without; FreeCAD 1.0) and dwg_example008_all 11.2 (1.5; FreeCAD 4.9): slivers of long
+    #: channels that neither the finish laps nor the clean-up rounds take. A budget on the area the
+    #: undone passes leave (0.3 or 1 mm^2 a level) kept spiral_0 covered but also removed the gain
+    sliver_pass_min_yield: float = 0.0
     #: fraction of r: ... and not for a pass that runs where the tool-centre region is less than this
     #: half-wide (Grid.half_width): in a band narrower than the tool every pass cuts little and they are
     #: the way in (a 7 mm channel, D 6, of test_adaptive_links: 4 entries instead of 2 and 0.71 min
