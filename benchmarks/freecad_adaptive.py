@@ -46,9 +46,11 @@ class _Q:
 
 
 class _Op:
-    def __init__(self, feed):
+    def __init__(self, feed, vert_feed):
         self.commandlist = []
-        self.vertFeed = float(feed) / 60.0     # FreeCAD's Path feeds are mm/s; the post writes mm/min
+        # FreeCAD's Path feeds are mm/s; the post writes mm/min. GenerateGCode runs its helix and its
+        # descents at vertFeed: the job's helix/ramp entry feed, as our programs run theirs
+        self.vertFeed = float(vert_feed) / 60.0
         self.horizFeed = float(feed) / 60.0
 
 
@@ -138,7 +140,7 @@ def _worker(spec_path, out_path):
     results = a2d.Execute(stock, geometry, lambda paths: False)
     adaptive = [{"HelixCenterPoint": r.HelixCenterPoint, "StartPoint": r.StartPoint,
                  "AdaptivePaths": r.AdaptivePaths, "ReturnMotionType": r.ReturnMotionType} for r in results]
-    op, obj = _Op(spec["feed_mm_min"]), _Obj(spec)
+    op, obj = _Op(spec["feed_mm_min"], spec.get("entry_feed_mm_min", spec["feed_mm_min"])), _Obj(spec)
     op.commandlist.append(Path.Command("(Adaptive)"))
     op.commandlist.append(Path.Command("G0", {"Z": CLEARANCE_Z}))
     PathAdaptive.GenerateGCode(op, obj, adaptive, 0.0)
@@ -182,7 +184,7 @@ def job_spec(job) -> dict:
     D = 2 * job.tool_radius
     a_e = job.tool_radius * (1 - math.cos(math.radians(job.theta_deg)))
     return {"rings": rings, "tool_diameter": D, "stepover_pct": 100.0 * a_e / D, "a_p": job.a_p,
-            "depth": job.depth, "feed_mm_min": job.feed_mm_min, "spindle_rpm": job.spindle_rpm,
+            "depth": job.depth, "feed_mm_min": job.feed_mm_min, "entry_feed_mm_min": job.entry_feed, "spindle_rpm": job.spindle_rpm,
             "theta_deg": job.theta_deg, "source": _repo_relative(job.source)}
 
 
