@@ -65,8 +65,27 @@ def run_cli(argv, sig=None, delay=None, env=None, timeout=600.0, ignored=()):
             proc.wait(timeout=delay)
         except subprocess.TimeoutExpired:
             proc.send_signal(sig)
-    out, err = proc.communicate(timeout=timeout)
+    out, err = communicate_or_dump(proc, timeout)
     return proc.returncode, out, err, time.perf_counter() - t0
+
+
+def communicate_or_dump(proc, timeout: float):
+    """``proc.communicate(timeout)`` (the pipes are read, so a chatty child cannot block on a full
+    pipe); a child still running after ``timeout`` s is sent SIGABRT -- a child started with
+    ``python -X faulthandler`` (or ``-m cnclab``, which enables it) then prints every thread's stack --
+    and the test fails with that stderr: a hang is reported with its place, not as a bare timeout."""
+    try:
+        return proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGABRT)
+        try:
+            out, err = proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            out, err = proc.communicate()
+        err = err.decode(errors="replace") if isinstance(err, bytes) else err
+        raise AssertionError(f"child {proc.args!r} still running {timeout} s after it was started or "
+                             f"signalled; its stacks (SIGABRT):\n{err[-6000:]}") from None
 
 
 def startup_s(n: int = 3) -> float:

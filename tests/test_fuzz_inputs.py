@@ -40,7 +40,7 @@ from cnclab.geometry.freeform_part import tessellate_heightfield
 from cnclab.geometry.mesh import STLError, STLWarning, TriMesh, read_stl, write_stl
 from cnclab.nc import apt
 from cnclab.nc import spindle_control as sc
-from tests._fuzz_support import SAMPLE, check_complete, classify_interrupt, run_cli, startup_s
+from tests._fuzz_support import SAMPLE, check_complete, classify_interrupt, communicate_or_dump, run_cli, startup_s
 
 OUTCOMES: collections.Counter = collections.Counter()
 FUZZ = settings(max_examples=120, deadline=None,
@@ -937,13 +937,13 @@ def test_sigterm_to_cli_process_leaves_complete_outputs_or_none(tmp_path):
     code = ("import sys; from cnclab.__main__ import main; sys.exit(main(sys.argv[1:]))")
     for delay in (0.3, 0.8, 1.6):
         out_p, ngc = tmp_path / f"o{delay}.apt", tmp_path / f"o{delay}.ngc"
-        proc = subprocess.Popen([sys.executable, "-c", code, "spindle", str(stl), str(big), *BASE, "-o", str(out_p),
+        proc = subprocess.Popen([sys.executable, "-X", "faulthandler", "-c", code, "spindle", str(stl), str(big), *BASE, "-o", str(out_p),
                                  "--gcode", str(ngc), "--allow-mismatch"], stderr=subprocess.PIPE, stdout=subprocess.PIPE)
         try:
             proc.wait(timeout=delay)
         except subprocess.TimeoutExpired:
             proc.send_signal(signal.SIGTERM)
-        proc.wait(timeout=60)
+        communicate_or_dump(proc, 60)
         assert not [f for f in os.listdir(tmp_path) if f.endswith(".tmp") or ".tmp." in f]
         assert out_p.exists() == ngc.exists()
         if out_p.exists():

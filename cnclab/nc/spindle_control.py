@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import dataclasses
 import time
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -509,55 +508,18 @@ def gcode_text(program: AptProgram, header: str = "") -> str:
     return write_linear_moves(np.vstack(xyz), rap_a, fe_a, sp, header=header)
 
 
-def _join_uninterrupted(thread) -> None:
-    """``thread.join()`` that a further Ctrl-C / SIGTERM does not cut short (the first one is raised
-    after the thread has ended)."""
-    pending = None
-    while thread.is_alive():
-        try:
-            thread.join()
-        except BaseException as exc:             # noqa: BLE001 -- re-raised below
-            pending = pending or exc
-    if pending is not None:
-        raise pending
-
-
 def read_inputs(stl_path, apt_path):
-    """``read_stl(stl_path)`` and ``read_apt(apt_path)`` with its ``cl_points()``, read concurrently
-    (the STL in a second thread; its compiled kernels and numpy release the GIL). Returns
-    (mesh, program, cl). Errors as when read one after the other: the STL's first, then the APT's.
+    """``read_stl(stl_path)`` and ``read_apt(apt_path)`` with its ``cl_points()``, one after the other
+    (the STL's errors first). Returns (mesh, program, cl).
+
+    Read in the main thread only: an earlier version read the STL in a second thread, which gained
+    ~3 ms on the sample files but made interrupts unsafe (a SIGINT while the thread ran compiled nogil
+    kernels at interpreter shutdown crashed the process; a SIGTERM that arrived while the main thread
+    held numba's compiler lock left the reader waiting for that lock forever and the CLI hung).
     """
-    # a daemon thread, not a pool: a SIGTERM turned into SystemExit in the main thread (cli_spindle)
-    # must not wait at exit for the reader (a pool's worker is joined at interpreter exit; a CI run
-    # once saw the CLI hang there for over 60 s after SIGTERM)
-    out = {}
-
-    def _read():
-        try:
-            out["mesh"] = read_stl(stl_path)
-        except BaseException as exc:             # noqa: BLE001 -- re-raised in the caller's thread
-            out["exc"] = exc
-
-    reader = threading.Thread(target=_read, name="cnclab-read-stl", daemon=True)
-    reader.start()
-    try:
-        prog = read_apt(apt_path)
-        cl = prog.cl_points()
-        err = None
-    except Exception as exc:                     # reported after the STL's own error, if any
-        err = exc
-    except BaseException:
-        # Ctrl-C / SIGTERM: wait for the reader before unwinding. A daemon thread still running the
-        # compiled (nogil) STL kernels while the interpreter shuts down and numba's JIT memory is
-        # released crashes the process (SIGSEGV seen after a SIGINT ~1.2 s into a run).
-        _join_uninterrupted(reader)
-        raise
-    _join_uninterrupted(reader)
-    if "exc" in out:
-        raise out["exc"]
-    if err is not None:
-        raise err
-    return out["mesh"], prog, cl
+    mesh = read_stl(stl_path)
+    prog = read_apt(apt_path)
+    return mesh, prog, prog.cl_points()
 
 
 def postprocess_files(stl_path, apt_path, out_path, options: SpindleOptions | None = None, *, gcode_path=None,
