@@ -78,7 +78,7 @@ from ..simulation import dixel
 from ..simulation.common import simulate
 from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
                                   resample_path, thesis3_path)
-from .ce_routes import chord_clear, geodesic, geodesic_cells, roll_in, split_runs
+from .ce_routes import chord_clear, dilate, geodesic, geodesic_cells, roll_in, split_runs
 from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
 from .path import ToolPath, helix_ring, resample_polyline
 
@@ -435,7 +435,7 @@ class _Clearing:
         """Material now, and (computed on demand) the region where the tool centre misses it."""
         mat = self.stock.to_polygon()
         r, res = self.r, self.s.resolution_mm
-        return mat, functools.cache(lambda: self.allowed.difference(mat.buffer(r - res, quad_segs=16)))
+        return mat, functools.cache(lambda: self.allowed.difference(dilate(mat, r - res, res)))
 
     def link(self, R, k, kind="link"):
         """Emit the link ``R`` after cutting it through the stock: steps that remove material -> linkcut."""

@@ -22,7 +22,7 @@ from shapely.geometry import LineString, Point, Polygon
 
 from ..simulation.common import simulate
 
-__all__ = ["chord_clear", "grid_graph", "geodesic", "geodesic_cells", "split_runs", "roll_in", "ROLL_IN_OFFSETS",
+__all__ = ["chord_clear", "dilate", "grid_graph", "geodesic", "geodesic_cells", "split_runs", "roll_in", "ROLL_IN_OFFSETS",
            "ROLL_IN_RADII", "ROLL_IN_SWEEPS_DEG"]
 
 
@@ -35,6 +35,37 @@ def chord_clear(a, b, material, guard, r, margin_mm):
     if not guard.contains(line):
         return False
     return material.is_empty or not line.buffer(r - margin_mm, quad_segs=16).intersects(material)
+
+
+#: segments per quarter circle of :func:`dilate`'s round joins (its distance is raised by the chord error)
+DILATE_QUAD_SEGS = 8
+
+
+def dilate(material, distance_mm: float, tol_mm: float):
+    """A polygon containing every point within ``distance_mm`` (mm) of ``material`` (a shapely
+    geometry), and at most about ``tol_mm`` + 0.5 % of ``distance_mm`` more: ``material`` simplified
+    within ``tol_mm`` (the dixel stock's staircase of rows collapses to its outline), grown by
+    ``distance_mm + tol_mm``, with the round joins' chords pushed out to contain the arcs; any
+    material the simplification left farther than ``tol_mm`` outside (GEOS's topology-preserving
+    simplifier does not bound that: up to 0.02 mm^2 seen on the spline pocket) is grown by
+    ``distance_mm`` and added. ~100x faster than growing the staircase itself (2 s -> 0.02 s a call
+    on data/pockets/spline_pocket.json at 0.1 mm rows), which dominated the constant-engagement planner.
+
+    >>> from shapely.geometry import box
+    >>> m = box(0, 0, 1, 1)
+    >>> bool(dilate(m, 2.0, 0.1).contains(m.buffer(2.0, quad_segs=64)))
+    True
+    """
+    if material.is_empty:
+        return material
+    q = DILATE_QUAD_SEGS
+    sec = 1.0 / math.cos(math.pi / (4 * q))              # a join's chords lie inside its arc by (sec - 1) x radius
+    ms = material.simplify(tol_mm)
+    out = ms.buffer((distance_mm + tol_mm) * sec, quad_segs=q)
+    extra = material.difference(ms.buffer(tol_mm, quad_segs=q))
+    if not extra.is_empty:
+        out = out.union(extra.buffer(distance_mm * sec, quad_segs=q))
+    return out
 
 
 def grid_graph(free, grid_mm):
