@@ -412,12 +412,20 @@ _SLIVER_WKT = ('POLYGON ((-4.916339044839923 0.576290201359072, 4.88187445097032
     '14643005055887, -5.675759822888521 -5.307154383198031, -4.916339044839923 0.576290201359072))')
 
 
-def test_sliver_pocket_refused_with_reason():
+def test_sliver_pocket_left_stated_and_refused_as_uncut():
+    # the planner enters the sliver (a helix of its room) but no finishing lap can start in it: the
+    # rest is left and stated (was: PlanningError for the whole job, issue 28 item 1); plan measures
+    # it (3.6 of 15 mm^2 reachable) and refuses it above the uncut limit unless allow_uncut
     from shapely import wkt
 
-    poly = wkt.loads(_SLIVER_WKT)
-    with pytest.raises(PlanningError, match="sliver-test: .*too narrow"):
-        adaptive_clearing(_job(poly, 60.0, source="sliver-test"), resolution_mm=H, step_mm=0.05)
+    from cnclab.toolpath import planners
+
+    job = _job(wkt.loads(_SLIVER_WKT), 60.0, source="sliver-test")
+    tp = adaptive_clearing(job, resolution_mm=H, step_mm=0.05)
+    assert any("too narrow" in q and "left uncut" in q for q in tp.info["left_parts"])
+    assert evaluate(tp, job, H).plunges_into_material == 0
+    with pytest.raises(planners.UncutError, match="sliver-test: .*leaves material uncut"):
+        planners.plan(job, "adaptive", H)
 
 
 def test_coarse_planning_stock_refused():

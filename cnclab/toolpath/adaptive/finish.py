@@ -12,11 +12,10 @@ import numpy as np
 import shapely
 
 from .control import GUARD_LEVEL, replay
-from .entries import PlanningError
 from .narrow import NARROW_MIN_HALF_WIDTH_FRAC, medial_axis, medial_graph
 from ..path import resample_polyline
 
-__all__ = ["finish_part", "slot_strips"]
+__all__ = ["finish_part", "note_unvisited", "slot_strips"]
 
 
 def finish_part(lv, part):
@@ -55,18 +54,18 @@ def _laps(lv, part):
                 e = lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
             else:
                 e = None
+            if e is None and dm[k0] < lv.r:
+                # no cleared place to start the lap from and none reachable at depth: a part no entry
+                # could open (a sliver of the tool-centre region thinner than the smallest helix). Left
+                # uncut and stated (:func:`_leave_part`); ``plan`` measures what it leaves and refuses it
+                # above the uncut limit unless allow_uncut (issue 28 item 1)
+                _leave_part(lv, part)
+                return
             if e is None:
                 lv.retract()
                 lv.b.rapid([Rl[0]], z=lv.clearance_z)
-                if dm[k0] >= lv.r:          # free of material under the tool: feed down into cleared area
-                    lv.b.plunge(Rl[0], lv.z, lv.feed_mm_min, tag="cleared", cleared=True)
-                else:
-                    ins = shapely.maximum_inscribed_circle(part)
-                    raise PlanningError(
-                        f"{lv.source}: a part of the tool-centre region (area {part.area:.2f} mm^2, inscribed "
-                        f"radius {ins.length:.2f} mm near ({ins.coords[0][0]:.2f}, {ins.coords[0][1]:.2f})) "
-                        "is too narrow to be cleared under engagement control: no cleared place to start "
-                        "its finishing pass (the pocket is too narrow for the tool)")
+                # free of material under the tool: feed down into cleared area
+                lv.b.plunge(Rl[0], lv.z, lv.feed_mm_min, tag="cleared", cleared=True)
             elif math.hypot(Rl[0, 0] - lv.cur[0], Rl[0, 1] - lv.cur[1]) > 1e-9:
                 lv.b.link([Rl[0]], lv.link_feed_mm_min, z=lv.z)
                 lv.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
@@ -115,6 +114,37 @@ def _laps(lv, part):
             lv.b.add(P[1:], np.where(ai, "link", "cut").astype(object), np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min),
                      "finish", z=lv.z)
             lv.cur = (float(P[-1, 0]), float(P[-1, 1]))
+
+
+def _leave_part(lv, part) -> None:
+    """State a part of the tool-centre region whose finishing lap has no cleared place to start and
+    none reachable at depth (a sliver thinner than the tool can move in under the engagement bound:
+    an entry's tiny helix at most): the lap is skipped, one line in ``lv.left_parts`` (the result's
+    ``info["left_parts"]`` and notes, the program header); ``plan`` measures what is left."""
+    ins = shapely.maximum_inscribed_circle(part)
+    x, y = ins.coords[0]
+    lv.left_parts.append(f"level z {lv.z:g}: a part of the tool-centre region near ({x:.2f}, {y:.2f}) (area "
+                         f"{part.area:.2f} mm^2, inscribed radius {ins.length:.2f} mm) is too narrow to be cleared "
+                         "under engagement control (no cleared place to start its finishing lap): its rest is left uncut")
+    lv.stats["parts_left"] = lv.stats.get("parts_left", 0) + 1
+
+
+def note_unvisited(lv, mark) -> None:
+    """After the level: every part of the tool-centre region (``lv.allowed_parts``) that no move at
+    the level's depth since the builder ``mark`` visits (no entry fits it: thinner than the smallest
+    helix, ``helix_min_frac`` r, and no ramp; no way in at depth) is stated in ``lv.left_parts``."""
+    pts, _, _ = lv.b.tail(mark)
+    pts = pts[pts[:, 2] <= lv.z + 1e-9] if len(pts) else pts
+    for part in lv.allowed_parts:
+        near = part.buffer(2.0 * lv.h)
+        if len(pts) and shapely.contains_xy(near, pts[:, 0], pts[:, 1]).any():
+            continue
+        ins = shapely.maximum_inscribed_circle(part)
+        x, y = ins.coords[0]
+        lv.left_parts.append(f"level z {lv.z:g}: a part of the tool-centre region near ({x:.2f}, {y:.2f}) (area "
+                             f"{part.area:.2f} mm^2, inscribed radius {ins.length:.2f} mm) is too narrow to be entered "
+                             "under engagement control (no helix or ramp fits, no way in at depth): left uncut")
+        lv.stats["parts_left"] = lv.stats.get("parts_left", 0) + 1
 
 
 def slot_strips(lv, part) -> None:

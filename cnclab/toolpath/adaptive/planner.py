@@ -270,13 +270,35 @@ class _Level:
             return
         self.finish_part(self.todo_parts.pop(kk))
 
+    def keep_clean_round(self, saved):
+        """Keep the clean-up round since ``saved`` (builder mark, stock snapshot, tool point, stats)
+        only when it pays: the area it removed is at least ``clean_round_min_yield`` of what the
+        nominal cut (a_e wide at the cutting feed) removes in the feed time the round adds (its
+        rapids not counted); else roll it back. True if kept."""
+        n0, snap0, cur0, st0 = saved
+        took = float(snap0[0].sum() - self.g.M.sum()) * self.h * self.h
+        P3, _, F3 = self.b.tail(n0 - 1)
+        F3 = F3[1:]
+        L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
+        t_feed = float(np.sum(np.where(np.isfinite(F3) & (F3 > 0), L3 / np.where(F3 > 0, F3, 1.0), 0.0)))
+        if took < self.prm.clean_round_min_yield * self.a_e * self.feed_mm_min * t_feed or took <= 0.0:
+            self.b.rollback(n0)
+            self.g.restore(snap0)
+            self.cur = cur0
+            self.stats.clear(); self.stats.update(st0)
+            return False
+        self.stats["clean_rounds"] += 1
+        return True
+
     def run(self):
         """Plan the level: enter, clear (passes, links, remnants), finish; up to clean_rounds more rounds."""
         self.todo_parts = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
         self.r_free = self.r + self.prm.free_margin_hc * self.g.hc      # coarse cell centre to material, with the cell half-diagonal margin
         # narrow regions (narrow.py): out of the passes' view, each cut by Thesis IV's trochoid when reached
         self.narrow_state = narrow.LevelRegions(self, self.narrow_regs)
+        mark = self.b.mark()
         if not self.enter() and not narrow.next_region(self):
+            finish.note_unvisited(self, mark)
             return
         for rnd in range(self.clean_rounds + 1):
             # round 0 clears and finishes; a clean-up round takes what the sliver guard and the bans left
@@ -371,24 +393,10 @@ class _Level:
                         dd = [q.distance(Point(*self.cur)) for q in self.todo_parts]
                         kk = int(np.argmin(dd))
                     self.finish_part(self.todo_parts.pop(kk))
-            if rnd > 0:
-                # keep the clean-up round only when it pays: the area it removed is at least 10 % of what
-                # the nominal cut (a_e wide at the cutting feed) removes in the feed time the round adds
-                # (its rapids not counted); else roll it back
-                n0, snap0, cur0, st0 = saved
-                took = float(snap0[0].sum() - self.g.M.sum()) * self.h * self.h
-                P3, _, F3 = self.b.tail(n0 - 1)
-                F3 = F3[1:]
-                L3 = np.linalg.norm(np.diff(P3, axis=0), axis=1) if len(P3) > 1 else np.zeros(0)
-                t_feed = float(np.sum(np.where(np.isfinite(F3) & (F3 > 0), L3 / np.where(F3 > 0, F3, 1.0), 0.0)))
-                if took < self.prm.clean_round_min_yield * self.a_e * self.feed_mm_min * t_feed or took <= 0.0:
-                    self.b.rollback(n0)
-                    self.g.restore(snap0)
-                    self.cur = cur0
-                    self.stats.clear(); self.stats.update(st0)
-                    break
-                self.stats["clean_rounds"] += 1
+            if rnd > 0 and not self.keep_clean_round(saved):
+                break
         self.retract()
+        finish.note_unvisited(self, mark)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -480,6 +488,7 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
         raise PlanningError(f"{source}: the start hole is not inside the pocket")
     narrow_regs = narrow.narrow_regions(allowed, r, h) if prm.narrow_trochoid else []
     narrow_done = []      # one line per narrow region cut by the trochoid (info, program header)
+    left_parts = []       # one line per part of the tool-centre region left uncut (finish._leave_part)
     cfg = {k: v for k, v in locals().items() if k not in ("lev", "z", "z_prev", "g")}
     for lev, z in enumerate(zlev):
         z_prev = top_z if lev == 0 else zlev[lev - 1]
@@ -490,9 +499,11 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
 
         _Level(cfg, lev, z, z_prev, g).run()
     if len(b) == 0:
-        raise PlanningError(f"{source}: nothing to machine")
+        raise PlanningError(f"{source}: nothing to machine" + "".join(f"; {q}" for q in dict.fromkeys(left_parts)))
     done = list(dict.fromkeys(narrow_done))        # the narrow regions cut by the trochoid (narrow.py)
-    tp = b.build(**stats, plan_time_s=time.perf_counter() - t_start, narrow_regions=done, notes=done)
+    left = list(dict.fromkeys(left_parts))         # the parts left uncut (finish._leave_part; a clean-up round repeats them)
+    tp = b.build(**stats, plan_time_s=time.perf_counter() - t_start, narrow_regions=done, left_parts=left,
+                 notes=done + left)
     if tp.kind[0] != _RAPID:                     # the first move (from an unknown place) is a rapid
         tp.kind[0], tp.feed[0], tp.arc[0], tp.arc_center[0] = _RAPID, np.nan, 0, np.nan
     return tp

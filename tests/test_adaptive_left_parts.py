@@ -1,0 +1,51 @@
+"""Parts of the tool-centre region the adaptive planner cannot open are left and stated (issue 28
+item 1), not a failure of the whole job.
+
+A 40 x 30 mm pocket (D = 6 mm, theta = 60 deg; a pocket of this test) with a 6.1 mm square bay
+joined to it by a 4 mm neck: the neck is narrower than the tool, so the bay's part of the
+tool-centre region is a separate sliver 0.1 mm wide (inscribed radius 0.05 mm), too small for the
+smallest helix (``helix_min_frac`` r = 0.3 mm) and with no way in at depth. Before, the finish
+raised PlanningError for the whole job (dwg_box_w_holes, dwg_example009, dwg_many_holes_inner of
+the corpus); now the bay is left, named in ``info["left_parts"]`` and the program header, and
+``plan`` measures it as uncut: above the limit (:func:`cnclab.toolpath.coverage.uncut_limit_mm2`,
+1 mm^2 + 1 % of the reachable area) an :class:`UncutError` unless ``allow_uncut``. The rest of the
+pocket is planned safely (0 plunges or rapids into material, scored by the evaluator at r / 30)."""
+import pytest
+from shapely.geometry import box
+
+from cnclab.nc.program import check_program, write_program
+from cnclab.toolpath import planners
+from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.job import Job
+from cnclab.toolpath.path import Tool
+
+R = 3.0
+H = R / 30.0
+
+
+def _job():
+    # bay 40.8..46.9 x 11.95..18.05 (tool-centre part about 43.0..43.9 x 14.95..15.05), neck 4 mm wide (< D)
+    poly = box(0.0, 0.0, 40.0, 30.0).union(box(39.0, 13.0, 41.0, 17.0)).union(box(40.8, 11.95, 46.9, 18.05))
+    return Job(poly, Tool(2 * R), 60.0, 3.0, feed_mm_min=764.0, spindle_rpm=5968.0, rapid_mm_min=10000.0,
+               link_feed_mm_min=1500.0, v_fmax=1146.0, source="bay behind a neck")
+
+
+def test_a_part_no_entry_can_open_is_refused_as_uncut_by_default():
+    with pytest.raises(planners.UncutError, match="leaves material uncut"):
+        planners.plan(_job(), "adaptive", H)
+
+
+def test_a_part_no_entry_can_open_is_left_and_stated_with_allow_uncut():
+    job = _job()
+    tp = planners.plan(job, "adaptive", H, allow_uncut=True)
+    left = tp.info["left_parts"]
+    assert len(left) == 1 and "too narrow to be entered" in left[0] and ", 15.00)" in left[0]
+    assert tp.info["uncut"]["over"] == [0] and tp.info["warnings"]
+    prog = write_program(tp, job)
+    assert "left uncut" in prog
+    assert check_program(prog, clearance_z=job.clearance_z, top_z=job.top_z).errors == []
+    ev = evaluate(tp, job, H)
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    # the bay (6.1 x 6.1 mm, its corners beyond r unreachable by any tool) is what is left; the
+    # main rectangle is cleared as without the bay (measured 3.6 mm^2 uncut beyond the corners)
+    assert 25.0 < tp.info["uncut"]["uncut_mm2"][0] < 45.0
