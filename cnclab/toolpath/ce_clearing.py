@@ -83,7 +83,7 @@ from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
 from .path import ToolPath, helix_ring, resample_polyline
 
 __all__ = ["PLAN_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "helical_entry",
-           "ClearingSettings", "CutSettings", "ce_clearing", "clearing_path"]
+           "ClearingSettings", "CutSettings", "ce_clearing", "clearing_path", "round_corners"]
 
 #: Planning labels of the clearing's points (written as ToolPath kinds/tags, see the module docstring).
 PLAN_KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
@@ -274,6 +274,11 @@ class ClearingSettings:
     clip_deg : None (default), or an engagement (deg above ``theta_deg``): a lap run is cut only up to
         its first step above it in a trial cut, and resumes after that stretch (``_Clearing.clip``),
         the material skipped left to later laps and the cleanup.
+    corner_radius_mm : the cleanup (offset rings and the final contour pass) rounds every sharp
+        convex corner of the allowed region (a concave corner of the pocket) by an arc of this radius
+        (mm; 0: none), :func:`round_corners`: a tool centre path turning on the spot in a corner meets
+        the corner's cusp along 90 deg of its edge (Jacso's rectangle: theta + 31 deg there); a fillet
+        of radius rho leaves (1 - pi/4) ((rho + r)^2 - r^2) mm^2 more in a 90 deg corner.
     wall_margin_mm : the tool centres at depth (not the jumps, not the entries) are kept this far (mm)
         inside the allowed region, projected onto it when outside (data/pockets/spline_pocket.json:
         the tool 0.006 mm past the wall with 0 mm, 0.002 mm with 0.005 mm, none with 0.02 mm).
@@ -297,6 +302,7 @@ class ClearingSettings:
     cleanup_step_mm: float | None = None
     clip_deg: float | None = None
     wall_margin_mm: float = 0.0
+    corner_radius_mm: float = 0.0
 
     def sample_step_mm(self) -> float:
         """Check the steps and wall options (ValueError naming the parameter); the sample step (mm)."""
@@ -387,6 +393,36 @@ def _rings(region) -> list:
     return rings
 
 
+def round_corners(region, radius_mm: float, min_turn_deg: float = 20.0):
+    """``region`` (mm) with each convex vertex of its rings that turns by more than ``min_turn_deg``
+    (deg) rounded by a tangent arc of radius ``radius_mm`` (mm): the morphological opening of
+    ``region`` by that radius, kept only near those vertices (thin parts elsewhere stay whole).
+
+    >>> from shapely.geometry import box
+    >>> round(box(0, 0, 10, 10).area - round_corners(box(0, 0, 10, 10), 1.0).area, 3)   # 4 (1 - pi/4)
+    0.859
+    """
+    if not radius_mm > 0:
+        return region
+    opened = region.buffer(-radius_mm, quad_segs=64).buffer(radius_mm, quad_segs=64)
+    discs = []
+    for p in _polys(region):
+        for ring in [orient(p, 1.0).exterior] + list(orient(p, 1.0).interiors):
+            V = np.asarray(ring.coords)[:-1]
+            if len(V) < 3:
+                continue
+            a, b = V - np.roll(V, 1, axis=0), np.roll(V, -1, axis=0) - V
+            turn = np.degrees(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1)))
+            # exterior counter-clockwise, holes clockwise: a left turn (> 0) is convex for the region
+            for v, t in zip(V, turn):
+                if t > min_turn_deg:
+                    reach = radius_mm * (1.0 + 1.0 / math.tan(math.radians(180.0 - t) / 2.0))
+                    discs.append(Point(v).buffer(reach, quad_segs=16))
+    if not discs:
+        return region
+    return region.difference(region.difference(opened).intersection(shapely.union_all(discs)))
+
+
 class _Clearing:
     """The state of one :func:`ce_clearing` run: the planning stock, the emitted segments
     ``(points, labels, seed)``, and the steps (entries, laps, links, cleanup) that extend them."""
@@ -418,6 +454,7 @@ class _Clearing:
         self.domain = pocket.buffer(-2 * res)              # wall slivers must not join the cleared region
         self.segs: list = []
         self.cells = geodesic_cells(self.allowed, seeds, settings.link_grid_mm)
+        self.finish = round_corners(self.allowed, settings.corner_radius_mm)
 
     def emit(self, P, K, reg):
         """Append a planning segment; with ``wall_margin_mm`` its points at depth (not the jumps, not the
@@ -633,7 +670,7 @@ class _Clearing:
         ``cleanup_step_mm``, :meth:`offset_rings` first."""
         if self.s.cleanup_step_mm is not None:
             self.offset_rings(self.s.cleanup_step_mm)
-        for ring in _rings(self.allowed):
+        for ring in _rings(self.finish):
             self.ring_pass(ring)
 
     def offset_rings(self, step_mm):
@@ -645,7 +682,7 @@ class _Clearing:
             material, free = self.free_region()
             if material.is_empty:
                 return
-            region = free().buffer(step_mm, quad_segs=16).intersection(self.allowed)
+            region = free().buffer(step_mm, quad_segs=16).intersection(self.finish)
             removed = sum(self.ring_pass(ring) for ring in _rings(region))
             if removed <= self.air_tol:
                 return
