@@ -315,24 +315,46 @@ def _identity(path):
 #: object-cache hooks (``llvmlite/binding/executionengine.py``, wrapped by ``ctypes.CFUNCTYPE`` and
 #: called by LLVM while numba compiles). An exception raised in them (or in anything they call) is
 #: printed and dropped by ctypes ("Exception ignored on calling ctypes callback function"), and the
-#: native code goes on in a state it did not expect (a rare SIGSEGV was seen after one). Only these
-#: frames: stdlib ``ctypes`` code and the rest of llvmlite are ordinary Python called from Python,
-#: where an interrupt is raised at once.
+#: native code goes on in a state it did not expect (a rare SIGSEGV was seen after one).
 _NATIVE_CALLBACKS = tuple((os.path.join("llvmlite", "binding", "executionengine.py"), name)
                           for name in ("_raw_object_cache_notify", "_raw_object_cache_getbuffer"))
+
+#: Packages whose Python code runs under native machinery: numba's dispatcher (C) calls into numba's
+#: Python code to type arguments and to compile or load a kernel from its cache, and numba's compiler
+#: holds a global lock taken in Python. A KeyboardInterrupt raised there was seen to surface as
+#: "SystemError: CPUDispatcher(pass_kernel) returned a result with an exception set" (a CI fuzz run,
+#: SIGINT 1.5 s into `plan`), and one raised between a lock's acquire and its ``with`` block leaves the
+#: lock held for good. A signal arriving there is delivered again once the call is back in other code.
+_DEFER_PACKAGES = ("numba", "llvmlite")
+
+
+def _package_dirs() -> tuple:
+    """The folders (with a trailing separator) of the :data:`_DEFER_PACKAGES` imported so far."""
+    import sys
+
+    dirs = []
+    for name in _DEFER_PACKAGES:
+        f = getattr(sys.modules.get(name), "__file__", None)
+        if f:
+            dirs.append(os.path.dirname(os.path.abspath(f)) + os.sep)
+    return tuple(dirs)
 
 
 def in_native_callback(frame) -> bool:
     """True when ``frame`` (a signal handler's frame argument) or a caller of it runs inside a callback
-    from native code (one of ``_NATIVE_CALLBACKS``), where an exception must not be raised.
+    from native code (one of ``_NATIVE_CALLBACKS``) or in numba/llvmlite's own Python code
+    (:data:`_DEFER_PACKAGES`), where an exception must not be raised.
 
     >>> import sys
     >>> in_native_callback(sys._getframe())
     False
     """
+    dirs = _package_dirs()
     while frame is not None:
         code = frame.f_code
         if any(code.co_name == name and code.co_filename.endswith(os.sep + tail) for tail, name in _NATIVE_CALLBACKS):
+            return True
+        if dirs and code.co_filename.startswith(dirs):
             return True
         frame = frame.f_back
     return False

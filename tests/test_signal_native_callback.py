@@ -31,17 +31,16 @@ def test_native_callback_frames_are_recognised():
     assert in_native_callback(sys._getframe()) is False
 
 
-def test_ordinary_ctypes_and_llvmlite_frames_are_not_callbacks():
-    """stdlib ctypes (loading a library, find_library) and llvmlite's other Python code (its ffi call
-    wrappers, object finalizers) are called from Python, not from native code: an interrupt there is
-    raised at once (the former rule matched every path with a ``ctypes`` or ``llvmlite`` folder)."""
+def test_ordinary_ctypes_frames_are_not_callbacks():
+    """stdlib ctypes (loading a library, find_library) is called from Python, not from native code: an
+    interrupt there is raised at once; a folder merely named like numba/llvmlite is not theirs."""
     import ctypes
 
     stdlib_ctypes = os.path.join(os.path.dirname(ctypes.__file__), "__init__.py")
     assert _in_fake(in_native_callback, stdlib_ctypes, "__init__") is False
     assert _in_fake(in_native_callback, stdlib_ctypes, "_raw_object_cache_notify") is False   # same name, other file
-    assert _in_fake(in_native_callback, f"{_SITE}llvmlite{os.sep}binding{os.sep}ffi.py", "__call__") is False
-    assert _in_fake(in_native_callback, _FAKE, "close") is False
+    assert _in_fake(in_native_callback, f"{_SITE}llvmlite_not{os.sep}binding{os.sep}ffi.py", "__call__") is False
+    assert _in_fake(in_native_callback, f"{_SITE}numbafied{os.sep}core{os.sep}dispatcher.py", "typeof_pyval") is False
     # the real hooks are where the rule says (a new llvmlite that moves them fails here)
     from llvmlite.binding import executionengine as ee
 
@@ -67,3 +66,36 @@ def test_signal_in_a_native_callback_is_raised_after_it_returns():
             late = True
     assert not raised_in_callback
     assert late and run.signum == signal.SIGINT
+
+
+def test_numba_and_llvmlite_code_defers_the_signal():
+    """numba's dispatcher (C) calls numba's Python code to type arguments and load or compile a kernel:
+    a signal there is delivered later (a KeyboardInterrupt raised inside it surfaced as "SystemError:
+    CPUDispatcher(...) returned a result with an exception set"). The real package folders count,
+    wherever they are installed; callers of such a frame do not."""
+    import llvmlite.binding.ffi as ffi
+    import numba.core.dispatcher as disp
+
+    assert _in_fake(in_native_callback, disp.__file__, "typeof_pyval") is True
+    assert _in_fake(in_native_callback, ffi.__file__, "__call__") is True
+    assert in_native_callback(sys._getframe()) is False      # this test's frame: not numba's
+
+
+def test_signal_in_numba_code_is_raised_after_it_returns():
+    import numba.core.dispatcher as disp
+
+    run = InterruptReport([])
+    with run:
+        try:
+            _in_fake(lambda fr: run._handler(signal.SIGINT, fr), disp.__file__, "_compile_for_args")
+            raised_inside = False
+        except KeyboardInterrupt:
+            raised_inside = True
+        try:
+            t0 = time.monotonic()
+            while time.monotonic() - t0 < 5.0:
+                time.sleep(0.01)
+            late = False
+        except KeyboardInterrupt:
+            late = True
+    assert not raised_inside and late

@@ -179,8 +179,12 @@ def run_rs274(program, timeout_s: float = 120.0) -> str:
         proc = subprocess.run([exe, "-t", str(tbl), "-g", str(program.resolve())], capture_output=True,
                               text=True, timeout=timeout_s, cwd=tmp, env=env)
     if proc.returncode < 0:
-        raise OSError(f"{program}: rs274 was killed by signal {-proc.returncode} "
-                      f"({signal.Signals(-proc.returncode).name}); that is a crash, not a verdict on the program")
+        try:
+            name = signal.Signals(-proc.returncode).name
+        except ValueError:                       # a real-time signal has no name in the enum
+            name = "no name"
+        raise OSError(f"{program}: rs274 was killed by signal {-proc.returncode} ({name}); that is a crash, "
+                      "not a verdict on the program")
     if proc.returncode != 0:
         msg = " | ".join(s.strip() for s in proc.stderr.splitlines() if s.strip() and s.strip() != "executing")
         raise Rs274Error(f"{program}: rs274 refused the program (exit {proc.returncode}): {msg}")
