@@ -4,8 +4,8 @@ is the time the written program takes").
 :func:`cnclab.toolpath.planners.plan` gives the helix and ramp entries the job's entry feed
 (:attr:`Job.entry_feed`: ``entry_feed_mm_min``, default 0.5 x the cutting feed) and the writer writes
 every feed as the path has it. So for every registered strategy on bench pockets (rectangle with its
-start hole, long slot, two regions; the constant-engagement strategy refuses all three by its promise,
-tests/test_planners.py, and is checked on a disc, which it plans), the program written and read back
+start hole, long slot, two regions; the constant-engagement strategy, which refuses the last two by its
+promise, is checked on a disc, which it plans), the program written and read back
 by the G-code reader:
 
 * without arc fitting (``arc_tol_mm=None``: one block per planned move): its length / feed time equals
@@ -64,7 +64,7 @@ def _disc_job():
 
 
 def _jobs(strategy):
-    if strategy == "constant-engagement":    # refuses the bench pockets (tests/test_planners.py), after ~20 s each
+    if strategy == "constant-engagement":    # refuses the slot and two regions by its promise; a disc is quicker
         return [_disc_job()]
     return [load_job(data_path(folder, name)) for folder, name in BENCH]
 

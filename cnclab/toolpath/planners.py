@@ -116,7 +116,10 @@ def register(name: str, description: str):
 #: data/pockets/spline_pocket: 51.9 deg, 0.09 % (one link into material) -> 6.1 deg, 0.03 %: PLANNED
 #: (tests/test_constant_engagement_strategy.py; see CE_WALL_MARGIN_MM);
 #: Jacso's rectangle: 67.7, 2.76 % (laps 1.50, links 0.97, cleanup 0.29) -> 34.6, 0.90 % (laps 0.15,
-#: links 0.21, cleanup 0.53): refused for its maximum (a link and the cleanup in the corners);
+#: links 0.21, cleanup 0.53) -> with the rounded corners (:data:`CE_CORNER_FRACTION`) 11.3, 0.29 %: PLANNED
+#: (tests/test_constant_engagement_strategy.py); the issue-29 pocket's first level 35.1 (cleanup in a
+#: corner) -> 18.4 (a link onto a run along the wall), the 30 x 22 mm pocket of tests/test_deep_pockets.py
+#: 29.1 -> 16.3 (a link), a 28 x 18 mm rectangle 59.5 (a link), L 66.5, star 39.2 (links): still refused;
 #: Jacso's L: 68.4, 2.15 % -> 68.2, 1.38 % (before the clip); star: 69.6, 6.13 % -> 46.8, 3.37 % (cleanup
 #: 2.39 % in the star's inner corners; before the clip); the 60 x 40 mm D8 deep pocket of issue 29
 #: (first level, tests/test_constant_engagement_deep.py): 61.9, 1.24 % -> 32.7, 0.62 % (before the clip);
@@ -181,8 +184,8 @@ def _ce_breach(path: ToolPath, job: Job) -> str | None:
 
 @register("constant-engagement", "Jacsó Thesis III constant-engagement laps from helical entries (ce_clearing); "
           f"plans only jobs on which it keeps the engagement <= theta + {CE_PROMISE_DEG:g} deg and <= theta + 5 deg "
-          f"on all but {CE_SHARE_ABOVE_5_PCT:g} % of its cutting length (else refuses: e.g. discs and the spline "
-          "bench pocket yes; rectangles, L, star no)")
+          f"on all but {CE_SHARE_ABOVE_5_PCT:g} % of its cutting length (else refuses: e.g. discs, the spline "
+          "bench pocket and Jacsó's rectangle yes; L, star, islands no)")
 def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
     """The Thesis III laps (:func:`cnclab.toolpath.ce_clearing.clearing_path`), refused on a job with
     islands, or when the planned level breaks the promise (:data:`CE_PROMISE_DEG`,
@@ -190,9 +193,14 @@ def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
     from . import ce_clearing
 
     if _has_islands(job):
+        # measured with this refusal lifted (r / 20 evaluator, D6, theta 60): the 30 x 22 mm pocket with a
+        # 4 x 4 island of tests/test_deep_pockets.py theta + 79.7 (gate) / 82.2 (roll-in), 5.8 / 7.8 % above
+        # theta + 5; the island pockets of tests/test_strategy_safety.py theta + 120 (180 deg), 5.8-12.2 %:
+        # the laps stop at the island and the cleanup slots round it. Refused up front (planning them
+        # to measure the same breach costs 5-12 s a job).
         raise ValueError(f"{job.source}: the constant-engagement strategy (Thesis III laps) cannot hold the "
-                         "engagement around islands (issue 28: 176-180 deg beside a hole near a wall); use the "
-                         "adaptive strategy")
+                         "engagement around islands (measured: theta + 80 to 120 deg, up to 180 deg where the "
+                         "cleanup slots round an island near a wall; issue 28); use the adaptive strategy")
     # runs resuming from the wall entered by roll-in arcs (islands are refused above: with islands the
     # arcs leave material, see ce_routes.roll_in)
     a_e = job.tool_radius * (1.0 - math.cos(math.radians(job.theta_deg)))     # radial depth at theta, mm
