@@ -33,9 +33,14 @@ def test_every_pocket_has_a_freecad_fixture_made_from_its_job(name):
     except ValueError as exc:          # FreeCAD planned nothing: say so, never a silent empty row
         assert "no cutting motion" in str(exc)
         return
-    # the program runs at the job's feed, and its time is the G-code reader's canonical total
-    f = p.feed[p.is_kind("cut")]
-    assert np.allclose(f, job.feed_mm_min, rtol=1e-3)
+    # the program cuts at the job's feed and runs its helix and descents at the job's entry feed (as
+    # ours do: FreeCAD's vertFeed, prov["settings"]), and its time is the G-code reader's canonical total
+    d = np.diff(p.xyz, axis=0)
+    cut = p.is_kind("cut") & np.r_[False, np.linalg.norm(d, axis=1) > 1e-9]   # zero-length repeats take no time
+    down = np.r_[False, d[:, 2] < -1e-9]
+    assert np.allclose(p.feed[cut & ~down], job.feed_mm_min, rtol=1e-3)
+    assert np.allclose(p.feed[cut & down], job.entry_feed, rtol=1e-3)
+    assert prov["settings"]["entry_feed_mm_min"] == job.entry_feed
     moves = gcode.load_gcode(fx.FIXTURES / f"{name}.ngc")
     assert p.time_s(job.rapid_mm_min)["total_s"] == pytest.approx(
         gcode.program_time(moves, job.rapid_mm_min)["total_s"], rel=1e-9)
