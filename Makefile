@@ -6,11 +6,12 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.cnclab-installed
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: reproduce test lab venv claims bench strip clean help browser-test site gcode-check tp-check
+.PHONY: reproduce test test-slow lab venv claims bench strip clean help browser-test site gcode-check tp-check
 
 help:
 	@echo "make reproduce   execute every notebook, write build/ (figures, HTML, claims report)"
 	@echo "make test        unit + claims tests and every notebook in fast mode (CNCLAB_FAST=1)"
+	@echo "make test-slow   the tests marked slow (skipped by make test; CI runs both)"
 	@echo "make lab         open the collection in JupyterLab at notebooks/00_index.ipynb"
 	@echo "make bench       run benchmarks/ and print their tables"
 	@echo "make claims      print the claims ledger with freshly computed values"
@@ -39,6 +40,10 @@ reproduce: $(STAMP)
 test: $(STAMP)
 	$(PY) -m cnclab warm
 	CNCLAB_FAST=1 $(PY) -m pytest -n $(JOBS) --dist loadgroup --durations=15 tests
+
+# the tests marked `slow` (skipped by `make test`), in fast mode; CI runs it after `make test`
+test-slow: $(STAMP)
+	CNCLAB_FAST=1 CNCLAB_SLOW=1 $(PY) -m pytest -n $(JOBS) --dist loadgroup --durations=10 -m slow tests
 
 # JupyterLab on the collection, opened at the index notebook (Ctrl-C twice to stop)
 lab: $(STAMP)

@@ -64,6 +64,16 @@ def pytest_collection_modifyitems(session, config, items):
         return next((i for i, s in enumerate(_SLOW_FIRST) if s in item.nodeid), len(_SLOW_FIRST))
 
     items.sort(key=rank)   # stable: the rest keeps its order
+    # `slow` tests (a whole bench pocket where a smaller case shows the same property) are skipped in
+    # fast mode (`make test`) unless CNCLAB_SLOW=1; `make test-slow` runs exactly them and CI runs it
+    # after `make test` (README, "The two commands"), so nothing goes untested.
+    from cnclab.runtime import fast_mode
+
+    if fast_mode() and os.environ.get("CNCLAB_SLOW", "").strip().lower() not in {"1", "true", "yes", "on"}:
+        skip = pytest.mark.skip(reason="slow: run by `make test-slow` (CI runs it) or without CNCLAB_FAST")
+        for item in items:
+            if "slow" in item.keywords:
+                item.add_marker(skip)
 
 
 #: one-level plans by (strategy, one-level job, resolution, options), pickled, for the whole session
