@@ -44,7 +44,7 @@ from .path import ToolPath
 __all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "MAX_LEVELS", "MIN_LEVEL_STEP_MM", "GOUGE_TOL_MM", "CE_PROMISE_DEG",
            "CE_SHARE_ABOVE_5_PCT", "CE_CORNER_FRACTION",
            "MIN_RESOLUTION_MM", "MAX_RESOLUTION_TOOL_FRACTION", "UncutError", "check_limits", "check_resolution",
-           "plan", "register"]
+           "adaptive_engagement_check", "plan", "register"]
 
 #: name -> (planner(job, resolution_mm, **options) -> ToolPath for one level, one-line description);
 #: ``resolution_mm`` None: the planner's own default
@@ -309,13 +309,75 @@ def _snap_inside(passes, job: Job) -> list:
     return out
 
 
-@register("adaptive", "engagement-controlled clearing of the simulated stock, links at depth (adaptive_clearing)")
+@register("adaptive", "engagement-controlled clearing of the simulated stock, links at depth (adaptive_clearing); "
+          "promises an engagement <= theta + 10 deg, measured on every job (refuses a job beyond it unless "
+          "allow_engagement_breach)")
 def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
+    """One level of :func:`cnclab.toolpath.adaptive.plan_job`, its promise checked
+    (:func:`adaptive_engagement_check`): a level whose measured maximum exceeds theta +
+    ``AdaptiveParams.promise_max_deg`` is planned once more with the tighter sliver guard
+    (``retry_guard_deg``), the lower maximum kept; still beyond it, ``info["engagement_breach"]`` says
+    where and how far (:func:`plan` refuses it unless ``allow_engagement_breach``, then states it in
+    ``info["warnings"]`` and the program header); ``info["engagement_check"]`` holds the measure."""
     # the planning pixel is at most r/60, the resolution the planner was designed and measured at
     # (at r/20 the K&Y pocket keeps 169 mm^2 uncut, at r/30 5 mm^2): a finer resolution_mm is used as
     # given, a coarser one (a caller's evaluation dixel) plans at r/60 (info["resolution_mm"] says so)
     h = None if resolution_mm is None else min(float(resolution_mm), job.tool_radius / 60.0)
-    return adaptive.plan_job(job, resolution_mm=h, **options)
+    prm = options.pop("params", None) or adaptive.AdaptiveParams()
+    path = adaptive.plan_job(job, resolution_mm=h, params=prm, **options)
+    chk = adaptive_engagement_check(path, job, prm)
+    if chk is not None and not chk["ok"]:
+        again = adaptive.plan_job(job, resolution_mm=h, params=dataclasses.replace(prm, guard_deg=prm.retry_guard_deg),
+                                  **options)
+        chk2 = adaptive_engagement_check(again, job, prm)
+        if chk2["max_deg"] < chk["max_deg"]:
+            path, chk = again, dict(chk2, retried=True)
+    if chk is None:
+        return path
+    path.info["engagement_check"] = chk
+    if not chk["ok"]:
+        path.info["engagement_breach"] = (
+            f"{job.source}: the adaptive strategy promises an engagement <= theta + {prm.promise_max_deg:g} deg; the "
+            f"level at z {min(job.levels()):g} mm measures {chk['where']} (evaluator at {chk['resolution_mm']:.4g} mm)")
+    return path
+
+
+def adaptive_engagement_check(path: ToolPath, job: Job, prm) -> dict | None:
+    """The adaptive planner's promise measured on its own ``path`` of one level: the evaluator
+    (:func:`cnclab.toolpath.evaluate.evaluate`, the exact vector stock) at ``prm.check_resolution_frac`` r
+    (at least ``prm.check_min_resolution_mm``); None when the check is off (frac 0). A dict:
+    ``resolution_mm``, ``max_deg`` (over the cutting samples; with ``prm.slot_narrow`` its slots, whose
+    engagement the notes state, aside), ``p95_deg``, ``share_above_5_pct`` (the evaluator's), ``ok``
+    (max <= theta + ``prm.promise_max_deg``), ``where`` (the maximum, where it is, the tag of its move).
+
+    >>> from shapely.geometry import box
+    >>> from cnclab.toolpath.path import Tool
+    >>> job = Job(box(0, 0, 16, 11), Tool(3.0), 60.0, 1.0, v_c=100, f_z=0.05)
+    >>> prm = adaptive.AdaptiveParams()
+    >>> chk = adaptive_engagement_check(adaptive.plan_job(job, params=prm), job, prm)
+    >>> chk["ok"], chk["max_deg"] <= 70.0, round(chk["resolution_mm"], 3)
+    (True, True, 0.05)
+    """
+    if not prm.check_resolution_frac > 0:
+        return None
+    hc = max(prm.check_resolution_frac * job.tool_radius, prm.check_min_resolution_mm)
+    ev = evaluate(path, job, hc, machine=None)
+    th = job.theta_deg
+    t = ev.trace
+    tags = np.array([str(g) for g in t["tag"]], dtype=object)
+    # the slots of the opt-in slot_narrow are no breach: their engagement (up to 180 deg) is its stated point
+    counted = np.asarray(t["cutting"], bool) & ~((tags == "slot") if prm.slot_narrow else np.zeros(len(tags), bool))
+    eng = np.where(counted, np.nan_to_num(np.asarray(t["engagement_deg"], float), nan=-1.0), -1.0)
+    if not counted.any():
+        return {"resolution_mm": hc, "max_deg": float("nan"), "p95_deg": float("nan"), "share_above_5_pct": float("nan"),
+                "ok": True, "where": "no cutting"}
+    k = int(np.argmax(eng))
+    mx = float(eng[k])
+    where = (f"max {mx:.1f} deg (theta {th:g} + {mx - th:.1f}) at ({t['x'][k]:.2f}, {t['y'][k]:.2f}) in a move "
+             f"'{tags[k] or 'clearing pass'}', p95 {ev.engagement_p95_deg:.1f} deg, {ev.share_above_5_pct:.2f} % of "
+             "the cutting length above theta + 5 deg")
+    return {"resolution_mm": hc, "max_deg": mx, "p95_deg": float(ev.engagement_p95_deg),
+            "share_above_5_pct": float(ev.share_above_5_pct), "ok": bool(mx <= th + prm.promise_max_deg), "where": where}
 
 
 #: the strategy :func:`plan` (and ``python -m cnclab plan``) uses when none is named
@@ -392,6 +454,10 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     material the levels above left, ``info["uncut"]`` what the plan leaves by region
     (:func:`cnclab.toolpath.coverage.uncut_report`). A plan leaving more than the stated limit in a
     region raises :class:`UncutError`, unless ``allow_uncut`` (then ``info["warnings"]`` says it).
+    A level beyond the strategy's engagement promise (the adaptive one, measured per level:
+    ``info["engagement_check"]``, the worst level's) raises ValueError naming the job, where and how
+    far, unless the option ``allow_engagement_breach=True`` (then the warnings and the program header
+    say it). Every level's ``notes``, ``warnings`` and ``left_parts`` reach the result.
     A job beyond :data:`MAX_LEVELS` / :data:`MIN_LEVEL_STEP_MM`, or a ``resolution_mm`` outside
     [:data:`MIN_RESOLUTION_MM`, D / 10] (:func:`check_resolution`), is refused before planning."""
     if strategy not in STRATEGIES:
@@ -401,6 +467,7 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     check_resolution(resolution_mm, job)
     check_limits(job)
     f = STRATEGIES[strategy][0]
+    allow_breach = bool(options.pop("allow_engagement_breach", False))
     levels = job.levels()
     tops = [job.top_z] + levels[:-1]
     paths = []
@@ -409,6 +476,13 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
         paths.append(_run_strategy(f, strategy, lv, resolution_mm, options))
     out = with_entry_feed(join_levels(paths, tops, job), job)
     out.info.update(strategy=strategy, levels=levels)
+    for key in ("notes", "warnings", "left_parts"):      # every level's, not only the first's
+        got = list(dict.fromkeys(q for p in paths for q in p.info.get(key, ())))
+        if got:
+            out.info[key] = got
+    checks = [p.info["engagement_check"] for p in paths if "engagement_check" in p.info]
+    if checks:                         # the adaptive promise per level (_adaptive): the worst level's
+        out.info["engagement_check"] = max(checks, key=lambda c: c["max_deg"])
     gouge, at = coverage.wall_gouge(out, job)
     if gouge > GOUGE_TOL_MM:
         raise ValueError(f"{job.source}: strategy {strategy} cannot honour this job: its tool reaches {gouge:.3f} mm "
@@ -421,4 +495,10 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
         if not allow_uncut:
             raise UncutError(msg + " (accept it with allow_uncut=True, CLI --allow-uncut)", rep)
         out.info.setdefault("warnings", []).append(msg)
+    breach = [p.info["engagement_breach"] for p in paths if "engagement_breach" in p.info]
+    if breach:          # a strategy's promise broken on this job (the adaptive one: _adaptive)
+        if not allow_breach:
+            raise ValueError(breach[0] + ": refused (accept it with allow_engagement_breach=True)")
+        out.info.setdefault("warnings", []).extend(breach)
+        out.info["notes"] = list(out.info.get("notes", ())) + [f"engagement beyond the promise: {b}" for b in breach]
     return out

@@ -634,7 +634,10 @@ class LevelRegions:
         self.A0 = g.A.copy()
         narrow_all = shapely.union_all([q.polygon.buffer(g.h) for q in self.pending])
         rest = lv.allowed.difference(narrow_all)
-        reach = rest.buffer(lv.r) if not rest.is_empty else shapely.Polygon()
+        # hidden: material farther than r + hide_margin_h h from the rest (a pass's tool centre lies up to
+        # a pixel's half-diagonal inside the raster ``am`` of a region, and a thin crescent of hidden
+        # material at its circle spans a wide arc: dwg_concave_hole theta + 14.8 deg at r)
+        reach = rest.buffer(lv.r + lv.prm.narrow_hide_margin_h * g.h) if not rest.is_empty else shapely.Polygon()
         self.masks, self.saved = [], []
         for reg in self.pending:
             am = raster(reg.polygon.buffer(g.h), g.x0, g.y0, g.h, g.nx, g.ny) > 0

@@ -47,8 +47,10 @@ class AdaptiveParams:
     #: (finish.slot_strips; off: they are left, and ``plan`` reports them as uncut)
     slot_narrow: bool = False
     #: deg: the finish is held at theta + finish_margin_deg (the simulator measures up to ~3 deg more
-    #: than the planning stock on thin wall rests; theta + 10 is the bound)
-    finish_margin_deg: float = 6.0
+    #: than the planning stock on thin wall rests; theta + 10 is the bound). Was 6: above theta + 5 by
+    #: design, the laps alone put 2.0 % (spiral_0) and 1.27 % (rectilinear_0) of the cutting length
+    #: above theta + 5 (the promise: <= 0.5 %); at 4: 0.015 and 0.23 %, uncut +0.0 / +0.5 mm^2
+    finish_margin_deg: float = 4.0
     #: deg: a finishing point snapped onto the wall keeps the snap only while its engagement stays
     #: within theta + this (random pockets, theta 40, r 2 mm: max 52.2 deg at +7, 46.8 at +2)
     finish_snap_deg: float = 2.0
@@ -123,6 +125,13 @@ class AdaptiveParams:
     #: (r - h) slot_bulbs_2 reaches theta + 22 deg (the mouth point then chosen has its first return
     #: meet material), at 0 the islands-neck case of test_adaptive_clearing theta + 11 in a later pass
     mouth_capsule_margin_h: float = 0.5
+    #: pixels (h): while a narrow region waits for its trochoid (narrow.LevelRegions), the material
+    #: only its tool centres reach is hidden from the passes; "only" means farther than r + this from
+    #: the rest of the tool-centre region. Was r (0): a pass's tool centre may stand up to a pixel's
+    #: half-diagonal inside the region's raster, and the hidden crescent its circle then meets, thin
+    #: but wide in angle, was engagement the planner did not see (dwg_concave_hole, D 8: theta + 14.8 deg
+    #: measured where the planner saw theta - 1.2; program stock 52.0 deg at that step)
+    narrow_hide_margin_h: float = 2.0
     #: fraction of a_e: before the tool lifts for another helix entry (at the entry feed, a slot's
     #: chip), the pass bans are lifted once (a second chance: the places a failed start closed with
     #: its r-wide ban are tried again through cleared area, a failed start then banning only
@@ -187,3 +196,23 @@ class AdaptiveParams:
     #: this and from which no pass start outside the bans is reachable is undone and its place banned
     #: (dwg_forms_4: three entries in a row, each followed by no pass, on slivers the passes had failed on)
     idle_entry_frac: float = 0.1
+
+    # -- the promise, checked per job (issue 28 item 2) -------------------------------------------
+    #: deg over theta: the engagement maximum the planner promises (the issue-29 target), measured on
+    #: every planned level by the package's one evaluator (cnclab.toolpath.evaluate, the exact vector
+    #: stock the corpus benchmark scores) in ``plan``'s adaptive registration: a level beyond it is
+    #: planned once more (``retry_guard_deg``), then stated in the result and the program header, and
+    #: refused unless ``allow_engagement_breach``
+    promise_max_deg: float = 10.0
+    #: fraction of r: the check's evaluation dixel (the corpus benchmark's r / 30, so that the check
+    #: and the benchmark agree; a coarser one misses peaks: neck_3 reads theta + 2.8 at r / 20 where
+    #: r / 30 reads + 11.2), at least ``check_min_resolution_mm``; 0: no check
+    check_resolution_frac: float = 1.0 / 30.0
+    #: mm: ... and never finer than this (the benchmark's clip: a 1 mm tool's check stays affordable)
+    check_min_resolution_mm: float = 0.05
+    #: deg: the retry of a level beyond the promise plans with the clearing passes' sliver guard at
+    #: theta + this (tighter than ``guard_deg``: the passes turn away from wall skins and crescents
+    #: thinner than a pixel, which the planning stock under-counts); the retry is kept when its maximum
+    #: is lower. Measured: spiral_0 theta + 11.1 -> + 5.5, neck_3 + 11.2 -> + 4.4, regions_3 + 10.0 ->
+    #: + 8.6; as the default it cost up to 1 % program time and 1.2 mm^2 uncut (dwg_concave_hole)
+    retry_guard_deg: float = 3.0

@@ -1,0 +1,50 @@
+"""The adaptive strategy's engagement promise checked per job (issue 28 item 2): ``plan`` measures
+every planned level with the package's one evaluator (exact vector stock) at r / 30 -- the corpus
+benchmark's resolution -- and refuses a level beyond theta + ``AdaptiveParams.promise_max_deg`` unless
+``allow_engagement_breach`` (then stated in the warnings and the program header), as the
+constant-engagement strategy does with its own promise. The check can fail: with the bound lowered
+to theta - 30 deg (no path clears a pocket so) every job is refused; the default bound (theta + 10)
+holds on a plain rectangle (a 16 x 11 mm pocket, D 3 mm, theta 60 deg, measured max about theta + 4)."""
+import pytest
+from shapely.geometry import box
+
+from cnclab.nc.program import write_program
+from cnclab.toolpath import planners
+from cnclab.toolpath.adaptive import AdaptiveParams
+from cnclab.toolpath.job import Job
+from cnclab.toolpath.path import Tool
+
+THETA = 60.0
+
+
+def _job(depth=1.0):
+    return Job(box(0, 0, 16, 11), Tool(3.0), THETA, 1.0, depth=depth, feed_mm_min=500.0, spindle_rpm=8000.0,
+               source="promise-test")
+
+
+def test_the_promise_holds_and_is_recorded_on_a_plain_pocket():
+    tp = planners.plan(_job(), "adaptive")
+    chk = tp.info["engagement_check"]
+    assert chk["ok"] and chk["max_deg"] <= THETA + 10.0
+    assert chk["resolution_mm"] == pytest.approx(0.05)          # max(r / 30 = 0.05, 0.05) mm
+    assert not any("beyond the promise" in str(q) for q in tp.info.get("notes", ()))
+
+
+def test_a_level_beyond_the_promise_is_refused():
+    with pytest.raises(ValueError, match=r"promise-test: the adaptive strategy promises an engagement <= theta "
+                                         r"\+ -30 deg; the level at z -1 mm measures max .* at \(.*refused"):
+        planners.plan(_job(), "adaptive", params=AdaptiveParams(promise_max_deg=-30.0))
+
+
+def test_a_breach_allowed_is_stated_in_the_result_and_the_program_header():
+    job = _job(depth=2.0)                  # two levels: every level's statement reaches the result
+    tp = planners.plan(job, "adaptive", params=AdaptiveParams(promise_max_deg=-30.0), allow_engagement_breach=True)
+    assert tp.info["engagement_check"]["ok"] is False
+    assert sum("promises an engagement" in w for w in tp.info["warnings"]) == 2
+    header = [ln for ln in write_program(tp, job).splitlines() if ln.startswith("(")]
+    assert any("engagement beyond the promise" in ln for ln in header)
+
+
+def test_the_check_can_be_switched_off():
+    tp = planners.plan(_job(), "adaptive", params=AdaptiveParams(check_resolution_frac=0.0, promise_max_deg=-30.0))
+    assert "engagement_check" not in tp.info
