@@ -116,10 +116,11 @@ def register(name: str, description: str):
 #: data/pockets/spline_pocket: 51.9 deg, 0.09 % (one link into material) -> 6.1 deg, 0.03 %: PLANNED
 #: (tests/test_constant_engagement_strategy.py; see CE_WALL_MARGIN_MM);
 #: Jacso's rectangle: 67.7, 2.76 % (laps 1.50, links 0.97, cleanup 0.29) -> 34.6, 0.90 % (laps 0.15,
-#: links 0.21, cleanup 0.53) -> with the rounded corners (:data:`CE_CORNER_FRACTION`) 11.3, 0.29 %: PLANNED
+#: links 0.21, cleanup 0.53) -> with the rounded corners (:data:`CE_CORNER_FRACTION`) 11.3, 0.28 %: PLANNED
 #: (tests/test_constant_engagement_strategy.py); the issue-29 pocket's first level 35.1 (cleanup in a
-#: corner) -> 18.4 (a link onto a run along the wall), the 30 x 22 mm pocket of tests/test_deep_pockets.py
-#: 29.1 -> 16.3 (a link), a 28 x 18 mm rectangle 59.5 (a link), L 66.5, star 39.2 (links): still refused;
+#: corner) -> 18.3, 0.35 % (a link onto the wall by a corner), the 30 x 22 mm pocket of
+#: tests/test_deep_pockets.py 29.1 -> 18.0 (a link by a corner), a 28 x 18 mm rectangle 59.5 (a link),
+#: L 65.6, star 39.9 (links; star 2.73 % above theta + 5): still refused (measured 2026-11-26 on 6da9d23);
 #: Jacso's L: 68.4, 2.15 % -> 68.2, 1.38 % (before the clip); star: 69.6, 6.13 % -> 46.8, 3.37 % (cleanup
 #: 2.39 % in the star's inner corners; before the clip); the 60 x 40 mm D8 deep pocket of issue 29
 #: (first level, tests/test_constant_engagement_deep.py): 61.9, 1.24 % -> 32.7, 0.62 % (before the clip);
