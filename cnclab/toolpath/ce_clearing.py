@@ -78,7 +78,7 @@ from ..simulation import dixel
 from ..simulation.common import simulate
 from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
                                   resample_path, thesis3_path)
-from .ce_routes import chord_clear, dilate, geodesic, geodesic_cells, roll_in, split_runs
+from .ce_routes import chord_clear, dilate, geodesic, geodesic_cells, roll_in, round_corners, split_runs
 from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
 from .path import ToolPath, helix_ring, resample_polyline
 
@@ -393,36 +393,6 @@ def _rings(region) -> list:
     return rings
 
 
-def round_corners(region, radius_mm: float, min_turn_deg: float = 20.0):
-    """``region`` (mm) with each convex vertex of its rings that turns by more than ``min_turn_deg``
-    (deg) rounded by a tangent arc of radius ``radius_mm`` (mm): the morphological opening of
-    ``region`` by that radius, kept only near those vertices (thin parts elsewhere stay whole).
-
-    >>> from shapely.geometry import box
-    >>> round(box(0, 0, 10, 10).area - round_corners(box(0, 0, 10, 10), 1.0).area, 3)   # 4 (1 - pi/4)
-    0.859
-    """
-    if not radius_mm > 0:
-        return region
-    opened = region.buffer(-radius_mm, quad_segs=64).buffer(radius_mm, quad_segs=64)
-    discs = []
-    for p in _polys(region):
-        for ring in [orient(p, 1.0).exterior] + list(orient(p, 1.0).interiors):
-            V = np.asarray(ring.coords)[:-1]
-            if len(V) < 3:
-                continue
-            a, b = V - np.roll(V, 1, axis=0), np.roll(V, -1, axis=0) - V
-            turn = np.degrees(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1)))
-            # exterior counter-clockwise, holes clockwise: a left turn (> 0) is convex for the region
-            for v, t in zip(V, turn):
-                if t > min_turn_deg:
-                    reach = radius_mm * (1.0 + 1.0 / math.tan(math.radians(180.0 - t) / 2.0))
-                    discs.append(Point(v).buffer(reach, quad_segs=16))
-    if not discs:
-        return region
-    return region.difference(region.difference(opened).intersection(shapely.union_all(discs)))
-
-
 #: the free region (``_Clearing.free_region``) grows only the material farther than this many rows from
 #: the walls: the rest is farther than r - (this x res) > r - res from every centre of the allowed region,
 #: so the region is the same in exact arithmetic (< 1: strictly), and growing it costs 3x less (the rows'
@@ -431,6 +401,11 @@ def round_corners(region, radius_mm: float, min_turn_deg: float = 20.0):
 #: 0.5 / 0.75 / 0.9 rows: max theta + 13.5 / 16.0 / 17.3 / 11.3 deg, the excess in a link onto a wall run
 #: by a corner (the weak spot of this strategy: see planners.CE_PROMISE_DEG)
 FREE_CORE_ROWS = 0.9
+
+
+#: a cleanup ring's start candidates (``_Clearing.ring_start``): spacing (mm) and how many are tried
+RING_START_SPACING_MM = 1.0
+RING_START_TRIES = 12
 
 
 class _Clearing:
@@ -485,7 +460,7 @@ class _Clearing:
         r, res = self.r, self.s.resolution_mm
         # material within FREE_CORE_ROWS x res of the walls is farther than r - res from every centre of the
         # allowed region: left out of the growing (the rows' staircase along the walls and the wall slivers)
-        return mat, functools.cache(lambda: self.allowed.difference(dilate(mat.intersection(self.core), r - res, res)))
+        return mat, functools.cache(lambda: self.allowed.difference(dilate(mat & self.core, r - res, res)))
 
     def link(self, R, k, kind="link"):
         """Emit the link ``R`` after cutting it through the stock: steps that remove material -> linkcut."""
@@ -715,6 +690,8 @@ class _Clearing:
             if in_air.any():
                 d = np.where(in_air, d, np.inf)
         i0 = int(np.argmin(d))
+        if self.s.link_limit_deg is not None and self.s.cleanup_step_mm is not None:
+            R0, i0 = self.ring_start(R0, i0, material, free)
         R = _resample(np.vstack([np.roll(R0, -i0, axis=0), R0[i0:i0 + 1]]), self.step)
         if not (self.sim(R, copy=True).removed_mm2.to_numpy() > self.air_tol).any():
             return 0.0
@@ -724,6 +701,33 @@ class _Clearing:
         if run is not None:
             self.emit(*run, -1)
         return float(rem.sum())
+
+    def ring_start(self, R0, i0, material, free):
+        """``(ring, i)``: where a cleanup ring ``R0`` (mm, open, closed implicitly) starts: ``R0[i0]`` when
+        the link to it (:meth:`route`) and the ring's first tool radius from it, cut on a copy of the
+        stock, stay within ``theta + link_limit_deg``; else the first such point of the ring resampled
+        every :data:`RING_START_SPACING_MM`, nearest to the tool first (at most :data:`RING_START_TRIES`);
+        else the one that cuts least (the nearest start: theta + 18 deg on the issue-29 pocket)."""
+        lim = self.theta + self.s.link_limit_deg
+
+        def trial(ring, i):
+            head = _resample(np.vstack([np.roll(ring, -i, axis=0), ring[i:i + 1]]), self.step)
+            s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(head, axis=0).T))]
+            return self.trial_max(self.route(ring[i], material, free)
+                                  + [("link", head[:max(2, int(np.searchsorted(s, self.r)))])])
+
+        best = (trial(R0, i0), R0, i0)
+        if best[0] <= lim:
+            return R0, i0
+        ring = _resample(np.vstack([R0, R0[:1]]), RING_START_SPACING_MM)[:-1]
+        order = np.argsort(np.hypot(*(ring - self.segs[-1][0][-1]).T), kind="stable")
+        for i in order[:RING_START_TRIES]:
+            e = trial(ring, int(i))
+            if e <= lim:
+                return ring, int(i)
+            if e < best[0]:
+                best = (e, ring, int(i))
+        return best[1], best[2]
 
     def run(self) -> ToolPath:
         """Entries and laps seed after seed, the cleanup, and the ToolPath of it all."""
