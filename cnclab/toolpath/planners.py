@@ -116,11 +116,13 @@ def register(name: str, description: str):
 #: data/pockets/spline_pocket: 51.9 deg, 0.09 % (one link into material) -> 6.1 deg, 0.03 %: PLANNED
 #: (tests/test_constant_engagement_strategy.py; see CE_WALL_MARGIN_MM);
 #: Jacso's rectangle: 67.7, 2.76 % (laps 1.50, links 0.97, cleanup 0.29) -> 34.6, 0.90 % (laps 0.15,
-#: links 0.21, cleanup 0.53) -> with the rounded corners (:data:`CE_CORNER_FRACTION`) 11.3, 0.28 %: PLANNED
-#: (tests/test_constant_engagement_strategy.py); the issue-29 pocket's first level 35.1 (cleanup in a
-#: corner) -> 18.3, 0.35 % (a link onto the wall by a corner), the 30 x 22 mm pocket of
-#: tests/test_deep_pockets.py 29.1 -> 18.0 (a link by a corner), a 28 x 18 mm rectangle 59.5 (a link),
-#: L 65.6, star 39.9 (links; star 2.73 % above theta + 5): still refused (measured 2026-11-26 on 6da9d23);
+#: links 0.21, cleanup 0.53) -> with the rounded corners (:data:`CE_CORNER_FRACTION`) 11.3, 0.28 % -> with
+#: the cleanup rings' start chosen by a trial cut (ce_clearing ``_Clearing.ring_start``) 7.8, 0.17 %: PLANNED
+#: (tests/test_constant_engagement_strategy.py); the issue-29 pocket (60 x 40, D8, depth 7.5, no start
+#: hole) 35.1 (cleanup in a corner) -> 18.3 (a ring's link onto the wall by a corner) -> 9.6, 0.30 %: PLANNED
+#: (tests/test_constant_engagement_deep.py); the 30 x 22 mm pocket of tests/test_deep_pockets.py 29.1 ->
+#: 18.0 -> 8.6, 0.04 %: PLANNED; star 39.9 (links) -> 23.1, 1.09 % (cleanup by a tip); a 28 x 18 mm
+#: rectangle 59.5, L 65.6 (links of the laps onto a wall run, head-on): still refused (2026-11-26);
 #: Jacso's L: 68.4, 2.15 % -> 68.2, 1.38 % (before the clip); star: 69.6, 6.13 % -> 46.8, 3.37 % (cleanup
 #: 2.39 % in the star's inner corners; before the clip); the 60 x 40 mm D8 deep pocket of issue 29
 #: (first level, tests/test_constant_engagement_deep.py): 61.9, 1.24 % -> 32.7, 0.62 % (before the clip);
@@ -186,7 +188,7 @@ def _ce_breach(path: ToolPath, job: Job) -> str | None:
 @register("constant-engagement", "Jacsó Thesis III constant-engagement laps from helical entries (ce_clearing); "
           f"plans only jobs on which it keeps the engagement <= theta + {CE_PROMISE_DEG:g} deg and <= theta + 5 deg "
           f"on all but {CE_SHARE_ABOVE_5_PCT:g} % of its cutting length (else refuses: e.g. discs, the spline "
-          "bench pocket and Jacsó's rectangle yes; L, star, islands no)")
+          "bench pocket, Jacsó's rectangle, the 60 x 40 mm deep pocket yes; L, star, islands no)")
 def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
     """The Thesis III laps (:func:`cnclab.toolpath.ce_clearing.clearing_path`), refused on a job with
     islands, or when the planned level breaks the promise (:data:`CE_PROMISE_DEG`,
