@@ -190,25 +190,21 @@ def _ce_breach(path: ToolPath, job: Job) -> str | None:
           f"on all but {CE_SHARE_ABOVE_5_PCT:g} % of its cutting length (else refuses: e.g. discs, the spline "
           "bench pocket, Jacsó's rectangle, the 60 x 40 mm deep pocket yes; L, star, islands no)")
 def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
-    """The Thesis III laps (:func:`cnclab.toolpath.ce_clearing.clearing_path`), refused on a job with
-    islands, or when the planned level breaks the promise (:data:`CE_PROMISE_DEG`,
-    :data:`CE_SHARE_ABOVE_5_PCT`, measured by the evaluator at r / 20)."""
+    """The Thesis III laps (:func:`cnclab.toolpath.ce_clearing.clearing_path`), refused when the planned
+    level breaks the promise (:data:`CE_PROMISE_DEG`, :data:`CE_SHARE_ABOVE_5_PCT`, measured by the
+    evaluator at r / 20; islands included: no island pocket measured so far keeps it)."""
     from . import ce_clearing
 
-    if _has_islands(job):
-        # measured with this refusal lifted (r / 20 evaluator, D6, theta 60): the 30 x 22 mm pocket with a
-        # 4 x 4 island of tests/test_deep_pockets.py theta + 79.7 (gate) / 82.2 (roll-in), 5.8 / 7.8 % above
-        # theta + 5; the island pockets of tests/test_strategy_safety.py theta + 120 (180 deg), 5.8-12.2 %:
-        # the laps stop at the island and the cleanup slots round it. Refused up front (planning them
-        # to measure the same breach costs 5-12 s a job).
-        raise ValueError(f"{job.source}: the constant-engagement strategy (Thesis III laps) cannot hold the "
-                         "engagement around islands (measured: theta + 80 to 120 deg, up to 180 deg where the "
-                         "cleanup slots round an island near a wall; issue 28); use the adaptive strategy")
-    # runs resuming from the wall entered by roll-in arcs (islands are refused above: with islands the
-    # arcs leave material, see ce_routes.roll_in)
+    # runs resuming from the wall entered by roll-in arcs; around islands (where the arcs leave material,
+    # see ce_routes.roll_in) the wall stretches are gated instead. Islands are planned and checked like
+    # any pocket: measured at r / 20 (D6, theta 60), the 30 x 22 mm pocket with a 4 x 4 island of
+    # tests/test_deep_pockets.py theta + 81.8, 4.9 % above theta + 5, the island pockets of
+    # tests/test_strategy_safety.py theta + 120 (180 deg), 6.6-12.5 %: the laps stop at the island and
+    # the cleanup slots round it, so they are refused with those numbers (issue 28)
+    wall = "gate" if _has_islands(job) else "roll-in"
     a_e = job.tool_radius * (1.0 - math.cos(math.radians(job.theta_deg)))     # radial depth at theta, mm
     path = ce_clearing.clearing_path(job, resolution_mm=_res(resolution_mm),
-                                     **{"wall": "roll-in", "link_limit_deg": CE_LINK_LIMIT_DEG,
+                                     **{"wall": wall, "link_limit_deg": CE_LINK_LIMIT_DEG,
                                         "clip_deg": CE_CLIP_DEG, "cleanup_step_mm": CE_CLEANUP_STEP_FRACTION * a_e,
                                         "wall_margin_mm": CE_WALL_MARGIN_MM,
                                         "corner_radius_mm": CE_CORNER_FRACTION * job.tool_radius, **options})
