@@ -31,7 +31,7 @@ def _job(pocket):
 def _run(name, wall="gate"):
     pk = POCKETS[name]
     job = _job(pk)
-    path = cc.clearing_path(job, resolution_mm=H, wall=wall)
+    path = cc.ce_clearing(job, resolution_mm=H, wall=wall)
     return job, path, evaluate(path, job, H)
 
 
@@ -141,40 +141,46 @@ def test_clamp_to_region_respects_islands():
 
 def test_bad_input_names_the_parameter():
     pk = box(0, 0, 40, 30)
+
+    def job(poly=pk, r=R, theta=THETA):
+        return Job(poly, Tool(2 * r), theta, 1.0, v_c=60.0, feed_mm_min=1000.0)
+
     with pytest.raises(ValueError, match="theta_deg"):
-        cc.ce_clearing(pk, R, 0.0)
+        cc.ce_clearing(job(theta=0.0))
     with pytest.raises(ValueError, match="tool_radius"):
-        cc.ce_clearing(pk, -1.0, THETA)
-    with pytest.raises(ValueError, match="tool_radius"):
-        cc.ce_clearing(pk, 20.0, THETA)                      # the tool does not fit
+        cc.ce_clearing(job(r=20.0))                      # the tool does not fit
     with pytest.raises(ValueError, match="resolution_mm"):
-        cc.ce_clearing(pk, R, THETA, resolution_mm=0)
+        cc.ce_clearing(job(), resolution_mm=0)
     with pytest.raises(ValueError, match="seeds"):
-        cc.ce_clearing(pk, R, THETA, seeds=[(1.0, 1.0)])
+        cc.ce_clearing(job(), seeds=[(1.0, 1.0)])
     with pytest.raises(ValueError, match="pocket"):
-        cc.ce_clearing("not a polygon", R, THETA)
+        cc.ce_clearing(job(poly="not a polygon"))
+    with pytest.raises(ValueError, match="Job"):
+        cc.ce_clearing(pk)
     with pytest.raises(ValueError, match="entry_radius_mm"):
         cc.helical_entry((0, 0), 4.0, R)
     with pytest.raises(ValueError, match="wall"):
-        cc.ce_clearing(pk, R, THETA, wall="slide")
+        cc.ce_clearing(job(), wall="slide")
     with pytest.raises(ValueError, match="seed_clearance_ratio"):
         cc.default_seeds(pk, 1.5)
-    with pytest.raises(ValueError, match="z_cut"):
-        cc.ce_clearing(pk, R, THETA, top_z=0.0, clearance_z=-1.0)
-    with pytest.raises(TypeError, match="'wal'"):                  # a field of neither settings class
-        cc.ce_clearing(pk, R, THETA, wal="gate")
+    with pytest.raises(TypeError, match="'wal'"):                  # not a ClearingSettings field
+        cc.ce_clearing(job(), wal="gate")
+    with pytest.raises(TypeError, match="'a_p'"):                  # cutting data come from the job only
+        cc.ce_clearing(job(), a_p=2.0)
     with pytest.raises(ValueError, match="resolution_mm"):          # the same check through the dataclass
-        cc.ce_clearing(pk, R, THETA, cc.ClearingSettings(resolution_mm=-1.0))
+        cc.ce_clearing(job(), cc.ClearingSettings(resolution_mm=-1.0))
 
 
 def test_keyword_options_and_settings_objects_plan_the_same_path():
-    """The keyword options are the fields of ClearingSettings / CutSettings: both spellings give one path."""
-    pk = box(0, 0, 24, 18)
-    a = cc.ce_clearing(pk, 3.0, 60.0, resolution_mm=0.25, max_laps=3, a_p=2.0, top_z=1.0)
-    b = cc.ce_clearing(pk, 3.0, 60.0, cc.ClearingSettings(resolution_mm=0.25, max_laps=3),
-                       cc.CutSettings(a_p=2.0, top_z=1.0))
+    """The keyword options are the fields of ClearingSettings: both spellings give one path; the cutting
+    level, feeds and planes are the job's."""
+    job = Job(box(0, 0, 24, 18), Tool(6.0), 60.0, 2.0, top_z=1.0, clearance_z=6.0, v_c=60.0, feed_mm_min=800.0)
+    a = cc.ce_clearing(job, resolution_mm=0.25, max_laps=3)
+    b = cc.ce_clearing(job, cc.ClearingSettings(resolution_mm=0.25, max_laps=3))
     assert np.array_equal(a.xyz, b.xyz) and a.kinds().tolist() == b.kinds().tolist()
     assert a.xyz[:, 2].min() == pytest.approx(-1.0)                 # top_z - a_p
+    assert a.xyz[:, 2].max() == pytest.approx(6.0)                  # the job's clearance plane
+    assert np.nanmax(a.feed[a.is_kind("cut")]) == pytest.approx(800.0)
 
 
 def _shares(path, job):
@@ -199,8 +205,8 @@ def test_link_limit_and_offset_rings_lower_the_engagement_above_theta():
     2.15 -> 0.61 %, cleanup 1.06 -> 0.72 %, whole path 3.61 -> 1.44 % -- still with nothing plunged
     or rapid into material and only the corner cusps uncut."""
     job = Job(box(0, 0, 28, 18), Tool(6.0), 60.0, 1.0, v_c=100, f_z=0.05)
-    before = cc.clearing_path(job, resolution_mm=0.1, wall="roll-in")
-    after = cc.clearing_path(job, resolution_mm=0.1, wall="roll-in", link_limit_deg=10.0,
+    before = cc.ce_clearing(job, resolution_mm=0.1, wall="roll-in")
+    after = cc.ce_clearing(job, resolution_mm=0.1, wall="roll-in", link_limit_deg=10.0,
                              cleanup_step_mm=0.25 * 3.0 * (1 - math.cos(math.radians(60.0))))
     ev0, p0 = _shares(before, job)
     ev1, p1 = _shares(after, job)

@@ -54,7 +54,7 @@ region of the planning stock), followed by a link at depth to the run. The one e
 >>> from cnclab.toolpath.job import Job
 >>> from cnclab.toolpath.path import Tool
 >>> job = Job(box(0, 0, 40, 30), Tool(10.0), 66.42, 1.0, v_c=60, feed_mm_min=1000)
->>> ev = evaluate(clearing_path(job, resolution_mm=0.25), job, 0.25)
+>>> ev = evaluate(ce_clearing(job, resolution_mm=0.25), job, 0.25)
 >>> ev.uncut_beyond_unreachable_mm2 < 1.0                          # only the corner cusps remain
 True
 >>> abs(ev.engagement_p50_deg - 66.42) < 2.0                       # the laps hold theta
@@ -83,7 +83,7 @@ from .job import LINK_FEED_MM_MIN, MAX_LAPS, RAPID_MM_MIN, Job
 from .path import ToolPath, helix_ring, resample_polyline
 
 __all__ = ["PLAN_KINDS", "LINK_FEED_MM_MIN", "RAPID_MM_MIN", "default_seeds", "geodesic_cells", "helical_entry",
-           "ClearingSettings", "CutSettings", "ce_clearing", "clearing_path", "round_corners"]
+           "ClearingSettings", "ce_clearing", "round_corners"]
 
 #: Planning labels of the clearing's points (written as ToolPath kinds/tags, see the module docstring).
 PLAN_KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
@@ -320,67 +320,30 @@ class ClearingSettings:
         return step
 
 
-@dataclasses.dataclass(frozen=True)
-class CutSettings:
-    """Cutting data and program planes of :func:`ce_clearing`.
-
-    Attributes
-    ----------
-    a_p : axial depth (mm; the cutting level is ``top_z - a_p``), also used by the planning simulation.
-    feed_mm_min : cutting feed (mm/min).
-    clearance_z, top_z : the program's clearance plane and stock top (mm).
-    link_feed_mm_min : linking feed (mm/min).
-    spindle_rpm : spindle speed (rpm), or None.
-    tool : the :class:`~cnclab.toolpath.path.Tool`, or None.
-
-    >>> CutSettings(a_p=3.0).z_cut
-    -3.0
-    """
-    a_p: float = 1.0
-    feed_mm_min: float = 1000.0
-    clearance_z: float = 5.0
-    top_z: float = 0.0
-    link_feed_mm_min: float = LINK_FEED_MM_MIN
-    spindle_rpm: float | None = None
-    tool: object = None
-
-    @property
-    def z_cut(self) -> float:
-        """The cutting level (mm): ``top_z - a_p``."""
-        return self.top_z - self.a_p
-
-
-def _settings(settings, cut, options):
-    """(:class:`ClearingSettings`, :class:`CutSettings`) from the given ones (or defaults) and keyword
-    ``options`` naming their fields (TypeError for any other name)."""
-    settings, cut = settings or ClearingSettings(), cut or CutSettings()
-    names = {f.name for f in dataclasses.fields(ClearingSettings)}, {f.name for f in dataclasses.fields(CutSettings)}
-    bad = sorted(set(options) - names[0] - names[1])
-    if bad:
-        raise TypeError(f"ce_clearing() got an unexpected keyword argument {bad[0]!r}")
-    settings = dataclasses.replace(settings, **{k: v for k, v in options.items() if k in names[0]})
-    return settings, dataclasses.replace(cut, **{k: v for k, v in options.items() if k in names[1]})
-
-
-def ce_clearing(pocket, tool_radius: float, theta_deg: float, settings: ClearingSettings | None = None,
-                cut: CutSettings | None = None, **options) -> ToolPath:
-    """Constant-engagement clearing of ``pocket`` (see the module docstring).
+def ce_clearing(job: Job, settings: ClearingSettings | None = None, **options) -> ToolPath:
+    """Constant-engagement clearing of ``job`` (see the module docstring).
 
     Parameters
     ----------
-    pocket : shapely Polygon (mm); holes are islands.
-    tool_radius : flat end mill radius r (mm).
-    theta_deg : target engagement angle (deg), e.g. arccos(1 - a_e/r) for a straight cut at a_e.
-    settings : :class:`ClearingSettings` (planning: seeds, steps, wall handling ...); default all defaults.
-    cut : :class:`CutSettings` (a_p, feeds, planes, spindle, tool); default all defaults.
-    options : any field of either, by name (e.g. ``resolution_mm=0.25, wall="trim", a_p=2.0``),
-        overriding ``settings`` / ``cut``.
+    job : the :class:`~cnclab.toolpath.job.Job`: its polygon (mm; holes are islands), tool (flat end
+        mill, radius r), ``theta_deg``, ``a_p``, feeds, planes and spindle (one level, ``top_z - a_p``).
+    settings : :class:`ClearingSettings` (planning: resolution, seeds, steps, wall handling ...);
+        default all defaults.
+    options : any field of :class:`ClearingSettings`, by name (e.g. ``resolution_mm=0.25,
+        wall="trim"``), overriding ``settings``; another name is a TypeError.
 
     Returns a :class:`~cnclab.toolpath.path.ToolPath` whose ``info`` holds the seeds, laps per seed,
     the entry radius and the planning stock's uncut area.
     """
-    settings, cut = _settings(settings, cut, options)
-    return _Clearing(pocket, tool_radius, theta_deg, settings, cut).run()
+    settings = settings or ClearingSettings()
+    names = {f.name for f in dataclasses.fields(ClearingSettings)}
+    bad = sorted(set(options) - names)
+    if bad:
+        raise TypeError(f"ce_clearing() got an unexpected keyword argument {bad[0]!r} (not a ClearingSettings "
+                        "field; the cutting data come from the job)")
+    if not isinstance(job, Job):
+        raise ValueError(f"ce_clearing: job must be a cnclab Job, got {type(job).__name__}")
+    return _Clearing(job, dataclasses.replace(settings, **options)).run()
 
 
 def _rings(region) -> list:
@@ -412,12 +375,10 @@ class _Clearing:
     """The state of one :func:`ce_clearing` run: the planning stock, the emitted segments
     ``(points, labels, seed)``, and the steps (entries, laps, links, cleanup) that extend them."""
 
-    def __init__(self, pocket, tool_radius, theta_deg, settings: ClearingSettings, cut: CutSettings):
+    def __init__(self, job: Job, settings: ClearingSettings):
+        pocket, tool_radius, theta_deg = job.polygon, job.tool_radius, job.theta_deg
         self.allowed = _check_common(pocket, tool_radius, theta_deg)
-        if not (cut.clearance_z > cut.top_z and cut.a_p > 0):
-            raise ValueError(f"need clearance_z > top_z > z_cut = top_z - a_p (mm), got {cut.clearance_z}, "
-                             f"{cut.top_z}, {cut.a_p}")
-        self.s, self.cut, self.r, self.theta = settings, cut, float(tool_radius), float(theta_deg)
+        self.s, self.job, self.r, self.theta = settings, job, float(tool_radius), float(theta_deg)
         self.step = settings.sample_step_mm()
         self.roll_in = settings.wall == "roll-in"
         self.wall = "gate" if self.roll_in else settings.wall
@@ -452,7 +413,7 @@ class _Clearing:
 
     def sim(self, P, copy=False):
         """Cut the tool centres ``P`` (mm) through the planning stock (a copy with ``copy``): the table."""
-        return simulate(self.stock, P, self.r, self.cut.a_p, self.cut.feed_mm_min, copy=copy)
+        return simulate(self.stock, P, self.r, self.job.a_p, self.job.feed_mm_min, copy=copy)
 
     def free_region(self):
         """Material now, and (computed on demand) the region where the tool centre misses it."""
@@ -529,8 +490,8 @@ class _Clearing:
         st, e_max = self.stock.copy(), 0.0
         for m in route:
             if m[0] == "link":
-                e = simulate(st, _resample(np.asarray(m[1], float), self.step), self.r, self.cut.a_p,
-                             self.cut.feed_mm_min).engagement_deg.to_numpy()
+                e = simulate(st, _resample(np.asarray(m[1], float), self.step), self.r, self.job.a_p,
+                             self.job.feed_mm_min).engagement_deg.to_numpy()
                 e_max = max(e_max, float(np.nanmax(np.r_[e, 0.0])))
         return e_max
 
@@ -565,7 +526,7 @@ class _Clearing:
         while queue:
             P = queue.pop(0)
             material, free = self.free_region()
-            A, j = roll_in(self.stock, P, self.r, lim, self.guard, free, self.cut.a_p, self.cut.feed_mm_min,
+            A, j = roll_in(self.stock, P, self.r, lim, self.guard, free, self.job.a_p, self.job.feed_mm_min,
                             self.step, self.segs[-1][0][-1], self.allowed) if self.roll_in else (None, 0)
             if A is not None:                        # link to the arc's start (in air), roll in
                 self.go_to(A[0], k, material, free)
@@ -621,8 +582,8 @@ class _Clearing:
                 st, e_max = self.stock.copy(), 0.0
                 for m in moves + [("link", head)]:
                     if m[0] == "link":
-                        e = simulate(st, _resample(np.asarray(m[1], float), self.step), self.r, self.cut.a_p,
-                                     self.cut.feed_mm_min).engagement_deg.to_numpy()
+                        e = simulate(st, _resample(np.asarray(m[1], float), self.step), self.r, self.job.a_p,
+                                     self.job.feed_mm_min).engagement_deg.to_numpy()
                         e_max = max(e_max, float(np.nanmax(np.r_[e, 0.0])))
                 if e_max <= lim:
                     return P[j:]
@@ -637,8 +598,8 @@ class _Clearing:
             if not runs:
                 break
             if self.wall == "gate":
-                runs = _gate(self.stock, *runs, self.r, self.theta + self.s.gate_margin_deg, self.cut.a_p,
-                             self.cut.feed_mm_min)
+                runs = _gate(self.stock, *runs, self.r, self.theta + self.s.gate_margin_deg, self.job.a_p,
+                             self.job.feed_mm_min)
                 if not runs:
                     break
             pre, n_segs = self.stock.copy(), len(self.segs)
@@ -743,12 +704,12 @@ class _Clearing:
                 "planning_uncut_area_mm2": self.stock.area(), "theta_deg": self.theta,
                 "resolution_mm": float(self.s.resolution_mm), "step_mm": self.step,
                 "name": "constant-engagement clearing"}
-        c = self.cut
+        j = self.job
         out, landed = _segments(self.segs)
-        path = ToolPath.from_segments(out, z_cut=c.z_cut, feed=c.feed_mm_min, clearance_z=c.clearance_z,
-                                      top_z=c.top_z, link_feed=c.link_feed_mm_min, spindle=c.spindle_rpm,
-                                      tool=c.tool, info=info)
-        return _tag_cleared_plunges(path, out, landed, c.top_z)
+        path = ToolPath.from_segments(out, z_cut=j.top_z - j.a_p, feed=j.feed_mm_min, clearance_z=j.clearance_z,
+                                      top_z=j.top_z, link_feed=j.link_feed_mm_min, spindle=j.spindle_rpm,
+                                      tool=j.tool, info=info)
+        return _tag_cleared_plunges(path, out, landed, j.top_z)
 
 
 def _tag_cleared_plunges(path: ToolPath, segments, landed, top_z: float) -> ToolPath:
@@ -789,12 +750,3 @@ def _segments(segs):
                            np.where(K == "link", "", f"seed {g}" if g >= 0 else ""))
             out.append((P, kind, tag.astype(object)))
     return out, landed
-
-
-def clearing_path(job: Job, resolution_mm: float = 0.1, **options) -> ToolPath:
-    """:func:`ce_clearing` of a :class:`~cnclab.toolpath.job.Job` (its polygon, tool, theta, a_p,
-    feeds, planes); ``options`` go to :func:`ce_clearing`."""
-    return ce_clearing(job.polygon, job.tool_radius, job.theta_deg, resolution_mm=resolution_mm, a_p=job.a_p,
-                       feed_mm_min=job.feed_mm_min, clearance_z=job.clearance_z, top_z=job.top_z,
-                       link_feed_mm_min=job.link_feed_mm_min, spindle_rpm=job.spindle_rpm, tool=job.tool,
-                       **options)

@@ -9,7 +9,7 @@ the clearance plane, the next starts with a rapid there). Units: mm, mm/min, deg
 adaptive (default)       :func:`cnclab.toolpath.adaptive.plan_job` (engagement-controlled
                          clearing of the simulated stock, links at depth through cleared area;
                          issue 16: the planner ``python -m cnclab plan`` runs unless told otherwise)
-constant-engagement      :func:`cnclab.toolpath.ce_clearing.clearing_path` (Jacsó Thesis III laps); plans
+constant-engagement      :func:`cnclab.toolpath.ce_clearing.ce_clearing` (Jacsó Thesis III laps); plans
                          only jobs on which it keeps its promise (:data:`CE_PROMISE_DEG`), refuses the others
 hybrid                   :func:`cnclab.toolpath.pocket.hybrid_path` (Jacsó §4: centre laps + CE trochoid arms)
 contour-parallel         :func:`cnclab.toolpath.pocket.contour_parallel_path` (offsets at a_e)
@@ -190,7 +190,7 @@ def _ce_breach(path: ToolPath, job: Job) -> str | None:
           f"on all but {CE_SHARE_ABOVE_5_PCT:g} % of its cutting length (else refuses: e.g. discs, the spline "
           "bench pocket, Jacsó's rectangle, the 60 x 40 mm deep pocket yes; L, star, islands no)")
 def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
-    """The Thesis III laps (:func:`cnclab.toolpath.ce_clearing.clearing_path`), refused when the planned
+    """The Thesis III laps (:func:`cnclab.toolpath.ce_clearing.ce_clearing`), refused when the planned
     level breaks the promise (:data:`CE_PROMISE_DEG`, :data:`CE_SHARE_ABOVE_5_PCT`, measured by the
     evaluator at r / 20; islands included: no island pocket measured so far keeps it)."""
     from . import ce_clearing
@@ -203,7 +203,7 @@ def _constant_engagement(job: Job, resolution_mm: float, **options) -> ToolPath:
     # the cleanup slots round it, so they are refused with those numbers (issue 28)
     wall = "gate" if _has_islands(job) else "roll-in"
     a_e = job.tool_radius * (1.0 - math.cos(math.radians(job.theta_deg)))     # radial depth at theta, mm
-    path = ce_clearing.clearing_path(job, resolution_mm=_res(resolution_mm),
+    path = ce_clearing.ce_clearing(job, resolution_mm=_res(resolution_mm),
                                      **{"wall": wall, "link_limit_deg": CE_LINK_LIMIT_DEG,
                                         "clip_deg": CE_CLIP_DEG, "cleanup_step_mm": CE_CLEANUP_STEP_FRACTION * a_e,
                                         "wall_margin_mm": CE_WALL_MARGIN_MM,

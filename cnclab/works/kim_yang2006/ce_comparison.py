@@ -64,7 +64,7 @@ def ce_path() -> ToolPath:
 @functools.cache
 @cached()
 def _ce_path(res: float) -> ToolPath:
-    return cc.clearing_path(ky.job(), resolution_mm=res)
+    return cc.ce_clearing(ky.job(), resolution_mm=res)
 
 
 @functools.cache
@@ -206,7 +206,7 @@ def wall_modes(modes: tuple = ("clamp", "gate")) -> pd.DataFrame:
         if w == default_wall:
             ev = evaluation("constant engagement")
         else:
-            path = cc.clearing_path(ky.job(), resolution_mm=resolution_mm(), wall=w)
+            path = cc.ce_clearing(ky.job(), resolution_mm=resolution_mm(), wall=w)
             ev = evaluate(path, ky.job(), resolution_mm())
         laps = _by_tag(ev)["laps"]
         rows[w] = {"laps: max engagement [deg]": laps["max engagement [deg]"],
