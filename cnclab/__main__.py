@@ -86,7 +86,7 @@ def main(argv=None) -> int:
         return 0
     from cnclab import fileio
 
-    fileio.INHERITED_IGNORED.update(_IGNORED_AT_START)       # InterruptReport & co. leave them ignored
+    fileio.keep_ignored(_IGNORED_AT_START)       # InterruptReport & co. leave them ignored
     mod = importlib.import_module(COMMANDS[argv[0]][0])   # an interrupt here: _stop_before_start
     with _interrupts_raise():
         try:

@@ -25,16 +25,24 @@ from typing import Iterator
 
 __all__ = ["atomic_output", "atomic_write", "atomic_write_many", "cleanup_on_signals", "deferred_signals",
            "same_file", "check_outputs", "live_temporary_files", "InterruptReport", "in_native_callback",
-           "redeliver_later", "raise_outside_native_code", "committed_outputs", "INHERITED_IGNORED"]
+           "redeliver_later", "raise_outside_native_code", "committed_outputs", "keep_ignored"]
 
 _LIVE_TMP: set = set()
 _COMMITTED: list = []      # every output this process moved into place (committed_outputs)
-#: signal numbers the process was started with ignored (SIG_IGN survives exec: ``nohup`` ignores
-#: SIGHUP, a non-interactive shell starts its background jobs with SIGINT ignored), recorded by
-#: ``python -m cnclab`` before it installs anything: :class:`InterruptReport` and
-#: :func:`cleanup_on_signals` leave them ignored, as Python itself does for SIGINT
-INHERITED_IGNORED: set = set()
+#: signal numbers the process was started with ignored (:func:`keep_ignored`)
+_INHERITED_IGNORED: set = set()
 _LOCK = threading.Lock()
+
+
+def keep_ignored(signals) -> None:
+    """Record the signal numbers this process was started with ignored (SIG_IGN survives exec:
+    ``nohup`` ignores SIGHUP, a non-interactive shell starts its background jobs with SIGINT
+    ignored); :class:`InterruptReport` and :func:`cleanup_on_signals` then leave them ignored, as
+    Python itself does for SIGINT. Called once by ``python -m cnclab`` before it installs anything.
+
+    >>> keep_ignored([])
+    """
+    _INHERITED_IGNORED.update(int(s) for s in signals)
 
 
 def _umask() -> int:
@@ -293,7 +301,7 @@ def cleanup_on_signals(signals=("SIGTERM", "SIGHUP")):
     old = {}
     for name in signals:
         sig = getattr(signal, name, None)
-        if sig is not None and sig not in INHERITED_IGNORED:
+        if sig is not None and sig not in _INHERITED_IGNORED:
             old[sig] = signal.signal(sig, _raise_exit)
     try:
         yield
@@ -431,7 +439,7 @@ class InterruptReport:
         if threading.current_thread() is threading.main_thread():
             for name in self.NAMES:
                 sig = getattr(signal, name, None)
-                if sig is not None and sig not in INHERITED_IGNORED:
+                if sig is not None and sig not in _INHERITED_IGNORED:
                     self.old[sig] = signal.signal(sig, self._handler)
         return self
 
