@@ -30,6 +30,7 @@ def _laps(lv, part):
     # the tool-centre limit (as the evaluator and Job.allowed() draw it: 64 segments a quarter circle),
     # 1 um inside it: the chords of its arcs never put the tool centre past the true limit
     wall = shapely.boundary(lv.allowed.buffer(-1e-3))
+    sliver = None       # whether the part is narrower than lap_skip_inscribed_frac r (asked once, when needed)
     for ring in [part.exterior, *part.interiors]:
         R = np.asarray(ring.coords)[:-1]
         if len(R) < 3:
@@ -50,6 +51,14 @@ def _laps(lv, part):
             else:
                 k0 = int(free_k[0])
             Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
+            if dm[k0] < lv.r and lap == 0 and sliver is None:
+                sliver = shapely.maximum_inscribed_circle(part).length < lv.prm.lap_skip_inscribed_frac * lv.r
+            if dm[k0] < lv.r and lap == 0 and sliver:
+                # no free place on the ring of a part narrower than the tool (entered, if at all, by a
+                # helix smaller than its ring): the link to the ring and the lap would cut its rest at
+                # the link feed, far beyond the bound (AdaptiveParams.lap_skip_inscribed_frac)
+                _leave_part(lv, part)
+                return
             if lv.cur is not None:
                 e = lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
             else:
