@@ -134,9 +134,18 @@ The loop of one level (``_Level.run``)::
                 clearing_pass()               # steps at theta until the wall, air or the guard ends it
         finish_part(each part)                # wall-following laps at theta + finish margin
     retract()
+    note_unvisited()                          # parts no entry could open: left, stated
+
+A part of the tool-centre region no entry opens, or one narrower than the tool whose rings hold no
+free place when its finish starts, is left and stated (``info["left_parts"]``, the notes, the program
+header); :func:`cnclab.toolpath.planners.plan` measures what it leaves (uncut report, issue 28 item 1).
 
 Levels (a pocket deeper than ``a_p``) are planned one by one by
 :func:`cnclab.toolpath.planners.plan` and joined by :func:`cnclab.toolpath.levels.join_levels`.
+``plan`` also checks the promise on every level (engagement max <= theta +
+``AdaptiveParams.promise_max_deg``, measured by the evaluator at r / 30,
+:func:`cnclab.toolpath.planners.adaptive_engagement_check`): a level beyond it is planned once more
+with the tighter sliver guard, then refused unless ``allow_engagement_breach``.
 
 >>> import numpy as np
 >>> from shapely.geometry import box
