@@ -48,3 +48,30 @@ def test_a_breach_allowed_is_stated_in_the_result_and_the_program_header():
 def test_the_check_can_be_switched_off():
     tp = planners.plan(_job(), "adaptive", params=AdaptiveParams(check_resolution_frac=0.0, promise_max_deg=-30.0))
     assert "engagement_check" not in tp.info
+
+
+def test_cli_refuses_a_breach_or_writes_it_with_the_option(tmp_path, capsys, monkeypatch):
+    """``python -m cnclab plan``: a job beyond the promise is refused (nothing written) naming the
+    option; with ``--allow-engagement-breach`` the program is written, the breach in stderr and the
+    header (the bound lowered to theta - 30 deg through the default parameters, as above)."""
+    import dataclasses
+    import json
+
+    from cnclab.nc import cli_plan
+    from cnclab.toolpath import adaptive
+
+    monkeypatch.setattr(adaptive, "AdaptiveParams",
+                        lambda **kw: AdaptiveParams(**{"promise_max_deg": -30.0, **kw}))
+    job = tmp_path / "box.json"
+    spec = {"polygon": [[0, 0], [16, 0], [16, 11], [0, 11]], "tool_diameter": 3.0, "theta_deg": THETA, "a_p": 1.0,
+            "feed_mm_min": 500.0, "spindle_rpm": 8000.0}
+    job.write_text(json.dumps(spec))
+    out = tmp_path / "box.ngc"
+    assert cli_plan.main([str(job), "-o", str(out)]) == 2
+    assert not out.exists()
+    assert "--allow-engagement-breach" in capsys.readouterr().err
+    assert cli_plan.main([str(job), "-o", str(out), "--allow-engagement-breach"]) == 0
+    assert "promises an engagement" in capsys.readouterr().err
+    header = [ln for ln in out.read_text().splitlines() if ln.startswith("(")]
+    assert any(ln.startswith("(WARNING: ") and "promises an engagement" in ln for ln in header)
+    assert dataclasses.is_dataclass(AdaptiveParams())

@@ -113,4 +113,4 @@ def test_cli_refuses_or_warns_in_output_and_header(one_pass, tmp_path, capsys):
     err = capsys.readouterr().err
     text = out.read_text()
     assert "warning:" in err and "region 0" in err
-    assert "WARNING --allow-uncut: " in text and "uncut beyond unreachable corners by region" in text
+    assert "WARNING: " in text and "uncut beyond unreachable corners by region" in text

@@ -78,7 +78,8 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
         header.insert(1, f"geometry from {job_file.name} layer {layer if layer is not None else 'all'}, chord "
                          f"tolerance {tolerance:g} mm; cutting data from {Path(cutting).name}")
     # a header line is a G-code comment: no parentheses inside
-    header += ["WARNING --allow-uncut: " + w.replace("(", "[").replace(")", "]") for w in path.info.get("warnings", [])]
+    # the planner's warnings: what --allow-uncut / --allow-engagement-breach let through
+    header += ["WARNING: " + w.replace("(", "[").replace(")", "]") for w in path.info.get("warnings", [])]
     header += ["WARNING job: " + w.replace("(", "[").replace(")", "]") for w in getattr(job, "warnings", ())]
     # with ``out`` the one writer checks the text and writes it atomically (nothing written on error)
     text = write_program(path, job, header=header, dialect=dialect, coolant=coolant, out=out, inputs=inputs)
@@ -95,12 +96,12 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
 def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False, *, cutting=None,
                  layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
                  allow_uncut: bool = False, dialect: str = "linuxcnc", coolant: str | None = None,
-                 resolution_mm: float | None = None) -> Path:
+                 resolution_mm: float | None = None, allow_engagement_breach: bool = False) -> Path:
     """Plan ``job_file`` (a job file, or a drawing with ``cutting`` data, see :func:`planned_program`)
     with ``strategy`` (None: the planner's default) and write the program to ``out``; returns the
     output path. Raises ``ValueError`` when the written program fails the static safety check or
-    leaves too much uncut (nothing is written then); with ``allow_uncut`` the uncut warning is
-    printed to stderr and written in the header. The job's plausibility warnings go to stderr
+    leaves too much uncut or breaks the planner's engagement promise (nothing is written then); with
+    ``allow_uncut`` / ``allow_engagement_breach`` the warning is printed to stderr and written in the header. The job's plausibility warnings go to stderr
     unless ``quiet``."""
     job_file, out = Path(job_file), Path(out)
     inputs = [job_file] + ([Path(cutting)] if cutting is not None else [])
@@ -108,7 +109,8 @@ def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False
     text, job, path, chk = planned_program(job_file, strategy, source=str(out), cutting=cutting, layer=layer,
                                            tolerance=tolerance, units=units, dialect=dialect, coolant=coolant, out=out,
                                            inputs=inputs,
-                                           plan_options=dict(allow_uncut=allow_uncut, resolution_mm=resolution_mm))
+                                           plan_options=dict(allow_uncut=allow_uncut, resolution_mm=resolution_mm,
+                                                             allow_engagement_breach=allow_engagement_breach))
     for w in path.info.get("warnings", []):
         print(f"warning: {w}", file=sys.stderr)
     name = strategy or path.info.get("strategy", "default")
@@ -162,6 +164,9 @@ def main(argv=None) -> int:
     ap.add_argument("--allow-uncut", action="store_true",
                     help="write the program even when it leaves more uncut area in a region than the limit "
                          "(1 mm^2 + 1 %% of the region's reachable area), with a WARNING in the output and the header")
+    ap.add_argument("--allow-engagement-breach", action="store_true",
+                    help="write the program even when a level breaks the planner's engagement promise (adaptive: "
+                         "theta + 10 deg, measured at r/30 after one re-plan), with a WARNING in the output and the header")
     ap.add_argument("--dialect", default="linuxcnc", choices=DIALECTS,
                     help="controller dialect: linuxcnc (T M6, G43 H; default) or grbl (GRBL 1.1 words, lines <= 80 "
                          "characters, tool named in a comment)")
@@ -181,5 +186,6 @@ def main(argv=None) -> int:
     return InterruptReport([args.output]).call(
         lambda: plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
                              tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut,
-                             dialect=args.dialect, coolant=args.coolant, resolution_mm=args.resolution),
+                             dialect=args.dialect, coolant=args.coolant, resolution_mm=args.resolution,
+                             allow_engagement_breach=args.allow_engagement_breach),
         (ValueError, OSError, RuntimeError, KeyError), message)

@@ -497,7 +497,7 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     breach = [p.info["engagement_breach"] for p in paths if "engagement_breach" in p.info]
     if breach:          # a strategy's promise broken on this job (the adaptive one: _adaptive)
         if not allow_breach:
-            raise ValueError(breach[0] + ": refused (accept it with allow_engagement_breach=True)")
+            raise ValueError(breach[0] + ": refused (accept it with allow_engagement_breach=True, CLI --allow-engagement-breach)")
         out.info.setdefault("warnings", []).extend(breach)
         out.info["notes"] = list(out.info.get("notes", ())) + [f"engagement beyond the promise: {b}" for b in breach]
     return out
