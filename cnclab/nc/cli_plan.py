@@ -95,13 +95,14 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
 
 def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False, *, cutting=None,
                  layer: str | None = None, tolerance: float = CHORD_TOL_MM, units: str | None = None,
-                 allow_uncut: bool = False, dialect: str = "linuxcnc", coolant: str | None = None,
-                 resolution_mm: float | None = None, allow_engagement_breach: bool = False) -> Path:
+                 dialect: str = "linuxcnc", coolant: str | None = None, **plan_options) -> Path:
     """Plan ``job_file`` (a job file, or a drawing with ``cutting`` data, see :func:`planned_program`)
     with ``strategy`` (None: the planner's default) and write the program to ``out``; returns the
     output path. Raises ``ValueError`` when the written program fails the static safety check or
-    leaves too much uncut or breaks the planner's engagement promise (nothing is written then); with
-    ``allow_uncut`` / ``allow_engagement_breach`` the warning is printed to stderr and written in the header. The job's plausibility warnings go to stderr
+    leaves too much uncut or breaks the planner's engagement promise (nothing is written then);
+    ``plan_options`` go to :func:`cnclab.toolpath.planners.plan` (``allow_uncut``,
+    ``allow_engagement_breach``: the warning is then printed to stderr and written in the header;
+    ``resolution_mm``). The job's plausibility warnings go to stderr
     unless ``quiet``."""
     job_file, out = Path(job_file), Path(out)
     inputs = [job_file] + ([Path(cutting)] if cutting is not None else [])
@@ -109,8 +110,7 @@ def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False
     text, job, path, chk = planned_program(job_file, strategy, source=str(out), cutting=cutting, layer=layer,
                                            tolerance=tolerance, units=units, dialect=dialect, coolant=coolant, out=out,
                                            inputs=inputs,
-                                           plan_options=dict(allow_uncut=allow_uncut, resolution_mm=resolution_mm,
-                                                             allow_engagement_breach=allow_engagement_breach))
+                                           plan_options=plan_options)
     for w in path.info.get("warnings", []):
         print(f"warning: {w}", file=sys.stderr)
     name = strategy or path.info.get("strategy", "default")
