@@ -19,14 +19,21 @@ from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import load_job
 
 
-@pytest.mark.slow
-def test_spline_pocket_is_planned_within_the_promise_and_safely():
-    job = load_job(data_path("pockets", "spline_pocket.json"))
+def _planned_within_the_promise(job):
+    """The strategy's plan of ``job`` and its evaluation at the check's resolution, asserted within the
+    promise and with nothing plunged or rapid into material."""
     path = planners.plan(job, "constant-engagement")
     ev = evaluate(path, job, planners.CE_CHECK_TOOL_FRACTION * job.tool_radius)
     assert ev.engagement_max_deg <= job.theta_deg + planners.CE_PROMISE_DEG
     assert ev.share_above_5_pct <= planners.CE_SHARE_ABOVE_5_PCT
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    return path, ev
+
+
+@pytest.mark.slow
+def test_spline_pocket_is_planned_within_the_promise_and_safely():
+    job = load_job(data_path("pockets", "spline_pocket.json"))
+    path, ev = _planned_within_the_promise(job)
     # the corner cusps (0.28 mm^2 without the margin) and the wall skin of CE_WALL_MARGIN_MM (measured 3.60 mm^2)
     assert ev.uncut_beyond_unreachable_mm2 < 1.0 + job.polygon.length * planners.CE_WALL_MARGIN_MM
     assert ev.wall_gouge_max_mm == 0.0
@@ -39,11 +46,7 @@ def test_rectangle_is_planned_within_the_promise_its_corners_rounded():
     uncut area bounded by what the rounded corners leave: 4 x (1 - pi/4) ((rho + r)^2 - r^2) beyond
     the unreachable cusps, plus the wall skin and 1 mm^2 as on the spline pocket."""
     job = load_job(data_path("jacso2021", "rectangle_pocket.json"))
-    path = planners.plan(job, "constant-engagement")
-    ev = evaluate(path, job, planners.CE_CHECK_TOOL_FRACTION * job.tool_radius)
-    assert ev.engagement_max_deg <= job.theta_deg + planners.CE_PROMISE_DEG
-    assert ev.share_above_5_pct <= planners.CE_SHARE_ABOVE_5_PCT
-    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    path, ev = _planned_within_the_promise(job)
     r, rho = job.tool_radius, planners.CE_CORNER_FRACTION * job.tool_radius
     corners = 4 * (1 - math.pi / 4) * ((rho + r) ** 2 - r ** 2)
     assert ev.uncut_beyond_unreachable_mm2 < corners + 1.0 + job.polygon.length * planners.CE_WALL_MARGIN_MM

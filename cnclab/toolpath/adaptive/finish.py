@@ -132,11 +132,17 @@ def _leave_part(lv, part) -> None:
     none reachable at depth (a sliver thinner than the tool can move in under the engagement bound:
     an entry's tiny helix at most): the lap is skipped, one line in ``lv.left_parts`` (the result's
     ``info["left_parts"]`` and notes, the program header); ``plan`` measures what is left."""
+    _state_left(lv, part, "cleared under engagement control (no cleared place to start its finishing lap): its "
+                          "rest is left uncut")
+
+
+def _state_left(lv, part, why: str) -> None:
+    """One line in ``lv.left_parts`` for a part of the tool-centre region left: where (its largest
+    inscribed circle, mm), its area (mm^2) and ``why`` (after "is too narrow to be ")."""
     ins = shapely.maximum_inscribed_circle(part)
     x, y = ins.coords[0]
     lv.left_parts.append(f"level z {lv.z:g}: a part of the tool-centre region near ({x:.2f}, {y:.2f}) (area "
-                         f"{part.area:.2f} mm^2, inscribed radius {ins.length:.2f} mm) is too narrow to be cleared "
-                         "under engagement control (no cleared place to start its finishing lap): its rest is left uncut")
+                         f"{part.area:.2f} mm^2, inscribed radius {ins.length:.2f} mm) is too narrow to be {why}")
     lv.stats["parts_left"] = lv.stats.get("parts_left", 0) + 1
 
 
@@ -150,12 +156,8 @@ def note_unvisited(lv, mark) -> None:
         near = part.buffer(2.0 * lv.h)
         if len(pts) and shapely.contains_xy(near, pts[:, 0], pts[:, 1]).any():
             continue
-        ins = shapely.maximum_inscribed_circle(part)
-        x, y = ins.coords[0]
-        lv.left_parts.append(f"level z {lv.z:g}: a part of the tool-centre region near ({x:.2f}, {y:.2f}) (area "
-                             f"{part.area:.2f} mm^2, inscribed radius {ins.length:.2f} mm) is too narrow to be entered "
-                             "under engagement control (no helix or ramp fits, no way in at depth): left uncut")
-        lv.stats["parts_left"] = lv.stats.get("parts_left", 0) + 1
+        _state_left(lv, part, "entered under engagement control (no helix or ramp fits, no way in at depth): "
+                              "left uncut")
 
 
 def slot_strips(lv, part) -> None:
