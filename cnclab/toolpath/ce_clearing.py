@@ -579,13 +579,7 @@ class _Clearing:
             head = P[j:max(j + 2, int(np.searchsorted(s_run, s_run[j] + self.r)))]
             route = self.route(P[j], material, free)
             for moves in ([route] if route and route[0][0] == "jump" else [route, self.jump_route(P[j], free)]):
-                st, e_max = self.stock.copy(), 0.0
-                for m in moves + [("link", head)]:
-                    if m[0] == "link":
-                        e = simulate(st, _resample(np.asarray(m[1], float), self.step), self.r, self.job.a_p,
-                                     self.job.feed_mm_min).engagement_deg.to_numpy()
-                        e_max = max(e_max, float(np.nanmax(np.r_[e, 0.0])))
-                if e_max <= lim:
+                if self.trial_max(moves + [("link", head)]) <= lim:
                     return P[j:]
         return P
 

@@ -163,6 +163,13 @@ def _has_islands(job: Job) -> bool:
     return any(len(g.interiors) for g in getattr(job.polygon, "geoms", [job.polygon]))
 
 
+def _engagement_peak(trace, counted) -> tuple:
+    """(engagement (deg) per trace sample with NaN and the samples not ``counted`` at -1, index of
+    the largest): where a strategy's promise is measured."""
+    eng = np.where(counted, np.nan_to_num(np.asarray(trace["engagement_deg"], float), nan=-1.0), -1.0)
+    return eng, int(np.argmax(eng))
+
+
 def _ce_breach(path: ToolPath, job: Job) -> str | None:
     """None when ``path`` keeps the constant-engagement promise on ``job``; else what it breaks: the
     measured maximum and share, where the maximum is, and the share per part of the path."""
@@ -171,12 +178,11 @@ def _ce_breach(path: ToolPath, job: Job) -> str | None:
     if ev.engagement_max_deg <= th + CE_PROMISE_DEG and ev.share_above_5_pct <= CE_SHARE_ABOVE_5_PCT:
         return None
     t = ev.trace
-    eng = np.nan_to_num(np.asarray(t["engagement_deg"], float), nan=-1.0)
     cut = np.asarray(t["cutting"], bool)
+    eng, k = _engagement_peak(t, cut)
     ds = np.asarray(t["ds_mm"], float)
     part = np.array(["cleanup" if "cleanup" in g else "links cutting material" if "linkcut" in g else "laps"
                      for g in t["tag"]], dtype=object)
-    k = int(np.argmax(np.where(cut, eng, -1.0)))
     L = float(ds[cut].sum())
     shares = ", ".join(f"{name} {100.0 * ds[cut & (part == name) & (eng > th + 5)].sum() / L:.2f} %"
                        for name in ("laps", "links cutting material", "cleanup"))
@@ -366,11 +372,10 @@ def adaptive_engagement_check(path: ToolPath, job: Job, prm) -> dict | None:
     tags = np.array([str(g) for g in t["tag"]], dtype=object)
     # the slots of the opt-in slot_narrow are no breach: their engagement (up to 180 deg) is its stated point
     counted = np.asarray(t["cutting"], bool) & ~((tags == "slot") if prm.slot_narrow else np.zeros(len(tags), bool))
-    eng = np.where(counted, np.nan_to_num(np.asarray(t["engagement_deg"], float), nan=-1.0), -1.0)
     if not counted.any():
         return {"resolution_mm": hc, "max_deg": float("nan"), "p95_deg": float("nan"), "share_above_5_pct": float("nan"),
                 "ok": True, "where": "no cutting"}
-    k = int(np.argmax(eng))
+    eng, k = _engagement_peak(t, counted)
     mx = float(eng[k])
     where = (f"max {mx:.1f} deg (theta {th:g} + {mx - th:.1f}) at ({t['x'][k]:.2f}, {t['y'][k]:.2f}) in a move "
              f"'{tags[k] or 'clearing pass'}', p95 {ev.engagement_p95_deg:.1f} deg, {ev.share_above_5_pct:.2f} % of "

@@ -53,14 +53,15 @@ def _laps(lv, part):
             Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
             # free: as for every link end, a coarse cell at least r_free (r + the cell half-diagonal
             # margin) from material; D at the cell of a point is not the point's own distance
-            if dm[k0] < lv.r_free and lap == 0 and sliver is None:
-                sliver = shapely.maximum_inscribed_circle(part).length < lv.prm.lap_skip_inscribed_frac * lv.r
-            if dm[k0] < lv.r_free and lap == 0 and sliver:
-                # no free place on the ring of a part narrower than the tool (entered, if at all, by a
-                # helix smaller than its ring): the link to the ring and the lap would cut its rest at
-                # the link feed, far beyond the bound (AdaptiveParams.lap_skip_inscribed_frac)
-                _leave_part(lv, part)
-                return
+            if dm[k0] < lv.r_free and lap == 0:
+                if sliver is None:
+                    sliver = shapely.maximum_inscribed_circle(part).length < lv.prm.lap_skip_inscribed_frac * lv.r
+                if sliver:
+                    # no free place on the ring of a part narrower than the tool (entered, if at all, by a
+                    # helix smaller than its ring): the link to the ring and the lap would cut its rest at
+                    # the link feed, far beyond the bound (AdaptiveParams.lap_skip_inscribed_frac)
+                    _leave_part(lv, part)
+                    return
             if lv.cur is not None:
                 e = lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
             else:
