@@ -238,9 +238,11 @@ def _run_claims_job(key: str) -> tuple[str, float, str | None]:
     """Evaluate the ledger and write build/claims.{csv,md} (in a worker process)."""
     t0 = time.perf_counter()
     results = claims.evaluate_all(claims.load())
-    p_csv, p_md = claims.write_report(results, build_dir())
+    # the qualitative rows too, every one computed (slow ones included: this is where they are checked)
+    qres = [claims.evaluate_qualitative(q) for q in claims.load_qualitative()]
+    p_csv, p_md = claims.write_report(results, build_dir(), qualitative=qres)
     summary = claims.headline(claims.summary_frame(results)).to_string()
-    bad = [r.claim.claim_id for r in results if not r.ok and not r.skipped]
+    bad = [r.claim.claim_id for r in [*results, *qres] if not r.ok and not r.skipped]
     atomic_write(build_dir() / "cache" / "reproduce" / "claims_summary.json",
                  json.dumps({"summary": summary, "bad": bad, "files": [str(p_csv), str(p_md)]}, indent=1) + "\n")
     sec = time.perf_counter() - t0
