@@ -189,11 +189,20 @@ def test_shortcut_keeps_only_free_chords():
     hc = 1.0
     route = [(3, i) for i in range(3, 17)] + [(j, 16) for j in range(4, 17)]
     pts = np.array([(i + 0.5, j + 0.5) for j, i in route])
-    keep = shortcut(pts, D, Ac, 5.0, -1, -1, 0.0, 0.0, hc)
+    A = np.ones((80, 80), np.uint8)         # the fine mask (h = 0.25 mm): all inside
+    keep = shortcut(pts, D, Ac, 5.0, -1, -1, 0.0, 0.0, hc, A, 0.25)
     assert keep[0] == 0 and keep[-1] == len(pts) - 1 and len(keep) == 3
     for a, b in zip(keep[:-1], keep[1:]):
         assert chord_free(D, Ac, 5.0, -1, -1, 0.0, 0.0, hc, *pts[a], *pts[b])
     assert not chord_free(D, Ac, 5.0, -1, -1, 0.0, 0.0, hc, *pts[0], *pts[-1])
+    # the fine mask is honoured too: a wall pixel on the first leg's chord (x 8 mm, y 3.5 mm) splits it;
+    # every chord the shortcut chose (over more than one route step) stays inside the mask
+    A[14, 32] = 0
+    keep2 = shortcut(pts, D, Ac, 5.0, -1, -1, 0.0, 0.0, hc, A, 0.25)
+    assert len(keep2) > len(keep)
+    from cnclab.toolpath.adaptive.stock import segment_inside
+    for a, b in zip(keep2[:-1], keep2[1:]):
+        assert b == a + 1 or segment_inside(A, 0.0, 0.0, 0.25, *pts[a], *pts[b], 0.0)
 
 
 def _eng2_reference(M, x0, y0, h, cx, cy, r, psi, n, level, level2):

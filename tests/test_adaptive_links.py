@@ -116,17 +116,45 @@ def test_ramp_entries_on_every_level_of_a_deep_job():
 
 
 def test_an_idle_entry_is_undone():
-    # corpus job islands_2 (D 6, theta 105.7): a second helix entry on slivers the passes had failed
-    # on took almost nothing and led to no pass; undone (AdaptiveParams.idle_entry_frac), the job
-    # plans with one entry and one lift (FreeCAD's one), safe and within the engagement bounds
+    # corpus job islands_2 (D 6, theta 105.7), passes from the nearest starts (upstream_start_cells 0,
+    # as plan's re-plans use them): a second helix entry on slivers the passes had failed on took
+    # almost nothing and led to no pass; undone (AdaptiveParams.idle_entry_frac), the job plans with
+    # one entry and one lift (FreeCAD's one), safe and within the engagement bounds. With the default
+    # upstream starts no such entry arises: one entry, one lift
     from cnclab.works.jacso2021 import corpus_comparison as cc
     jb = cc.job("islands_2")
     h = cc.resolution_mm(jb, False)
-    tp = planners.plan(jb, "adaptive", h, allow_uncut=True)
+    tp = planners.plan(jb, "adaptive", h, allow_uncut=True, params=AdaptiveParams(upstream_start_cells=0))
     ev = evaluate(tp, jb, h)
     assert tp.info["entries"] == 1 and tp.info["idle_entries_undone"] >= 1
     assert lifts(ev, jb.top_z) == 1
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0 and ev.wall_gouge_max_mm <= 1e-3
     assert ev.engagement_max_deg <= jb.theta_deg + 10
-    tp0 = planners.plan(jb, "adaptive", h, allow_uncut=True, params=AdaptiveParams(idle_entry_frac=0.0))
+    tp0 = planners.plan(jb, "adaptive", h, allow_uncut=True,
+                        params=AdaptiveParams(idle_entry_frac=0.0, upstream_start_cells=0))
     assert tp0.info["entries"] == 2
+    tp_up = planners.plan(jb, "adaptive", h, allow_uncut=True)
+    assert tp_up.info["entries"] == 1 and lifts(evaluate(tp_up, jb, h), jb.top_z) == 1
+
+
+def test_upstream_end_walks_the_band_of_starts_against_the_climb_direction():
+    # a coarse field (1 mm cells): material east of column 20 (D = 20 - i mm to its west), the
+    # tool-centre mask rows 5..34. With r_free 2 and band_hi 3.5 the band of pass starts is columns
+    # 17-18. The climb heading with material on the right runs north along it, so its upstream end is
+    # the band's southern end, row 5 (the wall); a banned row stops the walk just before it; a cell
+    # off the band gradient-less (D constant) stays where it is
+    from cnclab.toolpath.adaptive.links import upstream_end
+    ny, nx = 40, 30
+    i = np.arange(nx)
+    D = np.tile(np.where(i < 20, 20.0 - i, 0.0), (ny, 1))
+    Ac = np.zeros((ny, nx), bool)
+    Ac[5:35, :] = True
+    none = np.zeros((1, 1), bool)
+    j, i0 = upstream_end(D, Ac, none, 2.0, 3.5, 20, 17, 200)
+    assert j == 5 and i0 in (17, 18)
+    banned = np.zeros((ny, nx), bool)
+    banned[10, :] = True
+    assert upstream_end(D, Ac, banned, 2.0, 3.5, 20, 17, 200)[0] == 11
+    assert upstream_end(D, Ac, none, 2.0, 3.5, 20, 17, 4)[0] == 16      # at most 4 steps
+    flat = np.full((ny, nx), 5.0)
+    assert upstream_end(flat, Ac, none, 2.0, 3.5, 20, 17, 200) == (20, 17)

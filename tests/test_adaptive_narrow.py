@@ -142,3 +142,21 @@ def test_join_axis_rounds_the_mouth_corner():
     s, T = narrow._frame(j.axis)
     kappa = np.abs(np.gradient(np.unwrap(np.arctan2(T[:, 1], T[:, 0])), s))
     assert 1.0 / kappa.max() >= 0.9 * narrow.JOIN_RADIUS_C * 1.0 / 2
+
+
+@pytest.mark.parametrize("L, W, D, theta", [(60.0, 12.0, 8.0, 60.0), (47.3, 10.0, 6.0, 45.0), (50.0, 6.7, 5.0, 73.4)])
+def test_trochoid_front_reaches_a_dead_end(L, W, D, theta):
+    # a closed channel end (dead): cut_region extends the axis by c - h towards it; the periods step on
+    # until the front of the last one (its largest tool-centre reach along the axis) lands on that
+    # end within half a planning pixel -- a last period shorter than the step, never a step short of
+    # the face (at 60 x 12, D 8 the front used to stop 0.41 mm short, leaving the face's middle uncut).
+    # No period steps past it (front <= s_end + 1e-9)
+    r = D / 2
+    h = r / 30
+    allowed = box(0, 0, L, W).buffer(-r, join_style="mitre")
+    reg = narrow.narrow_regions(allowed, r, h)[0]
+    s_end = reg.length + float(reg.radius[-1]) - h
+    Q, K, F, steps, _ = narrow.axis_trochoid(reg, allowed, r, theta, h, s_end=s_end, hole_mm=float(reg.radius[0]))
+    t = (reg.axis[-1] - reg.axis[0]) / np.linalg.norm(reg.axis[-1] - reg.axis[0])
+    front = float(((Q - reg.axis[0]) @ t).max())
+    assert s_end - 0.5 * h <= front <= s_end + 1e-9

@@ -319,9 +319,11 @@ def _snap_inside(passes, job: Job) -> list:
           "allow_engagement_breach)")
 def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
     """One level of :func:`cnclab.toolpath.adaptive.plan_job`, its promise checked
-    (:func:`adaptive_engagement_check`): a level whose measured maximum exceeds theta +
-    ``AdaptiveParams.promise_max_deg`` is planned once more with the tighter sliver guard
-    (``retry_guard_deg``), the lower maximum kept; still beyond it, ``info["engagement_breach"]`` says
+    (:func:`adaptive_engagement_check`): a level beyond the bounds (max theta +
+    ``AdaptiveParams.promise_max_deg``, p95 theta + ``promise_p95_deg``, share above theta + 5 deg
+    ``promise_share_pct``) is planned again (:func:`_retries`: the tighter sliver guard
+    ``retry_guard_deg``, the nearest pass starts, both) and the first plan within all three kept, else
+    the lowest maximum; a maximum still beyond the promise: ``info["engagement_breach"]`` says
     where and how far (:func:`plan` refuses it unless ``allow_engagement_breach``, then states it in
     ``info["warnings"]`` and the program header); ``info["engagement_check"]`` holds the measure."""
     # the planning pixel is at most r/60, the resolution the planner was designed and measured at
@@ -331,20 +333,34 @@ def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
     prm = options.pop("params", None) or adaptive.AdaptiveParams()
     path = adaptive.plan_job(job, resolution_mm=h, params=prm, **options)
     chk = adaptive_engagement_check(path, job, prm)
-    if chk is not None and not chk["ok"]:
-        again = adaptive.plan_job(job, resolution_mm=h, params=dataclasses.replace(prm, guard_deg=prm.retry_guard_deg),
-                                  **options)
-        chk2 = adaptive_engagement_check(again, job, prm)
-        if chk2["max_deg"] < chk["max_deg"]:
-            path, chk = again, dict(chk2, retried=True)
     if chk is None:
         return path
+    for again_prm in _retries(prm):
+        if _within_bounds(chk, job, prm):
+            break
+        again = adaptive.plan_job(job, resolution_mm=h, params=again_prm, **options)
+        chk2 = adaptive_engagement_check(again, job, prm)
+        if _within_bounds(chk2, job, prm) or (not _within_bounds(chk, job, prm) and chk2["max_deg"] < chk["max_deg"]):
+            path, chk = again, dict(chk2, retried=True)
     path.info["engagement_check"] = chk
     if not chk["ok"]:
         path.info["engagement_breach"] = (
             f"{job.source}: the adaptive strategy promises an engagement <= theta + {prm.promise_max_deg:g} deg; the "
             f"level at z {min(job.levels()):g} mm measures {chk['where']} (evaluator at {chk['resolution_mm']:.4g} mm)")
     return path
+
+
+def _retries(prm):
+    """The re-plans of a level beyond the engagement bounds, in order: the tighter sliver guard, the
+    nearest pass starts, both (:class:`cnclab.toolpath.adaptive.AdaptiveParams`)."""
+    guard = dataclasses.replace(prm, guard_deg=prm.retry_guard_deg)
+    return [guard, dataclasses.replace(prm, upstream_start_cells=0), dataclasses.replace(guard, upstream_start_cells=0)]
+
+
+def _within_bounds(chk: dict, job: Job, prm) -> bool:
+    """Whether a level's :func:`adaptive_engagement_check` holds all three bounds: max, p95 and share."""
+    return bool(chk["ok"] and chk["p95_deg"] <= job.theta_deg + prm.promise_p95_deg
+                and chk["share_above_5_pct"] <= prm.promise_share_pct)
 
 
 def adaptive_engagement_check(path: ToolPath, job: Job, prm) -> dict | None:

@@ -40,10 +40,16 @@ Design (the ideas and where they come from; the code is cnclab's own)
   run ``1.5 r`` through air (that air tail is dropped; a pass that met no material at all in a band
   narrower than the tool is tried once more with ``3.5 r``, kept if it removes 0.2 a_e per mm: the
   way to the face of a neck is a loop mostly through air). Kim & Yang's insertion idea -- insert a path only where the regular
-  pass would leave material -- becomes the start rule: every pass starts at the cleared-region
-  point *nearest through cleared area* to where the tool is whose disk just touches material
-  (distance to the nearest material = r), heading along the material boundary; the controller
+  pass would leave material -- becomes the start rule: the next pass starts on the band of
+  cleared-region points whose disk just touches material (distance to the nearest material = r)
+  that is *nearest through cleared area* to where the tool is, at that band's **upstream end**
+  (:func:`.links.upstream_end`: walked against the climb direction, up to ``upstream_start_cells``
+  coarse cells, to a wall, a ban or a bend), heading along the material boundary; the controller
   then turns into the material and settles at ``theta`` (no perpendicular approach: no slotting).
+  A pass so started runs the whole boundary, as FreeCAD Adaptive's long arcs do, where a start at
+  the nearest point beside a wall hooked off it after a few mm (one link at depth each: two
+  machine stops). A pass that would cut less than ``wall_sliver_max_area_rae`` r a_e, all of it
+  within reach of a finishing lap still to come, is undone with its link (the lap takes that cusp).
   Where the tool-centre region is narrower than the turning circle and a pass runs straight into
   air, it is started once the other way round (the face at the end of a band lies behind it).
 * **Links** (Adaptive2d's ``keepToolDown`` linking through cleared area): the start of the next

@@ -160,6 +160,12 @@ class Grid:
             self._shadow[1][w] = self.Mr[w]
         self._since = None
 
+    def taken_since_checkpoint(self) -> np.ndarray:
+        """(m, 2) centres (mm) of the planning-stock pixels removed since the last :meth:`checkpoint`."""
+        w = self._window(self._since)
+        J, I = np.nonzero((self._shadow[0][w] != 0) & (self.M[w] == 0))
+        return np.c_[self.x0 + (I + w[1].start + 0.5) * self.h, self.y0 + (J + w[0].start + 0.5) * self.h]
+
     def rollback(self):
         """Set the stocks back to the last :meth:`checkpoint` (only the window changed since)."""
         box = self._since

@@ -244,6 +244,72 @@ def dijkstra(D, Ac, banned, r_free, band_hi, goal, start, geo, reach, buf, A):
 
 
 @njit(cache=True)
+def upstream_end(D, Ac, banned, r_free, band_hi, j, i, max_cells):
+    """The upstream end of the band of pass starts through the cell (j, i): walking the goal cells
+    (in ``Ac``, r_free <= D < band_hi, not banned) against the climb direction (the heading along the
+    material boundary with material on the right, from D's gradient) -- 8-neighbour steps, each the
+    best aligned (cosine >= 0.5) with the smoothed walking direction, no cell twice -- until no
+    neighbour continues the run, or ``max_cells`` steps. A pass started there runs the whole
+    boundary downstream instead of hooking off it where it began (a start beside a wall)."""
+    ny, nx = D.shape
+    nb = banned.shape[0] > 1
+    gy = D[min(j + 1, ny - 1), i] - D[max(j - 1, 0), i]
+    gx = D[j, min(i + 1, nx - 1)] - D[j, max(i - 1, 0)]
+    g = math.hypot(gx, gy)
+    if not (g > 0.0 and math.isfinite(g)):
+        return j, i
+    # the climb heading is the gradient turned clockwise: (gy, -gx) / g; upstream is its opposite
+    ux = -gy / g
+    uy = gx / g
+    seen_j = np.empty(max_cells + 1, np.int64)
+    seen_i = np.empty(max_cells + 1, np.int64)
+    seen_j[0] = j
+    seen_i[0] = i
+    ns = 1
+    for _ in range(max_cells):
+        best = 0.5
+        bj = -1
+        bi = -1
+        for dj in range(-1, 2):
+            for di in range(-1, 2):
+                if dj == 0 and di == 0:
+                    continue
+                jj = j + dj
+                ii = i + di
+                if jj < 0 or ii < 0 or jj >= ny or ii >= nx:
+                    continue
+                if not (Ac[jj, ii] and D[jj, ii] >= r_free and D[jj, ii] < band_hi) or (nb and banned[jj, ii]):
+                    continue
+                dup = False
+                for q in range(ns):
+                    if seen_j[q] == jj and seen_i[q] == ii:
+                        dup = True
+                        break
+                if dup:
+                    continue
+                L = math.hypot(di, dj)
+                c = (di * ux + dj * uy) / L
+                if c > best:
+                    best = c
+                    bj = jj
+                    bi = ii
+        if bj < 0:
+            break
+        L = math.hypot(bi - i, bj - j)
+        ux = 0.7 * ux + 0.3 * (bi - i) / L
+        uy = 0.7 * uy + 0.3 * (bj - j) / L
+        n = math.hypot(ux, uy)
+        ux /= n
+        uy /= n
+        j = bj
+        i = bi
+        seen_j[ns] = j
+        seen_i[ns] = i
+        ns += 1
+    return j, i
+
+
+@njit(cache=True)
 def chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, ax, ay, bx, by):
     """True when the chord a-b stays in free coarse cells (Ac and D >= r_free, or (gj, gi)): sampled
     every hc/2, its interior samples in free cells and no sample off the grid."""
@@ -262,10 +328,13 @@ def chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, ax, ay, bx, by):
 
 
 @njit(cache=True)
-def shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
+def shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc, A, h):
     """Indices of the points of ``pts`` (m, 2) kept by greedy straight chords that stay free
-    (:func:`chord_free`): from each kept point the farthest reachable one (a binary search while
-    the gap is over 8 points)."""
+    (:func:`chord_free`) and inside the fine tool-centre mask ``A`` (pixel ``h``; sampled every h/2,
+    :func:`segment_inside`: the coarse samples every hc/2 can cut a corner of the region between
+    them, a link clipping a wall by a few hundredths of a mm): from each kept point the farthest
+    reachable one (a binary search while the gap is over 8 points). The first chord may start on the
+    true wall (a finishing lap ends there), outside the mask for its first 2 h."""
     m = pts.shape[0]
     out = np.empty(m, np.int64)
     out[0] = 0
@@ -273,7 +342,9 @@ def shortcut(pts, D, Ac, r_free, gj, gi, x0, y0, hc):
     i = 0
     while i < m - 1:
         j = m - 1
-        while j > i + 1 and not chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1]):
+        while j > i + 1 and not (chord_free(D, Ac, r_free, gj, gi, x0, y0, hc, pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1])
+                                 and segment_inside(A, x0, y0, h, pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1],
+                                                    2.0 * h if i == 0 else 0.0)):
             j = max(i + 1, (i + j) // 2) if j - i > 8 else j - 1
         out[n] = j
         n += 1

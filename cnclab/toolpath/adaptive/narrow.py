@@ -24,7 +24,9 @@ Steps (one role: the narrow regions, from detection to their moves):
   ``C(s0 + x) + y N(s0 + x)`` (C the axis, N its left normal: the pattern's climb side kept), the
   periods laid closer on bends (:func:`bend_step`: the outer side of a bend is spaced 1 + kappa c
   wider than the axis; at most ``BEND_STRETCH`` x the slot's step), points that a bend or an end
-  pushes outside the tool-centre region projected back on it;
+  pushes outside the tool-centre region projected back on it; towards a closed end the axis runs on
+  to c - h of the tool-centre limit and the last period, shorter than the step, lands its front
+  there (the face is reached, not left up to a step short);
 * **order** (:class:`LevelRegions`, :func:`next_region`): at the start of a level every region
   leaves the level planner's view (its tool-centre pixels leave the grid's mask, the material only
   centres inside it can reach leaves the planning stock, the finish parts holding it wait), so the
@@ -433,10 +435,17 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
         if x0 is None:
             x0 = hole_mm + step - x_ext
         stop = s_end if b >= region.length - 1e-9 else b
+        closing_end = b >= region.length - 1e-9 and s_end > region.length
         steps.append(step)
         # period k runs from its roll-in start to the next period's (its return link included): the
         # periods join end to start, the first point of each after the first dropped
-        while x0 + x_ext <= stop + 1e-9 or not X:
+        last_front = -math.inf
+        while x0 + x_ext <= stop + 1e-9 or not X or (closing_end and last_front < stop - 0.5 * h):
+            if x0 + x_ext > stop + 1e-9 and X:
+                # the axis end (a dead end, extended to c - h of the tool-centre limit by the caller): one
+                # more period, shorter than the step, whose front lands on it -- the face is reached, not
+                # left up to a step short of it (its engagement is below theta: less material ahead)
+                x0 = stop - x_ext
             first = not X
             if not first:        # a straight return to this pattern's start (a width change: a new shape)
                 last = np.array([X[-1][-1], Y[-1][-1]])
@@ -449,6 +458,7 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
             X.append(P0[j:, 0] + x0); Y.append(P0[j:, 1]); K.append(kinds0[j:]); F.append(F0[j:])
             # the period's own return already ends at the next period's start: drop the duplicate
             X[-1], Y[-1], K[-1], F[-1] = X[-1][:-1], Y[-1][:-1], K[-1][:-1], F[-1][:-1]
+            last_front = x0 + x_ext
             x0 += bend_step(s_ax, ang_ax, x0, x_ext, float(np.abs(P0[:, 1]).max()), step, h)
     if not X:
         return np.zeros((0, 2)), np.zeros(0, dtype=object), np.zeros(0), steps, 0

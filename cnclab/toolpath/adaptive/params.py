@@ -161,6 +161,16 @@ class AdaptiveParams:
     #: channels that neither the finish laps nor the clean-up rounds take. A budget on the area the
     #: undone passes leave (0.3 or 1 mm^2 a level) kept spiral_0 covered but also removed the gain
     sliver_pass_min_yield: float = 0.0
+    #: r a_e (mm^2): a clearing pass that removes less than this area, all of it within reach of a
+    #: finishing lap still to come (every removed pixel within r - 3 h of the tool-centre limit, the
+    #: ring the laps follow 1.5 h inside it), is undone with its link and its start banned: the lap
+    #: takes that wall cusp in its one continuous run, where the pass cost a link at depth (two stops
+    #: of the machine) for a sliver. Measured on the bench pockets (machine time, small VMC, issue 24):
+    #: see the closing note of the session; 0 turns the rule off
+    wall_sliver_max_area_rae: float = 0.25
+    #: coarse cells: the next pass starts at the upstream end of the band of starts through the
+    #: nearest one (:func:`.links.upstream_end`), at most this many cells up it (0: the nearest)
+    upstream_start_cells: int = 200
     #: fraction of r: ... and not for a pass that runs where the tool-centre region is less than this
     #: half-wide (Grid.half_width): in a band narrower than the tool every pass cuts little and they are
     #: the way in (a 7 mm channel, D 6, of test_adaptive_links: 4 entries instead of 2 and 0.71 min
@@ -224,3 +234,12 @@ class AdaptiveParams:
     #: is lower. Measured: spiral_0 theta + 11.1 -> + 5.5, neck_3 + 11.2 -> + 4.4, regions_3 + 10.0 ->
     #: + 8.6; as the default it cost up to 1 % program time and 1.2 mm^2 uncut (dwg_concave_hole)
     retry_guard_deg: float = 3.0
+    #: deg over theta and % of the cutting length: with the maximum, the rest of the issue-29 bounds
+    #: (p95 <= theta + 2, share above theta + 5 <= 0.5 %); a level beyond any of them is planned again
+    #: (``retry_guard_deg``, then with the nearest pass starts, ``upstream_start_cells`` = 0, then
+    #: both) and the first plan within all three kept, else the one with the lowest maximum. Only
+    #: the maximum is refused (``promise_max_deg``); the others are stated in ``engagement_check``.
+    #: The upstream starts hold them on 67 of 71 corpus jobs; on dwg_concave_hole (theta + 12.2),
+    #: neck_3 (+ 10.03) and tapered_channel_2 (0.71 % above theta + 5) the nearest starts do
+    promise_p95_deg: float = 2.0
+    promise_share_pct: float = 0.5

@@ -17,7 +17,7 @@ from . import entries, finish, narrow
 from .entries import PlanningError
 from .grid import Grid, PassStep
 from .params import AdaptiveParams
-from .links import rapid_legs, shortcut, solid_within
+from .links import rapid_legs, shortcut, solid_within, upstream_end
 from .stock import capsule_free, component_discs, label8, segment_inside
 
 _RAPID, _PLUNGE = KINDS.index("rapid"), KINDS.index("plunge")
@@ -38,6 +38,7 @@ class _Level:
         self.entered = set()   # coarse cells of the entries at this level
         self.todo_parts = []
         self.r_free = np.nan
+        self._wall = None      # the tool-centre limit's boundary (wall_sliver), made when first needed
 
     def retract(self):
         if self.cur is not None:
@@ -86,12 +87,16 @@ class _Level:
         D, Ac = self.g.free_field()
         R = np.asarray(route, float)
         cells = np.c_[self.g.x0 + (R[:, 1] + 0.5) * self.g.hc, self.g.y0 + (R[:, 0] + 0.5) * self.g.hc]
-        pts_r = np.vstack([np.array([self.cur], float), cells[1:] if len(R) > 1 else cells[:1]])
+        # the route's first cell is the tool's own cell, or (the tool off the free set) the free cell a
+        # straight chord inside the fine mask reaches (links._start_cell): that one is kept, a chord
+        # past it to the next cell was never checked against the walls
+        own = tuple(int(v) for v in R[0]) == self.g.cell(*self.cur)
+        pts_r = np.vstack([np.array([self.cur], float), cells[1:] if (own and len(R) > 1) else cells])
         if end_xy is not None:
             pts_r[-1] = end_xy
 
         chords = pts_r[shortcut(np.ascontiguousarray(pts_r, float), D, Ac, float(r_free), int(cell[0]), int(cell[1]),
-                                 float(self.g.x0), float(self.g.y0), float(self.g.hc))]
+                                 float(self.g.x0), float(self.g.y0), float(self.g.hc), self.g.A, float(self.h))]
         for q in chords[1:]:
             if math.hypot(q[0] - self.cur[0], q[1] - self.cur[1]) > 1e-9:
                 legs = rapid_legs(self.g, self.cur, q) if self.rapid_links else None
@@ -120,7 +125,18 @@ class _Level:
         and enters anew). During a rescue (``rescue_fails`` >= 0): :meth:`rescue_start`'s next start."""
         if self.rescue_fails >= 0:
             return self.rescue_start()
-        end = self.link_to(self.r_free, self.r_free + 1.5 * self.g.hc, banned)
+        band_hi = self.r_free + 1.5 * self.g.hc
+        if self.prm.upstream_start_cells > 0 and self.cur is not None:
+            route = self.g.route(self.cur, self.r_free, band_hi, banned)
+            if route is not None and not isinstance(route, str):
+                j, i = (int(v) for v in route[-1])
+                D, Ac = self.g.free_field()
+                up = upstream_end(D, Ac, banned, float(self.r_free), float(band_hi), j, i, int(self.prm.upstream_start_cells))
+                if up != (j, i):
+                    end = self.link_to(self.r_free, -np.inf, banned, cell=up)
+                    if end is not None:
+                        return end, None
+        end = self.link_to(self.r_free, band_hi, banned)
         return end, None
 
     def rescue_start(self):
@@ -231,11 +247,36 @@ class _Level:
         ``sliver_min_half_width_frac`` r (a band where the passes are the way in)."""
         if self.narrow_state.open_mouth_pending():
             return 0.0
-        J = np.clip(((P[:, 1] - self.g.y0) // self.g.hc).astype(int), 0, self.g.half_width.shape[0] - 1)
-        I = np.clip(((P[:, 0] - self.g.x0) // self.g.hc).astype(int), 0, self.g.half_width.shape[1] - 1)
-        if self.g.half_width[J, I].min() < self.prm.sliver_min_half_width_frac * self.r:
+        if self.in_band(P):
             return 0.0
         return self.prm.second_chance_min_yield if fine else self.prm.sliver_pass_min_yield
+
+    def wall_sliver(self, removed, start, P):
+        """True when the pass just cut (from ``start``, (x, y) mm, through the points P (n, 2)), not in
+        a band (:meth:`in_band`), removed less than
+        ``wall_sliver_max_area_rae`` r a_e mm^2, all of it within reach of a finishing lap still to come
+        in its part: every removed pixel centre within r - 3 h of the tool-centre limit (the lap's
+        ring lies 1.5 h inside it; 1.5 h more for the pixel's half-diagonal and the ring's chords)."""
+        if (self.prm.wall_sliver_max_area_rae <= 0 or not self.finish or start is None
+                or removed >= self.prm.wall_sliver_max_area_rae * self.r * self.a_e
+                or self.narrow_state.open_mouth_pending() or self.in_band(P)):
+            return False
+        if not any(q.distance(Point(*start)) <= 2 * self.g.hc for q in self.todo_parts):
+            return False
+        taken = self.g.taken_since_checkpoint()
+        if len(taken) == 0:
+            return False
+        if self._wall is None:
+            self._wall = shapely.boundary(self.allowed)
+            shapely.prepare(self._wall)
+        return bool(shapely.distance(self._wall, shapely.points(taken)).max() <= self.r - 3 * self.h)
+
+    def in_band(self, P):
+        """Whether the pass through the points P (n, 2) runs where the tool-centre region is narrower
+        than ``sliver_min_half_width_frac`` r (a band where the passes are the way in)."""
+        J = np.clip(((P[:, 1] - self.g.y0) // self.g.hc).astype(int), 0, self.g.half_width.shape[0] - 1)
+        I = np.clip(((P[:, 0] - self.g.x0) // self.g.hc).astype(int), 0, self.g.half_width.shape[1] - 1)
+        return bool(self.g.half_width[J, I].min() < self.prm.sliver_min_half_width_frac * self.r)
 
     def undo_pass(self, undo, E, free):
         """A pass that only cuts slivers is not worth its link and its feed time: the link and the
@@ -372,6 +413,9 @@ class _Level:
                         P, removed, E, free = P[:1], 0.0, E[:1], free[:1]
                 if len(P) >= 2 and removed < self.min_yield(fine, P) * self.a_e * self.ds * (len(P) - 1):
                     P, removed, E, free = self.undo_pass(undo, E, free)
+                elif len(P) >= 2 and self.wall_sliver(removed, undo[1], P):
+                    P, removed, E, free = self.undo_pass(undo, E, free)
+                    self.stats["wall_slivers"] += 1
                 failed = removed < self.prm.pass_min_removed_rh * self.r * self.h or len(P) < 2
                 if failed:
                     self.ban_start(banned, j, i, self.prm.pass_ban_frac if (len(P) < 2 and reason == 0) or fine else 1.0)
@@ -479,7 +523,7 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
     # the moves (shared with the level planners: _Level.b)
     b = ToolPathBuilder(tool=tool, spindle=spindle, info={"planner": "adaptive_clearing", "theta_deg": theta_deg,
                                                           "resolution_mm": h, "step_mm": ds})
-    stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0,
+    stats = {"passes": 0, "entries": 0, "retracts": 0, "links": 0, "clean_rounds": 0, "remnant_sweeps": 0, "wall_slivers": 0,
              "rescued_starts": 0}
     allowed_parts = list(shapely.get_parts(allowed))
     part_wide = {}        # part index -> inscribed radius of that part of the tool-centre region (mm)
