@@ -158,3 +158,30 @@ def test_upstream_end_walks_the_band_of_starts_against_the_climb_direction():
     assert upstream_end(D, Ac, none, 2.0, 3.5, 20, 17, 4)[0] == 16      # at most 4 steps
     flat = np.full((ny, nx), 5.0)
     assert upstream_end(flat, Ac, none, 2.0, 3.5, 20, 17, 200) == (20, 17)
+
+
+def test_link_chords_are_merged_only_where_one_rapid_is_proven():
+    # a 20 x 10 mm box, r 2 mm, h r/30, cleared by tool discs every 0.4 mm except within 2.5 mm of
+    # (10, 4), where a remnant of about 0.5 mm radius stays. A link's chords (4, 5) -> (10, 7.8) ->
+    # (16, 5): the straight chord (4, 5) -> (16, 5) passes 1 mm from the remnant, inside the tool
+    # disc: kept as two chords (both proven G0). With the remnant cut too, the corner is dropped:
+    # one G0 (one machine stop fewer)
+    from types import SimpleNamespace
+
+    from cnclab.toolpath.adaptive.grid import Grid
+    from cnclab.toolpath.adaptive.planner import _Level
+    pocket = box(0, 0, 20, 10)
+    r, h = 2.0, 2.0 / 30
+    g = Grid(pocket, pocket.buffer(-r), r, h, None)
+    X, Y = np.meshgrid(np.arange(2.0, 18.01, 0.4), np.arange(2.0, 8.01, 0.4))
+    C = np.c_[X.ravel(), Y.ravel()]
+    keep = np.hypot(C[:, 0] - 10.0, C[:, 1] - 4.0) > 2.5
+    for p in C[keep]:
+        g.cut_path(p[None, :])
+    lv = SimpleNamespace(g=g, h=h)
+    chords = np.array([[4.0, 5.0], [10.0, 7.8], [16.0, 5.0]])
+    assert len(_Level.merge_rapid_chords(lv, chords)) == 3
+    for p in C[~keep]:
+        g.cut_path(p[None, :])
+    merged = _Level.merge_rapid_chords(lv, chords)
+    assert len(merged) == 2 and np.array_equal(merged, chords[[0, 2]])
