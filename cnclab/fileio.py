@@ -350,8 +350,8 @@ def _package_dirs() -> tuple:
 
 def in_native_callback(frame) -> bool:
     """True when ``frame`` (a signal handler's frame argument) or a caller of it runs inside a callback
-    from native code (one of ``_NATIVE_CALLBACKS``) or in numba/llvmlite's own Python code
-    (:data:`_DEFER_PACKAGES`), where an exception must not be raised.
+    from native code (one of ``_NATIVE_CALLBACKS``), in numba/llvmlite's own Python code
+    (:data:`_DEFER_PACKAGES`) or in a ``__del__`` finalizer, where an exception must not be raised.
 
     >>> import sys
     >>> in_native_callback(sys._getframe())
@@ -361,6 +361,10 @@ def in_native_callback(frame) -> bool:
     while frame is not None:
         code = frame.f_code
         if any(code.co_name == name and code.co_filename.endswith(os.sep + tail) for tail, name in _NATIVE_CALLBACKS):
+            return True
+        if code.co_name == "__del__":
+            # a finalizer (tqdm's, at exit): Python prints and drops an exception raised in it
+            # ("Exception ignored in ... __del__"): deliver the signal once it has returned
             return True
         if dirs and code.co_filename.startswith(dirs):
             return True

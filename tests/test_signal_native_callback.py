@@ -99,3 +99,31 @@ def test_signal_in_numba_code_is_raised_after_it_returns():
         except KeyboardInterrupt:
             late = True
     assert not raised_inside and late
+
+
+def test_signal_in_a_finalizer_is_raised_after_it_returns():
+    # a SIGTERM arriving in a __del__ (tqdm's, at exit, after the outputs were written: a CI fuzz run)
+    # was printed as "Exception ignored in ... __del__" and dropped; deferred, it is raised after the
+    # finalizer has returned
+    class Finalized:
+        def __del__(self):
+            seen.append(in_native_callback(sys._getframe()))
+            run._handler(signal.SIGTERM, sys._getframe())
+
+    seen = []
+    run = InterruptReport([])
+    with run:
+        try:
+            obj = Finalized()
+            del obj
+            raised_inside = False
+        except SystemExit:
+            raised_inside = True
+        try:
+            t0 = time.monotonic()
+            while time.monotonic() - t0 < 5.0:
+                time.sleep(0.01)
+            late = False
+        except SystemExit:
+            late = True
+    assert seen == [True] and not raised_inside and late
