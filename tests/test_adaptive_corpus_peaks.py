@@ -31,11 +31,11 @@ def _max_over_theta(name, **kw):
 
 @pytest.mark.slow
 def test_hidden_narrow_material_no_longer_meets_the_passes():
-    # with the nearest pass starts (upstream_start_cells 0), where it was measured: from the upstream
+    # with the nearest pass starts (upstream_start_frac 0), where it was measured: from the upstream
     # ends a clearing pass meets theta + 12.2 elsewhere (69.5, 35.7), and plan's check re-plans the
     # level with the nearest starts (planners._retries): the default plan stays within the bound
-    _, now = _max_over_theta("dwg_concave_hole", upstream_start_cells=0)
-    _, before = _max_over_theta("dwg_concave_hole", narrow_hide_margin_h=0.0, upstream_start_cells=0)
+    _, now = _max_over_theta("dwg_concave_hole", upstream_start_frac=0.0)
+    _, before = _max_over_theta("dwg_concave_hole", narrow_hide_margin_h=0.0, upstream_start_frac=0.0)
     assert now <= 10.0 < before                       # measured 7.4 and 14.8 deg
     jb = cc.job("dwg_concave_hole")
     h = jb.tool_radius / 30.0

@@ -116,7 +116,7 @@ def test_ramp_entries_on_every_level_of_a_deep_job():
 
 
 def test_an_idle_entry_is_undone():
-    # corpus job islands_2 (D 6, theta 105.7), passes from the nearest starts (upstream_start_cells 0,
+    # corpus job islands_2 (D 6, theta 105.7), passes from the nearest starts (upstream_start_frac 0,
     # as plan's re-plans use them): a second helix entry on slivers the passes had failed on took
     # almost nothing and led to no pass; undone (AdaptiveParams.idle_entry_frac), the job plans with
     # one entry and one lift (FreeCAD's one), safe and within the engagement bounds. With the default
@@ -124,14 +124,14 @@ def test_an_idle_entry_is_undone():
     from cnclab.works.jacso2021 import corpus_comparison as cc
     jb = cc.job("islands_2")
     h = cc.resolution_mm(jb, False)
-    tp = planners.plan(jb, "adaptive", h, allow_uncut=True, params=AdaptiveParams(upstream_start_cells=0))
+    tp = planners.plan(jb, "adaptive", h, allow_uncut=True, params=AdaptiveParams(upstream_start_frac=0.0))
     ev = evaluate(tp, jb, h)
     assert tp.info["entries"] == 1 and tp.info["idle_entries_undone"] >= 1
     assert lifts(ev, jb.top_z) == 1
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0 and ev.wall_gouge_max_mm <= 1e-3
     assert ev.engagement_max_deg <= jb.theta_deg + 10
     tp0 = planners.plan(jb, "adaptive", h, allow_uncut=True,
-                        params=AdaptiveParams(idle_entry_frac=0.0, upstream_start_cells=0))
+                        params=AdaptiveParams(idle_entry_frac=0.0, upstream_start_frac=0.0))
     assert tp0.info["entries"] == 2
     tp_up = planners.plan(jb, "adaptive", h, allow_uncut=True)
     assert tp_up.info["entries"] == 1 and lifts(evaluate(tp_up, jb, h), jb.top_z) == 1

@@ -354,7 +354,7 @@ def _retries(prm):
     """The re-plans of a level beyond the engagement bounds, in order: the tighter sliver guard, the
     nearest pass starts, both (:class:`cnclab.toolpath.adaptive.AdaptiveParams`)."""
     guard = dataclasses.replace(prm, guard_deg=prm.retry_guard_deg)
-    return [guard, dataclasses.replace(prm, upstream_start_cells=0), dataclasses.replace(guard, upstream_start_cells=0)]
+    return [guard, dataclasses.replace(prm, upstream_start_frac=0.0), dataclasses.replace(guard, upstream_start_frac=0.0)]
 
 
 def _within_bounds(chk: dict, job: Job, prm) -> bool:

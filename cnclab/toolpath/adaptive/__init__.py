@@ -43,7 +43,7 @@ Design (the ideas and where they come from; the code is cnclab's own)
   pass would leave material -- becomes the start rule: the next pass starts on the band of
   cleared-region points whose disk just touches material (distance to the nearest material = r)
   that is *nearest through cleared area* to where the tool is, at that band's **upstream end**
-  (:func:`.links.upstream_end`: walked against the climb direction, up to ``upstream_start_cells``
+  (:func:`.links.upstream_end`: walked against the climb direction, up to ``upstream_start_frac`` r
   coarse cells, to a wall, a ban or a bend), heading along the material boundary; the controller
   then turns into the material and settles at ``theta`` (no perpendicular approach: no slotting).
   A pass so started runs the whole boundary, as FreeCAD Adaptive's long arcs do, where a start at
@@ -92,7 +92,9 @@ Design (the ideas and where they come from; the code is cnclab's own)
   passes reached the walls); it runs under the same engagement control with the target raised by
   ``finish_margin_deg`` (6 deg: the simulator measures up to ~3 deg more than the planning stock on
   the thin wall rests, and theta + 10 deg is the bound) so that the corner wedges are peeled instead
-  of refused; the lap starts at the free ring point nearest the tool. Points planned within 2 h of
+  of refused; the lap starts at the free ring point nearest the tool. A lap that stops short (the
+  control finds no way on at the finish target, at a corner) is resumed at the first free ring point
+  r past the stop, linked through cleared area, up to ``finish_resume_laps`` times a ring. Points planned within 2 h of
   the wall are snapped onto the nearest wall point (1 um inside
   the 64-segment tool-centre limit); the lap is replayed on the stock (chords the snap made longer
   than 1.5 ds sampled along their length) and a snapped point whose engagement would exceed theta +

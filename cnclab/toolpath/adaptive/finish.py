@@ -1,6 +1,6 @@
 """The wall-following finish (see the package docstring, "Finish"): laps along every ring of one part
 of the tool-centre region under the engagement control at theta + finish_margin_deg, started where
-the ring is free of material, points near the wall snapped onto it and replayed on the stock (a snap
+the ring is free of material (a lap that stops short resumed r past its stop), points near the wall snapped onto it and replayed on the stock (a snap
 that would raise the engagement beyond theta + finish_snap_deg keeps its planned place). A function
 of the level planner ``lv`` (:class:`cnclab.toolpath.adaptive.planner._Level`). Units: mm, rad.
 """
@@ -36,21 +36,31 @@ def _laps(lv, part):
         if len(R) < 3:
             continue
         Rs = resample_polyline(np.vstack([R, R[:1]]), lv.ds, uniform=True)[:-1]
-        for lap in range(lv.finish_laps):   # repeated while the corner wedges are peeled
+        lap, segs, resume = 0, 0, None
+        while lap < lv.finish_laps and segs <= lv.prm.finish_resume_laps:   # laps while the corner wedges are peeled
             D, Ac = lv.g.free_field()
             jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
             ii = np.clip(((Rs[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
             dm = D[jj, ii]
-            if dm.min() > (lv.r + lv.g.hc if lap == 0 else lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e)):
+            if resume is None and dm.min() > (lv.r + lv.g.hc if lap == 0 else
+                                              lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e)):
                 break                # nothing (more) to take along this ring
             # start where the ring is free of material (the farthest from it, the field being
-            # capped: any point at the cap), the nearest such point to the tool
+            # capped: any point at the cap), the nearest such point to the tool (after a lap that
+            # stopped short, the first one at least r past where it stopped)
             free_k = np.flatnonzero(dm >= min(dm.max(), lv.r_free + lv.g.hc))
-            if lv.cur is not None and len(free_k) > 1:
+            if resume is not None:
+                past = (free_k - resume) % len(Rs)
+                free_k = free_k[past * lv.ds >= lv.r]
+                if len(free_k) == 0:
+                    break
+                k0 = int(free_k[np.argmin((free_k - resume) % len(Rs))])
+            elif lv.cur is not None and len(free_k) > 1:
                 k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - lv.cur[0], Rs[free_k, 1] - lv.cur[1]))])
             else:
                 k0 = int(free_k[0])
             Rl = np.vstack([Rs[k0:], Rs[:k0], Rs[k0:k0 + 1]])
+            origin = k0 if resume is None else origin    # a resumed lap runs on only to where its lap began
             # free: as for every link end, a coarse cell at least r_free (r + the cell half-diagonal
             # margin) from material; D at the cell of a point is not the point's own distance
             if dm[k0] < lv.r_free and lap == 0:
@@ -66,6 +76,8 @@ def _laps(lv, part):
                 e = lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1]))
             else:
                 e = None
+            if e is None and resume is not None:
+                break                # a resumed lap only through cleared area: no lift for it
             if e is None and dm[k0] < lv.r:
                 # no cleared place to start the lap from and none reachable at depth: a part no entry
                 # could open (a sliver of the tool-centre region thinner than the smallest helix). Left
@@ -87,45 +99,61 @@ def _laps(lv, part):
             dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
             mat = np.flatnonzero(dml < lv.r + lv.g.hc)
             L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + lv.prm.finish_run_on_frac * lv.r)
-            hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
-            snap = lv.g.snapshot()
-            M_before = snap[0]
-            P, _, _, E, _ = lv.g.run_pass(Rl[0], hd, lv.target_finish, lv.pass_step, int(2 * L_ring / lv.ds) + 100, 1e18,
-                                          min(lv.turn, lv.ds / lv.turn_radius), 1.02 * L_ring + lv.ds, lv.guard_finish)
-            # points the grid kept within 2 h of the wall go onto the exact wall
-            # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
-            pp = shapely.points(P)
-            near = shapely.distance(wall, pp) < lv.prm.finish_snap_band_h * lv.h
-            if near.any():
-                # the nearest wall point (not locate + interpolate along the multi-ring wall: a
-                # point nearest to a ring's closing vertex would land on the next ring's start)
-                snapped = shapely.get_coordinates(shapely.shortest_line(pp[near], wall))[1::2]
-                Q = P.copy()
-                Q[near] = snapped
-                # the snap moves points up to 2 h outwards: near a concave corner that can
-                # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
-                # on the stock as it was before this lap, a snapped point whose engagement
-                # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
-                # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
-                # into a corner)
-                for _ in range(lv.prm.finish_replay_rounds):       # a reverted point changes the stock the later ones meet
-                    Qd, seg = resample_polyline(Q, 1.5 * lv.ds, return_index=True)
-                    Qd = np.ascontiguousarray(Qd)
-                    Es, Eg = replay(M_before.copy(), lv.g.x0, lv.g.y0, lv.h, lv.r, Qd, lv.lag, lv.n_samp, GUARD_LEVEL)
-                    bad = np.zeros(len(Q), bool)
-                    bad[seg[(Es > lv.cap_finish) | (Eg > lv.cap_finish)]] = True
-                    bad[:-1] |= bad[1:]          # a chord over the bound: both its ends
-                    over = near & bad & np.any(Q != P, axis=1)
-                    if not over.any():
-                        break
-                    Q[over] = P[over]
-                lv.g.restore(snap)
-                E = lv.g.replay(Q, lv.lag, lv.n_samp)
-                P = Q
-            ai = E[1:] < lv.air_rad
-            lv.b.add(P[1:], np.where(ai, "link", "cut").astype(object), np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min),
-                     "finish", z=lv.z)
-            lv.cur = (float(P[-1, 0]), float(P[-1, 1]))
+            if resume is not None:
+                L_ring = min(L_ring, float(sl[(origin - k0) % len(Rs)]) + lv.prm.finish_run_on_frac * lv.r)
+            P = _run_lap(lv, wall, Rl, L_ring)
+            if float(np.hypot(*np.diff(P, axis=0).T).sum()) < L_ring - lv.prm.finish_run_on_frac * lv.r:
+                # the lap stopped short (the control found no way on at the finish target): the next
+                # one starts past where it stopped, the ring's rest not left for want of a thick rest
+                resume, segs = int(np.argmin(np.hypot(Rs[:, 0] - P[-1, 0], Rs[:, 1] - P[-1, 1]))), segs + 1
+            else:
+                resume, lap = None, lap + 1
+
+
+def _run_lap(lv, wall, Rl, L_ring):
+    """One wall-following pass along the ring points ``Rl`` (from the tool's point, its start) for at
+    most ``L_ring`` mm, under the engagement control at the finish target, points near the wall
+    snapped onto it (see the module docstring); emitted, the stock cut. Returns its points (n, 2)."""
+    hd = math.atan2(Rl[1, 1] - Rl[0, 1], Rl[1, 0] - Rl[0, 0])
+    snap = lv.g.snapshot()
+    M_before = snap[0]
+    P, _, _, E, _ = lv.g.run_pass(Rl[0], hd, lv.target_finish, lv.pass_step, int(2 * L_ring / lv.ds) + 100, 1e18,
+                                  min(lv.turn, lv.ds / lv.turn_radius), 1.02 * L_ring + lv.ds, lv.guard_finish)
+    # points the grid kept within 2 h of the wall go onto the exact wall
+    # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
+    pp = shapely.points(P)
+    near = shapely.distance(wall, pp) < lv.prm.finish_snap_band_h * lv.h
+    if near.any():
+        # the nearest wall point (not locate + interpolate along the multi-ring wall: a
+        # point nearest to a ring's closing vertex would land on the next ring's start)
+        snapped = shapely.get_coordinates(shapely.shortest_line(pp[near], wall))[1::2]
+        Q = P.copy()
+        Q[near] = snapped
+        # the snap moves points up to 2 h outwards: near a concave corner that can
+        # raise the engagement steeply (an arc nearly tangent to the rest). Replayed
+        # on the stock as it was before this lap, a snapped point whose engagement
+        # exceeds the finish target keeps its planned place (a skin < 2 h remains there)
+        # (a chord the snap made longer than 1.5 ds measured along its length too: it can reach
+        # into a corner)
+        for _ in range(lv.prm.finish_replay_rounds):       # a reverted point changes the stock the later ones meet
+            Qd, seg = resample_polyline(Q, 1.5 * lv.ds, return_index=True)
+            Qd = np.ascontiguousarray(Qd)
+            Es, Eg = replay(M_before.copy(), lv.g.x0, lv.g.y0, lv.h, lv.r, Qd, lv.lag, lv.n_samp, GUARD_LEVEL)
+            bad = np.zeros(len(Q), bool)
+            bad[seg[(Es > lv.cap_finish) | (Eg > lv.cap_finish)]] = True
+            bad[:-1] |= bad[1:]          # a chord over the bound: both its ends
+            over = near & bad & np.any(Q != P, axis=1)
+            if not over.any():
+                break
+            Q[over] = P[over]
+        lv.g.restore(snap)
+        E = lv.g.replay(Q, lv.lag, lv.n_samp)
+        P = Q
+    ai = E[1:] < lv.air_rad
+    lv.b.add(P[1:], np.where(ai, "link", "cut").astype(object), np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min),
+             "finish", z=lv.z)
+    lv.cur = (float(P[-1, 0]), float(P[-1, 1]))
+    return P
 
 
 def _leave_part(lv, part) -> None:

@@ -11,7 +11,7 @@ import numpy as np
 
 from .control import GUARD_LEVEL, pass_kernel, replay
 from .links import dijkstra
-from .stock import coarse_any, cut_disc, cut_path, dist_window, max_filter, raster
+from .stock import capsule_free, coarse_any, cut_disc, cut_path, dist_window, max_filter, raster
 
 
 def _union(a, b):
@@ -159,6 +159,13 @@ class Grid:
             self._shadow[0][w] = self.M[w]
             self._shadow[1][w] = self.Mr[w]
         self._since = None
+
+    def rapid_free_at_checkpoint(self, a, b) -> bool:
+        """Whether the chord a -> b (x, y) mm was a proven G0 on the rapid stock as it was at the last
+        :meth:`checkpoint` (no pixel within ``r_capsule`` of it: :func:`capsule_free`)."""
+        Mr = self.Mr if self._shadow is None else self._shadow[1]
+        return bool(capsule_free(Mr, self.x0, self.y0, self.h, float(a[0]), float(a[1]), float(b[0]), float(b[1]),
+                                 self.r_capsule))
 
     def taken_since_checkpoint(self) -> np.ndarray:
         """(m, 2) centres (mm) of the planning-stock pixels removed since the last :meth:`checkpoint`."""

@@ -65,6 +65,11 @@ class AdaptiveParams:
     #: laps: at most so many wall-following laps per ring (a further lap only while material deeper
     #: than max(0.3 mm, a_e/4) is left along the ring)
     finish_laps: int = 3
+    #: laps: a lap that stops short of its run (the control finds no way on at the finish target, at
+    #: a corner) is resumed at the first free ring point at least r past where it stopped, at most
+    #: this many times per ring (0: not resumed: the ring's rest was left, skins thinner than
+    #: ``finish_rest_min_mm`` too -- star_1 with the upstream starts: a lap of 8 of its 129 mm)
+    finish_resume_laps: int = 6
     #: passes: the most clearing passes per round (a bound against endless re-entry)
     max_passes: int = 5000
     #: deg: a step whose front half meets less material than this is air
@@ -168,9 +173,9 @@ class AdaptiveParams:
     #: of the machine) for a sliver. Measured on the bench pockets (machine time, small VMC, issue 24):
     #: see the closing note of the session; 0 turns the rule off
     wall_sliver_max_area_rae: float = 0.25
-    #: coarse cells: the next pass starts at the upstream end of the band of starts through the
-    #: nearest one (:func:`.links.upstream_end`), at most this many cells up it (0: the nearest)
-    upstream_start_cells: int = 200
+    #: fraction of r: the next pass starts at the upstream end of the band of starts through the
+    #: nearest one (:func:`.links.upstream_end`), at most this far up it (0: the nearest)
+    upstream_start_frac: float = 2.5
     #: fraction of r: ... and not for a pass that runs where the tool-centre region is less than this
     #: half-wide (Grid.half_width): in a band narrower than the tool every pass cuts little and they are
     #: the way in (a 7 mm channel, D 6, of test_adaptive_links: 4 entries instead of 2 and 0.71 min
@@ -236,7 +241,7 @@ class AdaptiveParams:
     retry_guard_deg: float = 3.0
     #: deg over theta and % of the cutting length: with the maximum, the rest of the issue-29 bounds
     #: (p95 <= theta + 2, share above theta + 5 <= 0.5 %); a level beyond any of them is planned again
-    #: (``retry_guard_deg``, then with the nearest pass starts, ``upstream_start_cells`` = 0, then
+    #: (``retry_guard_deg``, then with the nearest pass starts, ``upstream_start_frac`` = 0, then
     #: both) and the first plan within all three kept, else the one with the lowest maximum. Only
     #: the maximum is refused (``promise_max_deg``); the others are stated in ``engagement_check``.
     #: The upstream starts hold them on 67 of 71 corpus jobs; on dwg_concave_hole (theta + 12.2),

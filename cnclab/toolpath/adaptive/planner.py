@@ -39,6 +39,7 @@ class _Level:
         self.todo_parts = []
         self.r_free = np.nan
         self._wall = None      # the tool-centre limit's boundary (wall_sliver), made when first needed
+        self._link_tail = None  # the last link's final G0 (join_link_to_pass)
 
     def retract(self):
         if self.cur is not None:
@@ -99,9 +100,15 @@ class _Level:
                                  float(self.g.x0), float(self.g.y0), float(self.g.hc), self.g.A, float(self.h))]
         if self.rapid_links and len(chords) > 2:
             chords = self.merge_rapid_chords(chords)
-        for q in chords[1:]:
+        self._link_tail = None
+        for n_q, q in enumerate(chords[1:], start=1):
             if math.hypot(q[0] - self.cur[0], q[1] - self.cur[1]) > 1e-9:
+                mark_q, start_q = self.b.mark(), self.cur
                 legs = rapid_legs(self.g, self.cur, q) if self.rapid_links else None
+                if legs is not None and n_q == len(chords) - 1 and legs[1][0] == q[0] and legs[1][1] == q[1]:
+                    # the link ends with one G0 into the pass start: join_link_to_pass may run it on
+                    # to the end of the pass's own first G0 run (its start, its first chord or not)
+                    self._link_tail = (mark_q, start_q if legs[0] is None else tuple(legs[0][:2]), n_q == 1 and legs[0] is None)
                 if legs is None:
                     self.b.link([q[:2]], self.link_feed_mm_min, z=self.z)
                 else:
@@ -118,6 +125,27 @@ class _Level:
                 self.cur = (float(q[0]), float(q[1]))
         self.stats["links"] += 1
         return route[-1]
+
+    def join_link_to_pass(self, P, free):
+        """Run the link's last G0 (``_link_tail``: builder mark, its start, whether the tool's own point)
+        on to the end of the pass's first G0 run (the steps ``free`` from its start, proven while the
+        pass ran) where that one chord is a proven G0 on the rapid stock before the pass (the grid's
+        checkpoint) and stays in the fine mask: the corner at the pass start, a machine stop, goes.
+        Returns the index k of the pass point the link now ends at (0: no join)."""
+        tail, self._link_tail = self._link_tail, None
+        if tail is None or not self.rapid_links or len(P) < 3 or not free[1]:
+            return 0
+        k = 1
+        while k + 1 < len(P) - 1 and free[k + 1]:
+            k += 1
+        mark, s, own = tail
+        g = self.g
+        if not (segment_inside(g.A, g.x0, g.y0, self.h, s[0], s[1], P[k, 0], P[k, 1], 2.0 * self.h if own else 0.0)
+                and g.rapid_free_at_checkpoint(s, P[k])):
+            return 0
+        self.b.rollback(mark)
+        self.b.rapid([P[k]], z=self.z, tag="cleared: link through cleared area", cleared=True)
+        return k
 
     def merge_rapid_chords(self, chords):
         """The chords of a link (m, 2) joined where one G0 is proven for the join (:func:`rapid_legs` on
@@ -146,12 +174,13 @@ class _Level:
         if self.rescue_fails >= 0:
             return self.rescue_start()
         band_hi = self.r_free + 1.5 * self.g.hc
-        if self.prm.upstream_start_cells > 0 and self.cur is not None:
+        max_cells = int(self.prm.upstream_start_frac * self.r / self.g.hc)
+        if max_cells > 0 and self.cur is not None:
             route = self.g.route(self.cur, self.r_free, band_hi, banned)
             if route is not None and not isinstance(route, str):
                 j, i = (int(v) for v in route[-1])
                 D, Ac = self.g.free_field()
-                up = upstream_end(D, Ac, banned, float(self.r_free), float(band_hi), j, i, int(self.prm.upstream_start_cells))
+                up = upstream_end(D, Ac, banned, float(self.r_free), float(band_hi), j, i, max_cells)
                 if up != (j, i):
                     end = self.link_to(self.r_free, -np.inf, banned, cell=up)
                     if end is not None:
@@ -377,6 +406,7 @@ class _Level:
             for _ in range(self.max_passes):
                 D, Ac = self.g.free_field()
                 self.g.checkpoint()          # for undo_pass (only the window changed since is copied)
+                self._link_tail = None
                 undo = (self.b.mark(), self.cur, self.stats["links"])
                 end, heading = self.next_start(banned)
                 if end is None and narrow.next_region(self, banned):
@@ -442,8 +472,9 @@ class _Level:
                 self.note_pass(failed, j, i)
                 air = E < self.air_rad                # nothing in front of the tool: a link at the link feed, or
                                                  # a G0 where the chord is proven clear (``free``, see pass_kernel)
-                fr, ai = free[1:], air[1:]
-                self.b.add(P[1:], np.where(fr, "rapid", np.where(ai, "link", "cut")).astype(object),
+                k0 = self.join_link_to_pass(P, free) + 1
+                fr, ai = free[k0:], air[k0:]
+                self.b.add(P[k0:], np.where(fr, "rapid", np.where(ai, "link", "cut")).astype(object),
                            np.where(fr, np.nan, np.where(ai, self.link_feed_mm_min, self.feed_mm_min)),
                            np.where(fr, "cleared: air inside cleared area", "").astype(object), z=self.z, cleared=fr)
                 self.cur = (float(P[-1, 0]), float(P[-1, 1]))
