@@ -115,6 +115,7 @@ def test_ramp_entries_on_every_level_of_a_deep_job():
     assert check_program(write_program(tp, job), clearance_z=job.clearance_z, top_z=job.top_z).errors == []
 
 
+@pytest.mark.slow      # three whole plans of a corpus job: make test-slow (CI)
 def test_an_idle_entry_is_undone():
     # corpus job islands_2 (D 6, theta 105.7), passes from the nearest starts (upstream_start_frac 0,
     # as plan's re-plans use them): a second helix entry on slivers the passes had failed on took

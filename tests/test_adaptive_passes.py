@@ -133,6 +133,7 @@ def test_grid_taken_since_checkpoint_is_the_removed_pixels():
     assert d.max() <= r + h / np.sqrt(2)
 
 
+@pytest.mark.slow      # two whole plans and evaluations: make test-slow (CI)
 def test_wall_sliver_passes_are_left_to_the_finish_lap():
     # the spline bench pocket (D 6 mm, theta 60 deg, dixel 0.05 mm): between the hooks that clear the
     # crescents along its wall, passes that would cut only a cusp at the wall (less than 0.25 r a_e,
@@ -159,6 +160,7 @@ def test_wall_sliver_passes_are_left_to_the_finish_lap():
     assert ev_on.uncut_beyond_unreachable_mm2 <= ev_off.uncut_beyond_unreachable_mm2 + 0.05
 
 
+@pytest.mark.slow      # two whole plans and evaluations: make test-slow (CI)
 def test_upstream_starts_run_the_boundary_instead_of_hooking():
     # Jacsó's rectangle pocket (D 6 mm, theta 60 deg, dixel 0.05 mm): a pass started at the upstream
     # end of the band of starts (links.upstream_end) runs the material boundary from wall to wall, as
@@ -182,6 +184,7 @@ def test_upstream_starts_run_the_boundary_instead_of_hooking():
     assert ev_up.uncut_beyond_unreachable_mm2 <= min(ev_near.uncut_beyond_unreachable_mm2 + 0.5, 1.898)
 
 
+@pytest.mark.slow      # a plan with its re-plans, and an evaluation: make test-slow (CI)
 def test_a_level_beyond_the_bounds_is_planned_again_with_the_nearest_starts():
     # tapered_channel_2 (D 8 mm, theta 81.1 deg): with the upstream starts 0.71 % of the cutting length
     # lies above theta + 5 deg (the bound: 0.5 %); plan's check re-plans (planners._retries) and keeps
