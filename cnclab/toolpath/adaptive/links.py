@@ -244,6 +244,17 @@ def dijkstra(D, Ac, banned, r_free, band_hi, goal, start, geo, reach, buf, A):
 
 
 @njit(cache=True)
+def boundary_gradient(D, j, i):
+    """(gx, gy): central differences of the distance field ``D`` at the cell (j, i) (one-sided at the
+    grid's edges), pointing away from the material; the climb heading along the material boundary,
+    material on the right, is this turned clockwise."""
+    ny, nx = D.shape
+    gy = D[min(j + 1, ny - 1), i] - D[max(j - 1, 0), i]
+    gx = D[j, min(i + 1, nx - 1)] - D[j, max(i - 1, 0)]
+    return gx, gy
+
+
+@njit(cache=True)
 def upstream_end(D, Ac, banned, r_free, band_hi, j, i, max_cells):
     """The upstream end of the band of pass starts through the cell (j, i): walking the goal cells
     (in ``Ac``, r_free <= D < band_hi, not banned) against the climb direction (the heading along the
@@ -253,8 +264,7 @@ def upstream_end(D, Ac, banned, r_free, band_hi, j, i, max_cells):
     boundary downstream instead of hooking off it where it began (a start beside a wall)."""
     ny, nx = D.shape
     nb = banned.shape[0] > 1
-    gy = D[min(j + 1, ny - 1), i] - D[max(j - 1, 0), i]
-    gx = D[j, min(i + 1, nx - 1)] - D[j, max(i - 1, 0)]
+    gx, gy = boundary_gradient(D, j, i)
     g = math.hypot(gx, gy)
     if not (g > 0.0 and math.isfinite(g)):
         return j, i

@@ -17,7 +17,7 @@ from . import entries, finish, narrow
 from .entries import PlanningError
 from .grid import Grid, PassStep
 from .params import AdaptiveParams
-from .links import rapid_legs, shortcut, solid_within, upstream_end
+from .links import boundary_gradient, rapid_legs, shortcut, solid_within, upstream_end
 from .stock import capsule_free, component_discs, label8, segment_inside
 
 _RAPID, _PLUNGE = KINDS.index("rapid"), KINDS.index("plunge")
@@ -59,11 +59,13 @@ class _Level:
                                min(self.turn, self.ds / self.turn_radius), 1e18, self.guard_pass, self.air_rad,
                                self.rapid_links)
 
-    def link_to(self, r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None):
+    def link_to(self, r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None, route=None):
         """Link at depth through free cells to the nearest goal cell (:meth:`Grid.route`); its
         cell or None. ``end_xy``: the exact end point (in ``cell``, which need not lie inside the
-        tool-centre region: its centre is never a point of the link)."""
-        route = self.g.route(self.cur, r_free, band_hi, banned, cell)
+        tool-centre region: its centre is never a point of the link). ``route``: that search's result
+        from the tool's point, when the caller has it already (not searched again)."""
+        if route is None:
+            route = self.g.route(self.cur, r_free, band_hi, banned, cell)
         if isinstance(route, str):
             # no straight chord from here reaches a free cell inside the region (an island corner in
             # the way): retrace the tool's own path at this depth (inside the region, its material
@@ -185,6 +187,7 @@ class _Level:
                     end = self.link_to(self.r_free, -np.inf, banned, cell=up)
                     if end is not None:
                         return end, None
+                return self.link_to(self.r_free, band_hi, banned, route=route), None
         end = self.link_to(self.r_free, band_hi, banned)
         return end, None
 
@@ -215,7 +218,8 @@ class _Level:
                 # only skins and seams within reach, or a band too narrow for any pass to turn: no pass tried
                 self.banned_fine[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
                 continue
-            if self.link_to(self.r_free, -np.inf, self.banned_fine, cell=(j, i)) is None:
+            # the search above ended at (j, i), its nearest goal: the same route leads there
+            if self.link_to(self.r_free, -np.inf, self.banned_fine, cell=(j, i), route=route) is None:
                 break
             self.stats["rescued_starts"] += 1
             # along that solid material, on the right (the distance field's gradient there may point
@@ -431,8 +435,7 @@ class _Level:
                     continue
                 # heading: along the material boundary, material on the right
                 j, i = end
-                gy = D[min(j + 1, D.shape[0] - 1), i] - D[max(j - 1, 0), i]
-                gx = D[j, min(i + 1, D.shape[1] - 1)] - D[j, max(i - 1, 0)]
+                gx, gy = boundary_gradient(D, int(j), int(i))
                 if heading is None and (not (np.isfinite(gx) and np.isfinite(gy)) or gx == gy == 0):
                     banned[j, i] = self.banned_fine[j, i] = True
                     continue
