@@ -160,3 +160,36 @@ def test_trochoid_front_reaches_a_dead_end(L, W, D, theta):
     t = (reg.axis[-1] - reg.axis[0]) / np.linalg.norm(reg.axis[-1] - reg.axis[0])
     front = float(((Q - reg.axis[0]) @ t).max())
     assert s_end - 0.5 * h <= front <= s_end + 1e-9
+
+
+def test_a_refused_period_is_laid_closer_and_a_refusal_at_the_smallest_step_ends_the_trochoid():
+    # axis_trochoid's closed loop (check=, what PeriodCheck does with the planning stock): a check
+    # refusing every period that reaches past 20 mm along the axis (as material beside a junction would) makes
+    # each refused period be laid again at half the step, down to MIN_BEND_STEP_FRAC x the step;
+    # refused there too, the trochoid ends. So its front stops at most 20 mm and less than an eighth
+    # of a step (the last halving: 1/2, 1/4, 1/8 > 0.1) short of it; the first period is asked too
+    L, W, D, theta = 60.0, 12.0, 8.0, 60.0
+    r = D / 2
+    h = r / 30
+    allowed = box(0, 0, L, W).buffer(-r, join_style="mitre")
+    reg = narrow.narrow_regions(allowed, r, h)[0]
+    t = (reg.axis[-1] - reg.axis[0]) / np.linalg.norm(reg.axis[-1] - reg.axis[0])
+    asked = []
+
+    def front(Q):
+        return float(((Q - reg.axis[0]) @ t).max())
+
+    def check(Q, cutting, first):
+        asked.append(first)
+        assert len(Q) == len(cutting)
+        return front(Q) <= 20.0
+
+    Q, K, F, steps, _ = narrow.axis_trochoid(reg, allowed, r, theta, h, hole_mm=float(reg.radius[0]), check=check)
+    Q0, _, _, _, _ = narrow.axis_trochoid(reg, allowed, r, theta, h, hole_mm=float(reg.radius[0]))
+    assert asked[0] is True and not any(asked[1:])
+    assert front(Q0) > 40.0                            # unchecked, it runs on to the channel's end
+    assert 20.0 - 0.125 * steps[0] < front(Q) <= 20.0
+    # a first period refused: nothing is laid (cut_region then leaves the region to the planner)
+    Qn, Kn, _, _, _ = narrow.axis_trochoid(reg, allowed, r, theta, h, hole_mm=float(reg.radius[0]),
+                                           check=lambda Q, c, first: False)
+    assert len(Qn) == 0 and len(Kn) == 0

@@ -19,6 +19,7 @@ polyline), engagement p95 <= theta + 2 deg and max <= theta + 10 deg (the issue-
 """
 import numpy as np
 import pytest
+import shapely
 
 from cnclab.toolpath import planners
 from cnclab.toolpath.adaptive import AdaptiveParams
@@ -210,3 +211,44 @@ def test_a_finishing_lap_that_stops_short_is_resumed_past_where_it_stopped():
     ev, ev0 = _safe_and_within_targets(tp, jb, h), evaluate(tp0, jb, h)
     assert ev.uncut_beyond_unreachable_mm2 < 0.5 * ev0.uncut_beyond_unreachable_mm2
     assert lifts(ev, jb.top_z) <= lifts(ev0, jb.top_z)
+
+
+def _finish_cover(tp, jb, tol_mm=2e-3):
+    """Share of the tool-centre limit (sampled every 0.25 mm) within ``tol_mm`` of a finishing move."""
+    fin = np.flatnonzero(tp.tag == "finish")
+    moves = shapely.multilinestrings([np.array([tp.xyz[i - 1, :2], tp.xyz[i, :2]]) for i in fin])
+    edge = jb.allowed().boundary
+    pts = shapely.line_interpolate_point(edge, np.arange(0.0, edge.length, 0.25))
+    return float(np.mean(shapely.distance(moves, pts) < tol_mm))
+
+
+def test_corner_rests_the_full_laps_leave_are_peeled_by_local_laps():
+    # rectilinear_0 (D 10 mm, theta 79.5 deg): the finishing lap rounds the sharp corners at the end
+    # of the arm's 1.8 mm tool-centre band (the control at the finish target keeps out of the corner
+    # wedge) and leaves crescents: 8.63 mm^2 beyond what no tool disc reaches (FreeCAD 7.64, committed
+    # fixture). A local lap over each run of the ring with material deeper than 1.5 h in reach
+    # (finish_peel_rounds) takes them: 3.96 mm^2. Asserted: at least 3 mm^2 less than without the
+    # peels, more of the tool-centre limit run by a finishing move, no more entries, safe and within
+    # the engagement targets
+    jb, h, tp = _plan("rectilinear_0")
+    _, _, tp0 = _plan("rectilinear_0", finish_peel_rounds=0)
+    ev, ev0 = _safe_and_within_targets(tp, jb, h), evaluate(tp0, jb, h)
+    assert tp.info.get("peels", 0) >= 1 and tp0.info.get("peels", 0) == 0
+    assert ev.uncut_beyond_unreachable_mm2 <= ev0.uncut_beyond_unreachable_mm2 - 3.0
+    assert _finish_cover(tp, jb) > _finish_cover(tp0, jb)
+    assert tp.info["entries"] <= tp0.info["entries"]
+
+
+@pytest.mark.slow      # two whole plans and evaluations: make test-slow (CI)
+def test_the_first_finishing_lap_runs_the_whole_ring():
+    # islands_5 (D 5 mm, theta 53.8 deg): the passes run along the outer wall h/sqrt(2) inside the
+    # tool-centre limit, and the planning stock shows no material in reach there, so the first lap
+    # used to end 2 r past the last ring point with material: 42 mm of the top wall were never run on
+    # the limit, a sub-pixel skin the evaluator counts (3.91 mm^2 uncut, FreeCAD 2.90). The whole ring
+    # (finish_full_first_lap): 1.81 mm^2. Asserted: at least 97 % of the tool-centre limit within
+    # 2 um of a finishing move (84 % without), 1.5 mm^2 less uncut, safe and within the targets
+    jb, h, tp = _plan("islands_5")
+    _, _, tp0 = _plan("islands_5", finish_full_first_lap=False)
+    ev, ev0 = _safe_and_within_targets(tp, jb, h), evaluate(tp0, jb, h)
+    assert _finish_cover(tp, jb) >= 0.97 > 0.9 > _finish_cover(tp0, jb)
+    assert ev.uncut_beyond_unreachable_mm2 <= ev0.uncut_beyond_unreachable_mm2 - 1.5

@@ -322,7 +322,8 @@ def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
     (:func:`adaptive_engagement_check`): a level beyond the bounds (max theta +
     ``AdaptiveParams.promise_max_deg``, p95 theta + ``promise_p95_deg``, share above theta + 5 deg
     ``promise_share_pct``) is planned again (:func:`_retries`: the tighter sliver guard
-    ``retry_guard_deg``, the nearest pass starts, both) and the first plan within all three kept, else
+    ``retry_guard_deg``, the nearest pass starts, both, the narrow regions' trochoids checked period
+    by period) and the first plan within all three kept, else
     the lowest maximum; a maximum still beyond the promise: ``info["engagement_breach"]`` says
     where and how far (:func:`plan` refuses it unless ``allow_engagement_breach``, then states it in
     ``info["warnings"]`` and the program header); ``info["engagement_check"]`` holds the measure."""
@@ -352,9 +353,13 @@ def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
 
 def _retries(prm):
     """The re-plans of a level beyond the engagement bounds, in order: the tighter sliver guard, the
-    nearest pass starts, both (:class:`cnclab.toolpath.adaptive.AdaptiveParams`)."""
+    nearest pass starts, both, then the narrow regions' trochoids checked period by period
+    (``retry_narrow_check_deg``; :class:`cnclab.toolpath.adaptive.AdaptiveParams`)."""
     guard = dataclasses.replace(prm, guard_deg=prm.retry_guard_deg)
-    return [guard, dataclasses.replace(prm, upstream_start_frac=0.0), dataclasses.replace(guard, upstream_start_frac=0.0)]
+    out = [guard, dataclasses.replace(prm, upstream_start_frac=0.0), dataclasses.replace(guard, upstream_start_frac=0.0)]
+    if prm.narrow_check_margin_deg is None:
+        out.append(dataclasses.replace(prm, narrow_check_margin_deg=prm.retry_narrow_check_deg))
+    return out
 
 
 def _within_bounds(chk: dict, job: Job, prm) -> bool:

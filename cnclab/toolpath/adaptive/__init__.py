@@ -83,18 +83,25 @@ Design (the ideas and where they come from; the code is cnclab's own)
   tool-centre region is that narrow everywhere. In a band of tool-centre half-width below 0.2 r
   (no pass turns there, the narrow regions' trochoid would crawl) the entry is a **ramp** along the
   longest straight segment of the band through the place (``entries.ramp_entry``: the package's one
-  ramp generator, ToolPathBuilder.ramp, at the helix angle or one shallower leg, then back at depth;
-  its ends at the exact tool-centre limit): one entry for the band where helix after helix was
+  ramp generator, ToolPathBuilder.ramp, in an even number of legs at the helix angle or shallower,
+  so that it ends at depth where it began -- a return at depth through the wedge under the first leg
+  would slot at 180 deg; its ends at the exact tool-centre limit): one entry for the band where helix after helix was
   entered about r apart; its band counts as entered (the wall skins are the finishing laps').
 * **Finish**: one contour pass along every ring of the tool-centre region (outer rings
   counter-clockwise, islands clockwise: climb milling), started where the ring is already free of
   material, takes the thin rests the passes left against the walls (thinner than ``a_e`` where the
   passes reached the walls); it runs under the same engagement control with the target raised by
-  ``finish_margin_deg`` (6 deg: the simulator measures up to ~3 deg more than the planning stock on
+  ``finish_margin_deg`` (4 deg: the simulator measures up to ~3 deg more than the planning stock on
   the thin wall rests, and theta + 10 deg is the bound) so that the corner wedges are peeled instead
   of refused; the lap starts at the free ring point nearest the tool. A lap that stops short (the
   control finds no way on at the finish target, at a corner) is resumed at the first free ring point
-  r past the stop, linked through cleared area, up to ``finish_resume_laps`` times a ring. Points planned within 2 h of
+  r past the stop, linked through cleared area, up to ``finish_resume_laps`` times a ring. A ring's
+  first lap runs the whole ring (``finish_full_first_lap``): it is the only move on the true
+  tool-centre limit, and the sub-pixel skin the passes leave there is not on the planning stock.
+  After the laps, each run of the ring where material deeper than 1.5 h is left in reach (the corner
+  wedges the control rounds) gets local laps from the last free point before it to r/2 past it,
+  linked at depth, while at least ``finish_peel_min_mm2`` is left there (``finish_peel_rounds``).
+  Points planned within 2 h of
   the wall are snapped onto the nearest wall point (1 um inside
   the 64-segment tool-centre limit); the lap is replayed on the stock (chords the snap made longer
   than 1.5 ds sampled along their length) and a snapped point whose engagement would exceed theta +
@@ -115,7 +122,12 @@ Design (the ideas and where they come from; the code is cnclab's own)
   medial axis, the passes cannot turn; such a region is hidden from them and cut instead by Jacsó's
   constant-engagement trochoid (Thesis IV) laid along its Voronoi medial axis at the same theta,
   entered from cleared area at a mouth (no lift) or by a helix and a spiral out at a closed end; the
-  regions cut so are listed in ``info["narrow_regions"]`` and in the program header.
+  regions cut so are listed in ``info["narrow_regions"]`` and in the program header. The pattern is
+  laid open loop, made for a straight slot of the narrowest width nearby; at a channel's sharp corner
+  or a junction (letter pockets, ``benchmarks/bench_letters.py``) it can exceed the bound, and
+  ``plan``'s last re-plan of such a level replays each period on the planning stock, laying it closer
+  or ending the trochoid where its engagement would exceed theta + 4 deg (``narrow_level.PeriodCheck``,
+  ``retry_narrow_check_deg``; the notes say where).
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
@@ -125,18 +137,19 @@ Package layout (one role per module)
 pass); ``links`` links at depth and the rapid proofs; ``grid`` the per-level state (stocks, masks,
 free field); ``entries`` the entry choice, helix and bans; ``finish`` the wall-following laps;
 ``params`` :class:`AdaptiveParams` (every tuning constant with its unit and reason); ``narrow`` the
-narrow regions (detection, medial axis, the trochoid along it, their order); ``planner`` the
+narrow regions (detection, medial axis, the trochoid along it); ``narrow_level`` those regions at
+one level (their order, their cut, the period check); ``planner`` the
 level planner object (``_Level``) whose ``run`` is the loop below, and :func:`adaptive_clearing`.
 
 The loop of one level (``_Level.run``)::
 
-    hide the narrow regions (narrow.LevelRegions)
+    hide the narrow regions (narrow_level.LevelRegions)
     enter() or a narrow region by helix       # helix at the widest place with material in reach
     for each round (0, then up to clean_rounds clean-up rounds, each kept only if it pays):
         repeat:
             link_to(next border cell)         # Dijkstra through free cells, chords as G0 where proven
             if no border cell is reachable:
-                narrow.next_region()          # a trochoid from a reachable mouth, or (nothing left) by helix
+                narrow_level.next_region()          # a trochoid from a reachable mouth, or (nothing left) by helix
                 sweep_remnant() or finish_if_done() and enter() again, or stop
             else:
                 clearing_pass()               # steps at theta until the wall, air or the guard ends it

@@ -174,13 +174,17 @@ def ramp_entry(lv, a, b):
     """A ramp entry along the segment a-b (mm) of a band too narrow for a pass to turn (tool-centre
     half-width below ``ramp_half_width_frac`` r, where helix after helix was entered a few r apart):
     down from the level's top to its floor back and forth along a-b (the package's one ramp,
-    :meth:`ToolPathBuilder.ramp`) at the helix angle, or in one leg at a shallower angle where a-b is
-    longer than the 5 deg ramp, then back to ``a`` at depth (``ramp-return``). The tool disc swept
+    :meth:`ToolPathBuilder.ramp`) in an even number of legs at the helix angle or shallower, so that
+    it ends at depth back at ``a`` (no ``ramp-return`` through the wedge under its first leg). The tool disc swept
     along a-b is cut from the stock; the tool stays down at ``a``. Its moves are ``ramp`` (the job's
     entry feed; the evaluator reports their engagement apart, as a helix's)."""
     L = float(math.hypot(b[0] - a[0], b[1] - a[1]))
     dz = lv.z_prev - lv.z
-    deg = min(lv.helix_angle_deg, math.degrees(math.atan2(dz, L)))
+    # an even number of legs, at most at the helix angle: the ramp ends at depth back at ``a``. A
+    # ramp ending at b needs a return at depth to a through the wedge under its first leg: a slot
+    # (180 deg) for its last r, up to the full a_p high (a plus-shaped pocket, D 12 mm: theta + 132 deg)
+    legs = 2 * max(1, math.ceil(dz / math.tan(math.radians(lv.helix_angle_deg)) / (2.0 * L)))
+    deg = math.degrees(math.atan2(dz, legs * L))
     lv.retract()
     lv.b.rapid([a], z=lv.clearance_z)
     lv.b.rapid([a], z=lv.z_prev + lv.prm.approach_above_mm, tag="cleared: above the level", cleared=True)

@@ -99,6 +99,8 @@ def _laps(lv, part):
             dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
             mat = np.flatnonzero(dml < lv.r + lv.g.hc)
             L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + lv.prm.finish_run_on_frac * lv.r)
+            if lap == 0 and resume is None and lv.prm.finish_full_first_lap:
+                L_ring = float(sl[-1])       # the whole ring: see AdaptiveParams.finish_full_first_lap
             if resume is not None:
                 L_ring = min(L_ring, float(sl[(origin - k0) % len(Rs)]) + lv.prm.finish_run_on_frac * lv.r)
             P = _run_lap(lv, wall, Rl, L_ring)
@@ -108,6 +110,84 @@ def _laps(lv, part):
                 resume, segs = int(np.argmin(np.hypot(Rs[:, 0] - P[-1, 0], Rs[:, 1] - P[-1, 1]))), segs + 1
             else:
                 resume, lap = None, lap + 1
+        if lap and lv.prm.finish_peel_rounds:
+            _peel(lv, wall, Rs)
+
+
+def _ring_field(lv, Rs):
+    """(dm, jj, ii): the free field's distance (mm) from each ring point's coarse cell to material,
+    and the cell indices."""
+    D, _ = lv.g.free_field()
+    jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
+    ii = np.clip(((Rs[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
+    return D[jj, ii], jj, ii
+
+
+def _cyclic_runs(mask):
+    """(start, length) of the maximal runs of True in the cyclic boolean array ``mask`` (a run across
+    the end continues at the start); [(0, n)] when all True."""
+    n = len(mask)
+    if mask.all():
+        return [(0, n)]
+    k = int(np.flatnonzero(~mask)[0])           # rotate so that the array starts on a False
+    m = np.roll(mask, -k)
+    e = np.flatnonzero(np.diff(np.r_[0, m.astype(int), 0]))
+    return [((int(a) + k) % n, int(b - a)) for a, b in zip(e[0::2], e[1::2])]
+
+
+def _rest_mm2(lv, P) -> float:
+    """Area (mm^2) of the planning stock's material within the tool's reach (r) of the points P (n, 2)."""
+    g = lv.g
+    lo, hi = P.min(axis=0) - lv.r, P.max(axis=0) + lv.r
+    i0, j0 = max(int((lo[0] - g.x0) // g.h), 0), max(int((lo[1] - g.y0) // g.h), 0)
+    i1, j1 = min(int((hi[0] - g.x0) // g.h) + 1, g.nx), min(int((hi[1] - g.y0) // g.h) + 1, g.ny)
+    jj, ii = np.nonzero(g.M[j0:j1, i0:i1])
+    if len(jj) == 0:
+        return 0.0
+    C = np.c_[g.x0 + (ii + i0 + 0.5) * g.h, g.y0 + (jj + j0 + 0.5) * g.h]
+    d2 = ((C[:, None, :] - P[None, :, :]) ** 2).sum(axis=2).min(axis=1)
+    return float(np.count_nonzero(d2 < lv.r * lv.r)) * g.h * g.h
+
+
+def _peel(lv, wall, Rs):
+    """Local laps over the rests the full laps left along the ring ``Rs`` (corner wedges, which the
+    engagement control at the finish target peels a layer per lap): each run of ring points with
+    material deeper than ``finish_peel_rest_h`` h inside the tool disc gets laps from the last free
+    point before it (at most r upstream) to ``finish_peel_run_on_frac`` r past it, linked at depth
+    through cleared area (never by a lift), at most ``finish_peel_rounds``, while a lap takes
+    material and at least ``finish_peel_min_mm2`` is left within reach of the run."""
+    if lv.cur is None:
+        return
+    n = len(Rs)
+    up = max(1, int(math.ceil(lv.r / lv.ds)))
+    on = int(math.ceil(lv.prm.finish_peel_run_on_frac * lv.r / lv.ds))
+    dm, _, _ = _ring_field(lv, Rs)
+    runs = _cyclic_runs(dm < lv.r - lv.prm.finish_peel_rest_h * lv.h)
+    if not runs or runs[0][1] == n:
+        return                       # nothing left along the ring (or no free place on it)
+    for a, m in runs:
+        span = (a + np.arange(m)) % n
+        for _ in range(lv.prm.finish_peel_rounds):
+            dm, jj, ii = _ring_field(lv, Rs)
+            if not (dm[span] < lv.r - lv.prm.finish_peel_rest_h * lv.h).any() or \
+                    _rest_mm2(lv, Rs[span]) < lv.prm.finish_peel_min_mm2:
+                break
+            free = [k for k in ((a - q) % n for q in range(1, up + 1)) if dm[k] >= lv.r_free]
+            if not free:
+                break
+            k0 = free[0]
+            idx = (k0 + np.arange(min((a + m - k0) % n + on + 1, n + 1))) % n
+            Rl = Rs[idx]
+            if lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1])) is None:
+                break
+            if math.hypot(Rl[0, 0] - lv.cur[0], Rl[0, 1] - lv.cur[1]) > 1e-9:
+                lv.b.link([Rl[0]], lv.link_feed_mm_min, z=lv.z)
+                lv.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
+            before = int(np.count_nonzero(lv.g.M))
+            _run_lap(lv, wall, Rl, float(np.hypot(*np.diff(Rl, axis=0).T).sum()))
+            lv.stats["peels"] = lv.stats.get("peels", 0) + 1
+            if int(np.count_nonzero(lv.g.M)) == before:
+                break
 
 
 def _run_lap(lv, wall, Rl, L_ring):

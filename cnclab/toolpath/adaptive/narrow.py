@@ -27,7 +27,7 @@ Steps (one role: the narrow regions, from detection to their moves):
   pushes outside the tool-centre region projected back on it; towards a closed end the axis runs on
   to c - h of the tool-centre limit and the last period, shorter than the step, lands its front
   there (the face is reached, not left up to a step short);
-* **order** (:class:`LevelRegions`, :func:`next_region`): at the start of a level every region
+* **order** (:mod:`.narrow_level`: ``LevelRegions``, ``next_region``): at the start of a level every region
   leaves the level planner's view (its tool-centre pixels leave the grid's mask, the material only
   centres inside it can reach leaves the planning stock, the finish parts holding it wait), so the
   passes clear the wide parts without crawling into it. When the planner has nothing left within
@@ -39,7 +39,7 @@ Steps (one role: the narrow regions, from detection to their moves):
   the wide part behind it is then reached through the cleared slot. Only when no place is left to
   enter is a region entered by a helix at its axis start (a closed end first), opened to the slot's
   width by a spiral out (radial pitch a_e / 2) and a circle;
-* **moves** (:func:`cut_region`, :func:`emit_trochoid`): the trochoid's cutting moves at the
+* **moves** (:mod:`.narrow_level`: ``cut_region``, ``emit_trochoid``): the trochoid's cutting moves at the
   booklet's feed control (§4: roll-in, roll-out and the cutting part of the return hold the nominal
   MRR, up to ``v_fmax``), its returns through air as one G0 chord where the rapid stock proves it
   (with short feed legs off the cut boundary), else feed links; the planning stock is cut as it
@@ -68,17 +68,15 @@ import shapely
 from shapely.geometry import LineString, MultiPoint, Point
 
 from ..constant_engagement import clamp_to_region
-from ..helix import helix_entry, helix_ring, helix_segments  # noqa: F401  (helix_entry: the one entry helix)
-from .links import rapid_legs
-from .stock import capsule_free, raster
+from ..helix import helix_entry  # noqa: F401  (re-exported: the package's one entry helix)
 from ...cutting.feed_control import controlled_feed
 from ..trochoidal import ce_trochoid, evaluate_pattern, pattern_kinds, period_index
 
 __all__ = ["NarrowRegion", "narrow_regions", "medial_graph", "medial_axis", "trochoid_period", "axis_trochoid",
-           "width_classes", "along", "bend_step", "join_axis", "spiral_out", "helix_entry", "emit_trochoid",
-           "cut_region", "LevelRegions",
-           "next_region", "close",
+           "width_classes", "along", "bend_step", "join_axis", "spiral_out", "helix_entry",
            "NARROW_HALF_WIDTH_FRAC", "NARROW_MIN_LENGTH_FRAC"]
+
+# the narrow regions at one level (their order, their cut, the period check): narrow_level.py
 
 #: a region is narrow where the tool-centre half-width c <= this x r (pocket width <= 2 D): the
 #: controller's tightest turn is 0.8 r, so a pass cannot turn round inside a band of half-width r
@@ -410,7 +408,7 @@ def bend_step(s, ang, x0, x_ext, y_ext, step, h):
 
 
 def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, s_end=None, q=None, hole_mm=0.0,
-                  vmax_ratio=1.0):
+                  vmax_ratio=1.0, check=None):
     """The trochoid of ``region`` (module docstring): (points (m, 2) mm, kinds (m,) of cut / link
     (the pattern's return through the slot), feed factors (m,) x the nominal feed (NaN: link, see
     :func:`trochoid_period`), the steps used (mm), number of points projected back into ``allowed``).
@@ -418,11 +416,16 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
     period's front (its largest local x) stays at most ``s_end`` (default: the axis end); each run of
     :func:`width_classes` (``q`` mm, default r/10) with the period made for its width. ``s_start``
     None: the first period's front one step beyond a hole of radius ``hole_mm`` (the helix's, tool
-    centre) about the axis start."""
+    centre) about the axis start. ``check``: None, or a callable ``check(points (m, 2) mm, cutting (m,)
+    bool, first) -> bool`` asked for every period (its points in the plane; after the first, from
+    the previous period's last point): False refuses it -- it is laid again at half the arc-length
+    step, down to ``MIN_BEND_STEP_FRAC`` x the step, and a period still refused there (or a refused
+    first period) ends the trochoid (the rest of the axis is left to the level planner; see
+    :class:`PeriodCheck`)."""
     s_end = region.length if s_end is None else s_end
     q = 0.1 * r if q is None else q
     X, Y, K, F, steps = [], [], [], [], []
-    x0 = s_start
+    x0, stop_all, x_prev = s_start, False, None
     s_ax, T_ax = _frame(region.axis)
     ang_ax = np.unwrap(np.arctan2(T_ax[:, 1], T_ax[:, 0]))
     for (a, b, cc) in width_classes(region, q, 2.0 * r):
@@ -439,7 +442,7 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
         steps.append(step)
         # period k runs from its roll-in start to the next period's (its return link included): the
         # periods join end to start, the first point of each after the first dropped
-        last_front = -math.inf
+        last_front, d = -math.inf, step
         while x0 + x_ext <= stop + 1e-9 or not X or (closing_end and last_front < stop - 0.5 * h):
             if x0 + x_ext > stop + 1e-9 and X:
                 # the axis end (a dead end, extended to c - h of the tool-centre limit by the caller): one
@@ -447,19 +450,39 @@ def axis_trochoid(region: NarrowRegion, allowed, r, theta_deg, h, s_start=None, 
                 # left up to a step short of it (its engagement is below theta: less material ahead)
                 x0 = stop - x_ext
             first = not X
+            Xk, Yk, Kk, Fk = [], [], [], []
             if not first:        # a straight return to this pattern's start (a width change: a new shape)
                 last = np.array([X[-1][-1], Y[-1][-1]])
                 S = np.array([P0[0, 0] + x0, P0[0, 1]])
                 m = max(int(math.ceil(np.hypot(*(S - last)) / (2 * h))), 1)
                 t = np.linspace(0, 1, m + 1)[1:]
-                X.append(last[0] + t * (S[0] - last[0])); Y.append(last[1] + t * (S[1] - last[1]))
-                K.append(np.full(m, "link", dtype=object)); F.append(np.full(m, np.nan))
+                Xk.append(last[0] + t * (S[0] - last[0])); Yk.append(last[1] + t * (S[1] - last[1]))
+                Kk.append(np.full(m, "link", dtype=object)); Fk.append(np.full(m, np.nan))
             j = 0 if first else 1
-            X.append(P0[j:, 0] + x0); Y.append(P0[j:, 1]); K.append(kinds0[j:]); F.append(F0[j:])
-            # the period's own return already ends at the next period's start: drop the duplicate
-            X[-1], Y[-1], K[-1], F[-1] = X[-1][:-1], Y[-1][:-1], K[-1][:-1], F[-1][:-1]
-            last_front = x0 + x_ext
-            x0 += bend_step(s_ax, ang_ax, x0, x_ext, float(np.abs(P0[:, 1]).max()), step, h)
+            # the period's own return already ends at the next period's start: its last point dropped
+            Xk.append(P0[j:-1, 0] + x0); Yk.append(P0[j:-1, 1]); Kk.append(kinds0[j:-1]); Fk.append(F0[j:-1])
+            if check is not None:
+                xs, ys = np.concatenate(Xk), np.concatenate(Yk)
+                if not first:
+                    xs, ys = np.r_[X[-1][-1], xs], np.r_[Y[-1][-1], ys]
+                Qk = along(region.axis, np.maximum(xs, 0.0), ys)
+                out = ~shapely.contains_xy(allowed, Qk[:, 0], Qk[:, 1])
+                if out.any():
+                    Qk = clamp_to_region(Qk, allowed.buffer(-1e-4))
+                cutting = np.concatenate(Kk) == "cut"
+                if not check(Qk, cutting if first else np.r_[False, cutting], first):
+                    if x_prev is not None and d > MIN_BEND_STEP_FRAC * step * 1.5:
+                        d = max(0.5 * d, MIN_BEND_STEP_FRAC * step)
+                        x0 = x_prev + d          # the period laid again, closer to the previous one
+                        continue
+                    stop_all = True
+                    break
+            X += Xk; Y += Yk; K += Kk; F += Fk
+            last_front, x_prev = x0 + x_ext, x0
+            d = bend_step(s_ax, ang_ax, x0, x_ext, float(np.abs(P0[:, 1]).max()), step, h)
+            x0 += d
+        if stop_all:
+            break
     if not X:
         return np.zeros((0, 2)), np.zeros(0, dtype=object), np.zeros(0), steps, 0
     X, Y, K, F = np.concatenate(X), np.concatenate(Y), np.concatenate(K), np.concatenate(F)
@@ -532,255 +555,3 @@ def spiral_out(c_xy, rho0, rho1, pitch, ds, start_rad=0.0):
     P[0] = np.asarray(c_xy, float) + rho0 * np.array([math.cos(start_rad), math.sin(start_rad)])
     P[-1] = np.asarray(c_xy, float) + max(rho1, rho0) * np.array([math.cos(start_rad), math.sin(start_rad)])
     return P
-
-
-def emit_trochoid(b, g, start, Q, K, feed, z, link_feed, tag):
-    """Append the trochoid ``Q`` (m, 2) mm at height ``z`` to the builder ``b`` from ``start`` (2,),
-    cutting the planning stocks of the grid ``g`` as it goes: every run of cutting moves is cut into
-    ``g``; every run of returns (``K == "link"``) then becomes one G0 chord marked cleared where the
-    rapid stock proves it (:func:`~.links.rapid_legs`: no material within r + h/sqrt(2) of it, with
-    short feed legs off the cut boundary at its ends: how the level planner's links are proven),
-    else feed links at ``link_feed`` (mm/min).
-    ``feed``: per point, mm/min (NaN on links)."""
-    link = np.asarray(K) == "link"
-    edges = np.flatnonzero(np.diff(link.astype(int))) + 1
-    bounds = np.r_[0, edges, len(Q)]
-    prev = np.asarray(start, float)
-    for a, e in zip(bounds[:-1], bounds[1:]):
-        run = Q[a:e]
-        if not link[a]:
-            b.cut(run, np.round(feed[a:e], 1), z=z, tag=tag)
-            g.cut_path(np.vstack([prev[None], run]))
-        else:
-            legs = rapid_legs(g, prev, run[-1]) if len(run) > 1 else None
-            if legs is None:
-                b.link(run, link_feed, z=z, tag=tag)
-                g.cut_path(np.vstack([prev[None], run]))
-            else:
-                p1, q1 = legs
-                if p1 is not None:
-                    b.link([p1], link_feed, z=z, tag=tag)
-                b.rapid([q1], z=z, tag="cleared: trochoid return through the cleared slot", cleared=True)
-                if q1[0] != run[-1, 0] or q1[1] != run[-1, 1]:
-                    b.link(run[-1:], link_feed, z=z, tag=tag)
-        prev = run[-1]
-
-
-def _builder(lv):
-    """The level planner's :class:`ToolPathBuilder` (``lv.b``)."""
-    return lv.b
-
-
-def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
-    """Cut the narrow region ``reg`` at the level of the planner ``lv``
-    (:class:`cnclab.toolpath.adaptive.planner._Level`): the trochoid along the axis from its start,
-    the planning stock cut along it; the tool stays down at the trochoid's end (``lv.cur``).
-    ``from_cleared``: the tool stands at the axis start, reached through cleared area (the level
-    planner's link), and the trochoid starts there; else it retracts, enters by a helix at the axis
-    start (into material) and spirals out to the slot's width. False (nothing emitted) when the axis
-    start has no room for a helix of ``prm.helix_min_mm`` or the pattern of its first width class
-    would crawl (step below ``MIN_STEP_FRAC`` a_e): the region is left to the level planner."""
-    prm, r, h = lv.prm, lv.r, lv.h
-    c_start = float(reg.radius[0])      # the hole opened to the half-width c: the pattern swings to c
-    rho = min(prm.helix_radius_frac * r, prm.helix_room_frac * float(reg.radius[0]) - h)
-    if not from_cleared and rho < prm.helix_min_mm:
-        return False
-    s_end = reg.length + (float(reg.radius[-1]) - h if reg.dead[1] else 0.0)
-    vmax = float(getattr(getattr(lv, "job", None), "v_fmax", lv.feed_mm_min))
-    Q, K, F, steps, n_out = axis_trochoid(reg, lv.allowed, r, lv.theta_deg, h, s_end=s_end,
-                                          hole_mm=0.0 if from_cleared else c_start, vmax_ratio=vmax / lv.feed_mm_min)
-    if len(Q) == 0:
-        return False
-    b = _builder(lv)
-    c0 = reg.axis[0]
-    if from_cleared:
-        p0 = np.array(lv.cur, float)
-    else:
-        lv.retract()
-        p0 = (c0[0] + rho, c0[1])
-        b.rapid([p0], z=lv.clearance_z)
-        b.rapid([p0], z=lv.z_prev + prm.approach_above_mm, tag="cleared: above the level", cleared=True)
-        b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
-        pe = helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg, tag="entry: narrow region")
-        lv.g.cut_path(helix_ring(c0, rho, 64))
-        # the hole opened to the slot's width: a spiral out to radius c (radial pitch a_e / 2), a circle
-        S = spiral_out(c0, rho, c_start, 0.5 * r * (1 - math.cos(math.radians(lv.theta_deg))), 2 * h,
-                       start_rad=math.atan2(pe[1] - c0[1], pe[0] - c0[0]))
-        S[0] = pe
-        b.cut(S[1:], lv.feed_mm_min, z=lv.z, tag="entry: narrow region, spiral out to the slot width")
-        lv.g.cut_path(S)
-        p0 = S[-1]
-        lv.stats["entries"] += 1
-    emit_trochoid(b, lv.g, np.asarray(p0, float), Q, K, F * lv.feed_mm_min, lv.z, lv.link_feed_mm_min,
-                  f"narrow region {reg.index}: Thesis IV trochoid")
-    lv.cur = (float(Q[-1, 0]), float(Q[-1, 1]))
-    lv.stats["narrow_trochoids"] = lv.stats.get("narrow_trochoids", 0) + 1
-    lv.narrow_done.append(reg.describe(r) + (" from cleared area" if from_cleared else " from a helix")
-                          + f", steps {', '.join(f'{s_:.3f}' for s_ in steps)} mm")
-    return True
-
-
-def _leg_fits(allowed, p, q, c) -> bool:
-    """The straight leg from ``p`` to ``q`` (mm) with a band of half-width ``c`` (mm) about it lies
-    inside the tool-centre region ``allowed`` (the trochoid's periods along it fit unclamped)."""
-    leg = LineString([p, q]) if float(np.hypot(*(np.asarray(p) - np.asarray(q)))) > 1e-9 else Point(*p)
-    return bool(allowed.contains(leg.buffer(max(c, 0.0), quad_segs=8)))
-
-
-class LevelRegions:
-    """The narrow regions of one level while the level planner runs (see :func:`next_region`).
-
-    On creation every region is taken out of the planner's view: its tool-centre pixels leave the
-    grid's tool-centre mask (the passes cannot enter it) and the material that only tool centres
-    inside it can reach (farther than r from the rest of the region) leaves the planning stock
-    (no pass, entry or link is drawn to it); the finish parts that hold it wait. A region is put
-    back just before its trochoid cuts it."""
-
-    def __init__(self, lv, regions):
-        g = lv.g
-        self.lv, self.pending, self.parked = lv, list(regions), []
-        if not self.pending:
-            return
-        self.A0 = g.A.copy()
-        narrow_all = shapely.union_all([q.polygon.buffer(g.h) for q in self.pending])
-        rest = lv.allowed.difference(narrow_all)
-        # hidden: material farther than r + hide_margin_h h from the rest (a pass's tool centre lies up to
-        # a pixel's half-diagonal inside the raster ``am`` of a region, and a thin crescent of hidden
-        # material at its circle spans a wide arc: dwg_concave_hole theta + 14.8 deg at r)
-        reach = rest.buffer(lv.r + lv.prm.narrow_hide_margin_h * g.h) if not rest.is_empty else shapely.Polygon()
-        self.masks, self.saved = [], []
-        for reg in self.pending:
-            am = raster(reg.polygon.buffer(g.h), g.x0, g.y0, g.h, g.nx, g.ny) > 0
-            mm = raster(reg.polygon.buffer(lv.r + 2 * g.h).difference(reach), g.x0, g.y0, g.h, g.nx, g.ny) > 0
-            self.masks.append((am, mm))
-            self.saved.append(g.M[mm].copy())
-        for am, mm in self.masks:
-            g.A[am] = False
-            g.M[mm] = 0
-        self._refresh()
-        self.park()
-
-    def _refresh(self):
-        g = self.lv.g
-        g.Ac = g.coarse(g.A).min(axis=(1, 3)) > 0
-        g.touch(np.array([[g.x0, g.y0], [g.x0 + g.nx * g.h, g.y0 + g.ny * g.h]]), 0.0)
-
-    def park(self):
-        """Hold back the finish parts that meet a pending region (their laps would cut its hidden
-        material); give back the others."""
-        lv = self.lv
-        parts = list(lv.todo_parts) + self.parked
-        polys = [q.polygon for q in self.pending]
-        self.parked = [p for p in parts if any(p.intersects(q) for q in polys)]
-        lv.todo_parts[:] = [p for p in parts if not any(p.intersects(q) for q in polys)]
-
-    def restore(self, k):
-        """Put region ``k`` (index into ``pending``) back into the planner's view and drop it."""
-        g = self.lv.g
-        am, mm = self.masks.pop(k)
-        g.A[am] = self.A0[am]
-        g.M[mm] = np.maximum(g.M[mm], self.saved.pop(k))
-        self._refresh()
-        return self.pending.pop(k)
-
-    def open_mouth_pending(self) -> bool:
-        """Whether a pending region has an open end (a mouth the planner must clear completely,
-        slivers too, for :meth:`reachable_mouth` to find its swing free)."""
-        return any(not all(reg.dead) for reg in self.pending)
-
-    def reachable_mouth(self):
-        """(k, reversed?, cell, point) of a pending region whose open end the tool reaches through
-        cleared area: ``point`` the centre of the free coarse cell (its tool disc free of material)
-        nearest to that end of the axis within 2 r, reached by :meth:`Grid.route`; the shortest
-        route first. None when no open end is reachable."""
-        lv, g = self.lv, self.lv.g
-        if lv.cur is None:
-            return None
-        D, Ac = g.free_field()
-        free = Ac & (D >= lv.r_free)
-        best = None
-        for k, reg in enumerate(self.pending):
-            for rev, (end, dead) in enumerate(((reg.axis[0], reg.dead[0]), (reg.axis[-1], reg.dead[1]))):
-                if dead:
-                    continue
-                j0, i0 = g.cell(*end)
-                w = int(math.ceil(3 * lv.r / g.hc))
-                J, I = np.nonzero(free[max(j0 - w, 0):j0 + w + 1, max(i0 - w, 0):i0 + w + 1])
-                if len(J) == 0:
-                    continue
-                J, I = J + max(j0 - w, 0), I + max(i0 - w, 0)
-                C = np.c_[g.x0 + (I + 0.5) * g.hc, g.y0 + (J + 0.5) * g.hc]
-                # the nearest from which the first periods' returns, swinging c to either side across
-                # the axis, meet no material (the capsule of radius r + mouth_capsule_margin_h h about that swing is free)
-                ax = reg.axis if rev == 0 else reg.axis[::-1]
-                t = ax[min(3, len(ax) - 1)] - ax[0]
-                n = np.array([-t[1], t[0]]) / max(float(np.hypot(*t)), 1e-12)
-                sw = float(reg.radius[0 if rev == 0 else -1]) * n
-                # ... and the leg from it to the axis end, where the pattern swings c to either side
-                # too, lies inside the tool-centre region (else the pattern is clamped onto its boundary
-                # along the leg and cuts as a slot: 124-152 deg at theta 60 where a leg ran 4 mm along an
-                # island's edge through uncleared material)
-                c_end = float(reg.radius[0 if rev == 0 else -1])
-                m = next((int(q) for q in np.argsort(np.hypot(*(C - end).T))[:MOUTH_CANDIDATES]
-                          if capsule_free(g.M, g.x0, g.y0, g.h, C[q, 0] - sw[0], C[q, 1] - sw[1], C[q, 0] + sw[0],
-                                          C[q, 1] + sw[1], lv.r + lv.prm.mouth_capsule_margin_h * g.h)
-                          and _leg_fits(lv.allowed, C[q], end, c_end - 2 * g.h)), None)
-                if m is None:
-                    continue
-                route = g.route(lv.cur, lv.r_free, -np.inf, None, (int(J[m]), int(I[m])))
-                if route is None or isinstance(route, str):
-                    continue
-                if best is None or len(route) < best[4]:
-                    best = (k, bool(rev), (int(J[m]), int(I[m])), C[m], len(route))
-        return None if best is None else best[:4]
-
-
-def next_region(lv, banned=None) -> bool:
-    """The level planner has nothing left within reach through cleared area: cut the next narrow
-    region (True), or leave it to the planner (False). A region whose open end (a mouth onto the
-    cleared area) the tool reaches through cleared area is entered there by the planner's link;
-    else, once the planner has no place left to enter (no material within reach of a free cell of
-    its tool-centre region, ``banned`` cells aside), a region is entered by a helix at its axis start
-    (a closed end first); a region without room for that helix is handed back to the planner."""
-    st = getattr(lv, "narrow_state", None)
-    if st is None or not st.pending:
-        return False
-    hit = st.reachable_mouth()
-    if hit is not None:
-        k, rev, cell, pt = hit
-        reg = st.pending[k].reversed() if rev else st.pending[k]
-        if lv.link_to(lv.r_free, -np.inf, None, cell, end_xy=tuple(pt)) is not None:
-            st.restore(k)
-            # the axis starts at the free point the link reached (its tool disc is free of material)
-            reg = join_axis(reg, lv.cur)
-            cut_region(lv, reg, from_cleared=True)
-            st.park()
-            return True
-    D, Ac = lv.g.free_field()
-    need = Ac & (D < lv.r)
-    if banned is not None:
-        need &= ~banned
-    if need.any():
-        return False
-    while st.pending:
-        k = next((i for i, q in enumerate(st.pending) if q.dead[0]), 0)
-        done = cut_region(lv, st.restore(k))
-        st.park()
-        if done:
-            return True
-        # no room for its helix, or its pattern would crawl: the region is back in the planner's
-        # view, and the planner enters it its own way (None: that place is banned, try again)
-        if lv.enter(banned) is not False:
-            return True
-    return False
-
-
-def close(lv) -> None:
-    """End of the level's passes: any region still pending goes back into the planner's view, and
-    every parked finish part back to the planner's list."""
-    st = getattr(lv, "narrow_state", None)
-    if st is None:
-        return
-    while st.pending:
-        st.restore(0)
-    st.park()

@@ -102,6 +102,30 @@ class AdaptiveParams:
     #: max(finish_rest_min_mm, finish_rest_frac_ae a_e) is left along the ring
     finish_rest_min_mm: float = 0.3
     finish_rest_frac_ae: float = 0.25
+    #: deg (None: off, the default): each period of a narrow region's trochoid is replayed on the
+    #: planning stock and laid closer (down to a tenth of its step), or ends the trochoid, where its
+    #: engagement exceeds theta + this (narrow_level.PeriodCheck). The open-loop pattern is made for a
+    #: straight slot; at a channel's sharp corner or junction it met up to theta + 29 deg (letter
+    #: pockets, benchmarks/bench_letters.py). Not the default: on the corpus's 1.5 D channels, which the
+    #: open loop holds, it lays periods closer at width changes and bends (+9 to +22 % program time on
+    #: 4 of 8, measured at 4 deg); ``plan``'s re-plan of a level beyond the bounds turns it on last
+    #: (``retry_narrow_check_deg``)
+    narrow_check_margin_deg: float | None = None
+    #: whether a ring's first finishing lap runs the whole ring (else it ends finish_run_on_frac r past
+    #: the last ring point the planning stock shows material in reach of): it is the only move on the
+    #: true tool-centre limit (passes stay h/sqrt(2) inside it), so it alone takes the sub-pixel skin
+    #: along walls the planning stock does not show (islands_5: 2.5 mm^2 of pixel skins in the
+    #: evaluator along a 42 mm wall the lap had skipped)
+    finish_full_first_lap: bool = True
+    #: rounds: after the full laps, local laps over each run of the ring where material is left deeper
+    #: than finish_peel_rest_h h inside the tool disc (corner wedges: the control peels one layer a
+    #: lap), from the last free point before the run to finish_peel_run_on_frac r past it (0: none)
+    finish_peel_rounds: int = 4
+    finish_peel_rest_h: float = 1.5
+    finish_peel_run_on_frac: float = 0.5
+    #: mm^2: a run is peeled only while this much material is left within the tool's reach of it
+    #: (a tenth of the 0.5 mm^2 a job may leave beyond FreeCAD's in issue 29's uncut target)
+    finish_peel_min_mm2: float = 0.05
     #: fraction of r: a finishing lap runs on this far past the last ring point with material in reach
     finish_run_on_frac: float = 2.0
     #: pixels (h): finishing points planned within this distance of the wall are snapped onto it
@@ -138,7 +162,7 @@ class AdaptiveParams:
     #: (r - h) slot_bulbs_2 reaches theta + 22 deg (the mouth point then chosen has its first return
     #: meet material), at 0 the islands-neck case of test_adaptive_clearing theta + 11 in a later pass
     mouth_capsule_margin_h: float = 0.5
-    #: pixels (h): while a narrow region waits for its trochoid (narrow.LevelRegions), the material
+    #: pixels (h): while a narrow region waits for its trochoid (narrow_level.LevelRegions), the material
     #: only its tool centres reach is hidden from the passes; "only" means farther than r + this from
     #: the rest of the tool-centre region. Was r (0): a pass's tool centre may stand up to a pixel's
     #: half-diagonal inside the region's raster, and the hidden crescent its circle then meets, thin
@@ -239,6 +263,12 @@ class AdaptiveParams:
     #: is lower. Measured: spiral_0 theta + 11.1 -> + 5.5, neck_3 + 11.2 -> + 4.4, regions_3 + 10.0 ->
     #: + 8.6; as the default it cost up to 1 % program time and 1.2 mm^2 uncut (dwg_concave_hole)
     retry_guard_deg: float = 3.0
+    #: deg over theta: the narrow-region period check (``narrow_check_margin_deg``) of the last re-plan
+    #: of a level beyond the bounds (after the tighter guard, the nearest starts and both). 4 deg: the
+    #: check's replay is the planning stock's model, which measures up to ~3 deg less than the evaluator
+    #: (as the finish's ``finish_margin_deg``); at 6 a letter T (D 3 mm, theta 22.9) kept 0.55 % above
+    #: theta + 5 deg
+    retry_narrow_check_deg: float = 4.0
     #: deg over theta and % of the cutting length: with the maximum, the rest of the issue-29 bounds
     #: (p95 <= theta + 2, share above theta + 5 <= 0.5 %); a level beyond any of them is planned again
     #: (``retry_guard_deg``, then with the nearest pass starts, ``upstream_start_frac`` = 0, then

@@ -13,7 +13,7 @@ from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
 from ..path import KINDS, ToolPath, ToolPathBuilder, resample_polyline
-from . import entries, finish, narrow
+from . import entries, finish, narrow, narrow_level
 from .entries import PlanningError
 from .grid import Grid, PassStep
 from .params import AdaptiveParams
@@ -389,9 +389,9 @@ class _Level:
         self.todo_parts = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
         self.r_free = self.r + self.prm.free_margin_hc * self.g.hc      # coarse cell centre to material, with the cell half-diagonal margin
         # narrow regions (narrow.py): out of the passes' view, each cut by Thesis IV's trochoid when reached
-        self.narrow_state = narrow.LevelRegions(self, self.narrow_regs)
+        self.narrow_state = narrow_level.LevelRegions(self, self.narrow_regs)
         mark = self.b.mark()
-        if not self.enter() and not narrow.next_region(self):
+        if not self.enter() and not narrow_level.next_region(self):
             finish.note_unvisited(self, mark)
             return
         for rnd in range(self.clean_rounds + 1):
@@ -413,7 +413,7 @@ class _Level:
                 self._link_tail = None
                 undo = (self.b.mark(), self.cur, self.stats["links"])
                 end, heading = self.next_start(banned)
-                if end is None and narrow.next_region(self, banned):
+                if end is None and narrow_level.next_region(self, banned):
                     continue
                 if end is None:
                     D, Ac = self.g.free_field()
@@ -481,7 +481,7 @@ class _Level:
                            np.where(fr, np.nan, np.where(ai, self.link_feed_mm_min, self.feed_mm_min)),
                            np.where(fr, "cleared: air inside cleared area", "").astype(object), z=self.z, cleared=fr)
                 self.cur = (float(P[-1, 0]), float(P[-1, 1]))
-            narrow.close(self)
+            narrow_level.close(self)
             if self.finish:
                 # every part of the tool-centre region is finished once, the nearest to the tool first (a part
                 # is also finished as soon as its clearing is done, before the tool leaves it: no extra lift)
