@@ -6,7 +6,9 @@ bounds replays each period on the planning stock and lays it closer, or ends the
 engagement would exceed theta + 4 deg (``AdaptiveParams.retry_narrow_check_deg``,
 :class:`cnclab.toolpath.adaptive.narrow_level.PeriodCheck`);
 a ramp entry that ended at its far end returned at depth through the wedge under its first leg
-(180 deg over its last r: theta + 132 deg in a plus, D 12 mm) and now ramps in an even number of legs.
+(180 deg over its last r: theta + 132 deg in a plus, D 12 mm) and now ramps in an even number of legs;
+the middle bar of an E, a branch of its narrow part's medial tree, is a region of its own in that
+re-plan (``AdaptiveParams.narrow_branches``).
 
 Scored by the package's one evaluator at r/30 (the corpus resolution): 0 plunges or rapids into
 material, no wall gouge beyond 1 um, engagement p95 <= theta + 2 deg, max <= theta + 10 deg and at
@@ -30,6 +32,9 @@ CASES = [
     ("U", 8.0, 10.3, 45.5, 98.8, 26.0),
     ("T", 8.0, 11.0, 30.0, 70.0, 18.8),
     ("plus", 12.0, 14.3, 88.0, 47.7, 132.3),
+    # the middle bar of an E is a branch of the medial tree: its own region (narrow_branches, the last
+    # re-plan), else the passes, which cannot turn in it (theta + 13.7 deg); measured theta + 9.96
+    ("E", 8.0, 11.0, 63.7, 51.7, 13.65),
 ]
 
 

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 from shapely.geometry import Point, Polygon, box
 
 from cnclab.nc.program import check_program, write_program
@@ -193,3 +194,25 @@ def test_a_refused_period_is_laid_closer_and_a_refusal_at_the_smallest_step_ends
     Qn, Kn, _, _, _ = narrow.axis_trochoid(reg, allowed, r, theta, h, hole_mm=float(reg.radius[0]),
                                            check=lambda Q, c, first: False)
     assert len(Qn) == 0 and len(Kn) == 0
+
+
+def test_a_branch_of_the_medial_tree_is_a_region_of_its_own():
+    # an E of bars 11 mm wide, D 8 mm: the tool-centre region is one narrow part (half-width 1.5 mm)
+    # whose medial tree has a trunk (top bar, spine, bottom bar) and a branch (the middle bar). By
+    # default only the longest path gets a trochoid (the passes take the middle bar, where they
+    # cannot turn: theta + 13.7 deg on a letter-pockets job); with branches the middle bar is a
+    # region of its own, open at the trunk (its junction end not dead) and dead at its tip, its
+    # tool-centre area apart from the trunk's and the two covering the part
+    from cnclab.works.jacso2021.letter_pockets import letter
+    r, h = 4.0, 4.0 / 60
+    allowed = letter("E", 11.0, 63.7).buffer(-r, join_style="mitre")
+    assert len(narrow.narrow_regions(allowed, r, h)) == 1
+    regs = narrow.narrow_regions(allowed, r, h, branches=True)
+    assert len(regs) == 2 and not regs[0].branch and regs[1].branch
+    trunk, br = regs
+    assert trunk.dead == (True, True) and sorted(br.dead) == [False, True]
+    tip = br.axis[0] if br.dead[0] else br.axis[-1]
+    assert tip[0] > 50.0 and abs(tip[1] - 63.7 / 2) < 0.5          # the middle bar's closed end
+    assert br.polygon.intersection(trunk.polygon).area < 1e-6
+    part = shapely.union_all([trunk.polygon, br.polygon])
+    assert abs(part.area - (allowed.area - 0.0)) < 0.02 * allowed.area

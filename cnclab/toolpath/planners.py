@@ -358,7 +358,10 @@ def _retries(prm):
     guard = dataclasses.replace(prm, guard_deg=prm.retry_guard_deg)
     out = [guard, dataclasses.replace(prm, upstream_start_frac=0.0), dataclasses.replace(guard, upstream_start_frac=0.0)]
     if prm.narrow_check_margin_deg is None:
-        out.append(dataclasses.replace(prm, narrow_check_margin_deg=prm.retry_narrow_check_deg))
+        checked = dataclasses.replace(prm, narrow_check_margin_deg=prm.retry_narrow_check_deg)
+        out.append(checked)
+        if not prm.narrow_branches:
+            out.append(dataclasses.replace(checked, narrow_branches=True))
     return out
 
 

@@ -131,6 +131,9 @@ class NarrowRegion:
     axis: np.ndarray
     radius: np.ndarray
     dead: tuple
+    #: a branch of a narrow part's medial tree (narrow_regions(branches=True)): its open end lies at
+    #: the trunk's slot, not at a wide area
+    branch: bool = False
 
     @property
     def length(self) -> float:
@@ -142,7 +145,7 @@ class NarrowRegion:
 
     def reversed(self) -> "NarrowRegion":
         return NarrowRegion(self.index, self.polygon, self.axis[::-1].copy(), self.radius[::-1].copy(),
-                            self.dead[::-1])
+                            self.dead[::-1], self.branch)
 
     def describe(self, r) -> str:
         """One line for the program header and the plan result (``r`` the tool radius, mm)."""
@@ -241,14 +244,15 @@ def medial_axis(region, spacing, G=None, keep=None):
 
 
 def narrow_regions(allowed, r, h=None, half_width_frac=NARROW_HALF_WIDTH_FRAC,
-                   min_length_frac=NARROW_MIN_LENGTH_FRAC) -> list:
+                   min_length_frac=NARROW_MIN_LENGTH_FRAC, branches=False) -> list:
     """The narrow regions of the tool-centre region ``allowed`` (pocket shrunk by the tool radius
     ``r``, mm): see the module docstring. ``h``: planning pixel (mm, default r/60). A list of
     :class:`NarrowRegion`, axes running from a closed (dead) end where there is one.
 
     The medial graph is built once on the whole region (so that the axis runs on through the mouth
     of a narrow part into the wide part with its true radius); each narrow part keeps the nodes of
-    radius at most ``half_width_frac`` r inside it."""
+    radius at most ``half_width_frac`` r inside it. ``branches``: each narrow part gives its trunk and
+    its branches (:func:`_branch_axes`), else its longest medial path only."""
     h = r / 60.0 if h is None else float(h)
     c_max = half_width_frac * r
     wide = allowed.buffer(-c_max, quad_segs=16).buffer(c_max, quad_segs=16)
@@ -267,20 +271,71 @@ def narrow_regions(allowed, r, h=None, half_width_frac=NARROW_HALF_WIDTH_FRAC,
     for part in parts:
         near = part.buffer(2 * h)
         inside = shapely.contains_xy(near, nodes[:, 0], nodes[:, 1]) & (cn <= c_max * 1.02)
-        ax = medial_axis(allowed, spacing, G, [tuple(p) for p in nodes[inside]])
-        if ax is None:
-            continue
-        P, c = ax
-        ok = np.flatnonzero(c >= NARROW_MIN_HALF_WIDTH_FRAC * r + 2 * h)
-        if len(ok) < 2:
-            continue
-        P, c = P[ok[0]:ok[-1] + 1], c[ok[0]:ok[-1] + 1]
-        if float(np.hypot(*np.diff(P, axis=0).T).sum()) < min_length_frac * r or c.min() < NARROW_MIN_HALF_WIDTH_FRAC * r:
-            continue
-        dead = tuple(bool(wide.is_empty or wide.distance(Point(*p)) > 2 * c_max) for p in (P[0], P[-1]))
-        reg = NarrowRegion(len(out), part, P, c, dead)
-        out.append(reg.reversed() if (dead[1] and not dead[0]) else reg)
+        axes = _branch_axes(allowed, spacing, G, nodes[inside], r, min_length_frac * r, c_max) if branches \
+            else [(ax, None) for ax in [medial_axis(allowed, spacing, G, [tuple(p) for p in nodes[inside]])] if ax]
+        polys = _branch_polygons(part, [a[0] for a, _ in axes], c_max, h)
+        for ((P, c), junction), poly in zip(axes, polys):
+            ok = np.flatnonzero(c >= NARROW_MIN_HALF_WIDTH_FRAC * r + 2 * h)
+            if len(ok) < 2:
+                continue
+            P, c = P[ok[0]:ok[-1] + 1], c[ok[0]:ok[-1] + 1]
+            if float(np.hypot(*np.diff(P, axis=0).T).sum()) < min_length_frac * r or c.min() < NARROW_MIN_HALF_WIDTH_FRAC * r:
+                continue
+            dead = tuple(bool(wide.is_empty or wide.distance(Point(*p)) > 2 * c_max) for p in (P[0], P[-1]))
+            if junction is not None:      # a branch: its end at the trunk opens onto the trunk's slot
+                at_start = np.hypot(*(P[0] - junction)) <= np.hypot(*(P[-1] - junction))
+                dead = (False, dead[1]) if at_start else (dead[0], False)
+            reg = NarrowRegion(len(out), poly, P, c, dead, junction is not None)
+            out.append(reg.reversed() if (dead[1] and not dead[0]) else reg)
     return out
+
+
+def _branch_axes(allowed, spacing, G, nodes, r, min_len, c_max):
+    """The medial axes of one narrow part: its longest path (the trunk, as :func:`medial_axis`), then
+    each branch of its medial tree at least ``min_len`` mm long that the trunk's slot does not cover
+    (the middle bar of an E, the far half of a T's bar): the longest path of each connected rest of
+    the graph once the nodes within c_max + r/4 of an axis already taken are removed. A list of
+    ((axis, c), junction point (2,) or None for the trunk)."""
+    keep = [tuple(p) for p in nodes]
+    trunk = medial_axis(allowed, spacing, G, keep)
+    if trunk is None:
+        return []
+    out, taken = [(trunk, None)], [trunk[0]]
+    for _ in range(8):            # a comb of fingers: at most 8 branches a part
+        cover = shapely.union_all([LineString(a).buffer(c_max + 0.25 * r) for a in taken])
+        rest = nodes[~shapely.contains_xy(cover, nodes[:, 0], nodes[:, 1])]
+        if len(rest) < 2:
+            break
+        H = G.subgraph([tuple(p) for p in rest])
+        comps = sorted((cc for cc in nx.connected_components(H) if len(cc) > 1), key=len, reverse=True)
+        best = None
+        for cc in comps:
+            ax = medial_axis(allowed, spacing, H.subgraph(cc))
+            if ax is not None and float(np.hypot(*np.diff(ax[0], axis=0).T).sum()) >= min_len:
+                best = ax
+                break
+        if best is None:
+            break
+        ends = np.array([best[0][0], best[0][-1]])
+        dist = [min(float(LineString(a).distance(Point(*e))) for a in taken) for e in ends]
+        out.append((best, ends[int(np.argmin(dist))]))
+        taken.append(best[0])
+    return out
+
+
+def _branch_polygons(part, axes, c_max, h):
+    """The tool-centre area of each axis of one narrow part: a branch keeps the part's area within
+    c_max + 2 h of its axis (beyond the trunk's share); the trunk keeps the rest."""
+    if len(axes) <= 1:
+        return [part] * len(axes)
+    polys = [None] * len(axes)
+    rest = part
+    for k in range(1, len(axes)):
+        polys[k] = part.intersection(LineString(axes[k]).buffer(c_max + 2 * h)).difference(
+            LineString(axes[0]).buffer(c_max + 2 * h))
+        rest = rest.difference(polys[k])
+    polys[0] = rest
+    return polys
 
 
 @lru_cache(maxsize=32)

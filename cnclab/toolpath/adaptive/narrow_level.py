@@ -51,7 +51,7 @@ class PeriodCheck:
         if hole is not None:
             cut_disc(self.M, g.x0 + self.i0 * g.h, g.y0 + self.j0 * g.h, g.h, float(hole[0][0]), float(hole[0][1]),
                      float(hole[1]), np.nan, np.nan)
-        self.start = np.asarray(start, float)
+        self.start, self.hole = np.asarray(start, float), hole is not None
         self.refused, self.last_ok = 0, None
 
     def __call__(self, Q, cutting, first=False) -> bool:
@@ -68,7 +68,9 @@ class PeriodCheck:
         sub = np.ascontiguousarray(self.M[b0:b1, a0:a1])
         E, _ = replay(sub, g.x0 + (self.i0 + a0) * g.h, g.y0 + (self.j0 + b0) * g.h, g.h, self.r,
                       np.ascontiguousarray(Q, float), self.lag, self.n_samp, GUARD_LEVEL)
-        if cutting.any() and float(E[cutting].max()) > self.limit:
+        # the first period after an entry's helix and spiral out is the entry's own transition from the
+        # round hole to the pattern (not refused: a region entered so would be left whole to the passes)
+        if cutting.any() and float(E[cutting].max()) > self.limit and not (first and self.hole):
             self.refused += 1
             return False
         self.M[b0:b1, a0:a1] = sub
@@ -244,6 +246,15 @@ class LevelRegions:
         slivers too, for :meth:`reachable_mouth` to find its swing free)."""
         return any(not all(reg.dead) for reg in self.pending)
 
+    def _with_own(self, k):
+        """The planning stock with pending region ``k``'s hidden material put back: a branch's mouth
+        lies at the trunk's slot, next to the material hidden for it (the middle bar of an E), which
+        its first periods meet."""
+        M = self.lv.g.M.copy()
+        am, mm = self.masks[k]
+        M[mm] = np.maximum(M[mm], self.saved[k])
+        return M
+
     def reachable_mouth(self):
         """(k, reversed?, cell, point) of a pending region whose open end the tool reaches through
         cleared area: ``point`` the centre of the free coarse cell (its tool disc free of material)
@@ -278,8 +289,9 @@ class LevelRegions:
                 # island's edge through uncleared material)
                 c_end = float(reg.radius[0 if rev == 0 else -1])
                 near = np.argsort(np.hypot(*(C - end).T))[:MOUTH_CANDIDATES]
+                Mk = self._with_own(k) if reg.branch else g.M
                 m = next((int(q) for q in near
-                          if capsule_free(g.M, g.x0, g.y0, g.h, C[q, 0] - sw[0], C[q, 1] - sw[1], C[q, 0] + sw[0],
+                          if capsule_free(Mk, g.x0, g.y0, g.h, C[q, 0] - sw[0], C[q, 1] - sw[1], C[q, 0] + sw[0],
                                           C[q, 1] + sw[1], lv.r + lv.prm.mouth_capsule_margin_h * g.h)
                           and _leg_fits(lv.allowed, C[q], end, c_end - 2 * g.h)), None)
                 if m is None:

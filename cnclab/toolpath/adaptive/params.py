@@ -111,6 +111,11 @@ class AdaptiveParams:
     #: 4 of 8, measured at 4 deg); ``plan``'s re-plan of a level beyond the bounds turns it on last
     #: (``retry_narrow_check_deg``)
     narrow_check_margin_deg: float | None = None
+    #: whether a narrow part's medial tree gives its branches their own trochoid (narrow._branch_axes:
+    #: the middle bar of an E, the far half of a T's bar; each entered from the trunk's slot), else
+    #: only its longest path is, and the passes take the branches. Not the default (as the check);
+    #: ``plan``'s last re-plan of a level beyond the bounds turns it on with the check
+    narrow_branches: bool = False
     #: whether a ring's first finishing lap runs the whole ring (else it ends finish_run_on_frac r past
     #: the last ring point the planning stock shows material in reach of): it is the only move on the
     #: true tool-centre limit (passes stay h/sqrt(2) inside it), so it alone takes the sub-pixel skin

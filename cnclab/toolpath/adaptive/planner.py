@@ -584,7 +584,7 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
     hole = None if start_hole is None else tuple(float(v) for v in start_hole)
     if hole is not None and not pocket.buffer(1e-9).contains(Point(hole[0], hole[1]).buffer(0.5 * hole[2] - 1e-6)):
         raise PlanningError(f"{source}: the start hole is not inside the pocket")
-    narrow_regs = narrow.narrow_regions(allowed, r, h) if prm.narrow_trochoid else []
+    narrow_regs = narrow.narrow_regions(allowed, r, h, branches=prm.narrow_branches) if prm.narrow_trochoid else []
     narrow_done = []      # one line per narrow region cut by the trochoid (info, program header)
     left_parts = []       # one line per part of the tool-centre region left uncut (finish._leave_part)
     cfg = {k: v for k, v in locals().items() if k not in ("lev", "z", "z_prev", "g")}
