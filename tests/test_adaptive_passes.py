@@ -58,6 +58,7 @@ def test_a_failed_pass_start_does_not_ban_a_narrow_arm():
     assert lifts(_safe_and_within_targets(tp, jb, h), jb.top_z) <= 2
 
 
+@pytest.mark.slow      # two plans with their re-plans (8 s): make test-slow (CI)
 @pytest.mark.parametrize("name", ["tapered_channel_2"])
 def test_narrow_region_mouth_is_entered_from_cleared_area(name):
     jb, h, tp = _plan(name)
@@ -222,6 +223,7 @@ def _finish_cover(tp, jb, tol_mm=2e-3):
     return float(np.mean(shapely.distance(moves, pts) < tol_mm))
 
 
+@pytest.mark.slow      # two plans and evaluations: make test-slow (CI)
 def test_corner_rests_the_full_laps_leave_are_peeled_by_local_laps():
     # rectilinear_0 (D 10 mm, theta 79.5 deg): the finishing lap rounds the sharp corners at the end
     # of the arm's 1.8 mm tool-centre band (the control at the finish target keeps out of the corner

@@ -67,6 +67,7 @@ def test_random_arcs_and_helices_fit_within_tolerance(r, sweep, a0, dz, spacing,
             assert (fit.arc != 0).any()
 
 
+@pytest.mark.slow      # 40 hypothesis examples (23 s): make test-slow (CI), keeping make test within 6 min
 @given(st.lists(st.tuples(st.floats(-20, 20), st.floats(-20, 20), st.floats(-2, 0)), min_size=2, max_size=30),
        st.integers(1, 8), st.sampled_from([3, 4, 5]))
 @settings(max_examples=40, deadline=None)

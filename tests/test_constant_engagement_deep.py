@@ -7,12 +7,15 @@ now at r / 20: max theta + 9.6 deg, 0.30 % of the cutting length above theta + 5
 scipy's "periodic" spline error before cnclab.toolpath.constant_engagement.thin_ring)."""
 import json
 
+import pytest
+
 from cnclab.nc.program import check_program
 
 JOB = {"polygon": [[0, 0], [60, 0], [60, 40], [0, 40]], "tool_diameter": 8, "teeth": 2, "theta_deg": 60,
        "a_p": 3, "depth": 7.5, "v_c": 120, "f_z": 0.04}
 
 
+@pytest.mark.slow      # a three-level plan through the CLI (16 s): make test-slow (CI)
 def test_deep_pocket_without_start_hole_is_planned_as_a_safe_program(tmp_path, capsys):
     from cnclab.nc.cli_plan import main
 
