@@ -38,10 +38,7 @@ def _laps(lv, part):
         Rs = resample_polyline(np.vstack([R, R[:1]]), lv.ds, uniform=True)[:-1]
         lap, segs, resume = 0, 0, None
         while lap < lv.finish_laps and segs <= lv.prm.finish_resume_laps:   # laps while the corner wedges are peeled
-            D, Ac = lv.g.free_field()
-            jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
-            ii = np.clip(((Rs[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
-            dm = D[jj, ii]
+            dm, jj, ii = _field_at(lv, Rs)
             if resume is None and dm.min() > (lv.r + lv.g.hc if lap == 0 else
                                               lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e)):
                 break                # nothing (more) to take along this ring
@@ -114,12 +111,12 @@ def _laps(lv, part):
             _peel(lv, wall, Rs)
 
 
-def _ring_field(lv, Rs):
-    """(dm, jj, ii): the free field's distance (mm) from each ring point's coarse cell to material,
-    and the cell indices."""
+def _field_at(lv, P):
+    """(dm, jj, ii): the free field's distance (mm) from the coarse cell of each point of P (n, 2) to
+    material, and the cell indices (clipped to the grid)."""
     D, _ = lv.g.free_field()
-    jj = np.clip(((Rs[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
-    ii = np.clip(((Rs[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
+    jj = np.clip(((P[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
+    ii = np.clip(((P[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
     return D[jj, ii], jj, ii
 
 
@@ -139,12 +136,11 @@ def _rest_mm2(lv, P) -> float:
     """Area (mm^2) of the planning stock's material within the tool's reach (r) of the points P (n, 2)."""
     g = lv.g
     lo, hi = P.min(axis=0) - lv.r, P.max(axis=0) + lv.r
-    i0, j0 = max(int((lo[0] - g.x0) // g.h), 0), max(int((lo[1] - g.y0) // g.h), 0)
-    i1, j1 = min(int((hi[0] - g.x0) // g.h) + 1, g.nx), min(int((hi[1] - g.y0) // g.h) + 1, g.ny)
-    jj, ii = np.nonzero(g.M[j0:j1, i0:i1])
+    wj, wi = g.window((lo[0], lo[1], hi[0], hi[1]))
+    jj, ii = np.nonzero(g.M[wj, wi])
     if len(jj) == 0:
         return 0.0
-    C = np.c_[g.x0 + (ii + i0 + 0.5) * g.h, g.y0 + (jj + j0 + 0.5) * g.h]
+    C = np.c_[g.x0 + (ii + wi.start + 0.5) * g.h, g.y0 + (jj + wj.start + 0.5) * g.h]
     d2 = ((C[:, None, :] - P[None, :, :]) ** 2).sum(axis=2).min(axis=1)
     return float(np.count_nonzero(d2 < lv.r * lv.r)) * g.h * g.h
 
@@ -161,14 +157,14 @@ def _peel(lv, wall, Rs):
     n = len(Rs)
     up = max(1, int(math.ceil(lv.r / lv.ds)))
     on = int(math.ceil(lv.prm.finish_peel_run_on_frac * lv.r / lv.ds))
-    dm, _, _ = _ring_field(lv, Rs)
+    dm, _, _ = _field_at(lv, Rs)
     runs = _cyclic_runs(dm < lv.r - lv.prm.finish_peel_rest_h * lv.h)
     if not runs or runs[0][1] == n:
         return                       # nothing left along the ring (or no free place on it)
     for a, m in runs:
         span = (a + np.arange(m)) % n
         for _ in range(lv.prm.finish_peel_rounds):
-            dm, jj, ii = _ring_field(lv, Rs)
+            dm, jj, ii = _field_at(lv, Rs)
             if not (dm[span] < lv.r - lv.prm.finish_peel_rest_h * lv.h).any() or \
                     _rest_mm2(lv, Rs[span]) < lv.prm.finish_peel_min_mm2:
                 break
@@ -305,10 +301,7 @@ def _slot_along(lv, P, inside) -> None:
     P = resample_polyline(P[shapely.contains_xy(inside, P[:, 0], P[:, 1])], lv.ds, uniform=True)
     if len(P) < 2:
         return
-    D, Ac = lv.g.free_field()
-    jj = np.clip(((P[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
-    ii = np.clip(((P[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
-    dm = D[jj, ii]
+    dm, jj, ii = _field_at(lv, P)
     mat = np.flatnonzero(dm < lv.r)
     if len(mat) == 0:
         return                                   # nothing left along this strip

@@ -137,7 +137,7 @@ class Grid:
         self.Mr[:] = snap[1]
         self._dirty = self._since = (-np.inf, -np.inf, np.inf, np.inf)
 
-    def _window(self, box):
+    def window(self, box):
         """Pixel slices (rows, columns) of the box (x0, y0, x1, y1) mm, one pixel grown, clipped."""
         if box is None:
             return slice(0, 0), slice(0, 0)
@@ -155,7 +155,7 @@ class Grid:
         if self._shadow is None:
             self._shadow = (self.M.copy(), self.Mr.copy())
         else:
-            w = self._window(self._since)
+            w = self.window(self._since)
             self._shadow[0][w] = self.M[w]
             self._shadow[1][w] = self.Mr[w]
         self._since = None
@@ -169,14 +169,14 @@ class Grid:
 
     def taken_since_checkpoint(self) -> np.ndarray:
         """(m, 2) centres (mm) of the planning-stock pixels removed since the last :meth:`checkpoint`."""
-        w = self._window(self._since)
+        w = self.window(self._since)
         J, I = np.nonzero((self._shadow[0][w] != 0) & (self.M[w] == 0))
         return np.c_[self.x0 + (I + w[1].start + 0.5) * self.h, self.y0 + (J + w[0].start + 0.5) * self.h]
 
     def rollback(self):
         """Set the stocks back to the last :meth:`checkpoint` (only the window changed since)."""
         box = self._since
-        w = self._window(box)
+        w = self.window(box)
         self.M[w] = self._shadow[0][w]
         self.Mr[w] = self._shadow[1][w]
         if box is not None:

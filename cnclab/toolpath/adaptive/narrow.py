@@ -117,6 +117,9 @@ JOIN_RADIUS_C = 1.5
 JOIN_MIN_TURN_DEG = 30.0
 #: free cells tried (nearest first) for the start of a trochoid at a mouth onto cleared area
 MOUTH_CANDIDATES = 200
+#: branches of one narrow part's medial tree given a trochoid of their own (narrow_regions(branches=True)):
+#: a comb's fingers
+MAX_BRANCHES = 8
 #: boundary sampling of the Voronoi medial axis, x the planning pixel h (and at most r / 8)
 AXIS_SPACING_H = 4.0
 
@@ -271,8 +274,8 @@ def narrow_regions(allowed, r, h=None, half_width_frac=NARROW_HALF_WIDTH_FRAC,
     for part in parts:
         near = part.buffer(2 * h)
         inside = shapely.contains_xy(near, nodes[:, 0], nodes[:, 1]) & (cn <= c_max * 1.02)
-        axes = _branch_axes(allowed, spacing, G, nodes[inside], r, min_length_frac * r, c_max) if branches \
-            else [(ax, None) for ax in [medial_axis(allowed, spacing, G, [tuple(p) for p in nodes[inside]])] if ax]
+        axes = _branch_axes(allowed, spacing, G, nodes[inside], r, min_length_frac * r, c_max,
+                            MAX_BRANCHES if branches else 0)
         polys = _branch_polygons(part, [a[0] for a, _ in axes], c_max, h)
         for ((P, c), junction), poly in zip(axes, polys):
             ok = np.flatnonzero(c >= NARROW_MIN_HALF_WIDTH_FRAC * r + 2 * h)
@@ -290,18 +293,19 @@ def narrow_regions(allowed, r, h=None, half_width_frac=NARROW_HALF_WIDTH_FRAC,
     return out
 
 
-def _branch_axes(allowed, spacing, G, nodes, r, min_len, c_max):
+def _branch_axes(allowed, spacing, G, nodes, r, min_len, c_max, max_branches):
     """The medial axes of one narrow part: its longest path (the trunk, as :func:`medial_axis`), then
     each branch of its medial tree at least ``min_len`` mm long that the trunk's slot does not cover
     (the middle bar of an E, the far half of a T's bar): the longest path of each connected rest of
-    the graph once the nodes within c_max + r/4 of an axis already taken are removed. A list of
-    ((axis, c), junction point (2,) or None for the trunk)."""
+    the graph once the nodes within c_max + r/4 of an axis already taken are removed, at most
+    ``max_branches`` (0: the trunk only). A list of ((axis, c), junction point (2,) or None for the
+    trunk)."""
     keep = [tuple(p) for p in nodes]
     trunk = medial_axis(allowed, spacing, G, keep)
     if trunk is None:
         return []
     out, taken = [(trunk, None)], [trunk[0]]
-    for _ in range(8):            # a comb of fingers: at most 8 branches a part
+    for _ in range(max_branches):
         cover = shapely.union_all([LineString(a).buffer(c_max + 0.25 * r) for a in taken])
         rest = nodes[~shapely.contains_xy(cover, nodes[:, 0], nodes[:, 1])]
         if len(rest) < 2:

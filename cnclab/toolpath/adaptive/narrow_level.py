@@ -39,17 +39,11 @@ class PeriodCheck:
         before the periods."""
         g = lv.g
         self.g, self.r, self.lag, self.n_samp, self.limit = g, lv.r, lv.lag, lv.n_samp, float(limit_rad)
-        x0, y0, x1, y1 = reg.polygon.buffer(lv.r + 3.0 * g.h).bounds
-        self.i0, self.j0 = max(int((x0 - g.x0) // g.h), 0), max(int((y0 - g.y0) // g.h), 0)
-        i1, j1 = min(int((x1 - g.x0) // g.h) + 1, g.nx), min(int((y1 - g.y0) // g.h) + 1, g.ny)
-        win = (slice(self.j0, j1), slice(self.i0, i1))
-        self.M = g.M[win].copy()
+        win = g.window(reg.polygon.buffer(lv.r + 3.0 * g.h).bounds)
+        self.j0, self.i0 = win[0].start, win[1].start
         st = getattr(lv, "narrow_state", None)
-        for (am, mm), saved in zip(getattr(st, "masks", []), getattr(st, "saved", [])):
-            full = np.zeros_like(g.M)
-            full[mm] = saved
-            self.M = np.maximum(self.M, full[win])
-        self.M = np.ascontiguousarray(self.M)
+        M = g.M if st is None else st.stock_with_hidden(range(len(st.masks)))
+        self.M = M[win].copy()
         if hole is not None:
             cut_disc(self.M, g.x0 + self.i0 * g.h, g.y0 + self.j0 * g.h, g.h, float(hole[0][0]), float(hole[0][1]),
                      float(hole[1]), np.nan, np.nan)
@@ -58,17 +52,16 @@ class PeriodCheck:
         # to the pattern: held to the limit plus the margin again (measured: theta + 5.2 deg in the
         # model at the closed end of an E's bar, D 8 mm; refused, the region is left whole to the passes)
         self.first_slack = (self.limit - math.radians(lv.theta_deg)) if hole is not None else 0.0
-        self.refused, self.last_ok = 0, None
+        self.refused = 0
 
     def __call__(self, Q, cutting, first=False) -> bool:
         if first and self.start is not None:
             Q, cutting = np.vstack([self.start[None], Q]), np.r_[False, cutting]
         g, pad = self.g, self.r + 2.0 * self.g.h
         lo, hi = Q.min(axis=0) - pad, Q.max(axis=0) + pad
-        a0 = max(int((lo[0] - g.x0) // g.h) - self.i0, 0)
-        b0 = max(int((lo[1] - g.y0) // g.h) - self.j0, 0)
-        a1 = min(int((hi[0] - g.x0) // g.h) + 1 - self.i0, self.M.shape[1])
-        b1 = min(int((hi[1] - g.y0) // g.h) + 1 - self.j0, self.M.shape[0])
+        wj, wi = g.window((lo[0], lo[1], hi[0], hi[1]))      # grid pixels, then within the copy
+        b0, b1 = max(wj.start - self.j0, 0), min(wj.stop - self.j0, self.M.shape[0])
+        a0, a1 = max(wi.start - self.i0, 0), min(wi.stop - self.i0, self.M.shape[1])
         if a1 <= a0 or b1 <= b0:
             return True
         sub = np.ascontiguousarray(self.M[b0:b1, a0:a1])
@@ -78,7 +71,6 @@ class PeriodCheck:
             self.refused += 1
             return False
         self.M[b0:b1, a0:a1] = sub
-        self.last_ok = Q[-1]
         return True
 
 
@@ -201,6 +193,7 @@ class LevelRegions:
     def __init__(self, lv, regions):
         g = lv.g
         self.lv, self.pending, self.parked = lv, list(regions), []
+        self.masks, self.saved = [], []
         if not self.pending:
             return
         self.A0 = g.A.copy()
@@ -210,7 +203,6 @@ class LevelRegions:
         # a pixel's half-diagonal inside the raster ``am`` of a region, and a thin crescent of hidden
         # material at its circle spans a wide arc: dwg_concave_hole theta + 14.8 deg at r)
         reach = rest.buffer(lv.r + lv.prm.narrow_hide_margin_h * g.h) if not rest.is_empty else shapely.Polygon()
-        self.masks, self.saved = [], []
         for reg in self.pending:
             am = raster(reg.polygon.buffer(g.h), g.x0, g.y0, g.h, g.nx, g.ny) > 0
             mm = raster(reg.polygon.buffer(lv.r + 2 * g.h).difference(reach), g.x0, g.y0, g.h, g.nx, g.ny) > 0
@@ -250,13 +242,15 @@ class LevelRegions:
         slivers too, for :meth:`reachable_mouth` to find its swing free)."""
         return any(not all(reg.dead) for reg in self.pending)
 
-    def _with_own(self, k):
-        """The planning stock with pending region ``k``'s hidden material put back: a branch's mouth
-        lies at the trunk's slot, next to the material hidden for it (the middle bar of an E), which
-        its first periods meet."""
+    def stock_with_hidden(self, ks):
+        """A copy of the planning stock with the material hidden for the pending regions ``ks``
+        (indices into ``pending``) put back: what the evaluator sees there. A branch's mouth lies at
+        the trunk's slot, next to its own hidden material (:meth:`reachable_mouth`); a trochoid's
+        periods meet the other pending regions' (:class:`PeriodCheck`)."""
         M = self.lv.g.M.copy()
-        am, mm = self.masks[k]
-        M[mm] = np.maximum(M[mm], self.saved[k])
+        for k in ks:
+            mm = self.masks[k][1]
+            M[mm] = np.maximum(M[mm], self.saved[k])
         return M
 
     def reachable_mouth(self):
@@ -293,7 +287,7 @@ class LevelRegions:
                 # island's edge through uncleared material)
                 c_end = float(reg.radius[0 if rev == 0 else -1])
                 near = np.argsort(np.hypot(*(C - end).T))[:MOUTH_CANDIDATES]
-                Mk = self._with_own(k) if reg.branch else g.M
+                Mk = self.stock_with_hidden([k]) if reg.branch else g.M
                 m = next((int(q) for q in near
                           if capsule_free(Mk, g.x0, g.y0, g.h, C[q, 0] - sw[0], C[q, 1] - sw[1], C[q, 0] + sw[0],
                                           C[q, 1] + sw[1], lv.r + lv.prm.mouth_capsule_margin_h * g.h)
