@@ -39,8 +39,11 @@ def _laps(lv, part):
         lap, segs, resume = 0, 0, None
         while lap < lv.finish_laps and segs <= lv.prm.finish_resume_laps:   # laps while the corner wedges are peeled
             dm, jj, ii = _field_at(lv, Rs)
-            if resume is None and dm.min() > (lv.r + lv.g.hc if lap == 0 else
-                                              lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e)):
+            # a lap's material: any within reach on the first lap, a rest deeper than
+            # max(finish_rest_min_mm, finish_rest_frac_ae a_e) on the further ones
+            reach = lv.r + lv.g.hc if lap == 0 else lv.r - max(lv.prm.finish_rest_min_mm, lv.prm.finish_rest_frac_ae * lv.a_e)
+            want = dm < reach
+            if resume is None and not want.any():
                 break                # nothing (more) to take along this ring
             # start where the ring is free of material (the farthest from it, the field being
             # capped: any point at the cap), the nearest such point to the tool (after a lap that
@@ -52,6 +55,8 @@ def _laps(lv, part):
                 if len(free_k) == 0:
                     break
                 k0 = int(free_k[np.argmin((free_k - resume) % len(Rs))])
+            elif lv.prm.finish_arc_laps and (lap > 0 or not lv.prm.finish_full_first_lap) and len(free_k) > 1:
+                k0 = _arc_start(want, free_k)
             elif lv.cur is not None and len(free_k) > 1:
                 k0 = int(free_k[np.argmin(np.hypot(Rs[free_k, 0] - lv.cur[0], Rs[free_k, 1] - lv.cur[1]))])
             else:
@@ -91,10 +96,12 @@ def _laps(lv, part):
                 lv.b.link([Rl[0]], lv.link_feed_mm_min, z=lv.z)
                 lv.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
             # the wall-following pass: the same engagement control, sliding along the wall;
-            # it ends 2 r past the last ring point that still has material within reach
+            # it ends 2 r past the last ring point with the lap's material (see ``want``)
             sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
-            dml = np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]]
-            mat = np.flatnonzero(dml < lv.r + lv.g.hc)
+            if lv.prm.finish_arc_laps:
+                mat = np.flatnonzero(np.r_[want[k0:], want[:k0], want[k0:k0 + 1]])
+            else:
+                mat = np.flatnonzero(np.r_[dm[k0:], dm[:k0], dm[k0:k0 + 1]] < lv.r + lv.g.hc)
             L_ring = float(sl[-1]) if len(mat) == 0 else min(float(sl[-1]), float(sl[mat[-1]]) + lv.prm.finish_run_on_frac * lv.r)
             if lap == 0 and resume is None and lv.prm.finish_full_first_lap:
                 L_ring = float(sl[-1])       # the whole ring: see AdaptiveParams.finish_full_first_lap
@@ -118,6 +125,25 @@ def _field_at(lv, P):
     jj = np.clip(((P[:, 1] - lv.g.y0) // lv.g.hc).astype(int), 0, D.shape[0] - 1)
     ii = np.clip(((P[:, 0] - lv.g.x0) // lv.g.hc).astype(int), 0, D.shape[1] - 1)
     return D[jj, ii], jj, ii
+
+
+def _arc_start(mat, free_k) -> int:
+    """The free ring point (of the indices ``free_k``) nearest upstream of the shortest arc of the
+    cyclic ring holding every True of ``mat`` (the ring minus its longest run of False): a lap
+    started there and run on past the arc's last material point covers the least ring.
+
+    >>> _arc_start(np.array([0, 0, 1, 0, 0, 0, 0, 0, 1, 0], bool), np.array([0, 4, 5, 9]))
+    5
+
+    (the longest free run is 3..7: the arc is 8, 9, 0, 1, 2; of the free points, 5 is the nearest
+    before 8)
+    """
+    gaps = [(m, a) for a, m in _cyclic_runs(~mat)]
+    if not gaps:
+        return int(free_k[0])
+    m, a = max(gaps)
+    first = (a + m) % len(mat)                  # the arc's first material point
+    return int(free_k[np.argmin((first - free_k) % len(mat))])
 
 
 def _cyclic_runs(mask):
