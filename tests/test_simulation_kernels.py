@@ -208,3 +208,18 @@ def test_lag_rule_front_no_phantom_engagement_on_a_u_turn(mod):
 def test_lag_rule_rejects_unknown():
     with pytest.raises(ValueError, match="lag_rule"):
         dixel.simulate(dixel.Stock.from_polygon(box(0, 0, 5, 5), 0.1), [[1, 1], [2, 1]], 1.0, 1.0, 1.0, lag_rule="x")
+
+
+def test_cut_disks_pixels_equals_one_disk_at_a_time():
+    # the batch kernel (coverage's uncut measure) removes the same pixels as the reference numpy
+    # window test applied centre by centre, and counts the same material, on random centres inside,
+    # on and beyond the grid
+    rng = np.random.default_rng(5)
+    C = rng.uniform(-1.0, 11.0, (200, 2))
+    for r in (0.3, 1.0, 2.55):
+        a = pixel.Stock.from_polygon(box(0, 0, 10, 7), 0.05)
+        b = a.copy()
+        n = sum(a.cut_disk_pixels(c, r, backend="numpy") for c in C)
+        assert b.cut_disks_pixels(C, r) == n and np.array_equal(a.grid, b.grid)
+    with pytest.raises(ValueError, match="centers_xy"):
+        b.cut_disks_pixels([[np.nan, 0.0]], 1.0)

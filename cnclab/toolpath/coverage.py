@@ -74,8 +74,7 @@ def _left_mm2(region, centres, r: float) -> float:
     x0, y0, x1, y1 = region.bounds
     h = max(h, math.sqrt((x1 - x0) * (y1 - y0) / 2e7))          # at most ~2e7 pixels
     st = Stock.from_polygon(region, h)
-    for cx, cy in centres:
-        st.cut_disk_pixels((cx, cy), r, backend="numba")
+    st.cut_disks_pixels(centres, r)
     return float(np.count_nonzero(binary_opening(st.grid, np.ones((3, 3), bool)))) * h * h
 
 
