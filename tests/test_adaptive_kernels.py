@@ -5,6 +5,7 @@ Tolerances: distances are exact up to floating-point rounding of one square root
 stocks must be equal pixel for pixel (the raster may differ from a point-in-polygon test only for pixel
 centres within 1e-9 mm of an edge, where "inside" is a matter of rounding)."""
 import math
+import types
 
 import numpy as np
 import shapely
@@ -15,7 +16,7 @@ from shapely.geometry import Point, Polygon, box
 
 from cnclab.toolpath.adaptive.control import engagement2
 from cnclab.toolpath.adaptive.grid import Grid
-from cnclab.toolpath.adaptive.links import bow_runs, chord_free, rapid_legs, shortcut
+from cnclab.toolpath.adaptive.links import blocked_spans, bow_runs, chord_free, rapid_legs, rapid_pieces, shortcut
 from cnclab.toolpath.adaptive.stock import (capsule_free, cut_disc, cut_disc_both, cut_path, dist_window, material_fraction, label8,
                                             max_filter, raster)
 
@@ -271,3 +272,51 @@ def test_label8_equals_scipy(ny, nx, p, seed):
     got, n = label8(M)
     ref, m = ndimage.label(M, structure=np.ones((3, 3)))
     assert n == m and np.array_equal(got, ref)     # both number components in row order of their first pixel
+
+
+@settings(**_SET)
+@given(st.integers(0, 2 ** 31 - 1), st.sampled_from([0.0, 0.002, 0.02]), st.sampled_from([0.5, 2.0]))
+def test_rapid_pieces_split_a_chord_into_proven_g0s_and_feed(seed, p, min_len):
+    """A link chord split by :func:`rapid_pieces`: the pieces run end to end from p to q along the
+    chord; every G0 piece is at least ``min_len`` long and :func:`capsule_free` on the rapid stock;
+    every stretch of at least ``min_len`` + 2 h between the material's blocked spans has a G0 in it
+    (nothing provable is left at feed); no pieces when no stretch is long enough. ``blocked_spans``
+    agrees with :func:`capsule_free` on random sub-chords."""
+    rng = np.random.default_rng(seed)
+    g = types.SimpleNamespace(Mr=rng.random((80, 120)) < p, x0=0.0, y0=0.0, h=0.1, r_capsule=1.07)
+    P, Q = rng.uniform([1, 1], [11, 7], 2), rng.uniform([1, 1], [11, 7], 2)
+    L = math.hypot(*(Q - P))
+    at = lambda u: P + u * (Q - P)        # noqa: E731
+    S = blocked_spans(g.Mr, 0.0, 0.0, 0.1, *P, *Q, g.r_capsule)
+    for _ in range(20):
+        a, b = np.sort(rng.uniform(0, 1, 2))
+        hit = bool(((S[:, 0] < b) & (S[:, 1] > a)).any())       # open spans meet the closed [a, b]
+        assert capsule_free(g.Mr, 0.0, 0.0, 0.1, *at(a), *at(b), g.r_capsule) == (not hit)
+    pieces = rapid_pieces(g, tuple(P), tuple(Q), min_len)
+    free = []                             # the complement of the blocked spans
+    t = 0.0
+    for t0, t1 in S[np.argsort(S[:, 0])]:
+        if t0 > t:
+            free.append((t, t0))
+        t = max(t, t1)
+    if t < 1.0:
+        free.append((t, 1.0))
+    long_free = [(a, b) for a, b in free if (b - a) * L >= min_len + 2 * g.h]
+    if pieces is None:
+        assert not long_free
+        return
+    prev = P
+    for e, fast in pieces:
+        e = np.asarray(e)
+        assert abs((Q - P)[0] * (e - P)[1] - (Q - P)[1] * (e - P)[0]) <= 1e-9 * max(L, 1.0) ** 2   # on the chord
+        assert np.dot(e - prev, Q - P) >= -1e-12                           # in order
+        if fast:
+            assert math.hypot(*(e - prev)) >= min_len - 1e-6
+            assert capsule_free(g.Mr, 0.0, 0.0, 0.1, *prev, *e, g.r_capsule)
+        prev = e
+    assert np.allclose(prev, Q)
+    for a, b in long_free:                # some G0 runs inside every long free stretch
+        m = at(0.5 * (a + b))
+        starts = [P] + [np.asarray(e) for e, _ in pieces[:-1]]
+        assert any(fast and np.dot(m - s, Q - P) >= 0 and np.dot(np.asarray(e) - m, Q - P) >= 0
+                   for s, (e, fast) in zip(starts, pieces))

@@ -390,6 +390,79 @@ def solid_within(M, x0, y0, h, cx, cy, rr):
     return n * h * h, cx + sx / n, cy + sy / n
 
 
+@njit(cache=True)
+def blocked_spans(M, x0, y0, h, ax, ay, bx, by, rr):
+    """(k, 2): for each material pixel centre of ``M`` within ``rr`` (mm) of the chord a -> b, the
+    open interval of the chord parameter t in [0, 1] whose points lie within ``rr`` of it (unmerged,
+    unsorted): the chord's sub-segment [t0, t1] is :func:`capsule_free` iff it meets none of them."""
+    ny, nx = M.shape
+    i0 = max(int(math.floor((min(ax, bx) - rr - x0) / h)), 0)
+    i1 = min(int(math.ceil((max(ax, bx) + rr - x0) / h)), nx - 1)
+    j0 = max(int(math.floor((min(ay, by) - rr - y0) / h)), 0)
+    j1 = min(int(math.ceil((max(ay, by) + rr - y0) / h)), ny - 1)
+    dx = bx - ax
+    dy = by - ay
+    A = dx * dx + dy * dy
+    out = np.empty((max(0, (j1 - j0 + 1) * (i1 - i0 + 1)), 2))
+    n = 0
+    if A == 0.0:
+        return out[:0]
+    for j in range(j0, j1 + 1):
+        py = y0 + (j + 0.5) * h
+        for i in range(i0, i1 + 1):
+            if M[j, i]:
+                px = x0 + (i + 0.5) * h
+                B = 2.0 * (dx * (ax - px) + dy * (ay - py))
+                C = (ax - px) ** 2 + (ay - py) ** 2 - rr * rr
+                disc = B * B - 4.0 * A * C
+                if disc <= 0.0:
+                    continue
+                sq = math.sqrt(disc)
+                t0 = (-B - sq) / (2.0 * A)
+                t1 = (-B + sq) / (2.0 * A)
+                if t1 <= 0.0 or t0 >= 1.0:
+                    continue
+                out[n, 0] = max(t0, 0.0)
+                out[n, 1] = min(t1, 1.0)
+                n += 1
+    return out[:n]
+
+
+def rapid_pieces(g, p, q, min_len):
+    """The chord p -> q at depth that :func:`rapid_legs` cannot prove as one G0, split where the rapid
+    stock allows: every stretch of at least ``min_len`` mm with no material pixel within r + h/sqrt(2)
+    (:func:`blocked_spans`; each piece checked again by :func:`capsule_free`) is a G0, the rest feed.
+    Returns ``[(end point, is_rapid), ...]`` from p to q, or None when no G0 piece is proven."""
+    L = math.hypot(q[0] - p[0], q[1] - p[1])
+    if L < min_len:
+        return None
+    S = blocked_spans(g.Mr, g.x0, g.y0, g.h, p[0], p[1], q[0], q[1], g.r_capsule)
+    S = S[np.argsort(S[:, 0])]
+    free, t = [], 0.0                       # the complement of the union of the open intervals
+    for t0, t1 in S:
+        if t0 > t:
+            free.append((t, t0))
+        t = max(t, t1)
+    if t < 1.0:
+        free.append((t, 1.0))
+    at = lambda u: (p[0] + u * (q[0] - p[0]), p[1] + u * (q[1] - p[1]))       # noqa: E731
+    eps = 1e-9
+    pieces, t = [], 0.0
+    for f0, f1 in free:
+        a, b = (f0 + eps if f0 > 0.0 else 0.0), (f1 - eps if f1 < 1.0 else 1.0)
+        if (b - a) * L < min_len or not capsule_free(g.Mr, g.x0, g.y0, g.h, *at(a), *at(b), g.r_capsule):
+            continue
+        if a > t:
+            pieces.append((at(a), False))
+        pieces.append((at(b), True))
+        t = b
+    if not pieces:
+        return None
+    if t < 1.0:
+        pieces.append(((q[0], q[1]), False))
+    return pieces
+
+
 def rapid_legs(g, p, q):
     """A G0 for the chord p -> q at depth: ``(None, q)`` when the chord is proven clear on the rapid
     stock (:func:`capsule_free`); else ``(p', q')`` with feed legs p -> p' and q' -> q of 2 h or 4 h

@@ -212,6 +212,12 @@ class AdaptiveParams:
     #: of the machine) for a sliver. Measured on the bench pockets (machine time, small VMC, issue 24):
     #: see the closing note of the session; 0 turns the rule off
     wall_sliver_max_area_rae: float = 0.25
+    #: mm: a link chord that no single G0 is proven for (links.rapid_legs) is split: each stretch of at
+    #: least this length with no material pixel within r + h/sqrt(2) becomes a G0, the rest stays at the
+    #: link feed (links.rapid_pieces). 2 mm: on the small VMC (2.5 m/s^2) a G0 of 2 mm from stop to
+    #: stop takes 0.057 s, the same length at 1500 mm/min 0.080 s; shorter pieces would not pay their
+    #: stops (1 mm: 0.040 against 0.040 s). 0: off (star_2, D 3 mm: 126 mm of such chords at feed)
+    rapid_piece_min_mm: float = 2.0
     #: fraction of r: the next pass starts at the upstream end of the band of starts through the
     #: nearest one (:func:`.links.upstream_end`), at most this far up it (0: the nearest)
     upstream_start_frac: float = 2.5

@@ -17,7 +17,7 @@ from . import entries, finish, narrow, narrow_level
 from .entries import PlanningError
 from .grid import Grid, PassStep
 from .params import AdaptiveParams
-from .links import boundary_gradient, rapid_legs, shortcut, solid_within, upstream_end
+from .links import boundary_gradient, rapid_legs, rapid_pieces, shortcut, solid_within, upstream_end
 from .stock import capsule_free, component_discs, label8, segment_inside
 
 _RAPID, _PLUNGE = KINDS.index("rapid"), KINDS.index("plunge")
@@ -111,7 +111,16 @@ class _Level:
                     # the link ends with one G0 into the pass start: join_link_to_pass may run it on
                     # to the end of the pass's own first G0 run (its start, its first chord or not)
                     self._link_tail = (mark_q, start_q if legs[0] is None else tuple(legs[0][:2]), n_q == 1 and legs[0] is None)
-                if legs is None:
+                pieces = rapid_pieces(self.g, self.cur, q, self.prm.rapid_piece_min_mm) \
+                    if legs is None and self.rapid_links and self.prm.rapid_piece_min_mm > 0 else None
+                if pieces is not None:
+                    # a chord no single G0 is proven for: G0 where a stretch of it is (rapid_pieces)
+                    for e, fast in pieces:
+                        if fast:
+                            self.b.rapid([e], z=self.z, tag="cleared: link through cleared area", cleared=True)
+                        else:
+                            self.b.link([e], self.link_feed_mm_min, z=self.z)
+                elif legs is None:
                     self.b.link([q[:2]], self.link_feed_mm_min, z=self.z)
                 else:
                     # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
