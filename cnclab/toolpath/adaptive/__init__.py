@@ -98,6 +98,8 @@ Design (the ideas and where they come from; the code is cnclab's own)
   r past the stop, linked through cleared area, up to ``finish_resume_laps`` times a ring. A ring's
   first lap runs the whole ring (``finish_full_first_lap``): it is the only move on the true
   tool-centre limit, and the sub-pixel skin the passes leave there is not on the planning stock.
+  The further laps (while a rest deeper than max(0.3 mm, a_e/4) is left) cover only the shortest arc
+  of the ring holding those rests, from the free ring point upstream of it (``finish_arc_laps``).
   After the laps, each run of the ring where material deeper than 1.5 h is left in reach (the corner
   wedges the control rounds) gets local laps from the last free point before it to r/2 past it,
   linked at depth, while at least ``finish_peel_min_mm2`` is left there (``finish_peel_rounds``).
@@ -116,7 +118,9 @@ Design (the ideas and where they come from; the code is cnclab's own)
   the wall-following pass that left the wall skin is tangent to it and never proven: an air run
   along it is moved 2 h to its left (away from the material on the pass's right) with feed legs
   off and back on the line, and a link from or to a wall point gets a feed leg of 2 h or 4 h, where
-  that makes the rest provable (:func:`bow_runs`, :func:`rapid_legs`).
+  that makes the rest provable (:func:`bow_runs`, :func:`rapid_legs`); a chord still not proven is
+  split, every stretch of at least ``rapid_piece_min_mm`` with no such pixel a G0 and the rest at the
+  link feed (:func:`rapid_pieces`: the exact chord intervals each pixel blocks).
 * **Narrow regions** (``narrow``; issue 29 item 5): where the tool-centre region is at most 0.75 r
   half-wide (a pocket <= 1.75 D: channels, slots, necks, comb fingers) along at least 3 r of its
   medial axis, the passes cannot turn; such a region is hidden from them and cut instead by Jacsó's
