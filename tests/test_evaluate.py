@@ -117,3 +117,22 @@ def test_time_is_sum_of_parts(moves):
     rate = np.where(p.is_kind("rapid"), _job().rapid_mm_min, F)
     assert ev.time_total_s == pytest.approx(float(np.sum(60 * L / rate)), rel=1e-12)
     assert isinstance(ev, Evaluation)
+
+
+def test_engagement_only_evaluation_skips_gouge_and_uncut_and_nothing_else():
+    # uncut_and_gouge=False (the adaptive planner's check of its promise): the same engagement, counts
+    # and times; gouge and uncut beyond the corners not measured (NaN, gouges -1), rapids outside the
+    # allowed region still counted. The slot runs in through the pocket's x = 0 and out through its x = 40 wall
+    job = _job()
+    p = _slot(x0=-5.0, y=10.0)
+    full, part = evaluate(p, job, H), evaluate(p, job, H, uncut_and_gouge=False)
+    for f in ("engagement_p50_deg", "engagement_p95_deg", "engagement_max_deg", "share_above_5_pct",
+              "plunges_into_material", "rapids_into_material", "time_total_s", "uncut_area_mm2"):
+        assert getattr(part, f) == getattr(full, f), f
+    assert np.array_equal(part.trace["engagement_deg"], full.trace["engagement_deg"], equal_nan=True)
+    assert full.uncut_beyond_unreachable_mm2 > 0 and math.isnan(part.uncut_beyond_unreachable_mm2)
+    assert full.wall_gouge_max_mm > 1.0 and full.gouges >= 1
+    assert math.isnan(part.wall_gouge_max_mm) and part.gouges == -1
+    out = ToolPath.build([[5, 10, 5], [5, 10, -1], [5, -5, -1], [5, -5, 5]],
+                         kind=["rapid", "plunge", "rapid", "retract"], feed=F)     # a G0 through the wall
+    assert evaluate(out, job, H, uncut_and_gouge=False).rapids_into_material == 1

@@ -343,7 +343,8 @@ def _cutting_level(path: ToolPath, job: Job, resolution_mm, feed_control, block_
 def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2: float | None = None,
              mrr_window_mm: float = 1.0, feed_control: bool | None = None, block_mm: float = 0.5,
              margin_deg: float = 5.0, link_tol_mm2: float = 1e-3, level_only: bool = False,
-             sampling: str = "vertices", machine: Machine | None = SMALL_VMC) -> Evaluation:
+             sampling: str = "vertices", machine: Machine | None = SMALL_VMC,
+             uncut_and_gouge: bool = True) -> Evaluation:
     """Cut ``path`` through a fresh stock of ``job`` (level by level) and measure it.
 
     Parameters
@@ -368,6 +369,11 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         most h between corners, whatever the block length -- what ``cnclab analyze`` uses for
         programs of unknown block length).
     machine : the machine model of ``time_machine_s`` (:mod:`cnclab.toolpath.motion`); None: NaN.
+    uncut_and_gouge : False: the wall gouge and the uncut area beyond the unreachable corners are
+        not measured (``wall_gouge_max_mm``, ``wall_gouge_area_mm2`` and
+        ``uncut_beyond_unreachable_mm2`` NaN, ``gouges`` -1, no gouge events; rapids outside the
+        allowed region still count): for a caller that reads only the engagement, as the adaptive
+        planner's check of its promise (``plan`` measures gouge and uncut area on its own).
 
     Returns an :class:`Evaluation`; besides the metrics it holds the wall gouge
     (:func:`wall_gouge`: ``wall_gouge_max_mm``, ``wall_gouge_area_mm2``, ``gouges`` = gouging
@@ -412,13 +418,16 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     lines = np.asarray(path.info["line"], int) if len(path.info.get("line", ())) == len(path) else None
     # plunges / rapids into material, per original move
     pl = plunge_like & (K != _K["rapid"]) & (removed > air)
-    rp_bad, gouge, g_area, g_mask, events = _material_events(P, src, lines, job, rapid, pl, removed, air)
+    rp_bad, gouge, g_area, g_mask, events = _material_events(P, src, lines, job, rapid, pl, removed, air,
+                                                             uncut_and_gouge)
     air_cut = (K == _K["cut"]) & (removed <= air)
     lengths = path.lengths()
     times = path.time_s(job.rapid_mm_min)
-    unreach = unreachable_region(job.polygon, r)
+    unreach = unreachable_region(job.polygon, r) if uncut_and_gouge else None
     uncut = float(sum(st.area() for st in stocks))
-    beyond = float(sum(st.to_polygon().difference(unreach).area for st in stocks)) if uncut > 0 else 0.0
+    beyond = float("nan")
+    if uncut_and_gouge:
+        beyond = float(sum(st.to_polygon().difference(unreach).area for st in stocks)) if uncut > 0 else 0.0
     trace = {"s_mm": np.cumsum(L3), "x": P[:, 0].copy(), "y": P[:, 1].copy(), "z": P[:, 2].copy(),
              "engagement_deg": eng, "removed_mm2": removed,
              "mrr_mm3_min": np.where((dxy > 0) & ~rapid, vol / np.where(dxy > 0, dxy, 1.0) * np.nan_to_num(feed), np.nan),
@@ -441,8 +450,8 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         time_entry_s=times["helix_s"] + times["ramp_s"] + times["plunge_s"], time_retract_s=times["retract_s"],
         time_total_s=times["total_s"], theta_deg=float(job.theta_deg), resolution_mm=h,
         time_machine_s=_machine_s(path, machine),
-        wall_gouge_max_mm=float(gouge.max(initial=0.0)), wall_gouge_area_mm2=g_area,
-        gouges=len(_runs(g_mask)), events=events,
+        wall_gouge_max_mm=float(gouge.max(initial=0.0)) if uncut_and_gouge else float("nan"), wall_gouge_area_mm2=g_area,
+        gouges=len(_runs(g_mask)) if uncut_and_gouge else -1, events=events,
         **_level_fields(times, level, trace))
 
 
@@ -477,17 +486,20 @@ def _mrr_max(cutting, dxy, feed, vol, mrr_window_mm: float, mrr_nominal: float) 
     return float((V[full] / T[full]).max() / mrr_nominal) if full.any() else float("nan")
 
 
-def _material_events(P, src, lines, job: Job, rapid, pl, removed, air: float):
+def _material_events(P, src, lines, job: Job, rapid, pl, removed, air: float, gouge_too: bool = True):
     """Rapids into material or below the top outside the allowed region (``rp_bad`` per sample), the
-    wall gouge (:func:`wall_gouge`) and the events table of the plunges ``pl`` / rapids / gouges:
-    ``(rp_bad, gouge, g_area, g_mask, events)``."""
+    wall gouge (:func:`wall_gouge`; zeros and area NaN when not ``gouge_too``) and the events table of
+    the plunges ``pl`` / rapids / gouges: ``(rp_bad, gouge, g_area, g_mask, events)``."""
     guard = job.allowed().buffer(POSITION_TOL_MM)
     low = rapid & (P[:, 2] < job.top_z - 1e-9)
     outside = np.zeros(len(P), bool)
     if low.any():
         outside[low] = ~shapely.contains_xy(guard, P[low, 0], P[low, 1])
     rp_bad = rapid & ((removed > air) | outside)
-    gouge, g_area, g_mask = wall_gouge(P, job, rapid=rapid)
+    if gouge_too:
+        gouge, g_area, g_mask = wall_gouge(P, job, rapid=rapid)
+    else:
+        gouge, g_area, g_mask = np.full(len(P), np.nan), float("nan"), np.zeros(len(P), bool)
     events = _events(P, src, lines, [("rapid into material", rp_bad, removed, "mm^2"),
                                      ("plunge into material", pl, removed, "mm^2"),
                                      ("wall gouge", g_mask, gouge, "mm")])

@@ -390,7 +390,7 @@ def adaptive_engagement_check(path: ToolPath, job: Job, prm) -> dict | None:
     if not prm.check_resolution_frac > 0:
         return None
     hc = max(prm.check_resolution_frac * job.tool_radius, prm.check_min_resolution_mm)
-    ev = evaluate(path, job, hc, machine=None)
+    ev = evaluate(path, job, hc, machine=None, uncut_and_gouge=False)     # plan measures those itself
     th = job.theta_deg
     t = ev.trace
     tags = np.array([str(g) for g in t["tag"]], dtype=object)
