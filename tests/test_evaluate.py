@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import box
 
-from cnclab.toolpath.evaluate import Evaluation, evaluate, weighted_percentile
+from cnclab.toolpath.evaluate import Evaluation, evaluate, evaluate_engagement, weighted_percentile
 from cnclab.toolpath.job import Job
 from cnclab.toolpath.path import Tool, ToolPath
 
@@ -120,12 +120,12 @@ def test_time_is_sum_of_parts(moves):
 
 
 def test_engagement_only_evaluation_skips_gouge_and_uncut_and_nothing_else():
-    # uncut_and_gouge=False (the adaptive planner's check of its promise): the same engagement, counts
+    # evaluate_engagement (the adaptive planner's check of its promise): the same engagement, counts
     # and times; gouge and uncut beyond the corners not measured (NaN, gouges -1), rapids outside the
     # allowed region still counted. The slot runs in through the pocket's x = 0 and out through its x = 40 wall
     job = _job()
     p = _slot(x0=-5.0, y=10.0)
-    full, part = evaluate(p, job, H), evaluate(p, job, H, uncut_and_gouge=False)
+    full, part = evaluate(p, job, H), evaluate_engagement(p, job, H)
     for f in ("engagement_p50_deg", "engagement_p95_deg", "engagement_max_deg", "share_above_5_pct",
               "plunges_into_material", "rapids_into_material", "time_total_s", "uncut_area_mm2"):
         assert getattr(part, f) == getattr(full, f), f
@@ -135,4 +135,4 @@ def test_engagement_only_evaluation_skips_gouge_and_uncut_and_nothing_else():
     assert math.isnan(part.wall_gouge_max_mm) and part.gouges == -1
     out = ToolPath.build([[5, 10, 5], [5, 10, -1], [5, -5, -1], [5, -5, 5]],
                          kind=["rapid", "plunge", "rapid", "retract"], feed=F)     # a G0 through the wall
-    assert evaluate(out, job, H, uncut_and_gouge=False).rapids_into_material == 1
+    assert evaluate_engagement(out, job, H).rapids_into_material == 1

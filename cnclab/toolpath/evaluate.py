@@ -85,7 +85,7 @@ from .job import Job
 from .motion import SMALL_VMC, Machine, path_machine_time
 from .path import KINDS, ToolPath
 
-__all__ = ["Evaluation", "evaluate", "UNITS", "weighted_percentile", "unreachable_region", "planar_view",
+__all__ = ["Evaluation", "evaluate", "evaluate_engagement", "UNITS", "weighted_percentile", "unreachable_region", "planar_view",
            "entry_hole", "SEGMENT_KINDS", "POSITION_TOL_MM", "EVENT_COLUMNS", "resample_by_length", "wall_gouge"]
 
 #: segment kinds of the cutting level (from the move kind and the tag's ``phase:kind``)
@@ -343,8 +343,7 @@ def _cutting_level(path: ToolPath, job: Job, resolution_mm, feed_control, block_
 def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2: float | None = None,
              mrr_window_mm: float = 1.0, feed_control: bool | None = None, block_mm: float = 0.5,
              margin_deg: float = 5.0, link_tol_mm2: float = 1e-3, level_only: bool = False,
-             sampling: str = "vertices", machine: Machine | None = SMALL_VMC,
-             uncut_and_gouge: bool = True) -> Evaluation:
+             sampling: str = "vertices", machine: Machine | None = SMALL_VMC) -> Evaluation:
     """Cut ``path`` through a fresh stock of ``job`` (level by level) and measure it.
 
     Parameters
@@ -369,11 +368,6 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
         most h between corners, whatever the block length -- what ``cnclab analyze`` uses for
         programs of unknown block length).
     machine : the machine model of ``time_machine_s`` (:mod:`cnclab.toolpath.motion`); None: NaN.
-    uncut_and_gouge : False: the wall gouge and the uncut area beyond the unreachable corners are
-        not measured (``wall_gouge_max_mm``, ``wall_gouge_area_mm2`` and
-        ``uncut_beyond_unreachable_mm2`` NaN, ``gouges`` -1, no gouge events; rapids outside the
-        allowed region still count): for a caller that reads only the engagement, as the adaptive
-        planner's check of its promise (``plan`` measures gouge and uncut area on its own).
 
     Returns an :class:`Evaluation`; besides the metrics it holds the wall gouge
     (:func:`wall_gouge`: ``wall_gouge_max_mm``, ``wall_gouge_area_mm2``, ``gouges`` = gouging
@@ -381,6 +375,30 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     move with its program line when ``path.info["line"]`` is set). ``trace`` holds per sample
     ``move`` (the path point index), ``line`` (with ``path.info["line"]``) and ``gouge_mm``.
     """
+    h = _checked(path, resolution_mm, mrr_window_mm)
+    level = None
+    if feed_control is not None:
+        level = _cutting_level(path, job, h, bool(feed_control), block_mm, margin_deg, link_tol_mm2, mrr_window_mm)
+    elif level_only:
+        raise ValueError("level_only needs feed_control=True or False")
+    if level_only:
+        return _level_evaluation(path, job, h, level, machine)
+    return _measured(path, job, h, air_tol_mm2, mrr_window_mm, sampling, machine, level, True)
+
+
+def evaluate_engagement(path: ToolPath, job: Job, resolution_mm: float = 0.05) -> Evaluation:
+    """:func:`evaluate` (default options, no machine model) without the wall gouge and the uncut area
+    beyond the unreachable corners: ``wall_gouge_max_mm``, ``wall_gouge_area_mm2`` and
+    ``uncut_beyond_unreachable_mm2`` are NaN, ``gouges`` -1, no gouge events (rapids outside the
+    allowed region still count). For a caller that reads only the engagement: the adaptive planner's
+    check of its promise (``plan`` measures gouge and uncut area on its own). Units as
+    :func:`evaluate`'s."""
+    h = _checked(path, resolution_mm, 1.0)
+    return _measured(path, job, h, None, 1.0, "vertices", None, None, False)
+
+
+def _checked(path, resolution_mm, mrr_window_mm) -> float:
+    """The evaluator's argument checks; returns the resolution (mm) as float."""
     if not isinstance(path, ToolPath):
         raise TypeError(f"path must be a ToolPath, got {type(path).__name__}")
     h = float(resolution_mm)
@@ -391,13 +409,12 @@ def evaluate(path: ToolPath, job: Job, resolution_mm: float = 0.05, air_tol_mm2:
     if len(path) < 2:
         raise ValueError(f"{path.info.get('source', 'path')}: the path has {len(path)} point(s), at least 2 are "
                          "needed (an empty or comment-only program?)")
-    level = None
-    if feed_control is not None:
-        level = _cutting_level(path, job, h, bool(feed_control), block_mm, margin_deg, link_tol_mm2, mrr_window_mm)
-    elif level_only:
-        raise ValueError("level_only needs feed_control=True or False")
-    if level_only:
-        return _level_evaluation(path, job, h, level, machine)
+    return h
+
+
+def _measured(path, job, h, air_tol_mm2, mrr_window_mm, sampling, machine, level, uncut_and_gouge) -> Evaluation:
+    """The slab simulation and every measure of :func:`evaluate` (``level``: its cutting-level model
+    or None); without ``uncut_and_gouge`` as :func:`evaluate_engagement`."""
     air = 0.5 * h * h if air_tol_mm2 is None else float(air_tol_mm2)
     r = job.tool_radius
     rp, src = _samples(path, h, sampling)

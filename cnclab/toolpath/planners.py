@@ -36,7 +36,7 @@ import shapely
 
 from . import adaptive   # the default; the other planners' modules are imported when used
 from . import coverage
-from .evaluate import evaluate
+from .evaluate import evaluate, evaluate_engagement
 from .job import Job
 from .levels import join_levels, with_entry_feed
 from .path import ToolPath
@@ -373,7 +373,7 @@ def _within_bounds(chk: dict, job: Job, prm) -> bool:
 
 def adaptive_engagement_check(path: ToolPath, job: Job, prm) -> dict | None:
     """The adaptive planner's promise measured on its own ``path`` of one level: the evaluator
-    (:func:`cnclab.toolpath.evaluate.evaluate`, the exact vector stock) at ``prm.check_resolution_frac`` r
+    (:func:`cnclab.toolpath.evaluate.evaluate_engagement`, the exact vector stock) at ``prm.check_resolution_frac`` r
     (at least ``prm.check_min_resolution_mm``); None when the check is off (frac 0). A dict:
     ``resolution_mm``, ``max_deg`` (over the cutting samples; with ``prm.slot_narrow`` its slots, whose
     engagement the notes state, aside), ``p95_deg``, ``share_above_5_pct`` (the evaluator's), ``ok``
@@ -390,7 +390,7 @@ def adaptive_engagement_check(path: ToolPath, job: Job, prm) -> dict | None:
     if not prm.check_resolution_frac > 0:
         return None
     hc = max(prm.check_resolution_frac * job.tool_radius, prm.check_min_resolution_mm)
-    ev = evaluate(path, job, hc, machine=None, uncut_and_gouge=False)     # plan measures those itself
+    ev = evaluate_engagement(path, job, hc)     # gouge and uncut area: plan measures them itself
     th = job.theta_deg
     t = ev.trace
     tags = np.array([str(g) for g in t["tag"]], dtype=object)
