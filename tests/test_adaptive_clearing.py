@@ -245,6 +245,8 @@ def test_corner_allowance_hand_cases():
     assert _slot_only_mm2(box(0, 0, 9, 7)) == pytest.approx(0.0, abs=1e-9)
 
 
+@pytest.mark.slow      # a whole random-bench pocket: make test-slow (CI); in make test the refusal of a
+# part no tool can enter is test_plan_limits' thin annulus
 def test_tapered_slot_is_left_and_plan_says_so():
     """The class of the random pockets the planner leaves most of (a channel narrowing to the tool's
     diameter, :data:`TAPERED`): the planner plans it safely within the engagement bound and leaves

@@ -127,6 +127,7 @@ def test_unknown_pocket_is_refused():
         fx.job("hexagon")
 
 
+@pytest.mark.slow      # the bench script end to end on one pocket: make test-slow (CI)
 def test_bench_script_uses_the_package_and_prints_ratios(capsys, monkeypatch):
     sys.path.insert(0, str(ROOT / "benchmarks"))
     import bench_vs_freecad as bench
