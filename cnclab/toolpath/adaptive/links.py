@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .stock import capsule_free, segment_inside
+from .stock import capsule_free, capsule_window, segment_inside
 
 
 @njit(cache=True)
@@ -395,11 +395,7 @@ def blocked_spans(M, x0, y0, h, ax, ay, bx, by, rr):
     """(k, 2): for each material pixel centre of ``M`` within ``rr`` (mm) of the chord a -> b, the
     open interval of the chord parameter t in [0, 1] whose points lie within ``rr`` of it (unmerged,
     unsorted): the chord's sub-segment [t0, t1] is :func:`capsule_free` iff it meets none of them."""
-    ny, nx = M.shape
-    i0 = max(int(math.floor((min(ax, bx) - rr - x0) / h)), 0)
-    i1 = min(int(math.ceil((max(ax, bx) + rr - x0) / h)), nx - 1)
-    j0 = max(int(math.floor((min(ay, by) - rr - y0) / h)), 0)
-    j1 = min(int(math.ceil((max(ay, by) + rr - y0) / h)), ny - 1)
+    i0, i1, j0, j1 = capsule_window(M, x0, y0, h, ax, ay, bx, by, rr)
     dx = bx - ax
     dy = by - ay
     A = dx * dx + dy * dy

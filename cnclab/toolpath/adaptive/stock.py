@@ -141,15 +141,23 @@ def material_fraction(M, x0, y0, h, x, y):
     return s
 
 
-@njit(cache=True)
-def capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
-    """True when no material pixel centre lies within ``rr`` of the segment (a, b): the tool disc
-    (radius < rr - h/sqrt(2)) swept along it removes nothing."""
+@njit(cache=True, inline="always")
+def capsule_window(M, x0, y0, h, ax, ay, bx, by, rr):
+    """(i0, i1, j0, j1): the pixel columns i0..i1 and rows j0..j1 (inclusive, clipped to ``M``) of the
+    box of the segment (a, b) grown by ``rr`` mm."""
     ny, nx = M.shape
     i0 = max(int(math.floor((min(ax, bx) - rr - x0) / h)), 0)
     i1 = min(int(math.ceil((max(ax, bx) + rr - x0) / h)), nx - 1)
     j0 = max(int(math.floor((min(ay, by) - rr - y0) / h)), 0)
     j1 = min(int(math.ceil((max(ay, by) + rr - y0) / h)), ny - 1)
+    return i0, i1, j0, j1
+
+
+@njit(cache=True)
+def capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
+    """True when no material pixel centre lies within ``rr`` of the segment (a, b): the tool disc
+    (radius < rr - h/sqrt(2)) swept along it removes nothing."""
+    i0, i1, j0, j1 = capsule_window(M, x0, y0, h, ax, ay, bx, by, rr)
     dx = bx - ax
     dy = by - ay
     L2 = dx * dx + dy * dy
