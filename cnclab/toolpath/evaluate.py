@@ -505,7 +505,7 @@ def _mrr_max(cutting, dxy, feed, vol, mrr_window_mm: float, mrr_nominal: float) 
 
 def _material_events(P, src, lines, job: Job, rapid, pl, removed, air: float, gouge_too: bool = True):
     """Rapids into material or below the top outside the allowed region (``rp_bad`` per sample), the
-    wall gouge (:func:`wall_gouge`; zeros and area NaN when not ``gouge_too``) and the events table of
+    wall gouge (:func:`wall_gouge`; NaN, no gouging sample, when not ``gouge_too``) and the events table of
     the plunges ``pl`` / rapids / gouges: ``(rp_bad, gouge, g_area, g_mask, events)``."""
     guard = job.allowed().buffer(POSITION_TOL_MM)
     low = rapid & (P[:, 2] < job.top_z - 1e-9)

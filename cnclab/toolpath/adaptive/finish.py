@@ -92,9 +92,8 @@ def _laps(lv, part):
                 lv.b.rapid([Rl[0]], z=lv.clearance_z)
                 # free of material under the tool: feed down into cleared area
                 lv.b.plunge(Rl[0], lv.z, lv.feed_mm_min, tag="cleared", cleared=True)
-            elif math.hypot(Rl[0, 0] - lv.cur[0], Rl[0, 1] - lv.cur[1]) > 1e-9:
-                lv.b.link([Rl[0]], lv.link_feed_mm_min, z=lv.z)
-                lv.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
+            else:
+                _step_onto(lv, Rl[0])
             # the wall-following pass: the same engagement control, sliding along the wall;
             # it ends 2 r past the last ring point with the lap's material (see ``want``)
             sl = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Rl, axis=0).T))]
@@ -116,6 +115,14 @@ def _laps(lv, part):
                 resume, lap = None, lap + 1
         if lap and lv.prm.finish_peel_rounds:
             _peel(lv, wall, Rs)
+
+
+def _step_onto(lv, xy):
+    """After a link to a ring point's cell: a feed step at the link feed onto the point ``xy`` (mm)
+    itself, where the tool is not there yet."""
+    if math.hypot(xy[0] - lv.cur[0], xy[1] - lv.cur[1]) > 1e-9:
+        lv.b.link([xy], lv.link_feed_mm_min, z=lv.z)
+        lv.cur = (float(xy[0]), float(xy[1]))
 
 
 def _field_at(lv, P):
@@ -202,9 +209,7 @@ def _peel(lv, wall, Rs):
             Rl = Rs[idx]
             if lv.link_to(lv.r_free, cell=(int(jj[k0]), int(ii[k0])), end_xy=(Rl[0, 0], Rl[0, 1])) is None:
                 break
-            if math.hypot(Rl[0, 0] - lv.cur[0], Rl[0, 1] - lv.cur[1]) > 1e-9:
-                lv.b.link([Rl[0]], lv.link_feed_mm_min, z=lv.z)
-                lv.cur = (float(Rl[0, 0]), float(Rl[0, 1]))
+            _step_onto(lv, Rl[0])
             before = int(np.count_nonzero(lv.g.M))
             _run_lap(lv, wall, Rl, float(np.hypot(*np.diff(Rl, axis=0).T).sum()))
             lv.stats["peels"] = lv.stats.get("peels", 0) + 1

@@ -107,32 +107,27 @@ class _Level:
             if math.hypot(q[0] - self.cur[0], q[1] - self.cur[1]) > 1e-9:
                 mark_q, start_q = self.b.mark(), self.cur
                 legs = rapid_legs(self.g, self.cur, q) if self.rapid_links else None
+                pieces = None
                 if legs is not None and n_q == len(chords) - 1 and legs[1][0] == q[0] and legs[1][1] == q[1]:
                     # the link ends with one G0 into the pass start: join_link_to_pass may run it on
                     # to the end of the pass's own first G0 run (its start, its first chord or not)
                     self._link_tail = (mark_q, start_q if legs[0] is None else tuple(legs[0][:2]), n_q == 1 and legs[0] is None)
-                pieces = rapid_pieces(self.g, self.cur, q, self.prm.rapid_piece_min_mm) \
-                    if legs is None and self.rapid_links and self.prm.rapid_piece_min_mm > 0 else None
-                if pieces is not None:
-                    # a chord no single G0 is proven for: G0 where a stretch of it is (rapid_pieces)
-                    for e, fast in pieces:
-                        if fast:
-                            self.b.rapid([e], z=self.z, tag="cleared: link through cleared area", cleared=True)
-                        else:
-                            self.b.link([e], self.link_feed_mm_min, z=self.z)
-                elif legs is None:
-                    self.b.link([q[:2]], self.link_feed_mm_min, z=self.z)
-                else:
-                    # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
-                    # chord's tool disc is truly swept (see Grid), sub-pixel slivers included; a
-                    # chord starting or ending on a cut boundary (a pass ends at the wall: its skin
-                    # is tangent there) gets a short feed leg off it
+                # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
+                # chord's tool disc is truly swept (see Grid), sub-pixel slivers included; a chord
+                # starting or ending on a cut boundary (a pass ends at the wall: its skin is tangent
+                # there) gets a short feed leg off it (rapid_legs); a chord still not proven is G0
+                # only where a stretch of it is (rapid_pieces), the rest at the link feed
+                if legs is not None:
                     a, b = legs
-                    if a is not None:
-                        self.b.link([a[:2]], self.link_feed_mm_min, z=self.z)
-                    self.b.rapid([b[:2]], z=self.z, tag="cleared: link through cleared area", cleared=True)
-                    if b[0] != q[0] or b[1] != q[1]:
-                        self.b.link([q[:2]], self.link_feed_mm_min, z=self.z)
+                    pieces = ([] if a is None else [(a, False)]) + [(b, True)] + \
+                        ([] if (b[0] == q[0] and b[1] == q[1]) else [(q, False)])
+                elif self.rapid_links and self.prm.rapid_piece_min_mm > 0:
+                    pieces = rapid_pieces(self.g, self.cur, q, self.prm.rapid_piece_min_mm)
+                for e, fast in pieces or [(q, False)]:
+                    if fast:
+                        self.b.rapid([e[:2]], z=self.z, tag="cleared: link through cleared area", cleared=True)
+                    else:
+                        self.b.link([e[:2]], self.link_feed_mm_min, z=self.z)
                 self.cur = (float(q[0]), float(q[1]))
         self.stats["links"] += 1
         return route[-1]
