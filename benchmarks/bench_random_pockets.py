@@ -33,7 +33,7 @@ from shapely.geometry import Point, Polygon, box
 from shapely.ops import unary_union
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from cnclab.toolpath.adaptive import PlanningError, adaptive_clearing  # noqa: E402
+from cnclab.toolpath.adaptive import PlanningError, adaptive_clearing, unproven_rapids  # noqa: E402
 from cnclab.toolpath.evaluate import evaluate  # noqa: E402
 from cnclab.toolpath.job import Job  # noqa: E402
 from cnclab.toolpath.path import Tool  # noqa: E402
@@ -100,10 +100,11 @@ def main(argv=None):
                     "share_above_5_pct": ev.share_above_5_pct, "entries": tp.info["entries"],
                     "plunges": ev.plunges_into_material, "rapids_into": ev.rapids_into_material,
                     "uncut_mm2": ev.uncut_beyond_unreachable_mm2, "gouge_mm": ev.wall_gouge_max_mm,
-                    "program_s": tp.time_s(10000.0)["total_s"]})
+                    "program_s": tp.time_s(10000.0)["total_s"],
+                    "g0_unproven": len(unproven_rapids(tp, P, r, tp.info["resolution_mm"], job.levels(), None))})
         row["ok"] = all(engagement_targets(ev.engagement_p95_deg, ev.engagement_max_deg, ev.share_above_5_pct,
                                            ev.share_above_15_pct, ev.plunges_into_material, ev.rapids_into_material,
-                                           ev.wall_gouge_max_mm, th, gouge_tol_mm=1e-3).values())
+                                           ev.wall_gouge_max_mm, th, gouge_tol_mm=1e-3).values()) and row["g0_unproven"] == 0
         rows.append(row)
         print(" ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()), flush=True)
     df = pd.DataFrame(rows).set_index("pocket")
@@ -113,7 +114,8 @@ def main(argv=None):
     print(f"\n== summary (seed {a.seed}): {len(planned)} planned, {len(df) - len(planned)} refused; "
           f"targets met on {int(planned['ok'].sum())}/{len(planned)}; max over theta {planned['max-theta'].max():.1f} deg, "
           f"max share above theta+5 {planned['share_above_5_pct'].max():.2f} %, plunges {int(planned['plunges'].sum())}, "
-          f"rapids into material {int(planned['rapids_into'].sum())}, max gouge {planned['gouge_mm'].max():.4f} mm, "
+          f"rapids into material {int(planned['rapids_into'].sum())}, unproven G0s at depth "
+          f"{int(planned['g0_unproven'].sum())}, max gouge {planned['gouge_mm'].max():.4f} mm, "
           f"max plan {planned['plan_s'].max():.2f} s")
 
 

@@ -362,7 +362,9 @@ def test_deterministic_golden_program():
     planner before the package split, rewritten by ``write_program(..., arc_tol_mm=None)`` when the
     entry became the package's one helix generator, issue 27: 63 line moves in place of 3 G3, every
     other move the same within 0.5e-4 mm; rewritten so again when the passes began to start at the
-    upstream end of their band and wall slivers were left to the finishing lap, issue 24): read back, every end point within its 4 written decimals
+    upstream end of their band and wall slivers were left to the finishing lap, issue 24; and when the
+    join of a link's last G0 to its pass kept the link's feed leg off the cut boundary, which it had
+    dropped, writing a G0 from the boundary that no proof covered: 12 feed legs more): read back, every end point within its 4 written decimals
     (0.5e-4 mm), every motion word and feed the same. Any change of the planner's moves fails here
     (the writer's own changes, e.g. arc fitting, do not: the path's moves are compared); regenerate the
     file only for a change that is meant, and say so in the commit."""

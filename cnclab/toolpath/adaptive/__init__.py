@@ -121,6 +121,10 @@ Design (the ideas and where they come from; the code is cnclab's own)
   that makes the rest provable (:func:`bow_runs`, :func:`rapid_legs`); a chord still not proven is
   split, every stretch of at least ``rapid_piece_min_mm`` with no such pixel a G0 and the rest at the
   link feed (:func:`rapid_pieces`: the exact chord intervals each pixel blocks).
+  :func:`unproven_rapids` (``audit.py``) proves every G0 at depth again from the written path alone
+  (a rapid stock rebuilt from its moves in their order); on a sound plan it finds none, and the tests
+  hold the planner to it (it found the join of a link's last G0 to its pass writing that G0 from the
+  cut boundary, the feed leg the proof assumed dropped).
 * **Narrow regions** (``narrow``; issue 29 item 5): where the tool-centre region is at most 0.75 r
   half-wide (a pocket <= 1.75 D: channels, slots, necks, comb fingers) along at least 3 r of its
   medial axis, the passes cannot turn; such a region is hidden from them and cut instead by Jacsó's
@@ -185,7 +189,8 @@ True
 """
 from __future__ import annotations
 
+from .audit import unproven_rapids
 from .params import AdaptiveParams
 from .planner import PlanningError, adaptive_clearing, plan_job
 
-__all__ = ["adaptive_clearing", "plan_job", "PlanningError", "AdaptiveParams"]
+__all__ = ["adaptive_clearing", "plan_job", "PlanningError", "AdaptiveParams", "unproven_rapids"]

@@ -120,9 +120,11 @@ class Grid:
         self.touch(P, self.r + self.h)
         return P, removed, reason, E, F
 
-    def cut_path(self, P):
+    def cut_path(self, P, P_rapid=None):
+        """Cut discs at the points ``P`` (n, 2) mm into the planning stock and at ``P_rapid`` (default
+        ``P``: points the tool truly passes) into the rapid stock."""
         cut_path(self.M, self.x0, self.y0, self.h, P, self.r)
-        self._cut_rapid(P)
+        self._cut_rapid(P if P_rapid is None else P_rapid)
         self.touch(P, self.r + self.h)
 
     def replay(self, P, lag, n_samp):

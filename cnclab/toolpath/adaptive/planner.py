@@ -105,13 +105,11 @@ class _Level:
         self._link_tail = None
         for n_q, q in enumerate(chords[1:], start=1):
             if math.hypot(q[0] - self.cur[0], q[1] - self.cur[1]) > 1e-9:
-                mark_q, start_q = self.b.mark(), self.cur
                 legs = rapid_legs(self.g, self.cur, q) if self.rapid_links else None
                 pieces = None
-                if legs is not None and n_q == len(chords) - 1 and legs[1][0] == q[0] and legs[1][1] == q[1]:
-                    # the link ends with one G0 into the pass start: join_link_to_pass may run it on
-                    # to the end of the pass's own first G0 run (its start, its first chord or not)
-                    self._link_tail = (mark_q, start_q if legs[0] is None else tuple(legs[0][:2]), n_q == 1 and legs[0] is None)
+                # the link ends with one G0 into the pass start: join_link_to_pass may run it on to the
+                # end of the pass's own first G0 run (its start, its first chord or not)
+                tail = legs is not None and n_q == len(chords) - 1 and legs[1][0] == q[0] and legs[1][1] == q[1]
                 # G0 at depth: no pixel of the rapid stock within r + h/sqrt(2) of the chord: the
                 # chord's tool disc is truly swept (see Grid), sub-pixel slivers included; a chord
                 # starting or ending on a cut boundary (a pass ends at the wall: its skin is tangent
@@ -123,11 +121,17 @@ class _Level:
                         ([] if (b[0] == q[0] and b[1] == q[1]) else [(q, False)])
                 elif self.rapid_links and self.prm.rapid_piece_min_mm > 0:
                     pieces = rapid_pieces(self.g, self.cur, q, self.prm.rapid_piece_min_mm)
+                at = self.cur
                 for e, fast in pieces or [(q, False)]:
                     if fast:
+                        if tail:
+                            # the builder mark and start point of this G0 itself: a feed leg before it
+                            # stays (the join's proof is for the chord from the leg's end)
+                            self._link_tail = (self.b.mark(), (float(at[0]), float(at[1])), n_q == 1 and legs[0] is None)
                         self.b.rapid([e[:2]], z=self.z, tag="cleared: link through cleared area", cleared=True)
                     else:
                         self.b.link([e[:2]], self.link_feed_mm_min, z=self.z)
+                    at = e
                 self.cur = (float(q[0]), float(q[1]))
         self.stats["links"] += 1
         return route[-1]
@@ -233,12 +237,17 @@ class _Level:
         return None, None
 
     def rescue_turns(self, heading, P, removed, reason, E, free):
-        """A rescued start (:meth:`rescue_start`) whose pass removed nothing (the stock unchanged;
-        nothing kept): once more per ``rescue_turns_deg``, turned so far towards the material (a
-        narrow mouth: along it the pass leaves the region); the last pass's (P, removed, reason, E, free)."""
+        """A rescued start (:meth:`rescue_start`) whose pass removed nothing from the planning stock
+        (nothing kept): once more per ``rescue_turns_deg``, turned so far towards the material (a
+        narrow mouth: along it the pass leaves the region); the last pass's (P, removed, reason, E, free).
+        Each pass not kept is rolled back first: removing nothing from the planning stock, it may
+        still have cut pixels of the rapid stock (its discs are r - h/sqrt(2): pixels whose centre an
+        earlier disc swept but not all of the pixel), and a rapid stock cut where the tool never went
+        proves G0 links that meet material."""
         for turn in self.prm.rescue_turns_deg:
             if removed > 0.0:
                 break
+            self.g.rollback()
             P, removed, reason, E, free = self.clearing_pass(heading - math.radians(turn), self.air_stop)
             self.stats["passes"] += 1
         return P, removed, reason, E, free

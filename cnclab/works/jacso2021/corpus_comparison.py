@@ -12,7 +12,8 @@ Evaluation dixel: h = r / 30 clipped to [0.05, 0.2] mm (the same relative resolu
 tool; doubled in fast mode); the planner plans at the same h.
 
 :func:`score_job` gives one row (planner columns, FreeCAD's with the suffix ``_fc``, the per-job
-target flags); :func:`family_table` the per-family distribution (jobs, planned, worst value per axis);
+target flags; ``g0_unproven``: the planner's G0s at depth that :func:`cnclab.toolpath.adaptive.unproven_rapids`
+cannot prove from the written path, 0 for a safe row); :func:`family_table` the per-family distribution (jobs, planned, worst value per axis);
 :func:`targets` the issue-29 targets over the corpus (met or not, with the measured value).
 Units: mm, mm^2, deg, min (program time: length / feed; machine time: the small-VMC model of
 :mod:`cnclab.toolpath.motion`, ``Evaluation.time_machine_s``), s (plan time). Rows written before the
@@ -34,6 +35,7 @@ from ...paths import REPO_ROOT
 from ...plotting import figsize
 from ...runtime import pick
 from ...toolpath import planners
+from ...toolpath.adaptive import unproven_rapids
 from ...toolpath.evaluate import evaluate
 from ...toolpath.job import Job, load_job
 from . import freecad_comparison as fx
@@ -50,7 +52,7 @@ RESULTS = REPO_ROOT / "benchmarks" / "results" / "corpus_rows.csv"
 AXES = ["engagement_p95_deg", "engagement_max_deg", "share_above_5_pct", "plunges_into_material", "rapids_into_material",
         "wall_gouge_mm", "lifts", "uncut_beyond_mm2", "program_time_min", "machine_time_min", "plan_time_s"]
 ROW_COLUMNS = (["family", "D_mm", "theta_deg", "levels"] + AXES + [a + "_fc" for a in AXES]
-               + ["uncut_over_limit", "ok_safe", "ok_engagement", "note"])
+               + ["uncut_over_limit", "g0_unproven", "ok_safe", "ok_engagement", "note"])
 
 
 def job_names() -> list:
@@ -107,13 +109,17 @@ def score_job(name: str, fast: bool | None = None) -> dict:
         r = fx.row(evaluate(tp, jb, h), t_plan, jb=jb)
         out.update({a: r[a] for a in AXES}, note="; ".join(tp.info.get("warnings", [])))
         out["uncut_over_limit"] = bool(tp.info["uncut"]["over"])
+        # the G0s at depth the written path does not prove clear (adaptive.audit; a sound plan: none)
+        out["g0_unproven"] = len(unproven_rapids(tp, jb.polygon, jb.tool_radius, tp.info["resolution_mm"],
+                                                 tp.info["levels"], jb.start_hole))
     except Exception as exc:       # noqa: BLE001 -- a refusal or a crash is a result of this benchmark
         out.update({a: math.nan for a in AXES}, note=f"{type(exc).__name__}: {str(exc)[:200]}")
     out.setdefault("uncut_over_limit", math.nan)
+    out.setdefault("g0_unproven", math.nan)
     out.update(_freecad(name, jb, h))
     th = jb.theta_deg
     out["ok_safe"] = bool(out["plunges_into_material"] == 0 and out["rapids_into_material"] == 0
-                          and out["wall_gouge_mm"] <= 1e-3) if out["note"][:5] != "Plann" else math.nan
+                          and out["wall_gouge_mm"] <= 1e-3 and out["g0_unproven"] == 0) if out["note"][:5] != "Plann" else math.nan
     out["ok_engagement"] = bool(out["engagement_p95_deg"] <= th + 2 and out["engagement_max_deg"] <= th + 10
                                 and out["share_above_5_pct"] <= 0.5)
     return out
@@ -168,7 +174,8 @@ def targets(df: pd.DataFrame) -> pd.DataFrame:
     safe = df["ok_safe"] == True  # noqa: E712 -- NaN (not planned) is not safe-and-planned
     rows = [
         ("every job planned", f"{int(planned.sum())}/{n}", bool(planned.all())),
-        ("0 plunges, 0 rapids into material, 0 wall/island gouge on every job",
+        ("0 plunges, 0 rapids into material, 0 wall/island gouge on every job (and every G0 at depth proven "
+         "by adaptive.audit)",
          f"{int(safe.sum())}/{n} planned and safe ({int(planned.sum())} planned)", bool(safe.all())),
         ("p95 <= θ+2, max <= θ+10, share>θ+5 <= 0.5 % on every job",
          f"{int(df['ok_engagement'].sum())}/{n}; "

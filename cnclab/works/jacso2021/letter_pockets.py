@@ -19,6 +19,7 @@ import shapely
 from shapely.geometry import box
 
 from ...toolpath import planners
+from ...toolpath.adaptive import unproven_rapids
 from ...toolpath.evaluate import evaluate
 from ...toolpath.job import Job
 from ...toolpath.path import Tool
@@ -76,8 +77,12 @@ def score(kind: str, D: float, w: float, L: float, theta: float) -> dict:
             "share_above_5_pct": ev.share_above_5_pct, "plunges": ev.plunges_into_material,
             "rapids_into_material": ev.rapids_into_material, "gouge_mm": ev.wall_gouge_max_mm,
             "uncut_beyond_mm2": ev.uncut_beyond_unreachable_mm2, "narrow_regions": len(tp.info.get("narrow_regions", [])),
-            "note": (tp.info.get("engagement_check") or {}).get("where", "")}
-    row["ok_safe"] = bool(row["plunges"] == 0 and row["rapids_into_material"] == 0 and row["gouge_mm"] <= 1e-3)
+            "note": (tp.info.get("engagement_check") or {}).get("where", ""),
+            # the G0s at depth the written path does not prove clear (adaptive.audit; a sound plan: none)
+            "g0_unproven": len(unproven_rapids(tp, jb.polygon, jb.tool_radius, tp.info["resolution_mm"],
+                                               tp.info["levels"], jb.start_hole))}
+    row["ok_safe"] = bool(row["plunges"] == 0 and row["rapids_into_material"] == 0 and row["gouge_mm"] <= 1e-3
+                          and row["g0_unproven"] == 0)
     row["ok_engagement"] = bool(row["p95_minus_theta"] <= 2 and row["max_minus_theta"] <= 10
                                 and row["share_above_5_pct"] <= 0.5)
     return row
