@@ -219,3 +219,23 @@ def test_every_g0_at_depth_of_a_corpus_job_is_proven_by_the_path_before_it(name)
     assert _g0_at_depth(tp) > 50
     assert _audit(tp, jb) == []
 
+
+
+def test_a_ramp_entry_leaves_no_wedge_for_a_g0():
+    # the letter O of validation seed 22 with bars 5.8 mm (1.16 D, D 5 mm, theta 75.1 deg): its narrow
+    # bars are entered by ramps. The last leg of a ramp (b -> a, down to the floor at a) leaves the
+    # wedge under it, dz / legs high at b; the stocks took a-b as swept at depth, and until 2026-11-26
+    # two G0s at depth ran into that wedge (the audit's unproven). Now each ramp is followed by a floor
+    # pass at depth a -> b (and back along its own cut): every G0 at depth is proven
+    from cnclab.works.jacso2021.letter_pockets import letter
+    job = Job(letter("O", 5.8, 29.6), Tool(5.0), 75.1, 1.0, v_c=100, f_z=0.05, source="letter O")
+    tp = planners.plan(job, "adaptive", 2.5 / 30, allow_uncut=True, allow_engagement_breach=True)
+    assert tp.info["ramp_entries"] >= 1
+    ramp = tp.is_kind("ramp")
+    ends = np.flatnonzero(ramp[:-1] & ~ramp[1:])            # the last leg of each ramp
+    assert len(ends) == tp.info["ramp_entries"]
+    for k in ends:
+        a, b = tp.xyz[k], tp.xyz[k + 1]
+        assert a[2] == pytest.approx(b[2]) and tp.is_kind("cut")[k + 1]        # the floor pass, at depth
+        assert np.hypot(*(b[:2] - a[:2])) > 1.0
+    assert _audit(tp, job) == []

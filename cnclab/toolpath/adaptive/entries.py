@@ -181,9 +181,11 @@ def ramp_entry(lv, a, b):
     half-width below ``ramp_half_width_frac`` r, where helix after helix was entered a few r apart):
     down from the level's top to its floor back and forth along a-b (the package's one ramp,
     :meth:`ToolPathBuilder.ramp`) in an even number of legs at the helix angle or shallower, so that
-    it ends at depth back at ``a`` (no ``ramp-return`` through the wedge under its first leg). The tool disc swept
-    along a-b is cut from the stock; the tool stays down at ``a``. Its moves are ``ramp`` (the job's
-    entry feed; the evaluator reports their engagement apart, as a helix's)."""
+    it ends at depth back at ``a`` (no ``ramp-return`` through the wedge under its first leg), then one
+    floor pass at depth a -> b through the wedge under its last leg (dz / legs high at b, at most half
+    the level) and back to ``a`` at the link feed. The tool disc swept along a-b is cut from the stock;
+    the tool stays down at ``a``. The legs are ``ramp`` moves (the job's entry feed; the evaluator
+    reports their engagement apart, as a helix's), the floor pass a ``cut`` and a ``link``."""
     L = float(math.hypot(b[0] - a[0], b[1] - a[1]))
     dz = lv.z_prev - lv.z
     # an even number of legs, at most at the helix angle: the ramp ends at depth back at ``a``. A
@@ -195,6 +197,12 @@ def ramp_entry(lv, a, b):
     lv.b.rapid([a], z=lv.clearance_z)
     lv.b.rapid([a], z=lv.z_prev + lv.prm.approach_above_mm, tag="cleared: above the level", cleared=True)
     lv.b.ramp(np.array([a, b]), lv.z_prev, lv.z, lv.feed_mm_min, ramp_deg=deg, max_mm=L)
+    # the floor pass: the last leg (b -> a) leaves the wedge under it, dz / legs high at b, which no
+    # move at depth has swept (as the helix's floor circle takes the wedge under its last turn); the
+    # stocks below say a-b is clear at depth, so the tool runs it once at depth, and back to a along
+    # its own cut at the link feed (from b, the dead end of a band this narrow, no link is proven)
+    lv.b.cut([b], lv.feed_mm_min, z=lv.z, tag="entry-floor")
+    lv.b.link([a], lv.link_feed_mm_min, z=lv.z, tag="entry-floor")
     Q = np.ascontiguousarray(resample_polyline(np.array([a, b]), lv.ds, uniform=True))
     lv.g.cut_path(Q)
     lv.cur = (float(a[0]), float(a[1]))
