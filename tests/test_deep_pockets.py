@@ -16,6 +16,7 @@ from shapely.geometry import box
 
 from cnclab.nc.program import check_program, write_program
 from cnclab.nc.rs274 import parse_canonical, rs274_available, run_rs274
+from cnclab.toolpath.adaptive import unproven_rapids
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import Job
 from cnclab.toolpath.levels import CLEARED_ABOVE, LevelError, swept_region
@@ -74,6 +75,9 @@ def test_every_strategy_plans_every_depth_safely(name, mult, hole, island, tmp_p
     assert chk.errors == [] and chk.plunges_into_material == 0 and chk.rapids_below_clearance == 0
     ev = evaluate(p, job, RES)
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+    # every G0 at depth (only the adaptive planner writes them) proven from the path before it, on a
+    # rapid stock rebuilt level by level from the written moves (adaptive.audit)
+    assert unproven_rapids(p, job.polygon, job.tool_radius, p.info.get("resolution_mm", RES), levels, job.start_hole) == []
     # every level below the first cuts only under area the levels above cleared (same plan in x, y)
     assert max(p.info["levels_extra_mm2"]) < 0.5
     if rs274_available():
