@@ -960,6 +960,7 @@ def _spindle_process(tmp_path, tag, sig=None, delay=None):
     return rc, out, err, outs
 
 
+@pytest.mark.slow      # 8 whole runs of `spindle` (12 s); test_fuzz_interrupts.py interrupts spindle at fixed offsets in make test
 def test_interrupt_at_any_moment_says_what_is_on_disk(tmp_path):
     """SIGINT and SIGTERM at offsets spread over a whole run of ``spindle`` on the sample files (the
     offsets are fractions of a measured uninterrupted run, so the reading, computing and writing
