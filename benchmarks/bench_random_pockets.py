@@ -101,7 +101,7 @@ def main(argv=None):
                     "plunges": ev.plunges_into_material, "rapids_into": ev.rapids_into_material,
                     "uncut_mm2": ev.uncut_beyond_unreachable_mm2, "gouge_mm": ev.wall_gouge_max_mm,
                     "program_s": tp.time_s(10000.0)["total_s"],
-                    "g0_unproven": len(unproven_rapids(tp, P, r, tp.info["resolution_mm"], job.levels(), None))})
+                    "g0_unproven": len(unproven_rapids(tp, job))})
         row["ok"] = all(engagement_targets(ev.engagement_p95_deg, ev.engagement_max_deg, ev.share_above_5_pct,
                                            ev.share_above_15_pct, ev.plunges_into_material, ev.rapids_into_material,
                                            ev.wall_gouge_max_mm, th, gouge_tol_mm=1e-3).values()) and row["g0_unproven"] == 0

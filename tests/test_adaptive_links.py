@@ -188,10 +188,6 @@ def test_link_chords_are_merged_only_where_one_rapid_is_proven():
     assert len(merged) == 2 and np.array_equal(merged, chords[[0, 2]])
 
 
-def _audit(tp, job):
-    return unproven_rapids(tp, job.polygon, job.tool_radius, tp.info["resolution_mm"], tp.info["levels"], job.start_hole)
-
-
 def _g0_at_depth(tp):
     on = tp.is_kind("rapid") & (tp.xyz[:, 2] < -1e-9)
     return int(np.count_nonzero(on[1:] & (np.abs(np.diff(tp.xyz[:, 2])) < 1e-9)))
@@ -201,7 +197,7 @@ def test_every_g0_at_depth_of_the_slot_is_proven_by_the_path_before_it(planned):
     # the rapid stock rebuilt from the written moves alone (adaptive.audit) proves every G0 at depth
     job, tp, _ = planned
     assert _g0_at_depth(tp) > 20
-    assert _audit(tp, job) == []
+    assert unproven_rapids(tp, job) == []
 
 
 @pytest.mark.parametrize("name", ["dwg_polygons", "gear_1"])
@@ -217,7 +213,7 @@ def test_every_g0_at_depth_of_a_corpus_job_is_proven_by_the_path_before_it(name)
     h = cc.resolution_mm(jb, False)
     tp = planners.plan(jb, "adaptive", h, allow_uncut=True)
     assert _g0_at_depth(tp) > 50
-    assert _audit(tp, jb) == []
+    assert unproven_rapids(tp, jb) == []
 
 
 
@@ -238,4 +234,4 @@ def test_a_ramp_entry_leaves_no_wedge_for_a_g0():
         a, b = tp.xyz[k], tp.xyz[k + 1]
         assert a[2] == pytest.approx(b[2]) and tp.is_kind("cut")[k + 1]        # the floor pass, at depth
         assert np.hypot(*(b[:2] - a[:2])) > 1.0
-    assert _audit(tp, job) == []
+    assert unproven_rapids(tp, job) == []

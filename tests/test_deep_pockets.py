@@ -77,7 +77,7 @@ def test_every_strategy_plans_every_depth_safely(name, mult, hole, island, tmp_p
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
     # every G0 at depth (only the adaptive planner writes them) proven from the path before it, on a
     # rapid stock rebuilt level by level from the written moves (adaptive.audit)
-    assert unproven_rapids(p, job.polygon, job.tool_radius, p.info.get("resolution_mm", RES), levels, job.start_hole) == []
+    assert unproven_rapids(p, job, p.info.get("resolution_mm", RES)) == []
     # every level below the first cuts only under area the levels above cleared (same plan in x, y)
     assert max(p.info["levels_extra_mm2"]) < 0.5
     if rs274_available():

@@ -18,52 +18,56 @@ import math
 
 import numpy as np
 
-from ..path import KINDS, ToolPath
-from .stock import capsule_free, cut_disc, raster
+from ..path import KINDS, ToolPath, resample_polyline
+from .grid import rapid_radii, stock_frame
+from .stock import capsule_free, cut_disc, cut_path, raster
 
 __all__ = ["unproven_rapids"]
 
 _RAPID = KINDS.index("rapid")
 
 
-def unproven_rapids(tp: ToolPath, pocket, tool_radius: float, resolution_mm: float, levels, start_hole=None) -> list:
+def unproven_rapids(tp: ToolPath, job, resolution_mm: float | None = None) -> list:
     """Indices of the G0 moves at depth of ``tp`` that the path before them does not prove clear.
 
-    ``pocket``: the shapely (Multi)Polygon; ``tool_radius`` (mm); ``resolution_mm``: the pixel (the
-    planner's, ``tp.info["resolution_mm"]``); ``levels``: the cutting z of each level (mm,
-    ``tp.info["levels"]``); ``start_hole``: None or (x, y, diameter) mm. A G0 at depth is a rapid
-    whose start and end lie on one level's z.
+    ``job``: the :class:`cnclab.toolpath.job.Job` it machines (its ``polygon``, tool radius and
+    ``start_hole``); ``tp.info["levels"]``: the cutting z of each level (mm; set by ``plan`` and by
+    :func:`.adaptive_clearing`); ``resolution_mm``: the pixel (mm; None: ``tp.info["resolution_mm"]``,
+    the planner's). A G0 at depth is a rapid whose start and end lie on one level's z.
 
     Two passes 1 mm apart (tool radius 1 mm), a feed link to the middle, then a G0 between them --
     or one 0.3 mm past the second pass:
 
     >>> from shapely.geometry import box
-    >>> from cnclab.toolpath.path import ToolPath
+    >>> from cnclab.toolpath.job import Job
+    >>> from cnclab.toolpath.path import Tool, ToolPath
+    >>> job = Job(box(0, 0, 10, 10), Tool(2.0), 60.0, 1.0, v_c=100, f_z=0.05)
     >>> cut = [[2, 2, 0], [2, 2, -1], [8, 2, -1], [8, 3, -1], [2, 3, -1]]
     >>> kind = ["rapid", "plunge", "cut", "cut", "cut", "link", "rapid"]
-    >>> tp = ToolPath.build(cut + [[3, 2.5, -1], [7, 2.5, -1]], kind=kind, feed=100)
-    >>> unproven_rapids(tp, box(0, 0, 10, 10), 1.0, 0.05, [-1.0])
+    >>> tp = ToolPath.build(cut + [[3, 2.5, -1], [7, 2.5, -1]], kind=kind, feed=100, info={"levels": [-1.0]})
+    >>> unproven_rapids(tp, job, 0.05)
     []
-    >>> tp = ToolPath.build(cut + [[3, 3.3, -1], [7, 3.3, -1]], kind=kind, feed=100)
-    >>> unproven_rapids(tp, box(0, 0, 10, 10), 1.0, 0.05, [-1.0])
+    >>> tp = ToolPath.build(cut + [[3, 3.3, -1], [7, 3.3, -1]], kind=kind, feed=100, info={"levels": [-1.0]})
+    >>> unproven_rapids(tp, job, 0.05)
     [6]
 
     A G0 back along the very line of a cut is not proven (its disc meets the pixels along the rim the
     cut swept only in part): the planner leaves a cut boundary by a short feed leg.
     """
-    h = float(resolution_mm)
-    r_rapid = tool_radius - h / math.sqrt(2.0)
-    r_capsule = tool_radius + h / math.sqrt(2.0) * (1 + 1e-9)
-    x0, y0, x1, y1 = pocket.bounds
-    m = 2 * h
-    x0, y0 = x0 - m, y0 - m
-    nx, ny = int(math.ceil((x1 - x0 + m) / h)), int(math.ceil((y1 - y0 + m) / h))
+    for key in ("levels",) + (("resolution_mm",) if resolution_mm is None else ()):
+        if key not in tp.info:
+            raise ValueError(f"unproven_rapids: the path's info has no {key!r} (plan() and adaptive_clearing "
+                             "set it; give resolution_mm for other paths)")
+    h = float(tp.info["resolution_mm"] if resolution_mm is None else resolution_mm)
+    r_rapid, r_capsule = rapid_radii(job.tool_radius, h)
+    x0, y0, nx, ny = stock_frame(job.polygon, h)
+    hole = job.start_hole
     P, K = tp.xyz, tp.kind
     bad = []
-    for z in levels:
-        M = raster(pocket, x0, y0, h, nx, ny)
-        if start_hole is not None:
-            cut_disc(M, x0, y0, h, start_hole[0], start_hole[1], 0.5 * start_hole[2] - h / math.sqrt(2.0), np.nan, np.nan)
+    for z in tp.info["levels"]:
+        M = raster(job.polygon, x0, y0, h, nx, ny)
+        if hole is not None:
+            cut_disc(M, x0, y0, h, hole[0], hole[1], 0.5 * hole[2] - h / math.sqrt(2.0), np.nan, np.nan)
         on = np.abs(P[:, 2] - z) < 1e-9
         for k in np.flatnonzero(on[1:]) + 1:
             a, b = P[k - 1], P[k]
@@ -73,16 +77,6 @@ def unproven_rapids(tp: ToolPath, pocket, tool_radius: float, resolution_mm: flo
                 continue
             if K[k] == _RAPID and not capsule_free(M, x0, y0, h, a[0], a[1], b[0], b[1], r_capsule):
                 bad.append(int(k))
-            _cut_segment(M, x0, y0, h, a, b, r_rapid)
+            # discs every h/2 along the move, both ends included
+            cut_path(M, x0, y0, h, np.ascontiguousarray(resample_polyline(np.array([a[:2], b[:2]]), 0.5 * h)), r_rapid)
     return bad
-
-
-def _cut_segment(M, x0, y0, h, a, b, rr):
-    """Discs of radius ``rr`` every h/2 along a -> b (both ends included)."""
-    L = math.hypot(b[0] - a[0], b[1] - a[1])
-    n = max(1, int(math.ceil(L / (0.5 * h))))
-    pcx = pcy = np.nan
-    for t in np.linspace(0.0, 1.0, n + 1):
-        cx, cy = a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])
-        cut_disc(M, x0, y0, h, cx, cy, rr, pcx, pcy)
-        pcx, pcy = cx, cy

@@ -21,6 +21,20 @@ def _union(a, b):
     return (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
 
 
+def stock_frame(pocket, h):
+    """(x0, y0, nx, ny): the pixel frame of a level's stocks, the pocket's box grown by 2 h (origin mm,
+    pixel counts; pixel centre ``x0 + (i + 0.5) h``)."""
+    x0, y0, x1, y1 = pocket.bounds
+    m = 2 * h
+    return x0 - m, y0 - m, int(math.ceil((x1 - x0 + 2 * m) / h)), int(math.ceil((y1 - y0 + 2 * m) / h))
+
+
+def rapid_radii(r, h):
+    """(r_rapid, r_capsule) mm of the rapid stock (see :class:`Grid`): its discs are cut with radius
+    r - h/sqrt(2), and a chord with no material pixel of it within r + h/sqrt(2) is a proven G0."""
+    return r - h / math.sqrt(2.0), r + h / math.sqrt(2.0) * (1 + 1e-9)
+
+
 class PassStep(NamedTuple):
     """How a pass steps (:func:`pass_kernel`'s settings that stay fixed for a plan): ``ds`` step (mm),
     ``lag`` the look-back of the engagement sampling (mm), ``n_samp`` samples on the arc, ``turn``
@@ -41,11 +55,7 @@ class Grid:
 
     def __init__(self, pocket, allowed, r, h, hole):
         self.r, self.h = r, h
-        x0, y0, x1, y1 = pocket.bounds
-        m = 2 * h
-        self.x0, self.y0 = x0 - m, y0 - m
-        self.nx = int(math.ceil((x1 - x0 + 2 * m) / h))
-        self.ny = int(math.ceil((y1 - y0 + 2 * m) / h))
+        self.x0, self.y0, self.nx, self.ny = stock_frame(pocket, h)
         self.M = raster(pocket, self.x0, self.y0, h, self.nx, self.ny)
         # tool-centre region shrunk by h/sqrt(2): every point of a pixel whose centre it holds (what
         # inside_mask accepts) is inside the true region (a further 1e-6: centres exactly on the shrunk
@@ -55,8 +65,7 @@ class Grid:
         # clear is within r - h/sqrt(2) of a disc centre, so every point within h/sqrt(2) of it (its
         # pixel) is truly swept: a chord with no material pixel of it within r + h/sqrt(2) is
         # clear in the exact geometry too, sub-pixel cusps between passes included
-        self.r_rapid = r - h / math.sqrt(2.0)
-        self.r_capsule = r + h / math.sqrt(2.0) * (1 + 1e-9)
+        self.r_rapid, self.r_capsule = rapid_radii(r, h)
         self.Mr = self.M.copy()
         if hole is not None:
             cut_disc(self.M, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2], np.nan, np.nan)

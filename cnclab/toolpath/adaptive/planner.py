@@ -524,7 +524,9 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
     ``link_feed_mm_min`` (mm/min), ``rapid_links``, ``clearance_z`` and ``top_z`` (mm),
     ``spindle_rpm`` and ``source`` (names the job in error messages). ``params``: the tuning
     constants (:class:`AdaptiveParams`, each field with its unit and reason); ``resolution_mm``
-    planning pixel (mm, None: r/60); ``step_mm`` path step (mm, None: r/30).
+    planning pixel (mm, None: r/60); ``step_mm`` path step (mm, None: r/30). The result's ``info``
+    holds ``resolution_mm`` and ``levels`` (the cutting z of each level, mm), what
+    :func:`.audit.unproven_rapids` reads.
     ``rapid_links``: the links at depth between passes (chords proven free of material on the rapid
     stock: no pixel of it within r + h/sqrt(2) of the chord, see Grid) are written as G0 marked
     ``cleared`` (the ToolPath column; as FreeCAD Adaptive's keep-tool-down links), else as G1 at ``link_feed_mm_min``.
@@ -613,7 +615,7 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
         raise PlanningError(f"{source}: nothing to machine" + "".join(f"; {q}" for q in dict.fromkeys(left_parts)))
     done = list(dict.fromkeys(narrow_done))        # the narrow regions cut by the trochoid (narrow.py)
     left = list(dict.fromkeys(left_parts))         # the parts left uncut (finish._leave_part; a clean-up round repeats them)
-    tp = b.build(**stats, plan_time_s=time.perf_counter() - t_start, narrow_regions=done, left_parts=left,
+    tp = b.build(**stats, plan_time_s=time.perf_counter() - t_start, narrow_regions=done, left_parts=left, levels=zlev,
                  notes=done + left)
     if tp.kind[0] != _RAPID:                     # the first move (from an unknown place) is a rapid
         tp.kind[0], tp.feed[0], tp.arc[0], tp.arc_center[0] = _RAPID, np.nan, 0, np.nan

@@ -110,8 +110,7 @@ def score_job(name: str, fast: bool | None = None) -> dict:
         out.update({a: r[a] for a in AXES}, note="; ".join(tp.info.get("warnings", [])))
         out["uncut_over_limit"] = bool(tp.info["uncut"]["over"])
         # the G0s at depth the written path does not prove clear (adaptive.audit; a sound plan: none)
-        out["g0_unproven"] = len(unproven_rapids(tp, jb.polygon, jb.tool_radius, tp.info["resolution_mm"],
-                                                 tp.info["levels"], jb.start_hole))
+        out["g0_unproven"] = len(unproven_rapids(tp, jb))
     except Exception as exc:       # noqa: BLE001 -- a refusal or a crash is a result of this benchmark
         out.update({a: math.nan for a in AXES}, note=f"{type(exc).__name__}: {str(exc)[:200]}")
     out.setdefault("uncut_over_limit", math.nan)

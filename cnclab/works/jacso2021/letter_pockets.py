@@ -79,8 +79,7 @@ def score(kind: str, D: float, w: float, L: float, theta: float) -> dict:
             "uncut_beyond_mm2": ev.uncut_beyond_unreachable_mm2, "narrow_regions": len(tp.info.get("narrow_regions", [])),
             "note": (tp.info.get("engagement_check") or {}).get("where", ""),
             # the G0s at depth the written path does not prove clear (adaptive.audit; a sound plan: none)
-            "g0_unproven": len(unproven_rapids(tp, jb.polygon, jb.tool_radius, tp.info["resolution_mm"],
-                                               tp.info["levels"], jb.start_hole))}
+            "g0_unproven": len(unproven_rapids(tp, jb))}
     row["ok_safe"] = bool(row["plunges"] == 0 and row["rapids_into_material"] == 0 and row["gouge_mm"] <= 1e-3
                           and row["g0_unproven"] == 0)
     row["ok_engagement"] = bool(row["p95_minus_theta"] <= 2 and row["max_minus_theta"] <= 10
