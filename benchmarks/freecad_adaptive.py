@@ -171,8 +171,12 @@ def freecad_available() -> bool:
         return False
 
 
-def job_spec(job) -> dict:
-    """Plain settings for the worker from a :class:`cnclab.toolpath.job.Job`."""
+def job_spec(job, stepover_scale: float = 1.0) -> dict:
+    """Plain settings for the worker from a :class:`cnclab.toolpath.job.Job`; ``stepover_scale``
+    multiplies FreeCAD's stepover (1: the job's a_e = r (1 - cos theta); below 1: FreeCAD held to the
+    engagement bounds, ``benchmarks/freecad_bounded.py``)."""
+    if not 0.0 < stepover_scale <= 1.0:
+        raise ValueError(f"stepover_scale must be in (0, 1], got {stepover_scale!r}")
     import shapely
     from shapely.geometry.polygon import orient
 
@@ -183,7 +187,7 @@ def job_spec(job) -> dict:
         rings.extend(shapely.get_coordinates(h).tolist() for h in poly.interiors)
     D = 2 * job.tool_radius
     a_e = job.tool_radius * (1 - math.cos(math.radians(job.theta_deg)))
-    return {"rings": rings, "tool_diameter": D, "stepover_pct": 100.0 * a_e / D, "a_p": job.a_p,
+    return {"rings": rings, "tool_diameter": D, "stepover_pct": 100.0 * a_e / D * stepover_scale, "stepover_scale": stepover_scale, "a_p": job.a_p,
             "depth": job.depth, "feed_mm_min": job.feed_mm_min, "entry_feed_mm_min": job.entry_feed, "spindle_rpm": job.spindle_rpm,
             "theta_deg": job.theta_deg, "source": _repo_relative(job.source)}
 
@@ -197,12 +201,12 @@ def _repo_relative(source: str) -> str:
         return str(source)
 
 
-def run_freecad(job, out_ngc, timeout_s: float = 600.0) -> dict:
+def run_freecad(job, out_ngc, timeout_s: float = 600.0, stepover_scale: float = 1.0) -> dict:
     """Run FreeCAD Adaptive on ``job``; write ``out_ngc``; return the worker's result (plan time s,
-    FreeCAD version) plus the settings and the command."""
+    FreeCAD version) plus the settings and the command. ``stepover_scale``: see :func:`job_spec`."""
     import tempfile
 
-    spec = job_spec(job)
+    spec = job_spec(job, stepover_scale)
     with tempfile.TemporaryDirectory() as tmp:
         sp = os.path.join(tmp, "spec.json")
         with open(sp, "w", encoding="utf-8") as fh:

@@ -67,3 +67,85 @@ def test_freecad_fixture_for_every_job(jobs):
         assert prov["job"] == f"data/pockets/corpus/{name}.json" and "plan_time_s" in prov
         assert Path(cc.FIXTURES / f"{name}.ngc").exists()
         assert prov["settings"]["tool_diameter"] == jobs[name].tool_diameter
+
+
+def test_bounded_freecad_fixtures_are_what_their_search_says(jobs):
+    """FreeCAD held to the engagement bounds (benchmarks/freecad_bounded.py): for every job a
+    provenance whose kept scale is the one its recorded search found (every coarse scale above it
+    failed the bounds, the kept one met them) and whose settings are the job's stepover times that
+    scale; or the reason there is none (FreeCAD writes nothing at the job's stepover, or no scale down
+    to the search's minimum meets the bounds: every scale tried failed)."""
+    kept = 0
+    for name in cc.job_names():
+        prov = json.loads((cc.FIXTURES_BOUNDED / f"{name}.json").read_text())
+        tried = {t["scale"]: t for t in prov["tried"]}
+        if "error" in prov:
+            assert not any(t.get("ok") for t in prov["tried"]), name
+            continue
+        s = prov["stepover_scale"]
+        assert tried[s]["ok"] and 0.5 <= s <= 1.0, name
+        assert cc.meets_bounds(jobs[name].theta_deg + tried[s]["p95_minus_theta_deg"],
+                               jobs[name].theta_deg + tried[s]["max_minus_theta_deg"],
+                               tried[s]["share_above_5_pct"], jobs[name].theta_deg), name
+        assert all(not t.get("ok") for k, t in tried.items() if k > s), name
+        nominal = 100.0 * jobs[name].a_e / jobs[name].tool_diameter
+        assert prov["settings"]["stepover_pct"] == pytest.approx(nominal * s, rel=1e-9), name
+        assert (cc.FIXTURES_BOUNDED / f"{name}.ngc").exists()
+        kept += 1
+    assert kept > 0
+
+
+def test_a_bounded_freecad_program_meets_the_bounds_when_measured_again(jobs):
+    """The committed program of a small job, measured now by the evaluator at the corpus resolution,
+    meets the bounds its provenance says it meets (a stale or hand-made fixture would not)."""
+    from cnclab.toolpath.evaluate import evaluate_engagement
+    from cnclab.works.jacso2021 import freecad_comparison as fx
+
+    name = "gear_0"
+    jb = jobs[name]
+    ev = evaluate_engagement(fx.freecad_path(name, jb.tool, cc.FIXTURES_BOUNDED), jb, cc.resolution_mm(jb, False))
+    prov = json.loads((cc.FIXTURES_BOUNDED / f"{name}.json").read_text())
+    t = {x["scale"]: x for x in prov["tried"]}[prov["stepover_scale"]]
+    assert cc.meets_bounds(ev.engagement_p95_deg, ev.engagement_max_deg, ev.share_above_5_pct, jb.theta_deg)
+    # the same numbers as recorded (the evaluator is deterministic; 1e-3 deg: the rounding in the file)
+    assert ev.engagement_max_deg - jb.theta_deg == pytest.approx(t["max_minus_theta_deg"], abs=1e-3)
+
+
+def test_freecad_job_spec_scales_only_the_stepover(jobs):
+    spec = importlib.util.spec_from_file_location("freecad_adaptive", REPO_ROOT / "benchmarks" / "freecad_adaptive.py")
+    fa = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fa)
+    jb = jobs["star_2"]
+    full, held = fa.job_spec(jb), fa.job_spec(jb, 0.8)
+    assert full["stepover_pct"] == pytest.approx(100.0 * jb.a_e / jb.tool_diameter, rel=1e-12)
+    assert held["stepover_pct"] == pytest.approx(0.8 * full["stepover_pct"], rel=1e-12)
+    assert {k: v for k, v in held.items() if not k.startswith("stepover")} == \
+        {k: v for k, v in full.items() if not k.startswith("stepover")}
+    for bad in (0.0, 1.2, -0.5):
+        with pytest.raises(ValueError, match="stepover_scale"):
+            fa.job_spec(jb, bad)
+
+
+def test_bounded_targets_count_by_hand():
+    """Three jobs, hand-counted: two programs faster than bounded FreeCAD's (ratio 0.5 and 1.0), one
+    slower (1.1); one job without a bounded program is left out; lifts and uncut compared per job."""
+    import math
+
+    import pandas as pd
+
+    df = pd.DataFrame({
+        "theta_deg": [60.0, 60.0, 60.0, 60.0], "engagement_max_deg": [65.0, 65.0, 65.0, 65.0],
+        "program_time_min": [1.0, 2.0, 1.1, 1.0], "program_time_min_fcb": [2.0, 2.0, 1.0, math.nan],
+        "lifts": [1, 3, 1, 1], "lifts_fcb": [1, 2, 1, math.nan],
+        "uncut_beyond_mm2": [1.0, 1.0, 2.0, 0.0], "uncut_beyond_mm2_fcb": [1.0, 0.6, 1.0, math.nan],
+        "engagement_p95_deg_fcb": [61.0, 62.0, 61.0, math.nan], "engagement_max_deg_fcb": [69.0, 70.0, 62.0, math.nan],
+        "share_above_5_pct_fcb": [0.1, 0.5, 0.0, math.nan]}, index=["a", "b", "c", "d"])
+    T = cc.bounded_targets(df)
+    assert T.loc["bounded FreeCAD meets the bounds (checked again here)", "measured"] == "3/3"
+    prog = T.loc["program time <= bounded FreeCAD's on >= 95 %"]
+    assert prog["measured"].startswith("66.7 % of 3 jobs") and "median ratio 1.000" in prog["measured"] and not prog["met"]
+    assert T.loc["program time <= 1.05 x bounded FreeCAD's on all", "measured"] == "worst 1.100 (c)"
+    assert T.loc["lifts <= bounded FreeCAD's on >= 95 %", "measured"].startswith("66.7 %")
+    # b: 1.0 <= 0.6 + 0.5; c: 2.0 > 1.0 + 0.5
+    assert T.loc["uncut <= bounded FreeCAD's + 0.5 mm^2 on >= 95 %", "measured"].startswith("66.7 %")
+    assert cc.bounded_targets(df.drop(columns="program_time_min_fcb")).empty

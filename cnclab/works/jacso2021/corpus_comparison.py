@@ -41,11 +41,14 @@ from ...toolpath.job import Job, load_job
 from . import freecad_comparison as fx
 
 __all__ = ["CORPUS", "FIXTURES", "RESULTS", "ROW_COLUMNS", "job_names", "job", "family", "resolution_mm",
-           "score_job", "family_table", "targets", "warm", "load_rows", "ratio_columns", "distribution_figure",
+           "score_job", "family_table", "targets", "bounded_targets", "meets_bounds", "FIXTURES_BOUNDED", "warm", "load_rows", "ratio_columns", "distribution_figure",
            "worst_cases"]
 
 CORPUS = REPO_ROOT / "data" / "pockets" / "corpus"
 FIXTURES = REPO_ROOT / "tests" / "fixtures" / "freecad" / "corpus"
+#: FreeCAD's programs held to the same engagement bounds (the largest stepover meeting them:
+#: ``benchmarks/freecad_bounded.py``), for the program time at equal engagement
+FIXTURES_BOUNDED = REPO_ROOT / "tests" / "fixtures" / "freecad" / "corpus_bounded"
 #: the committed rows of the last full run of benchmarks/bench_corpus.py (with its run notes in the .json)
 RESULTS = REPO_ROOT / "benchmarks" / "results" / "corpus_rows.csv"
 #: the axes of the comparison: planner column -> FreeCAD column is the same name + "_fc"
@@ -94,6 +97,27 @@ def _freecad(name: str, jb: Job, h: float) -> dict:
     return {a + "_fc": r[a] for a in AXES} | {"note_fc": ""}
 
 
+#: the axes compared with FreeCAD held to the bounds (suffix ``_fcb``)
+AXES_BOUNDED = ["engagement_p95_deg", "engagement_max_deg", "share_above_5_pct", "rapids_into_material", "lifts",
+                "uncut_beyond_mm2", "program_time_min", "machine_time_min"]
+
+
+def _freecad_bounded(name: str, jb: Job, h: float) -> dict:
+    """FreeCAD's program held to the engagement bounds (:data:`FIXTURES_BOUNDED`), scored as
+    :func:`_freecad` (suffix ``_fcb``) with its ``stepover_scale_fcb``; NaN and a note where there is none."""
+    nan = {a + "_fcb": math.nan for a in AXES_BOUNDED} | {"stepover_scale_fcb": math.nan}
+    prov_file = FIXTURES_BOUNDED / f"{name}.json"
+    if not prov_file.exists():
+        return nan | {"note_fcb": "no bounded FreeCAD fixture"}
+    prov = json.loads(prov_file.read_text(encoding="utf-8"))
+    if "error" in prov:
+        return nan | {"note_fcb": prov["error"][:120]}
+    fp = fx.freecad_path(name, jb.tool, FIXTURES_BOUNDED)
+    r = fx.row(evaluate(fp, jb, h), float(prov["plan_time_s"]), jb=jb)
+    return ({a + "_fcb": r[a] for a in AXES_BOUNDED} | {"stepover_scale_fcb": float(prov["stepover_scale"]),
+                                                           "note_fcb": ""})
+
+
 def score_job(name: str, fast: bool | None = None) -> dict:
     """One row of the corpus table for job ``name`` (see the module docstring); a job the planner
     refuses or fails on gets NaN planner columns and the reason in ``note``."""
@@ -119,13 +143,23 @@ def score_job(name: str, fast: bool | None = None) -> dict:
     th = jb.theta_deg
     out["ok_safe"] = bool(out["plunges_into_material"] == 0 and out["rapids_into_material"] == 0
                           and out["wall_gouge_mm"] <= 1e-3 and out["g0_unproven"] == 0) if out["note"][:5] != "Plann" else math.nan
-    out["ok_engagement"] = bool(out["engagement_p95_deg"] <= th + 2 and out["engagement_max_deg"] <= th + 10
-                                and out["share_above_5_pct"] <= 0.5)
+    out["ok_engagement"] = meets_bounds(out["engagement_p95_deg"], out["engagement_max_deg"], out["share_above_5_pct"], th)
+    out.update(_freecad_bounded(name, jb, h))
     return out
 
 
 def _ratio(df, a):
     return df[a] / df[a + "_fc"].replace(0.0, np.nan)
+
+
+def meets_bounds(p95_deg: float, max_deg: float, share_above_5_pct: float, theta_deg: float) -> bool:
+    """Issue 29's engagement bounds (deg, %): p95 <= theta + 2, max <= theta + 10, share above
+    theta + 5 <= 0.5 %.
+
+    >>> meets_bounds(61.9, 69.0, 0.4, 60.0), meets_bounds(62.1, 69.0, 0.4, 60.0)
+    (True, False)
+    """
+    return bool(p95_deg <= theta_deg + 2.0 and max_deg <= theta_deg + 10.0 and share_above_5_pct <= 0.5)
 
 
 def _machine_ratio(df):
@@ -198,6 +232,31 @@ def targets(df: pd.DataFrame) -> pd.DataFrame:
                      f"{int(ok.sum())}/{len(cb)} (FreeCAD planned {len(cb)} of {len(ch)}; "
                      f"ours {int(ch['engagement_max_deg'].notna().sum())})",
                      bool(len(cb) and ok.all())))
+    return pd.DataFrame(rows, columns=["target", "measured", "met"]).set_index("target")
+
+
+def bounded_targets(df: pd.DataFrame) -> pd.DataFrame:
+    """The program-time, lifts and uncut targets again against FreeCAD held to the same engagement
+    bounds (columns ``_fcb``, :data:`FIXTURES_BOUNDED`): beyond the issue's own targets (which compare
+    with FreeCAD at the job's stepover, where FreeCAD breaks the bounds), the comparison at equal
+    engagement. Over the jobs both planned and for which a bounded FreeCAD program exists (counted)."""
+    if "program_time_min_fcb" not in df:
+        return pd.DataFrame(columns=["target", "measured", "met"]).set_index("target")
+    both = df[df["engagement_max_deg"].notna() & df["program_time_min_fcb"].notna()]
+    nb = f"of {len(both)} jobs with a bounded FreeCAD program"
+    prog = both["program_time_min"] / both["program_time_min_fcb"]
+    lifts_ok = both["lifts"] <= both["lifts_fcb"]
+    uncut_ok = both["uncut_beyond_mm2"] <= both["uncut_beyond_mm2_fcb"] + 0.5
+    rows = [("bounded FreeCAD meets the bounds (checked again here)",
+             f"{int(sum(meets_bounds(*v) for v in both[['engagement_p95_deg_fcb', 'engagement_max_deg_fcb', 'share_above_5_pct_fcb', 'theta_deg']].to_numpy()))}/{len(both)}",
+             bool(all(meets_bounds(*v) for v in both[['engagement_p95_deg_fcb', 'engagement_max_deg_fcb', 'share_above_5_pct_fcb', 'theta_deg']].to_numpy()))),
+            ("program time <= bounded FreeCAD's on >= 95 %", f"{float((prog <= 1.0).mean() * 100):.1f} % {nb}; "
+             f"median ratio {float(prog.median()):.3f}", bool((prog <= 1.0).mean() >= 0.95)),
+            ("program time <= 1.05 x bounded FreeCAD's on all", f"worst {float(prog.max()):.3f} ({prog.idxmax() if len(prog) else '-'})",
+             bool((prog <= 1.05).all())),
+            ("lifts <= bounded FreeCAD's on >= 95 %", f"{float(lifts_ok.mean() * 100):.1f} % {nb}", bool(lifts_ok.mean() >= 0.95)),
+            ("uncut <= bounded FreeCAD's + 0.5 mm^2 on >= 95 %", f"{float(uncut_ok.mean() * 100):.1f} % {nb}",
+             bool(uncut_ok.mean() >= 0.95))]
     return pd.DataFrame(rows, columns=["target", "measured", "met"]).set_index("target")
 
 
