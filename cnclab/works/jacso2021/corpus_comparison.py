@@ -171,13 +171,15 @@ def _machine_ratio(df):
 
 def family_table(df: pd.DataFrame) -> pd.DataFrame:
     """Per family: jobs, planned, unsafe jobs, worst (max) engagement excess over theta (p95, max),
-    worst share above theta + 5, worst program-time and plan-time ratio to FreeCAD, worst lifts and
+    worst share above theta + 5, worst program-time and plan-time ratio to FreeCAD (and the median
+    program-time ratio to FreeCAD held to the bounds, :data:`FIXTURES_BOUNDED`), worst lifts and
     uncut excess over FreeCAD's (lifts - lifts_fc, uncut - uncut_fc in mm^2)."""
     d = df.copy()
     d["p95-θ"] = d["engagement_p95_deg"] - d["theta_deg"]
     d["max-θ"] = d["engagement_max_deg"] - d["theta_deg"]
     d["program ratio"] = _ratio(d, "program_time_min")
     d["machine ratio"] = _machine_ratio(d)
+    d["program ratio bounded"] = (d["program_time_min"] / d["program_time_min_fcb"]) if "program_time_min_fcb" in d else np.nan
     d["plan ratio"] = _ratio(d, "plan_time_s")
     d["lifts - FC"] = d["lifts"] - d["lifts_fc"]
     d["uncut - FC"] = d["uncut_beyond_mm2"] - d["uncut_beyond_mm2_fc"]
@@ -188,6 +190,7 @@ def family_table(df: pd.DataFrame) -> pd.DataFrame:
                       "worst p95-θ": g["p95-θ"].max(), "worst max-θ": g["max-θ"].max(),
                       "worst share>θ+5 %": g["share_above_5_pct"].max(), "worst program ratio": g["program ratio"].max(),
                       "median program ratio": g["program ratio"].median(),
+                      "median program ratio bounded FC": g["program ratio bounded"].median(),
                       "worst machine ratio": g["machine ratio"].max(), "worst plan ratio": g["plan ratio"].max(),
                       "worst lifts - FC": g["lifts - FC"].max(), "worst uncut - FC mm2": g["uncut - FC"].max()})
     return T
@@ -279,12 +282,15 @@ def ratio_columns(df: pd.DataFrame) -> pd.DataFrame:
                          "uncut - FC (mm²)": df["uncut_beyond_mm2"] - df["uncut_beyond_mm2_fc"],
                          "max - θ (deg)": df["engagement_max_deg"] - df["theta_deg"],
                          "max - θ FC (deg)": df["engagement_max_deg_fc"] - df["theta_deg"],
-                         "p95 - θ (deg)": df["engagement_p95_deg"] - df["theta_deg"]})
+                         "p95 - θ (deg)": df["engagement_p95_deg"] - df["theta_deg"],
+                         "program time / bounded FC": (df["program_time_min"] / df["program_time_min_fcb"]
+                                                       if "program_time_min_fcb" in df else np.nan)})
 
 
 #: the panels of :func:`distribution_figure`: column of :func:`ratio_columns`, target line, y scale
-PANELS = [("program time / FC", 1.0, "log"), ("lifts - FC", 0.0, "linear"), ("uncut - FC (mm²)", 0.5, "symlog"),
-          ("max - θ (deg)", 10.0, "linear"), ("p95 - θ (deg)", 2.0, "linear"), ("plan time / FC", 1.0, "log")]
+PANELS = [("program time / FC", 1.0, "log"), ("program time / bounded FC", 1.0, "log"), ("lifts - FC", 0.0, "linear"),
+          ("uncut - FC (mm²)", 0.5, "symlog"), ("max - θ (deg)", 10.0, "linear"), ("p95 - θ (deg)", 2.0, "linear"),
+          ("plan time / FC", 1.0, "log")]
 
 
 def distribution_figure(df: pd.DataFrame):
@@ -294,9 +300,13 @@ def distribution_figure(df: pd.DataFrame):
 
     R = ratio_columns(df)
     fams = sorted(R["family"].unique())
-    # three rows of two, the families labelled once under the bottom row: legible at a column width of 85 mm
-    fig, axs = plt.subplots(3, 2, figsize=figsize(1.5, 2.6), sharex=True, layout="constrained")
-    for ax, (col, target, yscale) in zip(axs.flat, PANELS):
+    panels = [p for p in PANELS if R[p[0]].notna().any()]   # rows of a run without bounded FreeCAD: no such panel
+    # rows of two, the families labelled once under the bottom row: legible at a column width of 85 mm
+    nrow = (len(panels) + 1) // 2
+    fig, axs = plt.subplots(nrow, 2, figsize=figsize(1.5, 0.95 * nrow), sharex=True, layout="constrained")
+    for ax in axs.flat[len(panels):]:
+        ax.set_visible(False)
+    for ax, (col, target, yscale) in zip(axs.flat, panels):
         for i, f in enumerate(fams):
             v = R.loc[R["family"] == f, col].dropna()
             ax.plot(i + np.linspace(-0.2, 0.2, len(v)) if len(v) > 1 else [i] * len(v), v, "o", ms=3, alpha=0.8)
@@ -306,14 +316,15 @@ def distribution_figure(df: pd.DataFrame):
         if yscale == "symlog":          # decades beyond the linear part only: -1, 0, 1 would overlap
             lo, hi = ax.get_ylim()
             ax.set_yticks([t for t in (-1e4, -1e3, -1e2, -10, 0, 10, 1e2, 1e3, 1e4) if lo <= t <= hi])
-    for ax in axs[-1]:
+    for ax in axs.flat[max(len(panels) - 2, 0):len(panels)]:      # the lowest panel of each column
         ax.set_xticks(range(len(fams)), fams, rotation=90, fontsize=6)
+        ax.xaxis.set_tick_params(labelbottom=True)
     return fig
 
 
 def worst_cases(df: pd.DataFrame, k: int = 3) -> pd.DataFrame:
     """The ``k`` worst jobs on each axis of :data:`PANELS` (largest value): axis, job, family, value."""
     R = ratio_columns(df)
-    rows = [(col, j, R.at[j, "family"], float(R.at[j, col])) for col, _, _ in PANELS
+    rows = [(col, j, R.at[j, "family"], float(R.at[j, col])) for col, _, _ in PANELS if R[col].notna().any()
             for j in R[col].dropna().sort_values(ascending=False).index[:k]]
     return pd.DataFrame(rows, columns=["axis", "job", "family", "value"])
