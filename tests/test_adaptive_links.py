@@ -235,3 +235,25 @@ def test_a_ramp_entry_leaves_no_wedge_for_a_g0():
         assert a[2] == pytest.approx(b[2]) and tp.is_kind("cut")[k + 1]        # the floor pass, at depth
         assert np.hypot(*(b[:2] - a[:2])) > 1.0
     assert unproven_rapids(tp, job) == []
+
+
+def test_a_finishing_lap_starts_where_the_tool_is():
+    # validation pocket 61:23 (bench_random_pockets.py, tests/fixtures/adaptive/random_pocket_61_23.json):
+    # a finishing lap's points near the wall are snapped onto it, and until 2026-11-26 its first point
+    # too -- where the tool already stood, the end of the link to the lap. The stocks were then cut
+    # at a point the tool never visits (0.074 mm off here) and a G0 proven on them, back to that lap
+    # start, met a rapid-stock pixel the written path leaves (the audit: 3 unproven G0s at depth).
+    # Now the first point stays: the lap's stocks are cut only where its written moves go
+    import json
+
+    from shapely.geometry import Polygon
+
+    from cnclab.paths import REPO_ROOT
+    from cnclab.toolpath.adaptive import adaptive_clearing
+
+    d = json.loads((REPO_ROOT / "tests" / "fixtures" / "adaptive" / "random_pocket_61_23.json").read_text())
+    job = Job(Polygon(d["exterior"], d["interiors"]), Tool(d["tool_diameter_mm"]), d["theta_deg"], d["a_p_mm"],
+              feed_mm_min=d["feed_mm_min"], spindle_rpm=d["spindle_rpm"], rapid_mm_min=d["rapid_mm_min"])
+    tp = adaptive_clearing(job)
+    assert _g0_at_depth(tp) > 50
+    assert unproven_rapids(tp, job) == []

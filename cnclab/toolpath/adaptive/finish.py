@@ -230,6 +230,9 @@ def _run_lap(lv, wall, Rl, L_ring):
     # (the grid mask is shrunk by h/sqrt(2) for safety: no skin is left on the walls)
     pp = shapely.points(P)
     near = shapely.distance(wall, pp) < lv.prm.finish_snap_band_h * lv.h
+    # not the first point: it is where the tool is (the lap's moves go to P[1:]); a snapped P[0] would
+    # cut the stocks where the tool never goes (up to 2 h off), and a G0 proven on them could graze
+    near[0] = False
     if near.any():
         # the nearest wall point (not locate + interpolate along the multi-ring wall: a
         # point nearest to a ring's closing vertex would land on the next ring's start)
