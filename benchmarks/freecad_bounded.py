@@ -108,12 +108,14 @@ def main(argv=None):
     ap.add_argument("jobs", nargs="*", help="job names (default: every corpus job with a FreeCAD fixture)")
     ap.add_argument("--min-scale", type=float, default=0.5, help="smallest stepover scale tried")
     a = ap.parse_args(argv)
-    if not freecad_available():
-        raise SystemExit("needs FreeCAD (apt-get install -y --no-install-recommends freecad)")
+    if not 0.0 < a.min_scale <= 1.0:
+        raise SystemExit(f"--min-scale must be in (0, 1] (a fraction of the job's stepover), got {a.min_scale!r}")
     names = a.jobs or cc.job_names()
     unknown = sorted(set(names) - set(cc.job_names()))
     if unknown:
-        raise SystemExit(f"unknown job(s) {unknown}")
+        raise SystemExit(f"unknown job(s) {unknown} (the jobs are the stems of {cc.CORPUS})")
+    if not freecad_available():
+        raise SystemExit("needs FreeCAD (apt-get install -y --no-install-recommends freecad)")
     t0 = time.perf_counter()
     for n in names:
         bounded(n, a.min_scale)

@@ -5,6 +5,7 @@ commit, licence) and the committed copy of the drawing is byte-identical to it (
 FreeCAD's committed program and provenance exist for every job."""
 import importlib.util
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -149,3 +150,17 @@ def test_bounded_targets_count_by_hand():
     # b: 1.0 <= 0.6 + 0.5; c: 2.0 > 1.0 + 0.5
     assert T.loc["uncut <= bounded FreeCAD's + 0.5 mm^2 on >= 95 %", "measured"].startswith("66.7 %")
     assert cc.bounded_targets(df.drop(columns="program_time_min_fcb")).empty
+
+
+@pytest.mark.parametrize("argv, says", [(["--min-scale", "2"], "--min-scale must be in (0, 1]"),
+                                        (["--min-scale", "0"], "--min-scale must be in (0, 1]"),
+                                        (["no_such_job"], "unknown job(s) ['no_such_job']")])
+def test_freecad_bounded_refuses_bad_arguments_before_running_anything(argv, says):
+    # a scale above 1 would write "no scale meets the bounds" over every fixture: refused up front
+    spec = importlib.util.spec_from_file_location("freecad_bounded", REPO_ROOT / "benchmarks" / "freecad_bounded.py")
+    fb = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fb)
+    before = {p.name: p.stat().st_mtime_ns for p in cc.FIXTURES_BOUNDED.iterdir()}
+    with pytest.raises(SystemExit, match=re.escape(says)):
+        fb.main(argv)
+    assert {p.name: p.stat().st_mtime_ns for p in cc.FIXTURES_BOUNDED.iterdir()} == before
