@@ -12,7 +12,12 @@ tool disc reaches past a wall or island, exact geometry along every move at dept
 time (s, as written at 10 m/min rapids) and plan time (s). A pocket the planner refuses is listed
 with its reason (a refusal is a clear error, never an unsafe program).
 
-    .venv/bin/python benchmarks/bench_random_pockets.py [--seed S] [--n N]
+    .venv/bin/python benchmarks/bench_random_pockets.py [--seed S] [--n N] [--via-plan]
+
+``--via-plan``: each pocket through :func:`cnclab.toolpath.planners.plan` (strategy ``adaptive``, what
+``python -m cnclab plan`` runs) instead of ``adaptive_clearing`` alone: its promise check re-plans a
+level beyond the engagement bounds with a tighter guard and refuses it, naming the place, when that
+fails too (counted as refused, with the reason); material left is allowed (``allow_uncut``).
 
 Targets of issue 16 checked per pocket (``ok``): the comparison notebook's
 (:func:`cnclab.works.jacso2021.freecad_comparison.engagement_targets`): p95 <= theta + 2, max <=
@@ -33,6 +38,7 @@ from shapely.geometry import Point, Polygon, box
 from shapely.ops import unary_union
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from cnclab.toolpath import planners  # noqa: E402
 from cnclab.toolpath.adaptive import PlanningError, adaptive_clearing, unproven_rapids  # noqa: E402
 from cnclab.toolpath.evaluate import evaluate  # noqa: E402
 from cnclab.toolpath.job import Job  # noqa: E402
@@ -74,6 +80,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--n", type=int, default=40)
+    ap.add_argument("--via-plan", action="store_true", help="plan through planners.plan (the CLI's path)")
     a = ap.parse_args(argv)
     rng = np.random.default_rng(a.seed)
     rows = []
@@ -88,8 +95,8 @@ def main(argv=None):
                   source=f"random {a.seed}:{it}")
         t0 = time.perf_counter()
         try:
-            tp = adaptive_clearing(job)
-        except PlanningError as e:
+            tp = planners.plan(job, "adaptive", None, allow_uncut=True) if a.via_plan else adaptive_clearing(job)
+        except (PlanningError, ValueError) as e:
             row["refused"] = str(e)
             rows.append(row)
             print(row["pocket"], "refused:", e, flush=True)
@@ -111,7 +118,7 @@ def main(argv=None):
     planned = df[df.get("refused").isna()] if "refused" in df else df
     print()
     print(df.drop(columns=[c for c in ("refused",) if c in df]).round(3).to_string())
-    print(f"\n== summary (seed {a.seed}): {len(planned)} planned, {len(df) - len(planned)} refused; "
+    print(f"\n== summary (seed {a.seed}{', through plan()' if a.via_plan else ''}): {len(planned)} planned, {len(df) - len(planned)} refused; "
           f"targets met on {int(planned['ok'].sum())}/{len(planned)}; max over theta {planned['max-theta'].max():.1f} deg, "
           f"max share above theta+5 {planned['share_above_5_pct'].max():.2f} %, plunges {int(planned['plunges'].sum())}, "
           f"rapids into material {int(planned['rapids_into'].sum())}, unproven G0s at depth "
