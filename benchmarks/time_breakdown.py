@@ -13,7 +13,15 @@ over its feed, rapids at the job's rapid rate) is put into one class:
 Beside the classes' ``total`` (length / feed), ``machine`` is the same path on the small-VMC machine
 model (``Evaluation.time_machine_s``: acceleration, corners; :mod:`cnclab.toolpath.motion`).
 
-Units: min. ``benchmarks/time_breakdown.py [--corpus] NAME ...`` prints one row per job (ours, FreeCAD).
+Per program also ``removed_mm2`` (the area the tool can reach, the pocket's opening by r, less the
+evaluator's uncut area beyond the unreachable corners) and ``cut_min_per_cm2`` (cutting time,
+``cut_theta + cut_low``, per cm^2 removed): at equal engagement the two programs' values would be
+equal; the ratio says how much of a program-time difference is the work done rather than the way.
+
+Units: min. ``benchmarks/time_breakdown.py [--corpus] NAME ...`` prints one row per job (ours, FreeCAD);
+``--corpus --all --csv PATH`` runs every corpus job FreeCAD planned and writes one row per job (the
+columns of both programs, suffixes ``_ours`` / ``_FC``) and prints the corpus sums and the median
+ratio of ``cut_min_per_cm2`` (the closing note of 2026-11-26 quotes that run).
 """
 from __future__ import annotations
 
@@ -53,6 +61,9 @@ def breakdown(ev, job) -> dict:
     out["machine"] = float(ev.time_machine_s) / 60.0
     out["air_feed_mm"] = float(L[cls == "air_feed"].sum())
     out["lifts"] = ev.retracts
+    reach = job.polygon.buffer(-job.tool_radius).buffer(job.tool_radius).area
+    out["removed_mm2"] = float(reach - ev.uncut_beyond_unreachable_mm2)
+    out["cut_min_per_cm2"] = (out["cut_theta"] + out["cut_low"]) / (out["removed_mm2"] / 100.0)
     return out
 
 
@@ -72,10 +83,34 @@ def run(name, corpus):
     return rows
 
 
+def corpus_table(path) -> pd.DataFrame:
+    """Every corpus job with a FreeCAD program: one row (both programs' columns); written to ``path``."""
+    from cnclab.fileio import atomic_write
+
+    rows = []
+    for n in cc.job_names():
+        R = run(n, True)
+        if "FC" not in R:
+            continue
+        rows.append({"job": n} | {f"{c}_{k}": v for k, r in R.items() for c, v in r.items() if c != "info"})
+    df = pd.DataFrame(rows).set_index("job")
+    atomic_write(Path(path), df.to_csv())
+    return df
+
+
 if __name__ == "__main__":
     corpus = "--corpus" in sys.argv
-    names = [a for a in sys.argv[1:] if not a.startswith("--")]
+    args = sys.argv[1:]
+    names = [a for i, a in enumerate(args) if not a.startswith("--") and (i == 0 or args[i - 1] != "--csv")]
     cc.warm()
+    if corpus and "--all" in args:
+        if "--csv" not in args or args.index("--csv") + 1 >= len(args):
+            raise SystemExit("--all needs --csv PATH")
+        df = corpus_table(args[args.index("--csv") + 1])
+        sums = {c: (round(float(df[c + "_ours"].sum()), 2), round(float(df[c + "_FC"].sum()), 2)) for c in CLASSES + ["total"]}
+        print("corpus sums (ours, FreeCAD), min:", sums)
+        print("median cut_min_per_cm2 ours / FreeCAD:", round(float((df["cut_min_per_cm2_ours"] / df["cut_min_per_cm2_FC"]).median()), 3))
+        sys.exit(0)
     for n in names:
         R = run(n, corpus)
         df = pd.DataFrame({k: {c: v for c, v in r.items() if c != "info"} for k, r in R.items()}).T
