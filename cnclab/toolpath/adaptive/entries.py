@@ -91,12 +91,8 @@ def enter(lv, banned=None):
         m_helix = lv.b.mark()
         pe = helix_entry(lv.b, c, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg)
         circ = c + rho * np.c_[np.cos(np.linspace(0, 2 * np.pi, 64)), np.sin(np.linspace(0, 2 * np.pi, 64))]
-        # the rapid stock cut along the written moves at the level's z (the floor circle's chords, h/2
-        # apart): its discs on the exact circle would clear the sagitta (<= 0.01 mm) outside the
-        # chords the tool runs, and prove G0s that graze it
-        xyz = lv.b.tail(m_helix)[0]
-        floor = xyz[np.abs(xyz[:, 2] - lv.z) < 1e-9, :2]
-        lv.g.cut_path(circ, np.ascontiguousarray(resample_polyline(floor, 0.5 * lv.h)))
+        # the rapid stock cut along the written moves at the level's z (the floor circle's chords)
+        lv.g.cut_path(circ, lv.written_floor(m_helix))
         lv.stats["entries"] += 1
         lv.cur = (float(pe[0]), float(pe[1]))
         if undo is not None and _idle_entry(lv, undo, rho, banned):

@@ -13,7 +13,6 @@ import shapely
 from shapely.geometry import LineString, Point
 
 from ..helix import helix_entry, helix_ring
-from ..path import resample_polyline
 from .control import GUARD_LEVEL, replay
 from .links import rapid_legs
 from .narrow import MOUTH_CANDIDATES, NarrowRegion, axis_trochoid, join_axis, spiral_out
@@ -151,11 +150,8 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
         b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
         m_helix = b.mark()
         pe = helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg, tag="entry: narrow region")
-        # the rapid stock along the written floor circle's chords (as entries.enter): discs on the exact
-        # circle would clear the sagitta outside the chords the tool runs
-        xyz = b.tail(m_helix)[0]
-        floor = np.ascontiguousarray(resample_polyline(xyz[np.abs(xyz[:, 2] - lv.z) < 1e-9, :2], 0.5 * lv.h))
-        lv.g.cut_path(helix_ring(c0, rho, 64), floor)
+        # the rapid stock along the written floor circle's chords (as entries.enter)
+        lv.g.cut_path(helix_ring(c0, rho, 64), lv.written_floor(m_helix))
         # the hole opened to the slot's width: a spiral out to radius c (radial pitch a_e / 2), a circle
         S = spiral_out(c0, rho, c_start, 0.5 * r * (1 - math.cos(math.radians(lv.theta_deg))), 2 * h,
                        start_rad=math.atan2(pe[1] - c0[1], pe[0] - c0[0]))

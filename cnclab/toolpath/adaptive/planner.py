@@ -53,6 +53,14 @@ class _Level:
         """An entry (:func:`.entries.enter`): True; False if none is left; None when banned."""
         return entries.enter(self, banned)
 
+    def written_floor(self, mark):
+        """The moves written since the builder ``mark`` at this level's z, as points every h/2 (n, 2) mm:
+        where the tool truly ran at depth. An entry cuts the rapid stock along them (its floor
+        circle's chords): discs on the exact circle would clear the sagitta outside the chords the
+        tool runs, and prove G0s that graze it."""
+        xyz = self.b.tail(mark)[0]
+        return np.ascontiguousarray(resample_polyline(xyz[np.abs(xyz[:, 2] - self.z) < 1e-9, :2], 0.5 * self.h))
+
     def clearing_pass(self, heading, a_stop):
         """A clearing pass from the tool's point (:meth:`Grid.run_pass`) with ``a_stop`` mm of air."""
         return self.g.run_pass(self.cur, heading, self.target, self.pass_step, self.prm.pass_max_steps, a_stop,
