@@ -39,6 +39,7 @@ from ...toolpath.adaptive import unproven_rapids
 from ...toolpath.evaluate import evaluate
 from ...toolpath.job import Job, load_job
 from . import freecad_comparison as fx
+from .freecad_comparison import meets_bounds
 
 __all__ = ["CORPUS", "FIXTURES", "RESULTS", "ROW_COLUMNS", "job_names", "job", "family", "resolution_mm",
            "score_job", "family_table", "targets", "bounded_targets", "meets_bounds", "FIXTURES_BOUNDED", "warm", "load_rows", "ratio_columns", "distribution_figure",
@@ -81,20 +82,27 @@ def resolution_mm(jb: Job, fast: bool | None = None) -> float:
     return h * (pick(1.0, 2.0) if fast is None else (2.0 if fast else 1.0))
 
 
-def _freecad(name: str, jb: Job, h: float) -> dict:
-    prov_file = FIXTURES / f"{name}.json"
+def _fixture_row(fixtures, name: str, jb: Job, h: float, missing_note: str, error_note) -> tuple:
+    """FreeCAD's committed program of job ``name`` in ``fixtures`` scored by :func:`fx.row`:
+    ``(row, provenance, "")``; ``(None, provenance or None, note)`` where there is no program to
+    score: ``missing_note`` (no fixture), ``error_note(message)`` (its provenance records a failure)
+    or that FreeCAD wrote no cutting motion (its plan time is then not a plan)."""
+    prov_file = fixtures / f"{name}.json"
     if not prov_file.exists():
-        return {a + "_fc": math.nan for a in AXES} | {"note_fc": "no FreeCAD fixture"}
+        return None, None, missing_note
     prov = json.loads(prov_file.read_text(encoding="utf-8"))
     if "error" in prov:
-        return {a + "_fc": math.nan for a in AXES} | {"note_fc": f"FreeCAD failed: {prov['error'][-120:]}"}
+        return None, prov, error_note(prov["error"])
     try:
-        fp = fx.freecad_path(name, jb.tool, FIXTURES)
-    except ValueError:        # FreeCAD planned nothing: no axis to compare (its plan time is not a plan)
-        return {a + "_fc": math.nan for a in AXES} | {
-            "note_fc": f"FreeCAD wrote no cutting motion ({prov['plan_time_s']:.2f} s)"}
-    r = fx.row(evaluate(fp, jb, h), float(prov["plan_time_s"]), jb=jb)
-    return {a + "_fc": r[a] for a in AXES} | {"note_fc": ""}
+        fp = fx.freecad_path(name, jb.tool, fixtures)
+    except ValueError:
+        return None, prov, f"FreeCAD wrote no cutting motion ({prov['plan_time_s']:.2f} s)"
+    return fx.row(evaluate(fp, jb, h), float(prov["plan_time_s"]), jb=jb), prov, ""
+
+
+def _freecad(name: str, jb: Job, h: float) -> dict:
+    r, _, note = _fixture_row(FIXTURES, name, jb, h, "no FreeCAD fixture", lambda e: f"FreeCAD failed: {e[-120:]}")
+    return {a + "_fc": math.nan if r is None else r[a] for a in AXES} | {"note_fc": note}
 
 
 #: the axes compared with FreeCAD held to the bounds (suffix ``_fcb``)
@@ -105,17 +113,9 @@ AXES_BOUNDED = ["engagement_p95_deg", "engagement_max_deg", "share_above_5_pct",
 def _freecad_bounded(name: str, jb: Job, h: float) -> dict:
     """FreeCAD's program held to the engagement bounds (:data:`FIXTURES_BOUNDED`), scored as
     :func:`_freecad` (suffix ``_fcb``) with its ``stepover_scale_fcb``; NaN and a note where there is none."""
-    nan = {a + "_fcb": math.nan for a in AXES_BOUNDED} | {"stepover_scale_fcb": math.nan}
-    prov_file = FIXTURES_BOUNDED / f"{name}.json"
-    if not prov_file.exists():
-        return nan | {"note_fcb": "no bounded FreeCAD fixture"}
-    prov = json.loads(prov_file.read_text(encoding="utf-8"))
-    if "error" in prov:
-        return nan | {"note_fcb": prov["error"][:120]}
-    fp = fx.freecad_path(name, jb.tool, FIXTURES_BOUNDED)
-    r = fx.row(evaluate(fp, jb, h), float(prov["plan_time_s"]), jb=jb)
-    return ({a + "_fcb": r[a] for a in AXES_BOUNDED} | {"stepover_scale_fcb": float(prov["stepover_scale"]),
-                                                           "note_fcb": ""})
+    r, prov, note = _fixture_row(FIXTURES_BOUNDED, name, jb, h, "no bounded FreeCAD fixture", lambda e: e[:120])
+    return ({a + "_fcb": math.nan if r is None else r[a] for a in AXES_BOUNDED}
+            | {"stepover_scale_fcb": math.nan if r is None else float(prov["stepover_scale"]), "note_fcb": note})
 
 
 def score_job(name: str, fast: bool | None = None) -> dict:
@@ -152,14 +152,11 @@ def _ratio(df, a):
     return df[a] / df[a + "_fc"].replace(0.0, np.nan)
 
 
-def meets_bounds(p95_deg: float, max_deg: float, share_above_5_pct: float, theta_deg: float) -> bool:
-    """Issue 29's engagement bounds (deg, %): p95 <= theta + 2, max <= theta + 10, share above
-    theta + 5 <= 0.5 %.
-
-    >>> meets_bounds(61.9, 69.0, 0.4, 60.0), meets_bounds(62.1, 69.0, 0.4, 60.0)
-    (True, False)
-    """
-    return bool(p95_deg <= theta_deg + 2.0 and max_deg <= theta_deg + 10.0 and share_above_5_pct <= 0.5)
+def _bounded_ratio(df):
+    """Program-time ratio to FreeCAD held to the bounds (NaN for rows without the ``_fcb`` columns)."""
+    if "program_time_min_fcb" not in df:
+        return pd.Series(np.nan, index=df.index)
+    return df["program_time_min"] / df["program_time_min_fcb"]
 
 
 def _machine_ratio(df):
@@ -179,7 +176,7 @@ def family_table(df: pd.DataFrame) -> pd.DataFrame:
     d["max-θ"] = d["engagement_max_deg"] - d["theta_deg"]
     d["program ratio"] = _ratio(d, "program_time_min")
     d["machine ratio"] = _machine_ratio(d)
-    d["program ratio bounded"] = (d["program_time_min"] / d["program_time_min_fcb"]) if "program_time_min_fcb" in d else np.nan
+    d["program ratio bounded"] = _bounded_ratio(d)
     d["plan ratio"] = _ratio(d, "plan_time_s")
     d["lifts - FC"] = d["lifts"] - d["lifts_fc"]
     d["uncut - FC"] = d["uncut_beyond_mm2"] - d["uncut_beyond_mm2_fc"]
@@ -247,12 +244,12 @@ def bounded_targets(df: pd.DataFrame) -> pd.DataFrame:
         return pd.DataFrame(columns=["target", "measured", "met"]).set_index("target")
     both = df[df["engagement_max_deg"].notna() & df["program_time_min_fcb"].notna()]
     nb = f"of {len(both)} jobs with a bounded FreeCAD program"
-    prog = both["program_time_min"] / both["program_time_min_fcb"]
+    prog = _bounded_ratio(both)
     lifts_ok = both["lifts"] <= both["lifts_fcb"]
     uncut_ok = both["uncut_beyond_mm2"] <= both["uncut_beyond_mm2_fcb"] + 0.5
-    rows = [("bounded FreeCAD meets the bounds (checked again here)",
-             f"{int(sum(meets_bounds(*v) for v in both[['engagement_p95_deg_fcb', 'engagement_max_deg_fcb', 'share_above_5_pct_fcb', 'theta_deg']].to_numpy()))}/{len(both)}",
-             bool(all(meets_bounds(*v) for v in both[['engagement_p95_deg_fcb', 'engagement_max_deg_fcb', 'share_above_5_pct_fcb', 'theta_deg']].to_numpy()))),
+    held = [meets_bounds(*v) for v in both[["engagement_p95_deg_fcb", "engagement_max_deg_fcb",
+                                            "share_above_5_pct_fcb", "theta_deg"]].to_numpy()]
+    rows = [("bounded FreeCAD meets the bounds (checked again here)", f"{sum(held)}/{len(both)}", all(held)),
             ("program time <= bounded FreeCAD's on >= 95 %", f"{float((prog <= 1.0).mean() * 100):.1f} % {nb}; "
              f"median ratio {float(prog.median()):.3f}", bool((prog <= 1.0).mean() >= 0.95)),
             ("program time <= 1.05 x bounded FreeCAD's on all", f"worst {float(prog.max()):.3f} ({prog.idxmax() if len(prog) else '-'})",
@@ -283,8 +280,7 @@ def ratio_columns(df: pd.DataFrame) -> pd.DataFrame:
                          "max - θ (deg)": df["engagement_max_deg"] - df["theta_deg"],
                          "max - θ FC (deg)": df["engagement_max_deg_fc"] - df["theta_deg"],
                          "p95 - θ (deg)": df["engagement_p95_deg"] - df["theta_deg"],
-                         "program time / bounded FC": (df["program_time_min"] / df["program_time_min_fcb"]
-                                                       if "program_time_min_fcb" in df else np.nan)})
+                         "program time / bounded FC": _bounded_ratio(df)})
 
 
 #: the panels of :func:`distribution_figure`: column of :func:`ratio_columns`, target line, y scale

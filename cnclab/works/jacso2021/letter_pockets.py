@@ -23,6 +23,7 @@ from ...toolpath.adaptive import unproven_rapids
 from ...toolpath.evaluate import evaluate
 from ...toolpath.job import Job
 from ...toolpath.path import Tool
+from .freecad_comparison import meets_bounds
 
 __all__ = ["LETTERS", "letter", "draw", "score"]
 
@@ -82,6 +83,5 @@ def score(kind: str, D: float, w: float, L: float, theta: float) -> dict:
             "g0_unproven": len(unproven_rapids(tp, jb))}
     row["ok_safe"] = bool(row["plunges"] == 0 and row["rapids_into_material"] == 0 and row["gouge_mm"] <= 1e-3
                           and row["g0_unproven"] == 0)
-    row["ok_engagement"] = bool(row["p95_minus_theta"] <= 2 and row["max_minus_theta"] <= 10
-                                and row["share_above_5_pct"] <= 0.5)
+    row["ok_engagement"] = meets_bounds(ev.engagement_p95_deg, ev.engagement_max_deg, ev.share_above_5_pct, theta)
     return row
