@@ -25,6 +25,7 @@ ratio of ``cut_min_per_cm2`` (the closing note of 2026-11-26 quotes that run).
 """
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 from pathlib import Path
@@ -98,21 +99,28 @@ def corpus_table(path) -> pd.DataFrame:
     return df
 
 
-if __name__ == "__main__":
-    corpus = "--corpus" in sys.argv
-    args = sys.argv[1:]
-    names = [a for i, a in enumerate(args) if not a.startswith("--") and (i == 0 or args[i - 1] != "--csv")]
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("jobs", nargs="*", help="pocket names (the comparison's, or the corpus's with --corpus)")
+    ap.add_argument("--corpus", action="store_true", help="the names are corpus jobs")
+    ap.add_argument("--all", action="store_true", help="every corpus job FreeCAD planned (with --corpus and --csv)")
+    ap.add_argument("--csv", help="with --all: the table's path")
+    a = ap.parse_args(argv)
+    if a.all and not (a.corpus and a.csv):
+        raise SystemExit("--all needs --corpus and --csv PATH")
     cc.warm()
-    if corpus and "--all" in args:
-        if "--csv" not in args or args.index("--csv") + 1 >= len(args):
-            raise SystemExit("--all needs --csv PATH")
-        df = corpus_table(args[args.index("--csv") + 1])
+    if a.all:
+        df = corpus_table(a.csv)
         sums = {c: (round(float(df[c + "_ours"].sum()), 2), round(float(df[c + "_FC"].sum()), 2)) for c in CLASSES + ["total"]}
         print("corpus sums (ours, FreeCAD), min:", sums)
         print("median cut_min_per_cm2 ours / FreeCAD:", round(float((df["cut_min_per_cm2_ours"] / df["cut_min_per_cm2_FC"]).median()), 3))
-        sys.exit(0)
-    for n in names:
-        R = run(n, corpus)
+        return
+    for n in a.jobs:
+        R = run(n, a.corpus)
         df = pd.DataFrame({k: {c: v for c, v in r.items() if c != "info"} for k, r in R.items()}).T
         print(f"== {n} {R['ours']['info']}")
         print(df.round(3).to_string(), flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -20,11 +20,16 @@ pytestmark = pytest.mark.xdist_group("test_corpus")
 CORPUS = REPO_ROOT / "data" / "pockets" / "corpus"
 
 
-def _generator():
-    spec = importlib.util.spec_from_file_location("make_corpus", CORPUS / "make_corpus.py")
+def _load(path):
+    """The module of the script ``path`` (the corpus generator, a benchmark), imported by its file."""
+    spec = importlib.util.spec_from_file_location(path.stem, path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def _generator():
+    return _load(CORPUS / "make_corpus.py")
 
 
 def test_corpus_is_the_frozen_generator_output():
@@ -113,9 +118,7 @@ def test_a_bounded_freecad_program_meets_the_bounds_when_measured_again(jobs):
 
 
 def test_freecad_job_spec_scales_only_the_stepover(jobs):
-    spec = importlib.util.spec_from_file_location("freecad_adaptive", REPO_ROOT / "benchmarks" / "freecad_adaptive.py")
-    fa = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(fa)
+    fa = _load(REPO_ROOT / "benchmarks" / "freecad_adaptive.py")
     jb = jobs["star_2"]
     full, held = fa.job_spec(jb), fa.job_spec(jb, 0.8)
     assert full["stepover_pct"] == pytest.approx(100.0 * jb.a_e / jb.tool_diameter, rel=1e-12)
@@ -157,9 +160,7 @@ def test_bounded_targets_count_by_hand():
                                         (["no_such_job"], "unknown job(s) ['no_such_job']")])
 def test_freecad_bounded_refuses_bad_arguments_before_running_anything(argv, says):
     # a scale above 1 would write "no scale meets the bounds" over every fixture: refused up front
-    spec = importlib.util.spec_from_file_location("freecad_bounded", REPO_ROOT / "benchmarks" / "freecad_bounded.py")
-    fb = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(fb)
+    fb = _load(REPO_ROOT / "benchmarks" / "freecad_bounded.py")
     before = {p.name: p.stat().st_mtime_ns for p in cc.FIXTURES_BOUNDED.iterdir()}
     with pytest.raises(SystemExit, match=re.escape(says)):
         fb.main(argv)
