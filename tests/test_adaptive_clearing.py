@@ -364,7 +364,9 @@ def test_deterministic_golden_program():
     other move the same within 0.5e-4 mm; rewritten so again when the passes began to start at the
     upstream end of their band and wall slivers were left to the finishing lap, issue 24; and when the
     join of a link's last G0 to its pass kept the link's feed leg off the cut boundary, which it had
-    dropped, writing a G0 from the boundary that no proof covered: 12 feed legs more): read back, every end point within its 4 written decimals
+    dropped, writing a G0 from the boundary that no proof covered: 12 feed legs more; and when the
+    free-space search's coarse cell of a small tool became r/10 (AdaptiveParams.coarse_cell_max_r; here
+    0.15 mm, it was one 0.05 mm pixel): the same 27 passes, 174 G0 link corners fewer): read back, every end point within its 4 written decimals
     (0.5e-4 mm), every motion word and feed the same. Any change of the planner's moves fails here
     (the writer's own changes, e.g. arc fitting, do not: the path's moves are compared); regenerate the
     file only for a change that is meant, and say so in the commit."""

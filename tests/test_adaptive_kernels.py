@@ -8,6 +8,7 @@ import math
 import types
 
 import numpy as np
+import pytest
 import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -320,3 +321,14 @@ def test_rapid_pieces_split_a_chord_into_proven_g0s_and_feed(seed, p, min_len):
         starts = [P] + [np.asarray(e) for e, _ in pieces[:-1]]
         assert any(fast and np.dot(m - s, Q - P) >= 0 and np.dot(np.asarray(e) - m, Q - P) >= 0
                    for s, (e, fast) in zip(starts, pieces))
+
+
+@pytest.mark.parametrize("r, h, k", [(1.5, 0.05, 3), (1.5, 0.025, 6), (2.0, 2.0 / 30, 3), (6.0, 0.1, 2), (6.0, 0.2, 1),
+                                     (0.5, 0.05, 1), (1.0, 0.03, 3)])
+def test_coarse_cell_is_a_tenth_of_r_or_0_2_mm(r, h, k):
+    # the free-space search's cell: about min(0.2 mm, r/10), a whole number of pixels, at least one
+    # (AdaptiveParams.coarse_cell_mm / coarse_cell_max_r); 0.5 mm tool radius at h 0.05: one pixel
+    pocket = box(0, 0, 12, 10)
+    g = Grid(pocket, pocket.buffer(-r), r, h, None)
+    assert g.k == k and g.hc == pytest.approx(k * h)
+    assert g.D.shape == g.Ac.shape == (g.ny // k, g.nx // k)

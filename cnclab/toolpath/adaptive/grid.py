@@ -53,7 +53,9 @@ class Grid:
     :meth:`free_field` recomputes the coarse field only in the window the change can affect. The field
     is capped at ``cap`` (mm): the planner only compares it with thresholds below ``cap``."""
 
-    def __init__(self, pocket, allowed, r, h, hole):
+    def __init__(self, pocket, allowed, r, h, hole, cell_mm=0.2, cell_max_r=0.1):
+        """``cell_mm``, ``cell_max_r``: the coarse cell is about ``min(cell_mm, cell_max_r r)`` mm, a whole
+        number of pixels (AdaptiveParams.coarse_cell_mm / coarse_cell_max_r)."""
         self.r, self.h = r, h
         self.x0, self.y0, self.nx, self.ny = stock_frame(pocket, h)
         self.M = raster(pocket, self.x0, self.y0, h, self.nx, self.ny)
@@ -71,7 +73,7 @@ class Grid:
             cut_disc(self.M, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2], np.nan, np.nan)
             cut_disc(self.Mr, self.x0, self.y0, h, hole[0], hole[1], 0.5 * hole[2] - h / math.sqrt(2.0), np.nan, np.nan)
         # coarse grid for the free-space search
-        self.k = max(1, int(round(0.2 / h))) if r >= 2 else 1
+        self.k = max(1, int(round(min(cell_mm, cell_max_r * r) / h)))
         self.hc = self.k * h
         self.Ac = self.coarse(self.A).min(axis=(1, 3)) > 0
         # each cell's distance to the region's boundary (mm: to the nearest cell outside it)

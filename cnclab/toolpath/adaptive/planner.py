@@ -613,7 +613,7 @@ def adaptive_clearing(job, params: AdaptiveParams = AdaptiveParams(), *, resolut
     cfg = {k: v for k, v in locals().items() if k not in ("lev", "z", "z_prev", "g")}
     for lev, z in enumerate(zlev):
         z_prev = top_z if lev == 0 else zlev[lev - 1]
-        g = Grid(pocket, allowed, r, h, hole)
+        g = Grid(pocket, allowed, r, h, hole, prm.coarse_cell_mm, prm.coarse_cell_max_r)
         if not g.A.any():
             raise PlanningError(f"{source}: the tool-centre region is thinner than the planning resolution "
                                 f"{h:g} mm: the pocket is too narrow for the tool")
