@@ -12,7 +12,13 @@ tool disc reaches past a wall or island, exact geometry along every move at dept
 time (s, as written at 10 m/min rapids) and plan time (s). A pocket the planner refuses is listed
 with its reason (a refusal is a clear error, never an unsafe program).
 
-    .venv/bin/python benchmarks/bench_random_pockets.py [--seed S] [--n N] [--via-plan]
+    .venv/bin/python benchmarks/bench_random_pockets.py [--seed S] [--n N] [--via-plan] [--radii 2,3,5]
+        [--param NAME=VALUE ...]
+
+``--radii``: the tool radii drawn from (mm; the same pockets and thetas for any list of three, the
+draw consumes the generator alike). ``--param``: an :class:`AdaptiveParams` field for every plan, for
+an ablation (``--radii 1,1.5,1.5 --param coarse_cell_max_r=1e-9`` is the one-pixel coarse cell of
+small tools before session 10).
 
 ``--via-plan``: each pocket through :func:`cnclab.toolpath.planners.plan` (strategy ``adaptive``, what
 ``python -m cnclab plan`` runs) instead of ``adaptive_clearing`` alone: its promise check re-plans a
@@ -28,6 +34,7 @@ Times are wall clock on a shared CPU: noisy.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -39,7 +46,7 @@ from shapely.ops import unary_union
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from cnclab.toolpath import planners  # noqa: E402
-from cnclab.toolpath.adaptive import PlanningError, adaptive_clearing, unproven_rapids  # noqa: E402
+from cnclab.toolpath.adaptive import AdaptiveParams, PlanningError, adaptive_clearing, unproven_rapids  # noqa: E402
 from cnclab.toolpath.evaluate import evaluate  # noqa: E402
 from cnclab.toolpath.job import Job  # noqa: E402
 from cnclab.toolpath.path import Tool  # noqa: E402
@@ -76,17 +83,42 @@ def random_pocket(rng):
     return P
 
 
+def _params(items):
+    """AdaptiveParams with the ``NAME=VALUE`` fields of ``items`` (SystemExit naming a bad one)."""
+    fields = {f.name: f.type for f in dataclasses.fields(AdaptiveParams)}
+    kw = {}
+    for it in items:
+        name, eq, val = it.partition("=")
+        if not eq or name not in fields:
+            raise SystemExit(f"--param {it!r}: NAME=VALUE with NAME an AdaptiveParams field")
+        try:
+            kw[name] = type(getattr(AdaptiveParams(), name))(float(val) if val not in ("True", "False") else val == "True")
+        except ValueError:
+            raise SystemExit(f"--param {it!r}: {val!r} is not a value of {name}") from None
+    return AdaptiveParams(**kw)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--n", type=int, default=40)
     ap.add_argument("--via-plan", action="store_true", help="plan through planners.plan (the CLI's path)")
+    ap.add_argument("--radii", default="2,3,5", help="tool radii to draw from, mm (comma-separated; default 2,3,5)")
+    ap.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                    help="an AdaptiveParams field for every plan (an ablation: the old rule against the new)")
     a = ap.parse_args(argv)
+    try:
+        radii = [float(v) for v in a.radii.split(",")]
+    except ValueError:
+        raise SystemExit(f"--radii: comma-separated radii in mm, got {a.radii!r}") from None
+    if not radii or min(radii) <= 0:
+        raise SystemExit(f"--radii: every radius must be > 0 mm, got {a.radii!r}")
+    prm = _params(a.param)
     rng = np.random.default_rng(a.seed)
     rows = []
     for it in range(a.n):
         P = random_pocket(rng)
-        r = float(rng.choice([2.0, 3.0, 5.0]))
+        r = float(rng.choice(radii))
         th = float(rng.choice([40.0, 60.0, 75.0]))
         if not P.is_valid or P.buffer(-r).is_empty:
             continue
@@ -95,7 +127,8 @@ def main(argv=None):
                   source=f"random {a.seed}:{it}")
         t0 = time.perf_counter()
         try:
-            tp = planners.plan(job, "adaptive", None, allow_uncut=True) if a.via_plan else adaptive_clearing(job)
+            tp = planners.plan(job, "adaptive", None, allow_uncut=True, params=prm) if a.via_plan \
+                else adaptive_clearing(job, prm)
         except (PlanningError, ValueError) as e:
             row["refused"] = str(e)
             rows.append(row)

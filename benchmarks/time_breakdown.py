@@ -61,7 +61,7 @@ def breakdown(ev, job) -> dict:
     out["total"] = float(t.sum())
     out["machine"] = float(ev.time_machine_s) / 60.0
     out["air_feed_mm"] = float(L[cls == "air_feed"].sum())
-    out["lifts"] = ev.retracts
+    out["lifts"] = fx.lifts(ev, job.top_z)     # rises from below the stock top (G0 or G1), as the corpus counts
     reach = job.polygon.buffer(-job.tool_radius).buffer(job.tool_radius).area
     out["removed_mm2"] = float(reach - ev.uncut_beyond_unreachable_mm2)
     out["cut_min_per_cm2"] = (out["cut_theta"] + out["cut_low"]) / (out["removed_mm2"] / 100.0)

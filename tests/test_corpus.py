@@ -165,3 +165,43 @@ def test_freecad_bounded_refuses_bad_arguments_before_running_anything(argv, say
     with pytest.raises(SystemExit, match=re.escape(says)):
         fb.main(argv)
     assert {p.name: p.stat().st_mtime_ns for p in cc.FIXTURES_BOUNDED.iterdir()} == before
+
+
+def test_time_breakdown_counts_by_hand():
+    # a 40 x 20 pocket: a plunge from the clearance plane to -2 at x=5, a 4 mm cut, a G0 lift, a G0 of
+    # 11 mm at clearance, a G0 down to 0.5 (air), a plunge to -2, a G1 retract. Two lifts from below the
+    # stock top, one by G0 and one by G1 (the column counted only G1 retracts before)
+    from shapely.geometry import box
+
+    from cnclab.toolpath.evaluate import evaluate
+    from cnclab.toolpath.job import Job
+    from cnclab.toolpath.path import Tool, ToolPath
+
+    tb = _load(REPO_ROOT / "benchmarks" / "time_breakdown.py")
+    jb = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.0, feed_mm_min=300, spindle_rpm=5000, rapid_mm_min=6000)
+    p = ToolPath.build([[5, 10, 5], [5, 10, -2], [9, 10, -2], [9, 10, 5], [20, 10, 5], [20, 10, 0.5], [20, 10, -2],
+                        [20, 10, 5]], kind=["rapid", "plunge", "cut", "rapid", "rapid", "rapid", "plunge", "retract"],
+                       feed=300)
+    out = tb.breakdown(evaluate(p, jb, 0.25), jb)
+    assert out["lifts"] == 2
+    # rapids: 7 + 11 + 4.5 mm at 6000 mm/min (the first positioning is move 0: no length); entries: 7 + 2.5 mm at 300
+    assert out["rapid"] == pytest.approx((7 + 11 + 4.5) / 6000, rel=1e-9)
+    assert out["entry"] == pytest.approx((7 + 2.5) / 300, rel=1e-9)
+    # the 4 mm cut and the 7 mm retract at feed 300: a cut into full material (slotting) is cut_theta,
+    # the retract (z going up, no material) air at feed
+    assert out["cut_theta"] + out["cut_low"] == pytest.approx(4 / 300, rel=1e-9)
+    assert out["air_feed"] == pytest.approx(7 / 300, rel=1e-9)
+    assert out["total"] == pytest.approx(sum(out[c] for c in tb.CLASSES), rel=1e-12)
+
+
+@pytest.mark.parametrize("argv, says", [(["--radii", "0,1.5"], "every radius must be > 0 mm"),
+                                        (["--radii", "1;2"], "comma-separated radii in mm"),
+                                        (["--param", "no_such_field=1"], "NAME an AdaptiveParams field"),
+                                        (["--param", "coarse_cell_max_r"], "NAME an AdaptiveParams field"),
+                                        (["--param", "coarse_cell_max_r=x"], "is not a value of coarse_cell_max_r")])
+def test_random_pocket_bench_refuses_bad_arguments(argv, says):
+    rp = _load(REPO_ROOT / "benchmarks" / "bench_random_pockets.py")
+    with pytest.raises(SystemExit, match=re.escape(says)):
+        rp.main(argv + ["--n", "0"])
+    assert rp._params(["coarse_cell_max_r=1e-9", "finish_resume_laps=3"]).coarse_cell_max_r == 1e-9
+    assert rp._params(["finish_resume_laps=3"]).finish_resume_laps == 3

@@ -167,6 +167,7 @@ class AdaptiveParams:
     #: 17 s); at r/10 they plan 3-9x faster, with equal or shorter programs (closing note of
     #: 2026-11-26, session 10)
     coarse_cell_mm: float = 0.2
+    #: fraction of r: the most the coarse cell may be (see ``coarse_cell_mm``)
     coarse_cell_max_r: float = 0.1
 
     # -- pass loop and narrow regions (helper "passes", issues 29/24: program time) ---------------
