@@ -54,8 +54,9 @@ Design (the ideas and where they come from; the code is cnclab's own)
   air, it is started once the other way round (the face at the end of a band lies behind it).
 * **Links** (Adaptive2d's ``keepToolDown`` linking through cleared area): the start of the next
   pass is found by a Dijkstra search over the cells whose tool disk is free of material (distance
-  field of the stock on a coarse grid, capped just above r and recomputed only in the window the
-  last change of the stock can reach) inside the tool-centre region, starting where the tool is;
+  field of the stock on a coarse grid of min(0.2 mm, r/10) cells, capped just above r and
+  recomputed only in the window the last change of the stock can reach) inside the tool-centre
+  region, starting where the tool is;
   the cell route is shortened to straight chords that stay in that free set and written as rapids
   at depth marked ``cleared`` (the ToolPath's proof column; FreeCAD writes its keep-tool-down links as G0 too; the evaluator
   counts any rapid that removes material) or, with ``rapid_links=False``, as feed moves (``link``,
