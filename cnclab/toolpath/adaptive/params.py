@@ -159,13 +159,11 @@ class AdaptiveParams:
     #: coarse cells: a cell is free when its distance to material is at least r + this many cells
     #: (the cell half-diagonal margin of the coarse grid)
     free_margin_hc: float = 0.75
-    #: mm and fraction of r: the coarse cell of the free-space search is about ``coarse_cell_mm``, and at
-    #: most ``coarse_cell_max_r`` r (a whole number of pixels, at least one). Its margin
-    #: (``free_margin_hc`` cells) then costs a link the same fraction of r for every tool. Small tools
-    #: had cells of one pixel (r/30 at the corpus resolution): 9x the cells of a D4 tool's grid, and
-    #: the Dijkstra searches and distance field took 60-80 % of the plan (star_1, islands_0: 4.5 and
-    #: 17 s); at r/10 they plan 3-9x faster, with equal or shorter programs (closing note of
-    #: 2026-11-26, session 10)
+    #: mm: the coarse cell of the free-space search is about ``min(coarse_cell_mm, coarse_cell_max_r r)``,
+    #: a whole number of pixels, at least one. Small tools (r < 2 mm) had cells of one pixel (r/30 at
+    #: the corpus resolution: 9x the cells of r/10), and the Dijkstra searches and the distance field
+    #: took 60-80 % of the plan (star_1, islands_0: 4.5 and 17 s); at r/10 they plan 3-9x faster, with
+    #: fewer passes and shorter programs (closing note of 2026-11-26, session 10)
     coarse_cell_mm: float = 0.2
     #: fraction of r: the most the coarse cell may be (see ``coarse_cell_mm``)
     coarse_cell_max_r: float = 0.1
