@@ -160,10 +160,12 @@ class AdaptiveParams:
     #: (the cell half-diagonal margin of the coarse grid)
     free_margin_hc: float = 0.75
     #: mm: the coarse cell of the free-space search is about ``min(coarse_cell_mm, coarse_cell_max_r r)``,
-    #: a whole number of pixels, at least one. Small tools (r < 2 mm) had cells of one pixel (r/30 at
-    #: the corpus resolution: 9x the cells of r/10), and the Dijkstra searches and the distance field
+    #: a whole number of pixels, at least one. Small tools (r < 2 mm) had cells of one pixel (r/60, the
+    #: pixel ``plan`` plans at: 36x the cells of r/10), and the Dijkstra searches and the distance field
     #: took 60-80 % of the plan (star_1, islands_0: 4.5 and 17 s); at r/10 they plan 3-9x faster, with
-    #: fewer passes and shorter programs (closing note of 2026-11-26, session 10)
+    #: fewer passes and shorter programs. r/20 (D4-D6 tools changed too) was worse on the corpus: uncut
+    #: <= FreeCAD's + 0.5 mm^2 on 91.9 % of the jobs, plan time 3.18 x FreeCAD's on the median job
+    #: (closing note of 2026-11-26, session 10)
     coarse_cell_mm: float = 0.2
     #: fraction of r: the most the coarse cell may be (see ``coarse_cell_mm``)
     coarse_cell_max_r: float = 0.1
