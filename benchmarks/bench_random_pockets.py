@@ -84,17 +84,30 @@ def random_pocket(rng):
 
 
 def _params(items):
-    """AdaptiveParams with the ``NAME=VALUE`` fields of ``items`` (SystemExit naming a bad one)."""
-    fields = {f.name: f.type for f in dataclasses.fields(AdaptiveParams)}
+    """AdaptiveParams with the ``NAME=VALUE`` fields of ``items`` (SystemExit naming a bad one): a
+    number field takes a number (an int field a whole one), a bool field True or False; a field
+    whose default is None or a tuple is not set from here."""
+    defaults = AdaptiveParams()
     kw = {}
     for it in items:
         name, eq, val = it.partition("=")
-        if not eq or name not in fields:
+        if not eq or not hasattr(defaults, name) or name.startswith("_"):
             raise SystemExit(f"--param {it!r}: NAME=VALUE with NAME an AdaptiveParams field")
+        kind = type(getattr(defaults, name))
+        if kind not in (bool, int, float):
+            raise SystemExit(f"--param {it!r}: {name} (default {getattr(defaults, name)!r}) is not set from the "
+                             "command line")
         try:
-            kw[name] = type(getattr(AdaptiveParams(), name))(float(val) if val not in ("True", "False") else val == "True")
+            if kind is bool:
+                if val not in ("True", "False"):
+                    raise ValueError(val)
+                kw[name] = val == "True"
+            elif kind is int:
+                kw[name] = int(val)
+            else:
+                kw[name] = float(val)
         except ValueError:
-            raise SystemExit(f"--param {it!r}: {val!r} is not a value of {name}") from None
+            raise SystemExit(f"--param {it!r}: {val!r} is not a value of {name} ({kind.__name__})") from None
     return AdaptiveParams(**kw)
 
 

@@ -198,10 +198,15 @@ def test_time_breakdown_counts_by_hand():
                                         (["--radii", "1;2"], "comma-separated radii in mm"),
                                         (["--param", "no_such_field=1"], "NAME an AdaptiveParams field"),
                                         (["--param", "coarse_cell_max_r"], "NAME an AdaptiveParams field"),
-                                        (["--param", "coarse_cell_max_r=x"], "is not a value of coarse_cell_max_r")])
+                                        (["--param", "coarse_cell_max_r=x"], "is not a value of coarse_cell_max_r"),
+                                        (["--param", "finish_resume_laps=2.5"], "is not a value of finish_resume_laps"),
+                                        (["--param", "finish=yes"], "is not a value of finish (bool)"),
+                                        (["--param", "rescue_turns_deg=30"], "is not set from the command line"),
+                                        (["--param", "narrow_check_margin_deg=4"], "is not set from the command line")])
 def test_random_pocket_bench_refuses_bad_arguments(argv, says):
     rp = _load(REPO_ROOT / "benchmarks" / "bench_random_pockets.py")
     with pytest.raises(SystemExit, match=re.escape(says)):
         rp.main(argv + ["--n", "0"])
     assert rp._params(["coarse_cell_max_r=1e-9", "finish_resume_laps=3"]).coarse_cell_max_r == 1e-9
     assert rp._params(["finish_resume_laps=3"]).finish_resume_laps == 3
+    assert rp._params(["finish=False"]).finish is False and rp._params([]) == rp.AdaptiveParams()
