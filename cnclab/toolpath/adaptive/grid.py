@@ -11,6 +11,7 @@ import numpy as np
 
 from .control import GUARD_LEVEL, pass_kernel, replay
 from .links import dijkstra
+from .params import AdaptiveParams
 from .stock import capsule_free, coarse_any, cut_disc, cut_path, dist_window, max_filter, raster
 
 
@@ -53,9 +54,10 @@ class Grid:
     :meth:`free_field` recomputes the coarse field only in the window the change can affect. The field
     is capped at ``cap`` (mm): the planner only compares it with thresholds below ``cap``."""
 
-    def __init__(self, pocket, allowed, r, h, hole, cell_mm=0.2, cell_max_r=0.1):
+    def __init__(self, pocket, allowed, r, h, hole, cell_mm=AdaptiveParams.coarse_cell_mm,
+                 cell_max_r=AdaptiveParams.coarse_cell_max_r):
         """``cell_mm``, ``cell_max_r``: the coarse cell is about ``min(cell_mm, cell_max_r r)`` mm, a whole
-        number of pixels (AdaptiveParams.coarse_cell_mm / coarse_cell_max_r)."""
+        number of pixels (AdaptiveParams.coarse_cell_mm / coarse_cell_max_r, their defaults)."""
         self.r, self.h = r, h
         self.x0, self.y0, self.nx, self.ny = stock_frame(pocket, h)
         self.M = raster(pocket, self.x0, self.y0, h, self.nx, self.ny)
