@@ -148,15 +148,16 @@ def score_job(name: str, fast: bool | None = None) -> dict:
     return out
 
 
-def _ratio(df, a):
-    return df[a] / df[a + "_fc"].replace(0.0, np.nan)
+def _ratio(df, a, suffix="_fc"):
+    """Column ``a`` over FreeCAD's (``a + suffix``; a zero there gives NaN)."""
+    return df[a] / df[a + suffix].replace(0.0, np.nan)
 
 
 def _bounded_ratio(df):
     """Program-time ratio to FreeCAD held to the bounds (NaN for rows without the ``_fcb`` columns)."""
     if "program_time_min_fcb" not in df:
         return pd.Series(np.nan, index=df.index)
-    return df["program_time_min"] / df["program_time_min_fcb"]
+    return _ratio(df, "program_time_min", "_fcb")
 
 
 def _machine_ratio(df):
