@@ -35,7 +35,7 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from cnclab.toolpath import planners  # noqa: E402
-from cnclab.toolpath.evaluate import evaluate  # noqa: E402
+from cnclab.toolpath.evaluate import evaluate, unreachable_region  # noqa: E402
 from cnclab.works.jacso2021 import corpus_comparison as cc  # noqa: E402
 from cnclab.works.jacso2021 import freecad_comparison as fx  # noqa: E402
 
@@ -62,7 +62,7 @@ def breakdown(ev, job) -> dict:
     out["machine"] = float(ev.time_machine_s) / 60.0
     out["air_feed_mm"] = float(L[cls == "air_feed"].sum())
     out["lifts"] = fx.lifts(ev, job.top_z)     # rises from below the stock top (G0 or G1), as the corpus counts
-    reach = job.polygon.buffer(-job.tool_radius).buffer(job.tool_radius).area
+    reach = job.polygon.area - unreachable_region(job.polygon, job.tool_radius).area   # the evaluator's opening
     out["removed_mm2"] = float(reach - ev.uncut_beyond_unreachable_mm2)
     out["cut_min_per_cm2"] = (out["cut_theta"] + out["cut_low"]) / (out["removed_mm2"] / 100.0)
     return out
