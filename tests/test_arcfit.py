@@ -174,3 +174,67 @@ def test_bench_pocket_programs_have_arcs_and_fewer_blocks_than_freecad(name):
     fc = read_gcode((fx.FIXTURES / f"{name}.ngc").read_text(encoding="utf-8")).moves
     assert any(m.motion in ("G2", "G3") for m in moves)
     assert len(moves) <= len(fc)
+
+
+def _wall_gouge_um(path: ToolPath, polygon, r: float, step: float = 0.002) -> float:
+    """Deepest reach (um) of the tool disc past the pocket wall, the path sampled every ``step`` mm
+    (between two samples 2 um apart along a wall the reach changes by far less than 0.01 um); samples
+    inside the pocket shrunk by r + 0.01 mm (a polygon inside the exact one) reach nowhere."""
+    import shapely
+    P = path.resample(step).xyz
+    P = P[~shapely.contains_xy(polygon.buffer(-(r + 0.01), 16), P[:, 0], P[:, 1])]
+    if not len(P):
+        return 0.0
+    d = shapely.distance(polygon.boundary, shapely.points(P[:, 0], P[:, 1]))
+    d = np.where(shapely.contains_xy(polygon, P[:, 0], P[:, 1]), d, -d)
+    return 1000.0 * float(np.maximum(r - d, 0.0).max())
+
+
+def _wall_pass(R, r, quarter_segments, spacing):
+    """A disc pocket drawn as a polygon (``quarter_segments`` per quarter circle, as a drawing's
+    arcs are) and the finishing pass a planner runs along it: the tool-centre boundary at exactly the
+    tool radius (the pocket buffered by -r), points every <= ``spacing`` mm, 2 mm below the top."""
+    from shapely.geometry import Point
+    pocket = Point(0, 0).buffer(R, quarter_segments)
+    ring = pocket.buffer(-r, 64).exterior.segmentize(spacing)
+    P = np.column_stack([np.asarray(ring.coords), np.full(len(ring.coords), -2.0)])
+    return pocket, ToolPath.build(P, kind=["rapid"] + ["cut"] * (len(P) - 1), feed=800)
+
+
+@given(st.floats(8, 25), st.floats(1, 5), st.integers(16, 128), st.floats(0.02, 0.3))
+@settings(max_examples=15, deadline=None)
+@example(R=20.0, r=3.0, quarter_segments=64, spacing=0.1)
+def test_a_wall_pass_is_not_fitted_into_the_wall(R, r, quarter_segments, spacing):
+    """The finishing pass along a polygonal round wall (it gouges 0 as planned), fitted with the
+    pocket's :class:`Walls`, reaches at most ``WALL_SLACK_MM`` + 0.1 um (the 4-decimal end and centre
+    rounding) past the wall, and stays within the fitting tolerance of the planned pass. Without the
+    walls the two-sided 0.005 mm fit bulges arcs over the polygon's flat sides into the wall (the
+    explicit example: 1.27 um; test_written_adaptive_program_does_not_gouge_more_than_the_plan
+    shows it on a planner's program)."""
+    from cnclab.nc.arcfit import WALL_SLACK_MM, Walls
+
+    pocket, path = _wall_pass(R, r, quarter_segments, spacing)
+    assert _wall_gouge_um(path, pocket, r) <= 0.01
+    fit = fit_arcs(path, walls=Walls(pocket, r))
+    assert _wall_gouge_um(fit, pocket, r) <= 1000 * WALL_SLACK_MM + 0.1
+    assert hausdorff(path, fit) <= DEFAULT_TOL_MM + STEP
+    if (R, r, quarter_segments, spacing) == (20.0, 3.0, 64, 0.1):
+        assert _wall_gouge_um(fit_arcs(path), pocket, r) > 1.0
+
+
+def test_written_adaptive_program_does_not_gouge_more_than_the_plan():
+    """Issue 29 target "0 wall/island gouges" on the program as written: the adaptive plan of the
+    two-islands bench pocket, written and read back, reaches at most WALL_SLACK_MM + 0.1 um further into
+    walls and islands than the planned path (sampled every STEP mm); written without the walls rule
+    (fit_arcs without ``walls``) it reaches more than 1 um further (4.6 um on islands_3 of the corpus)."""
+    from cnclab.nc.arcfit import WALL_SLACK_MM
+    from cnclab.toolpath.planners import plan
+    from cnclab.works.jacso2021 import freecad_comparison as fx
+
+    job = fx.job("two_islands_neck")
+    path = plan(job, "adaptive", fx.resolution_mm("two_islands_neck"))
+    back = read_toolpath(write_program(path, job), job.tool)
+    planned = _wall_gouge_um(path, job.polygon, job.tool_radius)
+    written = _wall_gouge_um(back, job.polygon, job.tool_radius)
+    assert written <= planned + 1000 * WALL_SLACK_MM + 0.1
+    assert _wall_gouge_um(fit_arcs(path), job.polygon, job.tool_radius) > written + 1.0

@@ -27,6 +27,15 @@ A piece is accepted only when, for every point and every chord of the replaced p
 Arcs have radius <= ``max_radius_mm`` (1 m; flatter runs are lines) and a chord of at least
 10 units of the last written digit.
 
+**Walls** (``walls``, a :class:`Walls`: the pocket, the tool radius, the stock top): the tolerance is
+two-sided, so a piece fitted to a pass that runs along a wall at exactly the tool radius could reach
+up to ``tol_mm`` into it (written programs gouged walls by up to 4.9 um before this rule). Below the
+stock top, every point and chord of the replaced polyline is therefore allowed a deviation of at most
+its own clearance from the walls and islands (``distance - r``, >= 0 on a path that does not gouge)
+plus ``Walls.slack_mm`` (0.5 um), capped by ``tol_mm``: away from walls the fit is unchanged, along
+them the written piece stays within ``slack_mm`` of the planned one (plus the rounding of the written
+coordinates, half a unit of the last digit per axis).
+
 >>> import numpy as np
 >>> from cnclab.toolpath.path import ToolPath
 >>> a = np.linspace(0, np.pi, 200)
@@ -43,13 +52,17 @@ import dataclasses
 import math
 
 import numpy as np
+import shapely
 
 from ..toolpath.path import KINDS, ToolPath
 
-__all__ = ["fit_arcs", "cleared_mask", "DEFAULT_TOL_MM", "MAX_RADIUS_MM"]
+__all__ = ["fit_arcs", "cleared_mask", "Walls", "DEFAULT_TOL_MM", "MAX_RADIUS_MM", "WALL_SLACK_MM"]
 
 #: default fitting tolerance [mm] (stated in every program header)
 DEFAULT_TOL_MM = 0.005
+#: deviation [mm] a fitted piece may add toward a wall or island beyond the planned path's own
+#: clearance (below the 1 um a corpus job counts as a gouge and the evaluator's 2 um event tolerance)
+WALL_SLACK_MM = 0.0005
 #: largest fitted arc radius [mm]; flatter runs are written as lines
 MAX_RADIUS_MM = 1000.0
 _MAX_SWEEP = 1.5 * math.pi     # at most 270 deg per arc block (centre well conditioned)
@@ -57,6 +70,52 @@ _MAX_STEP = 0.5 * math.pi      # a point may advance at most 90 deg along the ar
 _RAPID = KINDS.index("rapid")
 _LINK = KINDS.index("link")
 _FIXED = ("xyz", "arc", "arc_center")
+
+
+@dataclasses.dataclass(frozen=True)
+class Walls:
+    """The walls a fitted piece must not reach into: ``polygon`` (the pocket, islands as holes; mm),
+    the tool radius ``radius_mm`` and the stock top ``top_z`` (points at or above it are free).
+
+    >>> from shapely.geometry import box
+    >>> w = Walls(box(0, 0, 40, 20), 3.0)
+    >>> w.allowance(np.array([[20.0, 10, -1], [37.0, 10, -1], [37.0, 10, 1]]), 0.005).tolist()
+    [0.005, 0.0005, 0.005]
+    """
+    polygon: object
+    radius_mm: float
+    top_z: float = 0.0
+    slack_mm: float = WALL_SLACK_MM
+
+    @classmethod
+    def of_job(cls, job) -> "Walls | None":
+        """The walls of a pocket job (None for a job without a pocket polygon or tool radius)."""
+        poly, r = getattr(job, "polygon", None), getattr(job, "tool_radius", None)
+        if poly is None or r is None or poly.is_empty:
+            return None
+        return cls(poly, float(r), float(getattr(job, "top_z", 0.0) or 0.0))
+
+    def allowance(self, P: np.ndarray, tol: float) -> np.ndarray:
+        """Per point of ``P`` (n, 3) mm: the deviation a fitted piece may have there [mm],
+        ``min(tol, max(clearance, 0) + slack_mm)`` below the stock top, ``tol`` above it."""
+        P = np.asarray(P, float)
+        out = np.full(len(P), float(tol))
+        low = np.flatnonzero(P[:, 2] < self.top_z - 1e-9)
+        if low.size:
+            deep = self.polygon.buffer(-(self.radius_mm + 2 * tol), 64)   # inside: clearance >= tol (its 64-segment arcs: a margin of tol)
+            low = low[~shapely.contains_xy(deep, P[low, 0], P[low, 1])]
+        if low.size:
+            x, y = P[low, 0], P[low, 1]
+            d = shapely.distance(self.polygon.boundary, shapely.points(x, y))
+            d = np.where(shapely.contains_xy(self.polygon, x, y), d, -d)
+            out[low] = np.minimum(tol, np.maximum(d - self.radius_mm, 0.0) + self.slack_mm)
+        return out
+
+    def chord_allowance(self, P: np.ndarray, tol: float) -> np.ndarray:
+        """Per chord of the polyline ``P`` [mm]: the least allowance of its two ends and its middle."""
+        a = self.allowance(P, tol)
+        mid = self.allowance(0.5 * (P[1:] + P[:-1]), tol)
+        return np.minimum(np.minimum(a[1:], a[:-1]), mid)
 
 
 def cleared_mask(path: ToolPath) -> np.ndarray:
@@ -90,6 +149,9 @@ def _same_as_previous(cols: dict, n: int) -> np.ndarray:
 
 
 def _line_ok(P, i, j, tol):
+    """The line P[i] -> P[j] fits P[i..j]: every point within its tolerance (``tol`` per chord of
+    ``P``: a point gets the smaller of its two chords'; the line's distance to a chord is largest at
+    the chord's ends) and advancing along the line."""
     A, B = P[i], P[j]
     d = B - A
     dd = float(d @ d)
@@ -100,11 +162,14 @@ def _line_ok(P, i, j, tol):
     if np.any(np.diff(t) < -1e-12):
         return False
     perp = Q - t[:, None] * d
-    return bool(np.max(np.einsum("ij,ij->i", perp, perp)) <= tol * tol)
+    c = tol[i:j]
+    tp = np.minimum(np.r_[c[0], c], np.r_[c, c[-1]])
+    return bool(np.all(np.einsum("ij,ij->i", perp, perp) <= tp * tp))
 
 
 def _arc_fit(P, i, j, tol, grid, max_radius):
-    """``(code, cx, cy)`` of the arc through P[i] and P[j] that fits P[i..j], or None."""
+    """``(code, cx, cy)`` of the arc through P[i] and P[j] that fits P[i..j] (``tol`` [mm] per chord
+    of ``P``), or None."""
     Q = P[i:j + 1]
     A, B = Q[0], Q[-1]
     scale = 10.0 ** round(-math.log10(grid))
@@ -149,7 +214,8 @@ def _arc_fit(P, i, j, tol, grid, max_radius):
     rad = np.maximum(np.maximum(np.abs(dr[:-1]), np.abs(dr[1:])), inward)
     zmid = 0.5 * (Q[:-1, 2] + Q[1:, 2]) - (A[2] + (B[2] - A[2]) * 0.5 * (cum[:-1] + cum[1:]))
     zdev = np.maximum(np.maximum(np.abs(dz[:-1]), np.abs(dz[1:])), np.abs(zmid))
-    if float(np.max(rad * rad + zdev * zdev)) > tol * tol:
+    tc = tol[i:j]                                    # per chord
+    if np.any(rad * rad + zdev * zdev > tc * tc):
         return None
     return (3 if s > 0 else 2), float(c[0]), float(c[1])
 
@@ -187,7 +253,7 @@ def _longest(ok, n, first, max_span=4096):
 
 def _fit_run(P, tol, grid, max_radius, arcs=True):
     """Pieces ``[(end index in P, arc code 0/2/3, cx, cy), ...]`` covering the polyline ``P`` (lines
-    only unless ``arcs``)."""
+    only unless ``arcs``); ``tol`` [mm] per chord of ``P``."""
     n = len(P) - 1
     out = []
     i = 0
@@ -207,13 +273,17 @@ def _fit_run(P, tol, grid, max_radius, arcs=True):
 
 
 def fit_arcs(path: ToolPath, tol_mm: float = DEFAULT_TOL_MM, decimals: int = 4,
-             max_radius_mm: float = MAX_RADIUS_MM, rapid_arc_feed_mm_min: float | None = None) -> ToolPath:
+             max_radius_mm: float = MAX_RADIUS_MM, rapid_arc_feed_mm_min: float | None = None,
+             walls: Walls | None = None) -> ToolPath:
     """``path`` with runs of line moves replaced by fewer lines and G2/G3 arcs (see the module
     docstring) within ``tol_mm`` [mm] of the planned path, for a program written with ``decimals``
     digits [mm]. ``rapid_arc_feed_mm_min`` (default None: off): a run of G0 moves inside cleared
     area (:func:`cleared_mask`) may be fitted with arcs too; such an arc becomes a ``link`` move (a
     feed move through cleared area) at this feed [mm/min] — the rapid rate keeps the program's time
-    — because G0 cannot describe an arc; G0 pieces fitted as lines stay G0. ``info["arcfit"]`` records the tolerance and the move counts;
+    — because G0 cannot describe an arc; G0 pieces fitted as lines stay G0. ``walls`` (a
+    :class:`Walls`, e.g. ``Walls.of_job(job)``; default None): below the stock top a piece may deviate
+    toward a wall or island only by the planned path's clearance plus ``walls.slack_mm`` (module
+    docstring). ``info["arcfit"]`` records the tolerance and the move counts;
     ``info["arcfit_source"]`` the index of the original move each fitted move ends on.
 
     Raises ``ValueError`` for a tolerance not larger than two units of the last written digit.
@@ -228,6 +298,8 @@ def fit_arcs(path: ToolPath, tol_mm: float = DEFAULT_TOL_MM, decimals: int = 4,
         raise ValueError(f"max_radius_mm must be a finite number > 0 mm, got {max_radius_mm!r}")
     tol_fit = tol_mm - grid
     N = len(path)
+    tol_chord = (np.full(max(N - 1, 0), tol_fit) if walls is None or N < 2
+                 else walls.chord_allowance(path.xyz, tol_fit))     # tol_chord[m]: xyz[m] -> xyz[m + 1]
     cols = _columns(path)
     elig = path.arc == 0
     if N:
@@ -248,7 +320,8 @@ def fit_arcs(path: ToolPath, tol_mm: float = DEFAULT_TOL_MM, decimals: int = 4,
             k2 += 1
         rapid = path.kind[k] == _RAPID     # G0 runs: G0 lines, arcs only as links in cleared area
         arcs_ok = not rapid or (rapid_arc_feed_mm_min is not None and cleared[k])
-        for end, code, cx, cy in _fit_run(path.xyz[k - 1:k2 + 1], tol_fit, grid, max_radius_mm, arcs_ok):
+        for end, code, cx, cy in _fit_run(path.xyz[k - 1:k2 + 1], tol_chord[k - 1:k2], grid, max_radius_mm,
+                                         arcs_ok):
             keep.append(k - 1 + end); arc.append(code); ctr.append((cx, cy))
             if rapid and code:
                 to_link.append(len(keep) - 1)
@@ -260,7 +333,7 @@ def fit_arcs(path: ToolPath, tol_mm: float = DEFAULT_TOL_MM, decimals: int = 4,
         kw["feed"][to_link] = float(rapid_arc_feed_mm_min)
     info = {key: v for key, v in path.info.items()
             if not (isinstance(v, np.ndarray) and v.shape[:1] == (N,))}  # per-move info no longer aligned
-    info["arcfit"] = {"tol_mm": float(tol_mm), "moves_in": N, "moves_out": len(idx),
+    info["arcfit"] = {"tol_mm": float(tol_mm), "wall_slack_mm": None if walls is None else float(walls.slack_mm), "moves_in": N, "moves_out": len(idx),
                       "arcs": int(np.count_nonzero(np.asarray(arc) != 0))}
     info["arcfit_source"] = idx
     return dataclasses.replace(path, xyz=path.xyz[idx], arc=np.asarray(arc, np.int8),

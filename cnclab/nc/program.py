@@ -103,7 +103,7 @@ from .. import __version__
 from ..fileio import atomic_write
 from ..toolpath.job import ENTRY_FEED_FRACTION
 from ..toolpath.path import Move, ToolPath
-from .arcfit import DEFAULT_TOL_MM, fit_arcs
+from .arcfit import DEFAULT_TOL_MM, Walls, fit_arcs
 from .machine import machine_for_dialect, machine_time
 from .gcode import (MAX_COORD_MM, MAX_FEED_MM_MIN, MAX_SPINDLE_RPM, GcodeProgram,
                     parse_gcode, path_lengths, program_time, read_gcode, read_program_text)
@@ -266,10 +266,21 @@ def program_path(path: ToolPath, job=None, *, arc_tol_mm: float | None = DEFAULT
     cleared area as G2/G3 links at ``rapid_mm_min``). Its :meth:`~ToolPath.time_s` is the written
     program's time. ``values``: overrides of the job's numbers (see :func:`write_program`)."""
     setup = _setup(path, job, values)
-    return _program_path(path, setup, arc_tol_mm, decimals)[0]
+    return _program_path(path, setup, arc_tol_mm, decimals, job)[0]
 
 
-def _program_path(path: ToolPath, setup: _Setup, arc_tol_mm, decimals) -> tuple:
+def _walls(job, setup: _Setup) -> Walls | None:
+    """The walls the arc fit keeps off (:class:`cnclab.nc.arcfit.Walls`): the job's pocket with the
+    tool and stock top the program is written with; None without a pocket."""
+    walls = Walls.of_job(job)
+    tool = setup["tool"]
+    if walls is None:
+        return None
+    r = float(getattr(tool, "radius", walls.radius_mm)) if tool is not None else walls.radius_mm
+    return dataclasses.replace(walls, radius_mm=r, top_z=float(setup["top_z"] or 0.0))
+
+
+def _program_path(path: ToolPath, setup: _Setup, arc_tol_mm, decimals, job=None) -> tuple:
     notes = []
     entry = path.is_kind(*_ENTRY_KINDS)
     if entry.any():
@@ -283,8 +294,10 @@ def _program_path(path: ToolPath, setup: _Setup, arc_tol_mm, decimals) -> tuple:
         notes.append(f"no arc fitting: tolerance {arc_tol_mm:g} mm not above 2 units of the {decimals}-decimal output")
     elif arc_tol_mm is not None:
         rapid = setup["rapid_mm_min"]
-        path = fit_arcs(path, arc_tol_mm, decimals=decimals, rapid_arc_feed_mm_min=rapid)
+        walls = _walls(job, setup)
+        path = fit_arcs(path, arc_tol_mm, decimals=decimals, rapid_arc_feed_mm_min=rapid, walls=walls)
         notes.append(f"arcs fitted within {arc_tol_mm:g} mm of the planned path"
+                     + (f" ({walls.slack_mm:g} mm beyond its clearance toward walls and islands)" if walls else "")
                      + (f", curved G0 runs in cleared area as G2/G3 at F{rapid:g}" if rapid else ""))
     return path, notes
 
@@ -392,7 +405,7 @@ def write_program(path: ToolPath, job=None, *, out=None, inputs=(), dialect: str
     _check_setup(setup, dialect, decimals)
     clearance_z, spindle = float(setup["clearance_z"]), float(setup["spindle_rpm"])
     _check_rapids(path, clearance_z)
-    path, notes = _program_path(path, setup, arc_tol_mm, decimals)
+    path, notes = _program_path(path, setup, arc_tol_mm, decimals, job)
     _check_path_numbers(path, setup, decimals)
     _check_depth(path, job, setup, decimals)
     moves, comments = _program_moves(path, clearance_z, spindle, decimals)
