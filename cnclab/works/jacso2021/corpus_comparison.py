@@ -6,7 +6,11 @@ by ``data/pockets/corpus/make_corpus.py`` and is frozen. For every job the defau
 (``tests/fixtures/freecad/corpus/<job>.ngc``, same tool, stepover a_e = r (1 - cos theta) and feed;
 plan time from ``<job>.json``) are scored by the package's one evaluator on the job
 (:func:`cnclab.toolpath.evaluate.evaluate`) with the columns of
-:mod:`cnclab.works.jacso2021.freecad_comparison` (:func:`~.freecad_comparison.row`).
+:mod:`cnclab.works.jacso2021.freecad_comparison` (:func:`~.freecad_comparison.row`). Both are scored
+as **written programs**: the planner's path goes through the one program writer
+(:func:`cnclab.nc.program.write_program`: arcs fitted, approach and retract at the clearance plane)
+and is read back by the same G-code reader as FreeCAD's (:func:`cnclab.nc.gcode.read_toolpath`), so
+every column, the wall gouge included, is the program's a machine would run.
 
 Evaluation dixel: h = r / 30 clipped to [0.05, 0.2] mm (the same relative resolution for every
 tool; doubled in fast mode); the planner plans at the same h.
@@ -31,6 +35,8 @@ import time
 import numpy as np
 import pandas as pd
 
+from ...nc.gcode import read_toolpath
+from ...nc.program import write_program
 from ...paths import REPO_ROOT
 from ...plotting import figsize
 from ...runtime import pick
@@ -130,7 +136,8 @@ def score_job(name: str, fast: bool | None = None) -> dict:
         # what it leaves and an engagement beyond the promise are columns here (the warnings: the note)
         tp = planners.plan(jb, "adaptive", h, allow_uncut=True, allow_engagement_breach=True)
         t_plan = time.perf_counter() - t0
-        r = fx.row(evaluate(tp, jb, h), t_plan, jb=jb)
+        written = read_toolpath(write_program(tp, jb), tool=jb.tool)    # scored as written, as FreeCAD's
+        r = fx.row(evaluate(written, jb, h), t_plan, jb=jb)
         out.update({a: r[a] for a in AXES}, note="; ".join(tp.info.get("warnings", [])))
         out["uncut_over_limit"] = bool(tp.info["uncut"]["over"])
         # the G0s at depth the written path does not prove clear (adaptive.audit; a sound plan: none)

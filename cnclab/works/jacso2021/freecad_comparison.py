@@ -229,11 +229,18 @@ def engagement_targets(engagement_p95_deg, engagement_max_deg, share_above_5_pct
     >>> all(engagement_targets(41, 49, 0.2, 0.0, 0, 0, 0.0, theta_deg=40).values())
     True
     """
-    th = float(theta_deg)
-    return {"p95<=θ+2": bool(engagement_p95_deg <= th + 2), "share>θ+5<=0.5%": bool(share_above_5_pct <= 0.5),
-            "share>θ+15<=0.05%": bool(share_above_15_pct <= 0.05), "max<=θ+10": bool(engagement_max_deg <= th + 10),
+    b = _bounds(engagement_p95_deg, engagement_max_deg, share_above_5_pct, theta_deg)
+    return {"p95<=θ+2": b["p95"], "share>θ+5<=0.5%": b["share5"],
+            "share>θ+15<=0.05%": bool(share_above_15_pct <= 0.05), "max<=θ+10": b["max"],
             "no plunges": bool(plunges == 0), "no rapids in mat.": bool(rapids == 0),
             f"no gouge (<={gouge_tol_mm:g} mm)": bool(gouge_mm <= gouge_tol_mm)}
+
+
+def _bounds(p95_deg: float, max_deg: float, share_above_5_pct: float, theta_deg: float) -> dict:
+    """The three engagement bounds, written once: p95 <= theta + 2, max <= theta + 10 (deg), share
+    above theta + 5 <= 0.5 (%)."""
+    th = float(theta_deg)
+    return {"p95": bool(p95_deg <= th + 2.0), "max": bool(max_deg <= th + 10.0), "share5": bool(share_above_5_pct <= 0.5)}
 
 
 def meets_bounds(p95_deg: float, max_deg: float, share_above_5_pct: float, theta_deg: float) -> bool:
@@ -244,7 +251,7 @@ def meets_bounds(p95_deg: float, max_deg: float, share_above_5_pct: float, theta
     >>> meets_bounds(61.9, 69.0, 0.4, 60.0), meets_bounds(62.1, 69.0, 0.4, 60.0)
     (True, False)
     """
-    return bool(p95_deg <= theta_deg + 2.0 and max_deg <= theta_deg + 10.0 and share_above_5_pct <= 0.5)
+    return all(_bounds(p95_deg, max_deg, share_above_5_pct, theta_deg).values())
 
 
 def targets(t: pd.DataFrame, theta_deg: float, ours: str = "adaptive_clearing", gouge_tol_mm: float = 0.05) -> dict:
