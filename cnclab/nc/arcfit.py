@@ -30,10 +30,13 @@ Arcs have radius <= ``max_radius_mm`` (1 m; flatter runs are lines) and a chord 
 **Walls** (``walls``, a :class:`Walls`: the pocket, the tool radius, the stock top): the tolerance is
 two-sided, so a piece fitted to a pass that runs along a wall at exactly the tool radius could reach
 up to ``tol_mm`` into it (written programs gouged walls by up to 4.9 um before this rule). Below the
-stock top, every point and chord of the replaced polyline is therefore allowed a deviation of at most
-its own clearance from the walls and islands (``distance - r``, >= 0 on a path that does not gouge)
-plus ``Walls.slack_mm`` (0.5 um), capped by ``tol_mm``: away from walls the fit is unchanged, along
-them the written piece stays within ``slack_mm`` of the planned one (plus the rounding of the written
+stock top, every point and chord of the replaced polyline with clearance ``c`` from the walls and
+islands (``distance - r``, >= 0 on a path that does not gouge) is therefore allowed a deviation of
+at most ``max(c - tol_mm, 0) + Walls.slack_mm`` (0.5 um), capped by ``tol_mm``: a point within
+``tol_mm`` of a wall (a finishing lap) keeps within 0.5 um of the plan both ways — toward the wall it
+would gouge, away from it it would leave the sliver it was planned to take (spiral_0 of the corpus
+left 0.037 mm^2 more at a rule of ``c + slack``) — and away from walls the fit is unchanged. The
+written piece then reaches at most ``slack_mm`` past the wall (plus the rounding of the written
 coordinates, half a unit of the last digit per axis).
 
 >>> import numpy as np
@@ -97,18 +100,18 @@ class Walls:
 
     def allowance(self, P: np.ndarray, tol: float) -> np.ndarray:
         """Per point of ``P`` (n, 3) mm: the deviation a fitted piece may have there [mm],
-        ``min(tol, max(clearance, 0) + slack_mm)`` below the stock top, ``tol`` above it."""
+        ``min(tol, max(clearance - tol, 0) + slack_mm)`` below the stock top, ``tol`` above it."""
         P = np.asarray(P, float)
         out = np.full(len(P), float(tol))
         low = np.flatnonzero(P[:, 2] < self.top_z - 1e-9)
         if low.size:
-            deep = self.polygon.buffer(-(self.radius_mm + 2 * tol), 64)   # inside: clearance >= tol (its 64-segment arcs: a margin of tol)
+            deep = self.polygon.buffer(-(self.radius_mm + 3 * tol), 64)   # inside: clearance >= 2 tol (its 64-segment arcs: a margin of tol)
             low = low[~shapely.contains_xy(deep, P[low, 0], P[low, 1])]
         if low.size:
             x, y = P[low, 0], P[low, 1]
             d = shapely.distance(self.polygon.boundary, shapely.points(x, y))
             d = np.where(shapely.contains_xy(self.polygon, x, y), d, -d)
-            out[low] = np.minimum(tol, np.maximum(d - self.radius_mm, 0.0) + self.slack_mm)
+            out[low] = np.minimum(tol, np.maximum(d - self.radius_mm - tol, 0.0) + self.slack_mm)
         return out
 
     def chord_allowance(self, P: np.ndarray, tol: float) -> np.ndarray:
@@ -281,9 +284,9 @@ def fit_arcs(path: ToolPath, tol_mm: float = DEFAULT_TOL_MM, decimals: int = 4,
     area (:func:`cleared_mask`) may be fitted with arcs too; such an arc becomes a ``link`` move (a
     feed move through cleared area) at this feed [mm/min] — the rapid rate keeps the program's time
     — because G0 cannot describe an arc; G0 pieces fitted as lines stay G0. ``walls`` (a
-    :class:`Walls`, e.g. ``Walls.of_job(job)``; default None): below the stock top a piece may deviate
-    toward a wall or island only by the planned path's clearance plus ``walls.slack_mm`` (module
-    docstring). ``info["arcfit"]`` records the tolerance and the move counts;
+    :class:`Walls`, e.g. ``Walls.of_job(job)``; default None): below the stock top a point within
+    ``tol_mm`` of a wall or island may move by ``walls.slack_mm`` only, farther ones by their clearance
+    less ``tol_mm`` plus it (:meth:`Walls.allowance`, module docstring). ``info["arcfit"]`` records the tolerance and the move counts;
     ``info["arcfit_source"]`` the index of the original move each fitted move ends on.
 
     Raises ``ValueError`` for a tolerance not larger than two units of the last written digit.
