@@ -28,7 +28,9 @@ fails too (counted as refused, with the reason); material left is allowed (``all
 Targets of issue 16 checked per pocket (``ok``): the comparison notebook's
 (:func:`cnclab.works.jacso2021.freecad_comparison.engagement_targets`): p95 <= theta + 2, max <=
 theta + 10, share above theta + 5 <= 0.5 % and above theta + 15 <= 0.05 %, zero plunges and rapids
-into material, no wall gouge (<= 1e-3 mm, the finishing snap's tolerance).
+into material, no wall gouge (<= 1e-3 mm, the finishing snap's tolerance). Since 2026-11-26 (session
+11) every pocket is scored as written (:func:`cnclab.works.jacso2021.freecad_comparison.as_written`:
+the program the writer writes, read back), as the corpus is; earlier seeds were scored on the path.
 Times are wall clock on a shared CPU: noisy.
 """
 from __future__ import annotations
@@ -50,7 +52,7 @@ from cnclab.toolpath.adaptive import AdaptiveParams, PlanningError, adaptive_cle
 from cnclab.toolpath.evaluate import evaluate  # noqa: E402
 from cnclab.toolpath.job import Job  # noqa: E402
 from cnclab.toolpath.path import Tool  # noqa: E402
-from cnclab.works.jacso2021.freecad_comparison import engagement_targets  # noqa: E402
+from cnclab.works.jacso2021.freecad_comparison import as_written, engagement_targets  # noqa: E402
 
 
 def random_pocket(rng):
@@ -148,7 +150,7 @@ def main(argv=None):
             print(row["pocket"], "refused:", e, flush=True)
             continue
         row["plan_s"] = time.perf_counter() - t0
-        ev = evaluate(tp, job, 0.05 if P.area < 2500 else 0.1)
+        ev = evaluate(as_written(tp, job), job, 0.05 if P.area < 2500 else 0.1)    # scored as written
         row.update({"p95-theta": ev.engagement_p95_deg - th, "max-theta": ev.engagement_max_deg - th,
                     "share_above_5_pct": ev.share_above_5_pct, "entries": tp.info["entries"],
                     "plunges": ev.plunges_into_material, "rapids_into": ev.rapids_into_material,

@@ -36,8 +36,6 @@ import numpy as np
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from cnclab.nc.gcode import read_toolpath  # noqa: E402
-from cnclab.nc.program import write_program  # noqa: E402
 from cnclab.toolpath import planners  # noqa: E402
 from cnclab.toolpath.evaluate import evaluate, unreachable_region  # noqa: E402
 from cnclab.works.jacso2021 import corpus_comparison as cc  # noqa: E402
@@ -79,8 +77,7 @@ def run(name, corpus):
     t0 = time.perf_counter()
     tp = planners.plan(jb, "adaptive", h, allow_uncut=True)
     t_plan = time.perf_counter() - t0
-    written = read_toolpath(write_program(tp, jb), tool=jb.tool)    # timed as written, as FreeCAD's
-    rows = {"ours": breakdown(evaluate(written, jb, h), jb) | {"plan_s": t_plan, "info": {k: tp.info.get(k) for k in (
+    rows = {"ours": breakdown(evaluate(fx.as_written(tp, jb), jb, h), jb) | {"plan_s": t_plan, "info": {k: tp.info.get(k) for k in (
         "passes", "entries", "links", "remnant_sweeps", "clean_rounds")}}}
     try:
         fp = fx.freecad_path(name, jb.tool, cc.FIXTURES if corpus else fx.FIXTURES)

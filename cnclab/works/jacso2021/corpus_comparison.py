@@ -35,8 +35,6 @@ import time
 import numpy as np
 import pandas as pd
 
-from ...nc.gcode import read_toolpath
-from ...nc.program import write_program
 from ...paths import REPO_ROOT
 from ...plotting import figsize
 from ...runtime import pick
@@ -136,8 +134,7 @@ def score_job(name: str, fast: bool | None = None) -> dict:
         # what it leaves and an engagement beyond the promise are columns here (the warnings: the note)
         tp = planners.plan(jb, "adaptive", h, allow_uncut=True, allow_engagement_breach=True)
         t_plan = time.perf_counter() - t0
-        written = read_toolpath(write_program(tp, jb), tool=jb.tool)    # scored as written, as FreeCAD's
-        r = fx.row(evaluate(written, jb, h), t_plan, jb=jb)
+        r = fx.row(evaluate(fx.as_written(tp, jb), jb, h), t_plan, jb=jb)    # scored as written, as FreeCAD's
         out.update({a: r[a] for a in AXES}, note="; ".join(tp.info.get("warnings", [])))
         out["uncut_over_limit"] = bool(tp.info["uncut"]["over"])
         # the G0s at depth the written path does not prove clear (adaptive.audit; a sound plan: none)

@@ -47,6 +47,7 @@ from shapely.geometry import box
 
 from ...cutting.feed_control import controlled_feed
 from ...nc.gcode import read_toolpath
+from ...nc.program import write_program
 from ...paths import REPO_ROOT
 from ...runtime import pick
 from ...toolpath import planners
@@ -57,7 +58,7 @@ from ...toolpath.path import KINDS, Tool, ToolPath
 
 __all__ = ["POCKETS", "FIXTURES", "COLUMNS", "PLANNER_ROWS", "FREECAD", "job", "resolution_mm",
            "freecad_path", "freecad_plan_time_s", "plan_timed", "feed_controlled", "wall_gouge_mm", "lifts", "row",
-           "comparison", "ratios", "warm_planners", "summary", "engagement_targets", "meets_bounds"]
+           "comparison", "ratios", "warm_planners", "summary", "engagement_targets", "meets_bounds", "as_written"]
 
 #: the pockets of the comparison: name -> job file (relative to the repository)
 POCKETS = {
@@ -98,6 +99,14 @@ def resolution_mm(name: str, fast: bool | None = None) -> float:
     if fast is None:
         return pick(full, 2 * full)
     return 2 * full if fast else full
+
+
+def as_written(path: ToolPath, jb: Job) -> ToolPath:
+    """``path`` as the program a machine runs: written by :func:`cnclab.nc.program.write_program`
+    (arcs fitted off the walls, approach and retract at the clearance plane, 4 decimals) and read
+    back by the reader of FreeCAD's programs (:func:`cnclab.nc.gcode.read_toolpath`), so that a
+    planner's path and a FreeCAD program are scored the same way."""
+    return read_toolpath(write_program(path, jb), tool=jb.tool)
 
 
 def freecad_path(name: str, tool=None, fixtures: Path = FIXTURES) -> ToolPath:

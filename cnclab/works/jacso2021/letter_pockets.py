@@ -23,7 +23,7 @@ from ...toolpath.adaptive import unproven_rapids
 from ...toolpath.evaluate import evaluate
 from ...toolpath.job import Job
 from ...toolpath.path import Tool
-from .freecad_comparison import meets_bounds
+from .freecad_comparison import as_written, meets_bounds
 
 __all__ = ["LETTERS", "letter", "draw", "score"]
 
@@ -63,7 +63,8 @@ def draw(seed: int, n: int, w_lo: float, w_hi: float) -> list:
 
 
 def score(kind: str, D: float, w: float, L: float, theta: float) -> dict:
-    """One row: the adaptive plan of the letter job scored by the evaluator (a refusal: the note)."""
+    """One row: the adaptive plan of the letter job, scored as written (:func:`.freecad_comparison.as_written`)
+    by the evaluator (a refusal: the note)."""
     jb = Job(letter(kind, w, L), Tool(D), theta, 1.0, v_c=100, f_z=0.05, source=f"{kind} w{w} L{L}")
     h = float(np.clip(D / 2 / 30, 0.05, 0.2))
     row = {"letter": kind, "D_mm": D, "w_mm": w, "L_mm": L, "theta_deg": theta}
@@ -73,7 +74,7 @@ def score(kind: str, D: float, w: float, L: float, theta: float) -> dict:
     except Exception as exc:       # noqa: BLE001 -- a refusal is a result of this benchmark
         return row | {"note": f"{type(exc).__name__}: {str(exc)[:160]}"}
     row["plan_s"] = round(time.perf_counter() - t0, 2)
-    ev = evaluate(tp, jb, h)
+    ev = evaluate(as_written(tp, jb), jb, h)
     row |= {"max_minus_theta": ev.engagement_max_deg - theta, "p95_minus_theta": ev.engagement_p95_deg - theta,
             "share_above_5_pct": ev.share_above_5_pct, "plunges": ev.plunges_into_material,
             "rapids_into_material": ev.rapids_into_material, "gouge_mm": ev.wall_gouge_max_mm,
