@@ -140,3 +140,23 @@ def test_bench_script_uses_the_package_and_prints_ratios(capsys, monkeypatch):
     assert not (ROOT / "benchmarks" / "score_paths.py").exists() and not (ROOT / "benchmarks" / "pocket_jobs.py").exists()
     with pytest.raises(SystemExit, match="unknown pocket"):
         bench.main(["hexagon", "--fixtures"])
+
+
+def test_as_written_is_the_program_read_back():
+    """``as_written`` scores the program a machine runs: a helix and a straight cut, written and read
+    back, start at the clearance plane (the writer's approach), keep every planned point within the
+    0.005 mm fit and the 4-decimal rounding (+ the 0.01 mm sampling), carry the helix as G2/G3 arcs,
+    and take the same time at feed within 0.1 % (arcs for chords; the approach and retract are rapids)."""
+    jb = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.0, feed_mm_min=300, spindle_rpm=5000)
+    a = np.linspace(0, 4 * np.pi, 400)
+    helix = np.column_stack([10 + 2 * np.cos(a), 10 + 2 * np.sin(a), -a / (4 * np.pi)])
+    line = np.column_stack([np.linspace(12, 30, 50), np.full(50, 10.0), np.full(50, -1.0)])
+    P = np.vstack([[12.0, 10.0, jb.clearance_z], helix, line])    # from the clearance plane, as planners start
+    tp = ToolPath.build(P, kind=["rapid", "plunge"] + ["helix"] * 399 + ["cut"] * 50, feed=300.0, spindle=5000.0)
+    w = fx.as_written(tp, jb)
+    assert w.xyz[0, 2] == pytest.approx(jb.clearance_z)
+    assert np.any(w.arc != 0)
+    d = np.linalg.norm(w.resample(0.01).xyz[:, None, :] - P[None, ::7, :], axis=2).min(axis=0)
+    assert d.max() <= 0.005 + 1e-4 + 0.01
+    tw, tt = w.time_s(jb.rapid_mm_min), tp.time_s(jb.rapid_mm_min)
+    assert tw["total_s"] - tw["rapid_s"] == pytest.approx(tt["total_s"] - tt["rapid_s"], rel=1e-3)
