@@ -1,6 +1,9 @@
 """Issue 16 on pockets that are not in the repository: the default planner
 (:func:`cnclab.toolpath.adaptive.adaptive_clearing`) on random pockets, scored by the
-package's one evaluator (dixel 0.05 mm; 0.1 mm above 2500 mm^2), one row per pocket and a summary.
+package's one evaluator (dixel 0.05 mm; 0.1 mm above 2500 mm^2; at most r/30, the corpus's relative
+resolution, since session 11: at 0.05 mm = r/20 the maximum of an r = 1 mm tool's path moved by up to
+12 deg between the planned path and the written program of pocket 76:5, 6.4 and 5.8 deg at r/60),
+one row per pocket and a summary.
 
 The pockets (seeded, reproducible): a random star (5-11 vertices, radii 12-30 mm), the largest part
 of a union of three random boxes (15-35 mm) or a smooth blob (radius 20 mm with harmonics 2-5 of
@@ -150,7 +153,7 @@ def main(argv=None):
             print(row["pocket"], "refused:", e, flush=True)
             continue
         row["plan_s"] = time.perf_counter() - t0
-        ev = evaluate(as_written(tp, job), job, 0.05 if P.area < 2500 else 0.1)    # scored as written
+        ev = evaluate(as_written(tp, job), job, min(0.05 if P.area < 2500 else 0.1, r / 30))    # as written
         row.update({"p95-theta": ev.engagement_p95_deg - th, "max-theta": ev.engagement_max_deg - th,
                     "share_above_5_pct": ev.share_above_5_pct, "entries": tp.info["entries"],
                     "plunges": ev.plunges_into_material, "rapids_into": ev.rapids_into_material,

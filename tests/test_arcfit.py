@@ -245,3 +245,25 @@ def test_written_adaptive_program_does_not_gouge_more_than_the_plan():
     written = _wall_gouge_um(back, job.polygon, job.tool_radius)
     assert written <= planned + 1000 * WALL_SLACK_MM + 0.1
     assert _wall_gouge_um(fit_arcs(path), job.polygon, job.tool_radius) > written + 1.0
+
+
+@pytest.mark.parametrize("r, theta, want", [(3.0, 60.0, 0.005), (1.0, 40.0, 0.00224), (1.0, 150.0, 0.00349)])
+def test_small_tool_programs_are_fitted_within_the_engagement_budget(r, theta, want):
+    """On a pocket job the writer caps the 0.005 mm tolerance so that fitting moves the engagement by
+    at most ENGAGEMENT_BUDGET_DEG (0.2 deg): r sin(min(theta, 90)) x 0.2 deg in rad -- a 6 mm tool at
+    60 deg keeps 0.005 mm, a 2 mm tool at 40 deg gets 0.00224 mm, at 150 deg the sine of 30 deg;
+    the header states it and the written path stays within it of the planned one."""
+    from shapely.geometry import box
+    from cnclab.toolpath.job import Job
+    from cnclab.toolpath.path import Tool
+
+    job = Job(box(0, 0, 40, 30), Tool(2 * r), theta, 1.0, feed_mm_min=300, spindle_rpm=6000)
+    a = np.linspace(0, 1.5 * math.pi, 300)
+    P = np.column_stack([20 + 8 * np.cos(a) + 0.004 * np.sin(37 * a), 15 + 8 * np.sin(a), np.full(300, -1.0)])
+    P = np.vstack([[28.0, 15.0, job.clearance_z], P, [P[-1, 0], P[-1, 1], job.clearance_z]])
+    path = ToolPath.build(P, kind=["rapid", "plunge"] + ["cut"] * 299 + ["retract"], feed=300.0, spindle=6000.0)
+    text = write_program(path, job)
+    head = [ln for ln in text.splitlines() if "arcs fitted within" in ln][0]
+    assert f"arcs fitted within {want:g} mm" in head
+    assert ("capped" in head) == (want < DEFAULT_TOL_MM)
+    assert hausdorff(path, read_toolpath(text)) <= want + STEP

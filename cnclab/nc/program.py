@@ -103,7 +103,7 @@ from .. import __version__
 from ..fileio import atomic_write
 from ..toolpath.job import ENTRY_FEED_FRACTION
 from ..toolpath.path import Move, ToolPath
-from .arcfit import DEFAULT_TOL_MM, Walls, fit_arcs
+from .arcfit import DEFAULT_TOL_MM, ENGAGEMENT_BUDGET_DEG, Walls, engagement_tol_mm, fit_arcs
 from .machine import machine_for_dialect, machine_time
 from .gcode import (MAX_COORD_MM, MAX_FEED_MM_MIN, MAX_SPINDLE_RPM, GcodeProgram,
                     parse_gcode, path_lengths, program_time, read_gcode, read_program_text)
@@ -280,6 +280,21 @@ def _walls(job, setup: _Setup) -> Walls | None:
     return dataclasses.replace(walls, radius_mm=r, top_z=float(setup["top_z"] or 0.0))
 
 
+def _fit_tolerance(arc_tol_mm: float, walls: Walls | None, job, decimals: int) -> tuple:
+    """The arc-fitting tolerance [mm] of a program and the note saying why it is below ``arc_tol_mm``:
+    on a pocket job (walls and a target engagement) at most :func:`cnclab.nc.arcfit.engagement_tol_mm`
+    of the tool radius as written and the job's theta, so that fitting moves the engagement by at most
+    ``ENGAGEMENT_BUDGET_DEG``; never below three units of the last written digit."""
+    theta = getattr(job, "theta_deg", None)
+    if walls is None or theta is None:
+        return float(arc_tol_mm), ""
+    tol = max(engagement_tol_mm(walls.radius_mm, float(theta), arc_tol_mm), 3 * 10.0 ** -decimals)
+    if tol >= arc_tol_mm:
+        return float(arc_tol_mm), ""
+    return tol, (f", {arc_tol_mm:g} mm capped so that the engagement of r {walls.radius_mm:g} mm at "
+                 f"theta {float(theta):g} deg moves <= {ENGAGEMENT_BUDGET_DEG:g} deg")
+
+
 def _program_path(path: ToolPath, setup: _Setup, arc_tol_mm, decimals, job=None) -> tuple:
     notes = []
     entry = path.is_kind(*_ENTRY_KINDS)
@@ -295,8 +310,9 @@ def _program_path(path: ToolPath, setup: _Setup, arc_tol_mm, decimals, job=None)
     elif arc_tol_mm is not None:
         rapid = setup["rapid_mm_min"]
         walls = _walls(job, setup)
-        path = fit_arcs(path, arc_tol_mm, decimals=decimals, rapid_arc_feed_mm_min=rapid, walls=walls)
-        notes.append(f"arcs fitted within {arc_tol_mm:g} mm of the planned path"
+        tol, why = _fit_tolerance(arc_tol_mm, walls, job, decimals)
+        path = fit_arcs(path, tol, decimals=decimals, rapid_arc_feed_mm_min=rapid, walls=walls)
+        notes.append(f"arcs fitted within {tol:g} mm of the planned path{why}"
                      + (f" ({walls.slack_mm:g} mm beyond its clearance toward walls and islands)" if walls else "")
                      + (f", curved G0 runs in cleared area as G2/G3 at F{rapid:g}" if rapid else ""))
     return path, notes
