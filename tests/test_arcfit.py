@@ -204,7 +204,7 @@ def _wall_pass(R, r, quarter_segments, spacing):
 
 
 @given(st.floats(8, 25), st.floats(1, 5), st.integers(16, 128), st.floats(0.02, 0.3))
-@settings(max_examples=8, deadline=None)
+@settings(max_examples=5, deadline=None)
 @example(R=20.0, r=3.0, quarter_segments=64, spacing=0.1)
 def test_a_wall_pass_is_not_fitted_into_the_wall(R, r, quarter_segments, spacing):
     """The finishing pass along a polygonal round wall (it gouges 0 as planned), fitted with the
