@@ -55,8 +55,8 @@ import dataclasses
 import math
 
 import numpy as np
-import shapely
 
+from ..geometry.planar import wall_clearance
 from ..toolpath.path import KINDS, ToolPath
 
 __all__ = ["fit_arcs", "cleared_mask", "Walls", "engagement_tol_mm", "DEFAULT_TOL_MM", "MAX_RADIUS_MM",
@@ -109,25 +109,19 @@ class Walls:
 
     def allowance(self, P: np.ndarray, tol: float) -> np.ndarray:
         """Per point of ``P`` (n, 3) mm: the deviation a fitted piece may have there [mm],
-        ``min(tol, max(clearance - tol, 0) + slack_mm)`` below the stock top, ``tol`` above it."""
-        P = np.asarray(P, float)
-        out = np.full(len(P), float(tol))
-        low = np.flatnonzero(P[:, 2] < self.top_z - 1e-9)
-        if low.size:
-            deep = self.polygon.buffer(-(self.radius_mm + 3 * tol), 64)   # inside: clearance >= 2 tol (its 64-segment arcs: a margin of tol)
-            low = low[~shapely.contains_xy(deep, P[low, 0], P[low, 1])]
-        if low.size:
-            x, y = P[low, 0], P[low, 1]
-            d = shapely.distance(self.polygon.boundary, shapely.points(x, y))
-            d = np.where(shapely.contains_xy(self.polygon, x, y), d, -d)
-            out[low] = np.minimum(tol, np.maximum(d - self.radius_mm - tol, 0.0) + self.slack_mm)
-        return out
+        ``min(tol, max(clearance - tol, 0) + slack_mm)`` below the stock top, ``tol`` above it
+        (clearance: :func:`cnclab.geometry.planar.wall_clearance`; points inside the pocket shrunk by
+        r + 3 tol, whose 64-segment arcs leave a margin of tol, have at least 2 tol and skip it)."""
+        deep = self.polygon.buffer(-(self.radius_mm + 3 * tol), 64)
+        c = wall_clearance(self.polygon, self.radius_mm, P, self.top_z, clear=deep)
+        return np.minimum(tol, np.maximum(c - tol, 0.0) + self.slack_mm)
 
     def chord_allowance(self, P: np.ndarray, tol: float) -> np.ndarray:
         """Per chord of the polyline ``P`` [mm]: the least allowance of its two ends and its middle."""
-        a = self.allowance(P, tol)
-        mid = self.allowance(0.5 * (P[1:] + P[:-1]), tol)
-        return np.minimum(np.minimum(a[1:], a[:-1]), mid)
+        P = np.asarray(P, float)
+        a = self.allowance(np.vstack([P, 0.5 * (P[1:] + P[:-1])]), tol)     # the points, then the middles
+        n = len(P)
+        return np.minimum(np.minimum(a[1:n], a[:n - 1]), a[n:])
 
 
 def engagement_tol_mm(radius_mm: float, theta_deg: float, tol_mm: float = DEFAULT_TOL_MM,

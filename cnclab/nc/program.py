@@ -273,10 +273,9 @@ def _walls(job, setup: _Setup) -> Walls | None:
     """The walls the arc fit keeps off (:class:`cnclab.nc.arcfit.Walls`): the job's pocket with the
     tool and stock top the program is written with; None without a pocket."""
     walls = Walls.of_job(job)
-    tool = setup["tool"]
     if walls is None:
         return None
-    r = float(getattr(tool, "radius", walls.radius_mm)) if tool is not None else walls.radius_mm
+    r = float(getattr(setup["tool"], "radius", walls.radius_mm))     # the tool as written (None: the job's)
     return dataclasses.replace(walls, radius_mm=r, top_z=float(setup["top_z"] or 0.0))
 
 

@@ -79,6 +79,7 @@ import shapely
 from shapely.geometry import Point
 
 from ..cutting.feed_control import controlled_feed, mrr_error_windowed
+from ..geometry.planar import wall_clearance
 from ..simulation import dixel
 from ..simulation.common import simulate, simulate_runs
 from .job import Job
@@ -593,17 +594,8 @@ def wall_gouge(P, job: Job, rapid=None, tol_mm: float = POSITION_TOL_MM):
     (the area: the circular segment of depth 1 of the r = 3 disc, 9 acos(2/3) - 2 sqrt(5) = 3.098 mm^2)
     """
     P = np.asarray(P, float)
-    n, r = len(P), job.tool_radius
-    gouge = np.zeros(n)
-    low = P[:, 2] < job.top_z - 1e-9
-    cand = np.flatnonzero(low)
-    if cand.size:
-        cand = cand[~shapely.contains_xy(job.allowed(), P[cand, 0], P[cand, 1])]
-    if cand.size:
-        x, y = P[cand, 0], P[cand, 1]
-        d = shapely.distance(job.polygon.boundary, shapely.points(x, y))
-        d = np.where(shapely.contains_xy(job.polygon, x, y), d, -d)
-        gouge[cand] = np.maximum(0.0, r - d)
+    r = job.tool_radius
+    gouge = np.maximum(0.0, -wall_clearance(job.polygon, r, P, job.top_z, clear=job.allowed()))
     mask = gouge > tol_mm
     if rapid is not None:
         mask &= ~np.asarray(rapid, bool)
