@@ -141,6 +141,64 @@ def _step(contour, P, t, dt, r, theta_deg, method):
     return P + lam * v
 
 
+def _fixed_step_path(contour, P, t, t_end, dt, r, theta_deg, method, max_steps):
+    """:func:`thesis3_path` with a fixed step: the contour parameters of every step are known before
+    the march, so the contact points are evaluated in one call and the steps (:func:`_step`'s
+    arithmetic, on floats) run without array overhead."""
+    if method not in ("euler", "midpoint"):
+        raise ValueError(f"method must be 'euler' or 'midpoint', got {method!r}")
+    ts, hs, h = [t], [], dt
+    while ts[-1] < t_end - 1e-12 and len(ts) < max_steps:
+        h = min(h, t_end - ts[-1])
+        hs.append(h)
+        ts.append(ts[-1] + h)
+    tt = np.asarray(ts)
+    C = contour.point(tt)
+    Cx, Cy = C[:, 0].tolist(), C[:, 1].tolist()
+    if method == "midpoint":
+        M = contour.point(tt[:-1] + 0.5 * np.asarray(hs))
+        Mx, My = M[:, 0].tolist(), M[:, 1].tolist()
+    alpha = math.pi / 2 - math.radians(theta_deg)
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    px, py = float(P[0]), float(P[1])
+    out = [(px, py)]
+    for i in range(len(hs)):
+        vx, vy = _feed_dir(px, py, Cx[i], Cy[i], ca, sa)
+        if method == "midpoint":
+            lam = _ray_circle(px, py, vx, vy, Mx[i], My[i], r)
+            if not math.isfinite(lam):
+                raise ValueError(f"dt={dt} too large: the feed half-line misses the circle at t={ts[i]:.6g}")
+            vx, vy = _feed_dir(px + lam * vx, py + lam * vy, Mx[i], My[i], ca, sa)
+        lam = _ray_circle(px, py, vx, vy, Cx[i + 1], Cy[i + 1], r)
+        if not math.isfinite(lam):
+            raise ValueError(f"dt={dt} too large: the feed half-line misses the circle at t={ts[i]:.6g}")
+        px, py = px + lam * vx, py + lam * vy
+        out.append((px, py))
+    return PathResult(tt, np.asarray(out), C, method, 0)
+
+
+def _feed_dir(px, py, cx, cy, ca, sa):
+    """Thesis III Step 1 on floats: the unit vector P -> C rotated ccw by alpha (cos ``ca``, sin ``sa``)."""
+    ux, uy = cx - px, cy - py
+    n = math.sqrt(ux * ux + uy * uy)
+    ux, uy = ux / n, uy / n
+    return ca * ux - sa * uy, sa * ux + ca * uy
+
+
+def _ray_circle(px, py, vx, vy, cx, cy, r):
+    """:func:`ray_circle` on floats."""
+    wx, wy = px - cx, py - cy
+    b = vx * wx + vy * wy
+    disc = b * b - (wx * wx + wy * wy - r * r)
+    if disc < 0:
+        return math.nan
+    sq = math.sqrt(disc)
+    for lam in (-b - sq, -b + sq):
+        if lam >= -1e-12:
+            return max(lam, 0.0)
+    return math.nan
+
+
 def thesis3_path(contour, tool_radius, theta_deg, dt, method="euler", P0=None, t_end=None,
                  adaptive=False, tol_mm=1e-4, dt_min=None, dt_max=None, max_steps=2_000_000):
     """Thesis III: tool-path points holding engagement ``theta_deg`` along ``contour``.
@@ -163,6 +221,8 @@ def thesis3_path(contour, tool_radius, theta_deg, dt, method="euler", P0=None, t
     dt_min = dt * 1e-3 if dt_min is None else dt_min
     dt_max = dt * 50 if dt_max is None else dt_max
     order = 2 if method == "midpoint" else 1
+    if not adaptive:
+        return _fixed_step_path(contour, P, t, t_end, dt, r, theta_deg, method, max_steps)
     rejected = 0
     h = dt
     while t < t_end - 1e-12 and len(ts) < max_steps:
