@@ -75,3 +75,23 @@ def test_cli_refuses_a_breach_or_writes_it_with_the_option(tmp_path, capsys, mon
     header = [ln for ln in out.read_text().splitlines() if ln.startswith("(")]
     assert any(ln.startswith("(WARNING: ") and "promises an engagement" in ln for ln in header)
     assert dataclasses.is_dataclass(AdaptiveParams())
+
+
+def test_a_level_within_the_written_margin_is_planned_again_but_not_refused(monkeypatch):
+    """A planned maximum within ``written_margin_deg`` of the promise (the written program's arc fit
+    and the r / 30 dixel move it by ~1 deg) is re-planned as a level beyond the bounds, every retry of
+    ``_retries`` in turn, and kept (not refused) while the planned maximum is within the promise. With
+    the margin at 100 deg no plan is within the aim; with none, the plain pocket is planned once."""
+    from cnclab.toolpath import adaptive
+
+    calls = []
+    real = adaptive.plan_job
+    monkeypatch.setattr(adaptive, "plan_job", lambda *a, **kw: calls.append(kw["params"]) or real(*a, **kw))
+    base = AdaptiveParams(written_margin_deg=0.0)
+    tp = planners.plan(_job(), "adaptive", params=base)
+    assert len(calls) == 1 and tp.info["engagement_check"]["ok"]
+    calls.clear()
+    tp = planners.plan(_job(), "adaptive", params=AdaptiveParams(written_margin_deg=100.0))
+    assert len(calls) == 1 + len(planners._retries(base))
+    assert tp.info["engagement_check"]["ok"] and "engagement_breach" not in tp.info
+    assert tp.info["engagement_check"]["max_deg"] <= THETA + 10.0

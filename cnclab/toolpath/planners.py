@@ -320,7 +320,7 @@ def _snap_inside(passes, job: Job) -> list:
 def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
     """One level of :func:`cnclab.toolpath.adaptive.plan_job`, its promise checked
     (:func:`adaptive_engagement_check`): a level beyond the bounds (max theta +
-    ``AdaptiveParams.promise_max_deg``, p95 theta + ``promise_p95_deg``, share above theta + 5 deg
+    ``AdaptiveParams.promise_max_deg`` less the written program's margin ``written_margin_deg``, p95 theta + ``promise_p95_deg``, share above theta + 5 deg
     ``promise_share_pct``) is planned again (:func:`_retries`: the tighter sliver guard
     ``retry_guard_deg``, the nearest pass starts, both, the narrow regions' trochoids checked period
     by period) and the first plan within all three kept, else
@@ -366,8 +366,10 @@ def _retries(prm):
 
 
 def _within_bounds(chk: dict, job: Job, prm) -> bool:
-    """Whether a level's :func:`adaptive_engagement_check` holds all three bounds: max, p95 and share."""
-    return bool(chk["ok"] and chk["p95_deg"] <= job.theta_deg + prm.promise_p95_deg
+    """Whether a level's :func:`adaptive_engagement_check` holds all three bounds: max (with the
+    written program's margin, ``prm.written_margin_deg`` below the promise), p95 and share."""
+    aim = job.theta_deg + prm.promise_max_deg - prm.written_margin_deg
+    return bool(chk["ok"] and chk["max_deg"] <= aim and chk["p95_deg"] <= job.theta_deg + prm.promise_p95_deg
                 and chk["share_above_5_pct"] <= prm.promise_share_pct)
 
 

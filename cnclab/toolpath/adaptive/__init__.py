@@ -174,8 +174,10 @@ Levels (a pocket deeper than ``a_p``) are planned one by one by
 :func:`cnclab.toolpath.planners.plan` and joined by :func:`cnclab.toolpath.levels.join_levels`.
 ``plan`` also checks the promise on every level (engagement max <= theta +
 ``AdaptiveParams.promise_max_deg``, measured by the evaluator at r / 30,
-:func:`cnclab.toolpath.planners.adaptive_engagement_check`): a level beyond it is planned once more
-with the tighter sliver guard, then refused unless ``allow_engagement_breach``.
+:func:`cnclab.toolpath.planners.adaptive_engagement_check`): a level beyond it, or within
+``written_margin_deg`` (1 deg, what the arc fit of the written program may add) below it, is planned
+again (the tighter sliver guard, the nearest pass starts, ...); a maximum still beyond the promise is
+refused unless ``allow_engagement_breach``.
 
 >>> import numpy as np
 >>> from shapely.geometry import box

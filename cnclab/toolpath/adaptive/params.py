@@ -309,3 +309,10 @@ class AdaptiveParams:
     #: neck_3 (+ 10.03) and tapered_channel_2 (0.71 % above theta + 5) the nearest starts do
     promise_p95_deg: float = 2.0
     promise_share_pct: float = 0.5
+    #: deg: the margin the check keeps below ``promise_max_deg`` for the written program: a level whose
+    #: planned maximum lies within it of the promise is planned again (``_retries``) as one beyond the
+    #: bounds, and refused only beyond the promise itself. The arc fit moves every point by up to its
+    #: tolerance (5 um) and the r / 30 dixel re-draws the peak: over the corpus the written programs'
+    #: maximum lies 0.8 deg above the planned paths' on average, and dwg_forms_3 read theta + 9.24
+    #: planned, + 10.06 written (session 11)
+    written_margin_deg: float = 1.0
