@@ -16,6 +16,7 @@ import numpy as np
 from shapely.geometry import box
 
 from . import clihelp
+from .nc.arcfit import fit_arcs
 from .simulation import pixel
 from .toolpath.adaptive import adaptive_clearing
 from .toolpath.evaluate import evaluate
@@ -27,13 +28,14 @@ __all__ = ["warm", "main"]
 
 def warm() -> float:
     """Plan and evaluate a small pocket (dixel and pixel stocks, with and without the cutting-level
-    model): every shared kernel is compiled and cached. Returns the wall seconds it took."""
+    model) and fit its arcs as the writer does: every shared kernel is compiled and cached. Returns the wall seconds it took."""
     t0 = time.perf_counter()
     poly = box(0, 0, 12, 9)
     job = Job(poly, Tool(3.0), 60.0, 1.0, feed_mm_min=255.0, spindle_rpm=6000.0)
     tp = adaptive_clearing(job, resolution_mm=0.05, step_mm=0.05)
     evaluate(tp, job, 0.1)
     evaluate(tp, job, 0.1, feed_control=True)
+    fit_arcs(tp)                                   # the writer's arc fit
     xs = np.arange(-2.0, 14.0, 0.1)
     pixel.simulate(pixel.Stock.from_polygon(poly, 0.1), np.c_[xs, np.full_like(xs, 4.5)], 1.5, 1.0, 255.0)
     return time.perf_counter() - t0

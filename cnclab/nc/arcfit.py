@@ -57,6 +57,7 @@ import math
 import numpy as np
 
 from ..geometry.planar import wall_clearance
+from . import _arcfit_kernels as _kernels
 from ..toolpath.path import KINDS, ToolPath
 
 __all__ = ["fit_arcs", "cleared_mask", "Walls", "engagement_tol_mm", "DEFAULT_TOL_MM", "MAX_RADIUS_MM",
@@ -79,6 +80,7 @@ MIN_TOL_MM = 0.001
 MAX_RADIUS_MM = 1000.0
 _MAX_SWEEP = 1.5 * math.pi     # at most 270 deg per arc block (centre well conditioned)
 _MAX_STEP = 0.5 * math.pi      # a point may advance at most 90 deg along the arc
+_MAX_SPAN = 4096                # moves: the longest piece tried from one start
 _RAPID = KINDS.index("rapid")
 _LINK = KINDS.index("link")
 _FIXED = ("xyz", "arc", "arc_center")
@@ -170,128 +172,16 @@ def _same_as_previous(cols: dict, n: int) -> np.ndarray:
     return same
 
 
-def _line_ok(P, i, j, tol):
-    """The line P[i] -> P[j] fits P[i..j]: every point within its tolerance (``tol`` per chord of
-    ``P``: a point gets the smaller of its two chords'; the line's distance to a chord is largest at
-    the chord's ends) and advancing along the line."""
-    A, B = P[i], P[j]
-    d = B - A
-    dd = float(d @ d)
-    if dd <= 1e-18:
-        return False
-    Q = P[i:j + 1] - A
-    t = Q @ d / dd
-    if np.any(np.diff(t) < -1e-12):
-        return False
-    perp = Q - t[:, None] * d
-    c = tol[i:j]
-    tp = np.minimum(np.r_[c[0], c], np.r_[c, c[-1]])
-    return bool(np.all(np.einsum("ij,ij->i", perp, perp) <= tp * tp))
-
-
-def _arc_fit(P, i, j, tol, grid, max_radius):
-    """``(code, cx, cy)`` of the arc through P[i] and P[j] that fits P[i..j] (``tol`` [mm] per chord
-    of ``P``), or None."""
-    Q = P[i:j + 1]
-    A, B = Q[0], Q[-1]
-    scale = 10.0 ** round(-math.log10(grid))
-    Aw, Bw = np.round(A[:2] * scale) / scale, np.round(B[:2] * scale) / scale
-    ch = Bw - Aw
-    d = math.hypot(*ch)
-    if d < 10 * grid:
-        return None
-    n = np.array([-ch[1], ch[0]]) / d
-    Pr = Q[:, :2] - Aw
-    half = 0.5 * ch
-    a = np.einsum("ij,ij->i", Pr, Pr) - 2 * Pr @ half
-    b = 2 * Pr @ n
-    bb = float(b @ b)
-    if bb <= 1e-18:
-        return None                                       # collinear: a line, if anything
-    t = float(a @ b) / bb
-    if math.hypot(0.5 * d, t) > max_radius:
-        return None
-    c = np.round((Aw + half + t * n) * scale) / scale    # the centre as written
-    r0, r1 = math.hypot(*(Aw - c)), math.hypot(*(Bw - c))
-    if abs(r0 - r1) > 1.5 * grid:
-        return None
-    r = 0.5 * (r0 + r1)
-    V = Q[:, :2] - c
-    ang = np.arctan2(V[:, 1], V[:, 0])
-    dth = (np.diff(ang) + math.pi) % (2 * math.pi) - math.pi
-    sweep = float(dth.sum())
-    s = 1.0 if sweep > 0 else -1.0
-    if np.any(dth * s < -1e-12) or np.any(np.abs(dth) > _MAX_STEP) or not 1e-9 < abs(sweep) <= _MAX_SWEEP:
-        return None
-    cum = np.concatenate([[0.0], np.cumsum(dth)]) / sweep
-    dz = Q[:, 2] - (A[2] + (B[2] - A[2]) * cum)
-    dr = np.hypot(V[:, 0], V[:, 1]) - r
-    # chords: outward deviation is largest at an end point (|p - c| is convex along a chord), inward
-    # deviation is r minus the chord's distance to the centre; z at the chord's middle checked too
-    E = np.diff(V, axis=0)
-    ee = np.einsum("ij,ij->i", E, E)
-    u = np.clip(-np.einsum("ij,ij->i", V[:-1], E) / np.where(ee > 0, ee, 1.0), 0.0, 1.0)
-    near = V[:-1] + u[:, None] * E
-    inward = r - np.hypot(near[:, 0], near[:, 1])
-    rad = np.maximum(np.maximum(np.abs(dr[:-1]), np.abs(dr[1:])), inward)
-    zmid = 0.5 * (Q[:-1, 2] + Q[1:, 2]) - (A[2] + (B[2] - A[2]) * 0.5 * (cum[:-1] + cum[1:]))
-    zdev = np.maximum(np.maximum(np.abs(dz[:-1]), np.abs(dz[1:])), np.abs(zmid))
-    tc = tol[i:j]                                    # per chord
-    if np.any(rad * rad + zdev * zdev > tc * tc):
-        return None
-    return (3 if s > 0 else 2), float(c[0]), float(c[1])
-
-
-def _longest(ok, n, first, max_span=4096):
-    """A large ``j`` in [first, min(n, first + max_span)] with ``ok(j)`` truthy: every doubling
-    ``first - 1 + 2**k`` is probed (a short piece may fail where a longer one fits: an arc centre is
-    ill-determined over a short, noisy run), then bisection between the longest one that fits and the
-    next probe. Returns ``(j, ok(j))``, ``(first - 1, None)`` when no probe fits."""
-    last = min(n, first - 1 + max_span)
-    probes = []
-    step = 1
-    while first - 1 + step <= last:
-        probes.append(first - 1 + step)
-        step *= 2
-    if not probes or probes[-1] != last:
-        probes.append(last)
-    best, res, hi = first - 1, None, last + 1
-    for k in range(len(probes) - 1, -1, -1):
-        r = ok(probes[k])
-        if r:
-            best, res = probes[k], r
-            hi = probes[k + 1] if k + 1 < len(probes) else last + 1
-            break
-    lo = best
-    while best >= first and hi - lo > 1:
-        mid = (lo + hi) // 2
-        r = ok(mid)
-        if r:
-            lo, best, res = mid, mid, r
-        else:
-            hi = mid
-    return best, res
-
-
 def _fit_run(P, tol, grid, max_radius, arcs=True):
     """Pieces ``[(end index in P, arc code 0/2/3, cx, cy), ...]`` covering the polyline ``P`` (lines
-    only unless ``arcs``); ``tol`` [mm] per chord of ``P``."""
-    n = len(P) - 1
-    out = []
-    i = 0
-    while i < n:
-        jl, _ = _longest(lambda j: _line_ok(P, i, j, tol), n, i + 1)
-        jl = max(jl, i + 1)
-        ja, arc = (i, None)
-        if arcs and n - i >= 2:
-            ja, arc = _longest(lambda j: _arc_fit(P, i, j, tol, grid, max_radius), n, i + 2)
-        if arc is not None and ja > jl:
-            out.append((ja, *arc))
-            i = ja
-        else:
-            out.append((jl, 0, math.nan, math.nan))
-            i = jl
-    return out
+    only unless ``arcs``); ``tol`` [mm] per chord of ``P``. From each start the longest line and the
+    longest arc are found (doublings, then bisection: a short piece may fail where a longer one fits,
+    an arc centre being ill-determined over a short, noisy run); the arc is taken when it reaches
+    further. The tests of one piece and the cover are compiled (:mod:`cnclab.nc._arcfit_kernels`)."""
+    scale = 10.0 ** round(-math.log10(grid))
+    ends, codes, cxs, cys = _kernels.fit_run(np.ascontiguousarray(P, float), np.ascontiguousarray(tol, float),
+                                             grid, scale, max_radius, _MAX_STEP, _MAX_SWEEP, bool(arcs), _MAX_SPAN)
+    return [(int(e), int(c), float(x), float(y)) for e, c, x, y in zip(ends, codes, cxs, cys)]
 
 
 def fit_arcs(path: ToolPath, tol_mm: float = DEFAULT_TOL_MM, decimals: int = 4,
