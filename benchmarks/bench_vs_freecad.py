@@ -43,7 +43,6 @@ from cnclab.fileio import atomic_write  # noqa: E402
 from cnclab.nc.arcfit import DEFAULT_TOL_MM  # noqa: E402
 from cnclab.nc.gcode import program_time, read_gcode, read_toolpath  # noqa: E402
 from cnclab.nc.machine import MACHINES, machine_time  # noqa: E402
-from cnclab.nc.program import write_program  # noqa: E402
 from cnclab.works.jacso2021 import freecad_comparison as fx  # noqa: E402
 
 
@@ -119,12 +118,13 @@ def main(argv):
 
 
 def written_programs(job, keep, fc_file) -> dict:
-    """Motion blocks of the programs as written: the first planner row's path through the one writer
-    (:func:`cnclab.nc.program.write_program`, default arc fitting) and FreeCAD's program."""
+    """Motion blocks of the programs as written: the first planner row's program (the one writer's,
+    :func:`cnclab.nc.program.write_program`, default arc fitting, kept by
+    :func:`cnclab.works.jacso2021.freecad_comparison.as_written`) and FreeCAD's program."""
     label = next(k for k in keep if k != fx.FREECAD) if any(k != fx.FREECAD for k in keep) else None
     out = {}
     if label is not None:
-        moves = read_gcode(write_program(keep[label][0], job)).moves
+        moves = read_gcode(keep[label][0].info["program"]).moves
         out["blocks ours"] = len(moves)
         out["arc blocks ours"] = sum(m.motion in ("G2", "G3") for m in moves)
         out["feed time ours min"] = program_time(moves, job.rapid_mm_min)["total_s"] / 60

@@ -105,8 +105,12 @@ def as_written(path: ToolPath, jb: Job) -> ToolPath:
     """``path`` as the program a machine runs: written by :func:`cnclab.nc.program.write_program`
     (arcs fitted off the walls, approach and retract at the clearance plane, 4 decimals) and read
     back by the reader of FreeCAD's programs (:func:`cnclab.nc.gcode.read_toolpath`), so that a
-    planner's path and a FreeCAD program are scored the same way."""
-    return read_toolpath(write_program(path, jb), tool=jb.tool)
+    planner's path and a FreeCAD program are scored the same way. ``info["program"]`` holds the
+    program text."""
+    text = write_program(path, jb)
+    out = read_toolpath(text, tool=jb.tool)
+    out.info["program"] = text
+    return out
 
 
 def freecad_path(name: str, tool=None, fixtures: Path = FIXTURES) -> ToolPath:
@@ -325,9 +329,11 @@ def comparison(name: str, planner_rows: dict | None = None, fast: bool | None = 
                feed_control: bool = True, keep: dict | None = None) -> pd.DataFrame:
     """The table of pocket ``name``: one row per planner (``planner_rows``: label -> strategy,
     default :data:`PLANNER_ROWS`; a planner that refuses the pocket gets a NaN row with its reason in
-    ``note``), the first one again with §4 feed control, and FreeCAD Adaptive. ``freecad``:
+    ``note``), the first one again with §4 feed control, and FreeCAD Adaptive. Every planner's path
+    is scored as written (:func:`as_written`), as FreeCAD's program is; the feed-control row sets its
+    feeds on the planned moves (its engagement columns are the planned path's). ``freecad``:
     ``(ToolPath or None, plan seconds, note)`` (default: the committed fixture). ``keep``: a dict
-    that receives the paths and evaluations (label -> (path, evaluation)) for plots."""
+    that receives the paths and evaluations (label -> (path as written, evaluation)) for plots."""
     jb = job(name)
     h = resolution_mm(name, fast)
     rows = {}
@@ -337,15 +343,17 @@ def comparison(name: str, planner_rows: dict | None = None, fast: bool | None = 
         except ValueError as exc:
             rows[label] = _nan_row(f"refused: {exc}")
             continue
-        ev = evaluate(tp, jb, h)
+        tw = as_written(tp, jb)                          # scored as written, as FreeCAD's program
+        ev = evaluate(tw, jb, h)
         rows[label] = row(ev, t_plan, jb=jb) | {"note": ""}
         if keep is not None:
-            keep[label] = (tp, ev)
+            keep[label] = (tw, ev)
         if feed_control and k == 0:
-            fc = feed_controlled(tp, jb, ev)
-            rows[label + FEED_CONTROL_SUFFIX] = row(ev, t_plan, fc.time_s(jb.rapid_mm_min)["total_s"], jb,
+            evp = evaluate(tp, jb, h)                    # the feeds are set on the planned moves
+            fc = feed_controlled(tp, jb, evp)
+            rows[label + FEED_CONTROL_SUFFIX] = row(evp, t_plan, fc.time_s(jb.rapid_mm_min)["total_s"], jb,
                                                     path_machine_time(fc)) | {
-                "note": "same path, feeds per 0.5 mm block (MRR held, <= v_fmax)"}
+                "note": "the planned path, feeds per 0.5 mm block (MRR held, <= v_fmax)"}
     if freecad is None:
         try:
             freecad = (freecad_path(name, jb.tool), freecad_plan_time_s(name), "committed program, plan time from its JSON")
