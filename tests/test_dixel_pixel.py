@@ -225,35 +225,3 @@ def test_simulate_runs_equals_simulating_each_run_on_one_stock():
     np.testing.assert_allclose(T.engagement_deg.to_numpy(), np.r_[a.engagement_deg, b.engagement_deg])
     with _pytest.raises(ValueError, match="rapid"):
         _dixel.simulate_runs(st, P, rapid[:-1], 1.5, 2, 300)
-
-
-@pytest.mark.parametrize("seed", range(3))
-def test_dixel_material_polygon_is_the_union_of_its_row_rectangles(seed):
-    """``Stock.to_polygon`` (the boundary of the row rectangles, polygonized) is the overlay union of
-    the rectangles: the same area, an empty symmetric difference, a valid geometry, the same type, on
-    stocks cut by random discs (holes, islands of material, slivers) at three row heights."""
-    import shapely
-
-    rng = np.random.default_rng(seed)
-    for _ in range(12):
-        hole = Point(rng.uniform(5, 25), rng.uniform(5, 15)).buffer(rng.uniform(1, 4))
-        st = dixel.Stock.from_polygon(box(0, 0, 30, 20).difference(hole), float(rng.choice([0.05, 0.1, 0.2])))
-        for _ in range(int(rng.integers(0, 40))):
-            st.cut_disk(rng.uniform(0, 1, 2) * [30, 20], rng.uniform(0.5, 3))
-        rows, a, b = st.intervals()
-        h = st.resolution_mm
-        want = shapely.union_all(shapely.box(a, st.y0 + rows * h, b, st.y0 + (rows + 1) * h))
-        got = st.to_polygon()
-        assert got.is_valid and got.geom_type == want.geom_type
-        assert got.area == pytest.approx(want.area, abs=1e-9)
-        assert got.symmetric_difference(want).area <= 1e-9
-
-
-def test_dixel_material_polygon_merges_touching_intervals_and_keeps_holes():
-    from cnclab.simulation.dixel import material_polygon
-
-    g = material_polygon(np.array([0, 0, 1]), np.array([0.0, 1.0, 0.0]), np.array([1.0, 2.0, 2.0]), 0.0, 1.0)
-    assert g.geom_type == "Polygon" and g.area == pytest.approx(4.0) and g.is_valid     # [0,1] + [1,2] = [0,2]
-    ring = material_polygon(np.array([0, 1, 1, 2]), np.array([0.0, 0.0, 2.0, 0.0]), np.array([3.0, 1.0, 3.0, 3.0]), 0.0, 1.0)
-    assert ring.geom_type == "Polygon" and len(ring.interiors) == 1 and ring.area == pytest.approx(8.0)
-    assert material_polygon(np.array([], np.int64), np.array([]), np.array([]), 0.0, 1.0).is_empty
