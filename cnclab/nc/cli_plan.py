@@ -21,9 +21,9 @@ from pathlib import Path
 
 from .. import clihelp
 from ..fileio import InterruptReport, check_outputs
-from .gcode import read_gcode
+from .gcode import program_time, read_gcode
 from .machine import machine_for_dialect, machine_time
-from .program import COOLANT, DIALECTS, check_program, program_path, write_program
+from .program import COOLANT, DIALECTS, check_program, write_program
 
 from ..geometry.drawing import CHORD_TOL_MM
 from ..toolpath.from_drawing import load_job_input
@@ -119,7 +119,7 @@ def plan_program(job_file, out, strategy: str | None = None, quiet: bool = False
             print(f"warning: {w}", file=sys.stderr)
         uncut = ", ".join(f"{u:.1f}" for u in path.info["uncut"]["uncut_mm2"])
         moves = read_gcode(text).moves
-        t = program_path(path, job).time_s(job.rapid_mm_min)["total_s"]
+        t = program_time(moves, job.rapid_mm_min)["total_s"]        # the written program's time
         m = machine_for_dialect(dialect)
         print(f"wrote {out} ({dialect}): {len(path)} planned moves, {len(moves)} motion blocks, strategy {name}, "
               f"entries {chk.entries}, plunges below the stock top marked cleared or none: "
