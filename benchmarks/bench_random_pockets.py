@@ -50,6 +50,7 @@ from shapely.geometry import Point, Polygon, box
 from shapely.ops import unary_union
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from cnclab.nc.program import program_path  # noqa: E402
 from cnclab.toolpath import planners  # noqa: E402
 from cnclab.toolpath.adaptive import AdaptiveParams, PlanningError, adaptive_clearing, unproven_rapids  # noqa: E402
 from cnclab.toolpath.evaluate import evaluate  # noqa: E402
@@ -145,7 +146,7 @@ def main(argv=None):
                   source=f"random {a.seed}:{it}")
         t0 = time.perf_counter()
         try:
-            tp = planners.plan(job, "adaptive", None, allow_uncut=True, params=prm) if a.via_plan \
+            tp = planners.plan(job, "adaptive", None, allow_uncut=True, params=prm, written=program_path) if a.via_plan \
                 else adaptive_clearing(job, prm)
         except (PlanningError, ValueError) as e:
             row["refused"] = str(e)

@@ -36,6 +36,7 @@ import numpy as np
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from cnclab.nc.program import program_path  # noqa: E402
 from cnclab.toolpath import planners  # noqa: E402
 from cnclab.toolpath.evaluate import evaluate, unreachable_region  # noqa: E402
 from cnclab.works.jacso2021 import corpus_comparison as cc  # noqa: E402
@@ -75,7 +76,7 @@ def run(name, corpus):
     jb = cc.job(name) if corpus else fx.job(name)
     h = cc.resolution_mm(jb, False) if corpus else (0.1 if "120x85" in name else 0.05)
     t0 = time.perf_counter()
-    tp = planners.plan(jb, "adaptive", h, allow_uncut=True)
+    tp = planners.plan(jb, "adaptive", h, allow_uncut=True, written=program_path)
     t_plan = time.perf_counter() - t0
     rows = {"ours": breakdown(evaluate(fx.as_written(tp, jb), jb, h), jb) | {"plan_s": t_plan, "info": {k: tp.info.get(k) for k in (
         "passes", "entries", "links", "remnant_sweeps", "clean_rounds")}}}

@@ -1,4 +1,5 @@
 import copy
+import functools
 import os
 import pickle
 
@@ -81,6 +82,7 @@ _LEVEL_PLANS: dict = {}
 
 
 def _memo_planner(name, f):
+    @functools.wraps(f)          # its signature is f's (plan() passes ``written`` only to planners taking it)
     def planner(job, resolution_mm, **options):
         key = pickle.dumps((name, job, resolution_mm, sorted(options.items())))
         if key not in _LEVEL_PLANS:

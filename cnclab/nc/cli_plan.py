@@ -23,7 +23,7 @@ from .. import clihelp
 from ..fileio import InterruptReport, check_outputs
 from .gcode import program_time, read_gcode
 from .machine import machine_for_dialect, machine_time
-from .program import COOLANT, DIALECTS, check_program, write_program
+from .program import COOLANT, DIALECTS, check_program, program_path, write_program
 
 from ..geometry.drawing import CHORD_TOL_MM
 from ..toolpath.from_drawing import load_job_input
@@ -68,7 +68,8 @@ def planned_program(job_file, strategy: str | None = None, source: str | None = 
     job_file = Path(job_file)
     job = load_job_input(job_file, cutting=cutting, layer=layer, tolerance=tolerance, units=units)
     job = with_machine_warnings(job, dialect)
-    path = plan(job, strategy or DEFAULT_STRATEGY, **(plan_options or {}))
+    # the adaptive promise is checked on the path as this program writes it (the arc fit)
+    path = plan(job, strategy or DEFAULT_STRATEGY, written=program_path, **(plan_options or {}))
     name = strategy or path.info.get("strategy", "default")
     rep = path.info["uncut"]
     header = [f"cnclab plan {job_file.name} strategy {name}",

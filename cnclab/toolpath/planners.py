@@ -29,6 +29,7 @@ kim-yang-modified        the same with Kim & Yang's §3.2 constant-MRR modificat
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 
 import numpy as np
@@ -317,7 +318,7 @@ def _snap_inside(passes, job: Job) -> list:
 @register("adaptive", "engagement-controlled clearing of the simulated stock, links at depth (adaptive_clearing); "
           "promises an engagement <= theta + 10 deg, measured on every job (refuses a job beyond it unless "
           "allow_engagement_breach)")
-def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
+def _adaptive(job: Job, resolution_mm: float, written=None, **options) -> ToolPath:
     """One level of :func:`cnclab.toolpath.adaptive.plan_job`, its promise checked
     (:func:`adaptive_engagement_check`): a level beyond the bounds (max theta +
     ``AdaptiveParams.promise_max_deg`` less the written program's margin ``written_margin_deg``, p95 theta + ``promise_p95_deg``, share above theta + 5 deg
@@ -326,21 +327,25 @@ def _adaptive(job: Job, resolution_mm: float, **options) -> ToolPath:
     by period) and the first plan within all three kept, else
     the lowest maximum; a maximum still beyond the promise: ``info["engagement_breach"]`` says
     where and how far (:func:`plan` refuses it unless ``allow_engagement_breach``, then states it in
-    ``info["warnings"]`` and the program header); ``info["engagement_check"]`` holds the measure."""
+    ``info["warnings"]`` and the program header); ``info["engagement_check"]`` holds the measure.
+    ``written`` (default None: the planned path is measured): ``written(path, job)`` is the path as the
+    program writes it (``cnclab.nc.program.program_path``: the arc fit), measured instead, so that the
+    promise holds for the program a machine runs (``python -m cnclab plan`` passes it)."""
     # the planning pixel is at most r/60, the resolution the planner was designed and measured at
     # (at r/20 the K&Y pocket keeps 169 mm^2 uncut, at r/30 5 mm^2): a finer resolution_mm is used as
     # given, a coarser one (a caller's evaluation dixel) plans at r/60 (info["resolution_mm"] says so)
     h = None if resolution_mm is None else min(float(resolution_mm), job.tool_radius / 60.0)
     prm = options.pop("params", None) or adaptive.AdaptiveParams()
+    form = (lambda p, j: p) if written is None else written
     path = adaptive.plan_job(job, resolution_mm=h, params=prm, **options)
-    chk = adaptive_engagement_check(path, job, prm)
+    chk = adaptive_engagement_check(form(path, job), job, prm)
     if chk is None:
         return path
     for again_prm in _retries(prm):
         if _within_bounds(chk, job, prm):
             break
         again = adaptive.plan_job(job, resolution_mm=h, params=again_prm, **options)
-        chk2 = adaptive_engagement_check(again, job, prm)
+        chk2 = adaptive_engagement_check(form(again, job), job, prm)
         if _within_bounds(chk2, job, prm) or (not _within_bounds(chk, job, prm) and chk2["max_deg"] < chk["max_deg"]):
             path, chk = again, dict(chk2, retried=True)
     path.info["engagement_check"] = chk
@@ -487,7 +492,10 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     A level beyond the strategy's engagement promise (the adaptive one, measured per level:
     ``info["engagement_check"]``, the worst level's) raises ValueError naming the job, where and how
     far, unless the option ``allow_engagement_breach=True`` (then the warnings and the program header
-    say it). Every level's ``notes``, ``warnings`` and ``left_parts`` reach the result.
+    say it). The option ``written`` (a function ``(path, job) -> path``, e.g.
+    ``cnclab.nc.program.program_path``: the path as the program writes it) makes that check measure
+    the written form; ``python -m cnclab plan`` and the benchmarks pass it; strategies without such a
+    check ignore it. Every level's ``notes``, ``warnings`` and ``left_parts`` reach the result.
     A job beyond :data:`MAX_LEVELS` / :data:`MIN_LEVEL_STEP_MM`, or a ``resolution_mm`` outside
     [:data:`MIN_RESOLUTION_MM`, D / 10] (:func:`check_resolution`), is refused before planning."""
     if strategy not in STRATEGIES:
@@ -498,6 +506,9 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     check_limits(job)
     f = STRATEGIES[strategy][0]
     allow_breach = bool(options.pop("allow_engagement_breach", False))
+    written = options.pop("written", None)     # the writer's form of a path: the adaptive promise's check
+    if written is not None and "written" in inspect.signature(f).parameters:
+        options["written"] = written
     levels = job.levels()
     tops = [job.top_z] + levels[:-1]
     paths = []

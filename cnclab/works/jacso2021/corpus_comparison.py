@@ -35,6 +35,7 @@ import time
 import numpy as np
 import pandas as pd
 
+from ...nc.program import program_path
 from ...paths import REPO_ROOT
 from ...plotting import figsize
 from ...runtime import pick
@@ -132,7 +133,7 @@ def score_job(name: str, fast: bool | None = None) -> dict:
     t0 = time.perf_counter()
     try:
         # what it leaves and an engagement beyond the promise are columns here (the warnings: the note)
-        tp = planners.plan(jb, "adaptive", h, allow_uncut=True, allow_engagement_breach=True)
+        tp = planners.plan(jb, "adaptive", h, allow_uncut=True, allow_engagement_breach=True, written=program_path)
         t_plan = time.perf_counter() - t0
         r = fx.row(evaluate(fx.as_written(tp, jb), jb, h), t_plan, jb=jb)    # scored as written, as FreeCAD's
         out.update({a: r[a] for a in AXES}, note="; ".join(tp.info.get("warnings", [])))

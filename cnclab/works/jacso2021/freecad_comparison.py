@@ -47,7 +47,7 @@ from shapely.geometry import box
 
 from ...cutting.feed_control import controlled_feed
 from ...nc.gcode import read_toolpath
-from ...nc.program import write_program
+from ...nc.program import program_path, write_program
 from ...paths import REPO_ROOT
 from ...runtime import pick
 from ...toolpath import planners
@@ -132,7 +132,7 @@ def plan_timed(jb: Job, strategy: str, res_mm: float) -> tuple:
     """``(ToolPath, wall seconds)`` of :func:`cnclab.toolpath.planners.plan` (``res_mm``: the
     planner's dixel where it takes one)."""
     t0 = time.perf_counter()
-    tp = planners.plan(jb, strategy, res_mm)
+    tp = planners.plan(jb, strategy, res_mm, written=program_path)
     return tp, time.perf_counter() - t0
 
 

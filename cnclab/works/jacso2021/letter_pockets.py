@@ -18,6 +18,7 @@ import numpy as np
 import shapely
 from shapely.geometry import box
 
+from ...nc.program import program_path
 from ...toolpath import planners
 from ...toolpath.adaptive import unproven_rapids
 from ...toolpath.evaluate import evaluate
@@ -70,7 +71,7 @@ def score(kind: str, D: float, w: float, L: float, theta: float) -> dict:
     row = {"letter": kind, "D_mm": D, "w_mm": w, "L_mm": L, "theta_deg": theta}
     t0 = time.perf_counter()
     try:
-        tp = planners.plan(jb, "adaptive", h, allow_uncut=True, allow_engagement_breach=True)
+        tp = planners.plan(jb, "adaptive", h, allow_uncut=True, allow_engagement_breach=True, written=program_path)
     except Exception as exc:       # noqa: BLE001 -- a refusal is a result of this benchmark
         return row | {"note": f"{type(exc).__name__}: {str(exc)[:160]}"}
     row["plan_s"] = round(time.perf_counter() - t0, 2)
