@@ -26,7 +26,7 @@ def test_the_promise_holds_and_is_recorded_on_a_plain_pocket():
     tp = planners.plan(_job(), "adaptive")
     chk = tp.info["engagement_check"]
     assert chk["ok"] and chk["max_deg"] <= THETA + 10.0
-    assert chk["resolution_mm"] == pytest.approx(0.05)          # max(r / 30 = 0.05, 0.05) mm
+    assert chk["resolution_mm"] == pytest.approx(0.05)          # max(r / 30 = 0.05, 0.02) mm
     assert not any("beyond the promise" in str(q) for q in tp.info.get("notes", ()))
 
 

@@ -286,8 +286,11 @@ class AdaptiveParams:
     #: and the benchmark agree; a coarser one misses peaks: neck_3 reads theta + 2.8 at r / 20 where
     #: r / 30 reads + 11.2), at least ``check_min_resolution_mm``; 0: no check
     check_resolution_frac: float = 1.0 / 30.0
-    #: mm: ... and never finer than this (the benchmark's clip: a 1 mm tool's check stays affordable)
-    check_min_resolution_mm: float = 0.05
+    #: mm: ... and never finer than this (a check stays affordable for the smallest tools). 0.02: the
+    #: check measures at r / 30 down to r = 0.6 mm, as the benchmarks do (min(0.05, r / 30) since
+    #: session 11); at 0.05 a 1 mm tool was checked at r / 20, where random pocket 76:15 read under
+    #: theta + 9 and the benchmark's r / 30 read theta + 10.35
+    check_min_resolution_mm: float = 0.02
     #: deg: the retry of a level beyond the promise plans with the clearing passes' sliver guard at
     #: theta + this (tighter than ``guard_deg``: the passes turn away from wall skins and crescents
     #: thinner than a pixel, which the planning stock under-counts); the retry is kept when its maximum
