@@ -4,7 +4,7 @@ without a start hole, with or without an island, as a program that passes the st
 (0 plunges, 0 rapids into material) and, when LinuxCNC is installed, ``rs274``.
 
 The matrix: strategy x depth in {a_p, 2 a_p, 2.5 a_p} x start hole yes/no x island yes/no (the two
-slowest planners without the 2 a_p cells, see :data:`SLOW`), on a small rectangular pocket (so that
+slowest planners' 2 a_p cells marked slow: ``make test-slow``, see :data:`SLOW`), on a small rectangular pocket (so that
 it runs in the test budget; the 60 x 40 mm, D8 case of the issue is checked by ``python -m cnclab
 plan`` in ``test_issue_pocket_through_the_cli``)."""
 import dataclasses
@@ -36,21 +36,25 @@ def _job(mult, hole, island):
     return Job(poly, Tool(D, flutes=2), 60.0, AP, depth=AP * mult, start_hole=sh, v_c=120, f_z=0.04)
 
 
-#: the planners that take tens of seconds a level on this pocket (laps on a fine dixel stock): their
-#: 2 a_p cells are left to ``make gcode-check`` style runs (2.5 a_p already joins three levels, one
-#: of them partial); every other cell of the matrix runs
+#: the planners that take seconds a level on this pocket (laps on a fine dixel stock): their 2 a_p
+#: cells are marked slow (``make test-slow``, which CI runs; 2.5 a_p already joins three levels, one
+#: of them partial, in ``make test``); every cell of the matrix runs in CI
 SLOW = ("constant-engagement", "kim-yang-modified")
 #: the strategies that accept every job of the matrix (the others may refuse islands or a missing hole)
 ALWAYS = ("adaptive", "contour-parallel", "zig-zag")
-CASES = [(n, m, h, i) for n in sorted(STRATEGIES) for m in (1, 2, 2.5) for h in (False, True) for i in (False, True)
-         if not (n in SLOW and m == 2)]
+CASES = [(n, m, h, i) for n in sorted(STRATEGIES) for m in (1, 2, 2.5) for h in (False, True) for i in (False, True)]
+
+
+def _marks(n, m):
+    group = pytest.mark.xdist_group(f"deep-{n}")
+    return [group, pytest.mark.slow] if (n in SLOW and m == 2) else [group]
 
 
 # the a_p job of a cell is field for field the first level plan() makes of its 2 a_p job: with the
 # memo_levels fixture (tests/conftest.py) that level is planned once per strategy, and one xdist group
 # per strategy (make test: --dist loadgroup) keeps a strategy's cells in one worker
 @pytest.mark.parametrize("name, mult, hole, island",
-                         [pytest.param(*c, marks=pytest.mark.xdist_group(f"deep-{c[0]}")) for c in CASES],
+                         [pytest.param(*c, marks=_marks(c[0], c[1])) for c in CASES],
                          ids=[f"{n}-{m}-{'hole' if h else 'no-hole'}-{'island' if i else 'plain'}" for n, m, h, i in CASES])
 def test_every_strategy_plans_every_depth_safely(name, mult, hole, island, tmp_path, memo_levels):
     job = _job(mult, hole, island)
