@@ -92,18 +92,10 @@ def arc_start_point(arc, tool_radius, theta_deg, kind):
 
 
 def ray_circle(P, v, C, r):
-    """Smallest lambda >= 0 with |P + lambda v - C| = r (v unit); NaN if the half-line misses."""
-    w = np.asarray(P, float) - np.asarray(C, float)
-    b = float(v @ w)
-    c = float(w @ w) - r * r
-    disc = b * b - c
-    if disc < 0:
-        return math.nan
-    sq = math.sqrt(disc)
-    for lam in (-b - sq, -b + sq):          # nearer intersection first
-        if lam >= -1e-12:
-            return max(lam, 0.0)
-    return math.nan
+    """Smallest lambda >= 0 with |P + lambda v - C| = r (v unit); NaN if the half-line misses
+    (:func:`_ray_circle` on the 2-vectors)."""
+    (px, py), (vx, vy), (cx, cy) = (np.asarray(a, float).tolist() for a in (P, v, C))
+    return _ray_circle(px, py, vx, vy, cx, cy, r)
 
 
 @dataclass
@@ -186,7 +178,8 @@ def _feed_dir(px, py, cx, cy, ca, sa):
 
 
 def _ray_circle(px, py, vx, vy, cx, cy, r):
-    """:func:`ray_circle` on floats."""
+    """:func:`ray_circle` on floats: the nearer intersection of the half-line P + lambda v with the
+    circle (C, r) first."""
     wx, wy = px - cx, py - cy
     b = vx * wx + vy * wy
     disc = b * b - (wx * wx + wy * wy - r * r)
@@ -217,46 +210,39 @@ def thesis3_path(contour, tool_radius, theta_deg, dt, method="euler", P0=None, t
     t = float(contour.t_min)
     t_end = float(contour.t_max if t_end is None else t_end)
     P = start_point(contour, r, theta_deg) if P0 is None else np.asarray(P0, float)
+    if not adaptive:
+        return _fixed_step_path(contour, P, t, t_end, dt, r, theta_deg, method, max_steps)
     ts, Ps = [t], [P]
     dt_min = dt * 1e-3 if dt_min is None else dt_min
     dt_max = dt * 50 if dt_max is None else dt_max
     order = 2 if method == "midpoint" else 1
-    if not adaptive:
-        return _fixed_step_path(contour, P, t, t_end, dt, r, theta_deg, method, max_steps)
     rejected = 0
     h = dt
     while t < t_end - 1e-12 and len(ts) < max_steps:
         h = min(h, t_end - t)
-        if not adaptive:
-            Pn = _step(contour, P, t, h, r, theta_deg, method)
-            if Pn is None:
-                raise ValueError(f"dt={dt} too large: the feed half-line misses the circle at t={t:.6g}")
-        else:
-            P1 = _step(contour, P, t, h, r, theta_deg, method)
-            Pm = _step(contour, P, t, 0.5 * h, r, theta_deg, method)
-            P2 = None if Pm is None else _step(contour, Pm, t + 0.5 * h, 0.5 * h, r, theta_deg, method)
-            if P1 is None or P2 is None:
-                rejected += 1
-                h *= 0.5
-                if h < dt_min:
-                    raise ValueError(f"adaptive step fell below dt_min at t={t:.6g}")
-                continue
-            err = float(np.hypot(*(P2 - P1))) / (2 ** order - 1)
-            if err > tol_mm and h > dt_min:
-                rejected += 1
-                h = max(h * max(0.2, 0.9 * (tol_mm / err) ** (1 / (order + 1))), dt_min)
-                continue
-            Pn = P2 + (P2 - P1) / (2 ** order - 1)   # Richardson-extrapolated
-            fac = 2.0 if err == 0 else min(2.0, 0.9 * (tol_mm / err) ** (1 / (order + 1)))
+        P1 = _step(contour, P, t, h, r, theta_deg, method)
+        Pm = _step(contour, P, t, 0.5 * h, r, theta_deg, method)
+        P2 = None if Pm is None else _step(contour, Pm, t + 0.5 * h, 0.5 * h, r, theta_deg, method)
+        if P1 is None or P2 is None:
+            rejected += 1
+            h *= 0.5
+            if h < dt_min:
+                raise ValueError(f"adaptive step fell below dt_min at t={t:.6g}")
+            continue
+        err = float(np.hypot(*(P2 - P1))) / (2 ** order - 1)
+        if err > tol_mm and h > dt_min:
+            rejected += 1
+            h = max(h * max(0.2, 0.9 * (tol_mm / err) ** (1 / (order + 1))), dt_min)
+            continue
+        Pn = P2 + (P2 - P1) / (2 ** order - 1)   # Richardson-extrapolated
+        fac = 2.0 if err == 0 else min(2.0, 0.9 * (tol_mm / err) ** (1 / (order + 1)))
         t = t + h
         P = Pn
         ts.append(t)
         Ps.append(P)
-        if adaptive:
-            h = min(max(h * fac, dt_min), dt_max)
+        h = min(max(h * fac, dt_min), dt_max)
     tt = np.asarray(ts)
-    return PathResult(tt, np.asarray(Ps), contour.point(tt), method + ("-adaptive" if adaptive else ""),
-                      rejected)
+    return PathResult(tt, np.asarray(Ps), contour.point(tt), method + "-adaptive", rejected)
 
 
 def thesis2_ivp(contour, tool_radius, theta_deg, P0=None, t_eval=None, rtol=1e-10, atol=1e-10,
