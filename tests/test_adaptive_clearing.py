@@ -366,7 +366,9 @@ def test_deterministic_golden_program():
     join of a link's last G0 to its pass kept the link's feed leg off the cut boundary, which it had
     dropped, writing a G0 from the boundary that no proof covered: 12 feed legs more; and when the
     free-space search's coarse cell of a small tool became r/10 (AdaptiveParams.coarse_cell_max_r; here
-    0.15 mm, it was one 0.05 mm pixel): the same 27 passes, 174 G0 link corners fewer): read back, every end point within its 4 written decimals
+    0.15 mm, it was one 0.05 mm pixel): the same 27 passes, 174 G0 link corners fewer; and when a link to a
+    start whose pass cut nothing was no longer run (AdaptiveParams.drop_idle_links): the same 27 passes and
+    cut moves, 3 links fewer, G0 length at depth 69.5 -> 61.9 mm): read back, every end point within its 4 written decimals
     (0.5e-4 mm), every motion word and feed the same. Any change of the planner's moves fails here
     (the writer's own changes, e.g. arc fitting, do not: the path's moves are compared); regenerate the
     file only for a change that is meant, and say so in the commit."""

@@ -332,3 +332,35 @@ def test_coarse_cell_is_a_tenth_of_r_or_0_2_mm(r, h, k):
     g = Grid(pocket, pocket.buffer(-r), r, h, None)
     assert g.k == k and g.hc == pytest.approx(k * h)
     assert g.D.shape == g.Ac.shape == (g.ny // k, g.nx // k)
+
+
+def _near_segment(M, x0, y0, h, a, b, rr):
+    """Brute force: the material pixel centres of ``M`` within ``rr`` of the segment a -> b (bool mask)."""
+    J, I = np.mgrid[0:M.shape[0], 0:M.shape[1]]
+    px, py = x0 + (I + 0.5) * h, y0 + (J + 0.5) * h
+    d = np.subtract(b, a)
+    L2 = float(d @ d)
+    t = np.zeros_like(px) if L2 == 0 else np.clip(((px - a[0]) * d[0] + (py - a[1]) * d[1]) / L2, 0, 1)
+    return M.astype(bool) & ((a[0] + t * d[0] - px) ** 2 + (a[1] + t * d[1] - py) ** 2 < rr * rr)
+
+
+@settings(**_SET)
+@given(st.integers(0, 2 ** 31 - 1), st.sampled_from([0.0005, 0.003, 0.02]),
+       st.sampled_from(["any", "horizontal", "vertical", "point", "steep"]))
+def test_capsule_scans_only_the_capsule_rows_and_misses_no_pixel(seed, p, kind):
+    """:func:`capsule_free` and :func:`blocked_spans` scan each row only over the capsule's span in it
+    (``capsule_row``): they agree with a brute-force test of every pixel of the stock, for chords of
+    every direction, points and chords running off the stock (sparse material: most chords free)."""
+    rng = np.random.default_rng(seed)
+    M = (rng.random((90, 130)) < p).astype(np.uint8)
+    x0, y0, h = -0.3, 0.2, 0.1
+    for _ in range(25):
+        a = rng.uniform([-1.0, -1.0], [14.0, 10.0])
+        b = {"any": rng.uniform([-1.0, -1.0], [14.0, 10.0]), "horizontal": a + [rng.uniform(-9, 9), 0.0],
+             "vertical": a + [0.0, rng.uniform(-9, 9)], "point": a.copy(),
+             "steep": a + [rng.uniform(-0.05, 0.05), rng.uniform(-9, 9)]}[kind]
+        rr = float(rng.uniform(0.05, 2.5))
+        near = _near_segment(M, x0, y0, h, a, b, rr)
+        assert capsule_free(M, x0, y0, h, *a, *b, rr) == (not near.any())
+        if kind != "point":
+            assert len(blocked_spans(M, x0, y0, h, *a, *b, rr)) == int(near.sum())

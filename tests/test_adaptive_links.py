@@ -19,7 +19,7 @@ from shapely.geometry import Point, box
 
 from cnclab.nc.program import check_program, write_program
 from cnclab.toolpath import planners
-from cnclab.toolpath.adaptive import AdaptiveParams, unproven_rapids
+from cnclab.toolpath.adaptive import AdaptiveParams, adaptive_clearing, unproven_rapids
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import Job
 from cnclab.toolpath.path import Tool
@@ -170,6 +170,7 @@ def test_link_chords_are_merged_only_where_one_rapid_is_proven():
     from types import SimpleNamespace
 
     from cnclab.toolpath.adaptive.grid import Grid
+    from cnclab.toolpath.adaptive.links import rapid_legs
     from cnclab.toolpath.adaptive.planner import _Level
     pocket = box(0, 0, 20, 10)
     r, h = 2.0, 2.0 / 30
@@ -181,11 +182,14 @@ def test_link_chords_are_merged_only_where_one_rapid_is_proven():
         g.cut_path(p[None, :])
     lv = SimpleNamespace(g=g, h=h)
     chords = np.array([[4.0, 5.0], [10.0, 7.8], [16.0, 5.0]])
-    assert len(_Level.merge_rapid_chords(lv, chords)) == 3
+    assert len(_Level.merge_rapid_chords(lv, chords)[0]) == 3
     for p in C[~keep]:
         g.cut_path(p[None, :])
-    merged = _Level.merge_rapid_chords(lv, chords)
+    merged, legs = _Level.merge_rapid_chords(lv, chords)
     assert len(merged) == 2 and np.array_equal(merged, chords[[0, 2]])
+    # the merged chord's proof is handed on to the link (not computed again), the one rapid_legs gives
+    ref = rapid_legs(g, chords[0], chords[2])
+    assert ref is not None and legs[1][0] is ref[0] is None and np.array_equal(legs[1][1], ref[1])
 
 
 def _g0_at_depth(tp):
@@ -257,3 +261,26 @@ def test_a_finishing_lap_starts_where_the_tool_is():
     tp = adaptive_clearing(job)
     assert _g0_at_depth(tp) > 50
     assert unproven_rapids(tp, job) == []
+
+
+def test_links_to_starts_whose_pass_cut_nothing_are_not_run():
+    # a comb (a 32 x 6 mm bar, four 5 x 14 mm fingers), D 4 mm, theta 110 deg: many pass starts in the
+    # fingers yield a pass that meets no material (dropped). AdaptiveParams.drop_idle_links rolls back
+    # the link to each such start and links from the tool's point to the next start sought from there:
+    # the same passes cut the same moves (the plan's decisions are the same), with fewer links and
+    # less length out of the cut; every G0 at depth still proven by the path before it
+    from shapely.ops import unary_union
+
+    comb = unary_union([box(0, 0, 32, 6)] + [box(x, 6, x + 5.0, 20) for x in (0, 9, 18, 27)])
+    job = Job(comb, Tool(4.0), 110.0, 2.0, feed_mm_min=764.0, spindle_rpm=5968.0, rapid_mm_min=10000.0,
+              source="comb")
+    kept, dropped = (adaptive_clearing(job, AdaptiveParams(drop_idle_links=f), resolution_mm=2.0 / 30.0)
+                     for f in (False, True))
+    for tp in (kept, dropped):
+        assert tp.is_kind("cut").sum() > 1000
+    assert np.array_equal(kept.xyz[kept.is_kind("cut")], dropped.xyz[dropped.is_kind("cut")])
+    assert kept.info["passes"] == dropped.info["passes"]
+    assert dropped.info["links"] < 0.8 * kept.info["links"]
+    a, b = kept.lengths(), dropped.lengths()
+    assert b["rapid_mm"] + b["link_mm"] < a["rapid_mm"] + a["link_mm"] - 50.0
+    assert unproven_rapids(dropped, job) == []

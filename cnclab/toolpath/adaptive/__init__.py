@@ -60,7 +60,11 @@ Design (the ideas and where they come from; the code is cnclab's own)
   the cell route is shortened to straight chords that stay in that free set and written as rapids
   at depth marked ``cleared`` (the ToolPath's proof column; FreeCAD writes its keep-tool-down links as G0 too; the evaluator
   counts any rapid that removes material) or, with ``rapid_links=False``, as feed moves (``link``,
-  link feed). A pass that cuts too little bans the cells within r of its start (r/2 where it left the
+  link feed). A start whose pass meets no material at all (dropped) keeps no link either
+  (``drop_idle_links``): the next start is sought from it, as if the tool had gone there, and linked
+  to from where the tool is (the same passes, shorter links: a comb's fingers were wandered by G0).
+  When the search finds nothing from there the link to it is made after all, so that what follows
+  is chosen from the same point. A pass that cuts too little bans the cells within r of its start (r/2 where it left the
   region at once, or in the second chance: before a lift the bans are lifted once). Before the tool
   lifts for a new entry, the *rescue* (``_Level.rescue_start``) tries the starts inside those bans
   that lie farther than ``failed_start_ban_frac`` r from every failed start, where solid material lies
@@ -157,6 +161,7 @@ The loop of one level (``_Level.run``)::
     for each round (0, then up to clean_rounds clean-up rounds, each kept only if it pays):
         repeat:
             link_to(next border cell)         # Dijkstra through free cells, chords as G0 where proven
+                                              # (not run when the pass from there meets no material)
             if no border cell is reachable:
                 narrow_level.next_region()          # a trochoid from a reachable mouth, or (nothing left) by helix
                 sweep_remnant() or finish_if_done() and enter() again, or stop

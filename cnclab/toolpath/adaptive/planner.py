@@ -21,6 +21,7 @@ from .links import boundary_gradient, rapid_legs, rapid_pieces, shortcut, solid_
 from .stock import capsule_free, component_discs, label8, segment_inside
 
 _RAPID, _PLUNGE = KINDS.index("rapid"), KINDS.index("plunge")
+_UNTRIED = object()    # a chord whose rapid_legs were not computed yet (merge_rapid_chords)
 
 
 class _Level:
@@ -40,6 +41,7 @@ class _Level:
         self.r_free = np.nan
         self._wall = None      # the tool-centre limit's boundary (wall_sliver), made when first needed
         self._link_tail = None  # the last link's final G0 (join_link_to_pass)
+        self._virtual = None    # (start of a pass that emitted nothing, its link rolled back; the tool's point then)
 
     def retract(self):
         if self.cur is not None:
@@ -47,7 +49,7 @@ class _Level:
             # static check accept a rapid only so below the clearance plane
             self.b.rapid([(self.cur[0], self.cur[1], self.clearance_z)])
             self.stats["retracts"] += 1
-            self.cur = None
+            self.cur = self._virtual = None
 
     def enter(self, banned=None):
         """An entry (:func:`.entries.enter`): True; False if none is left; None when banned."""
@@ -108,12 +110,14 @@ class _Level:
 
         chords = pts_r[shortcut(np.ascontiguousarray(pts_r, float), D, Ac, float(r_free), int(cell[0]), int(cell[1]),
                                  float(self.g.x0), float(self.g.y0), float(self.g.hc), self.g.A, float(self.h))]
+        known = [_UNTRIED] * len(chords)      # the rapid_legs of each chord, where merge_rapid_chords has them
         if self.rapid_links and len(chords) > 2:
-            chords = self.merge_rapid_chords(chords)
+            chords, known = self.merge_rapid_chords(chords)
         self._link_tail = None
         for n_q, q in enumerate(chords[1:], start=1):
             if math.hypot(q[0] - self.cur[0], q[1] - self.cur[1]) > 1e-9:
-                legs = rapid_legs(self.g, self.cur, q) if self.rapid_links else None
+                legs = None if not self.rapid_links else \
+                    (rapid_legs(self.g, self.cur, q) if known[n_q] is _UNTRIED else known[n_q])
                 pieces = None
                 # the link ends with one G0 into the pass start: join_link_to_pass may run it on to the
                 # end of the pass's own first G0 run (its start, its first chord or not)
@@ -142,6 +146,7 @@ class _Level:
                     at = e
                 self.cur = (float(q[0]), float(q[1]))
         self.stats["links"] += 1
+        self._virtual = None
         return route[-1]
 
     def join_link_to_pass(self, P, free):
@@ -168,20 +173,25 @@ class _Level:
     def merge_rapid_chords(self, chords):
         """The chords of a link (m, 2) joined where one G0 is proven for the join (:func:`rapid_legs` on
         the rapid stock, feed legs off a cut boundary included) and stays in the fine tool-centre mask:
-        from each kept point the farthest such. The coarse free cells keep a chord r + 0.75 cells from
+        from each kept point the farthest such; (the kept points (k, 2), per kept point the
+        :func:`rapid_legs` of the chord ending there, ``_UNTRIED`` where not computed). The coarse free cells keep a chord r + 0.75 cells from
         material; proven on the pixels it runs straighter, and every corner it removes is a stop of the
         machine (a G0 chain's vertices are junctions of two rapids)."""
         g, h = self.g, self.h
-        out, i, n = [0], 0, len(chords)
+        out, legs, i, n = [0], [None], 0, len(chords)
         while i < n - 1:
-            j = n - 1
-            while j > i + 1 and not (segment_inside(g.A, g.x0, g.y0, h, chords[i][0], chords[i][1], chords[j][0],
-                                                    chords[j][1], 2.0 * h if i == 0 else 0.0)
-                                     and rapid_legs(g, chords[i], chords[j]) is not None):
+            j, lg = n - 1, _UNTRIED
+            while j > i + 1:
+                if segment_inside(g.A, g.x0, g.y0, h, chords[i][0], chords[i][1], chords[j][0], chords[j][1],
+                                  2.0 * h if i == 0 else 0.0):
+                    lg = rapid_legs(g, chords[i], chords[j])
+                    if lg is not None:
+                        break
                 j -= 1
             out.append(j)
+            legs.append(lg if j > i + 1 else _UNTRIED)
             i = j
-        return chords[out]
+        return chords[out], legs
 
     def next_start(self, banned):
         """Link at depth to the start of the next clearing pass (:meth:`link_to`): the nearest cell
@@ -193,6 +203,8 @@ class _Level:
             return self.rescue_start()
         band_hi = self.r_free + 1.5 * self.g.hc
         max_cells = int(self.prm.upstream_start_frac * self.r / self.g.hc)
+        if self.virtual is not None:
+            return self._start_from_virtual(banned, band_hi, max_cells), None
         if max_cells > 0 and self.cur is not None:
             route = self.g.route(self.cur, self.r_free, band_hi, banned)
             if route is not None and not isinstance(route, str):
@@ -206,6 +218,47 @@ class _Level:
                 return self.link_to(self.r_free, band_hi, banned, route=route), None
         end = self.link_to(self.r_free, band_hi, banned)
         return end, None
+
+    @property
+    def virtual(self):
+        """The start (x, y) mm of the last pass that emitted nothing, its link rolled back, while the tool
+        is still where it was then (:meth:`next_start` seeks the next start from there); else None."""
+        v = self._virtual
+        return v[0] if v is not None and v[1] == self.cur else None
+
+    def go_to_virtual(self, banned):
+        """Link to ``virtual`` after all, when no start is left from there: what comes next (a remnant
+        sweep, a narrow region, the second chance, a rescue, a finish before a lift) is chosen from the
+        tool's point, and the plan stays the one the links through the idle starts gave."""
+        v = self.virtual
+        if v is not None:
+            self._virtual = None
+            self.link_to(self.r_free, -np.inf, banned, cell=self.g.cell(*v), end_xy=v)
+
+    def _start_from_virtual(self, banned, band_hi, max_cells):
+        """:meth:`next_start` after a pass that emitted nothing (its link rolled back, ``virtual``: its
+        start): the next start is the one sought from there, as if the tool had gone there, and the
+        link runs to it straight from the tool's point (the start cell, or None)."""
+        route = self.g.route(self.virtual, self.r_free, band_hi, banned)
+        if route is None:
+            self.go_to_virtual(banned)
+            return None
+        if isinstance(route, str):
+            self._virtual = None
+            return self.link_to(self.r_free, band_hi, banned)
+        goal = tuple(int(v) for v in route[-1])
+        if max_cells > 0:
+            D, Ac = self.g.free_field()
+            up = upstream_end(D, Ac, banned, float(self.r_free), float(band_hi), goal[0], goal[1], max_cells)
+            if up != goal:
+                end = self.link_to(self.r_free, -np.inf, banned, cell=up)
+                if end is not None:
+                    return end
+        end = self.link_to(self.r_free, -np.inf, banned, cell=goal)
+        if end is None:
+            self._virtual = None
+            return self.link_to(self.r_free, band_hi, banned)
+        return end
 
     def rescue_start(self):
         """Before an entry (a lift): a pass start within the r-bans of failed passes, farther than
@@ -224,7 +277,8 @@ class _Level:
         min_solid = self.prm.pass_min_removed_rh * self.r * self.h
         rad = int(math.ceil(self.prm.failed_start_ban_frac * self.r / self.g.hc))
         while self.rescue_fails < self.prm.rescue_max_fails and self.cur is not None:
-            route = self.g.route(self.cur, self.r_free, band_hi, self.banned_fine)
+            route = self.g.route(self.cur if self.virtual is None else self.virtual, self.r_free, band_hi,
+                                 self.banned_fine)
             if route is None or isinstance(route, str):
                 break
             j, i = (int(v) for v in route[-1])
@@ -234,14 +288,17 @@ class _Level:
                 # only skins and seams within reach, or a band too narrow for any pass to turn: no pass tried
                 self.banned_fine[max(j - rad, 0):j + rad + 1, max(i - rad, 0):i + rad + 1] = True
                 continue
-            # the search above ended at (j, i), its nearest goal: the same route leads there
-            if self.link_to(self.r_free, -np.inf, self.banned_fine, cell=(j, i), route=route) is None:
+            # the search above ended at (j, i), its nearest goal: the same route leads there (from the
+            # tool's point, not from the start of an idle pass rolled back)
+            if self.link_to(self.r_free, -np.inf, self.banned_fine, cell=(j, i),
+                            route=route if self.virtual is None else None) is None:
                 break
             self.stats["rescued_starts"] += 1
             # along that solid material, on the right (the distance field's gradient there may point
             # away from a skin instead)
             return (j, i), math.atan2(sy - y, sx - x) + 0.5 * math.pi
         self.rescue_fails, self.rescue_spent = -1, True
+        self.go_to_virtual(self.banned_fine)
         return None, None
 
     def rescue_turns(self, heading, P, removed, reason, E, free):
@@ -354,11 +411,11 @@ class _Level:
 
     def undo_pass(self, undo, E, free):
         """A pass that only cuts slivers is not worth its link and its feed time: the link and the
-        pass are undone (``undo``: the builder mark, tool point and link count before the link; the
+        pass are undone (``undo``: the builder mark, tool point, link count and ``virtual`` state before the link; the
         stocks go back to the grid's checkpoint); the (P, removed, E, free) of an empty pass."""
         self.b.rollback(undo[0])
         self.g.rollback()
-        self.cur, self.stats["links"] = undo[1], undo[2]
+        self.cur, self.stats["links"], self._virtual = undo[1], undo[2], undo[3]
         return np.array([self.cur], float), 0.0, E[:1], free[:1]
 
     def ban_start(self, banned, j, i, frac):
@@ -432,7 +489,7 @@ class _Level:
                 D, Ac = self.g.free_field()
                 self.g.checkpoint()          # for undo_pass (only the window changed since is copied)
                 self._link_tail = None
-                undo = (self.b.mark(), self.cur, self.stats["links"])
+                undo = (self.b.mark(), self.cur, self.stats["links"], self._virtual)
                 end, heading = self.next_start(banned)
                 if end is None and narrow_level.next_region(self, banned):
                     continue
@@ -490,6 +547,13 @@ class _Level:
                 elif len(P) >= 2 and self.wall_sliver(removed, undo[1], P):
                     P, removed, E, free = self.undo_pass(undo, E, free)
                     self.stats["wall_slivers"] += 1
+                if len(P) < 2 and self.prm.drop_idle_links and len(self.b) > undo[0]:
+                    # nothing emitted: the link to this start is not run either (a chain of such links
+                    # wandered a comb's fingers by G0, hundreds of mm); the next start is sought from
+                    # this one (``virtual``) and linked to from the tool's point
+                    at = (float(P[0, 0]), float(P[0, 1]))
+                    P, removed, E, free = self.undo_pass(undo, E, free)
+                    self._virtual = (at, self.cur)
                 failed = removed < self.prm.pass_min_removed_rh * self.r * self.h or len(P) < 2
                 if failed:
                     self.ban_start(banned, j, i, self.prm.pass_ban_frac if (len(P) < 2 and reason == 0) or fine else 1.0)

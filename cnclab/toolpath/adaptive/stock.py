@@ -153,17 +153,43 @@ def capsule_window(M, x0, y0, h, ax, ay, bx, by, rr):
     return i0, i1, j0, j1
 
 
+@njit(cache=True, inline="always")
+def capsule_row(x0, h, ax, ay, dx, dy, rr, py, i0, i1):
+    """(i_lo, i_hi): the pixel columns of row centre ``py`` (mm) whose centres may lie within ``rr``
+    of the segment a -> a + (dx, dy), within i0..i1 (i_lo > i_hi: none). A superset: only the
+    segment's points with |y - py| < rr can be that near, and their x range grown by rr bounds the
+    row's pixels (one column of slack each side)."""
+    if dy == 0.0:
+        if abs(ay - py) >= rr:
+            return 1, 0
+        t_lo, t_hi = 0.0, 1.0
+    else:
+        ta = (py - rr - ay) / dy
+        tb = (py + rr - ay) / dy
+        t_lo = max(min(ta, tb), 0.0)
+        t_hi = min(max(ta, tb), 1.0)
+        if t_lo > t_hi:
+            return 1, 0
+    xa = ax + t_lo * dx
+    xb = ax + t_hi * dx
+    lo = max(int(math.floor((min(xa, xb) - rr - x0) / h - 0.5)) - 1, i0)
+    hi = min(int(math.ceil((max(xa, xb) + rr - x0) / h - 0.5)) + 1, i1)
+    return lo, hi
+
+
 @njit(cache=True)
 def capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
     """True when no material pixel centre lies within ``rr`` of the segment (a, b): the tool disc
-    (radius < rr - h/sqrt(2)) swept along it removes nothing."""
+    (radius < rr - h/sqrt(2)) swept along it removes nothing. Each row is scanned only over the
+    capsule's span in it (:func:`capsule_row`), not over the segment's whole box."""
     i0, i1, j0, j1 = capsule_window(M, x0, y0, h, ax, ay, bx, by, rr)
     dx = bx - ax
     dy = by - ay
     L2 = dx * dx + dy * dy
     for j in range(j0, j1 + 1):
         py = y0 + (j + 0.5) * h
-        for i in range(i0, i1 + 1):
+        lo, hi = capsule_row(x0, h, ax, ay, dx, dy, rr, py, i0, i1)
+        for i in range(lo, hi + 1):
             if M[j, i]:
                 px = x0 + (i + 0.5) * h
                 t = 0.0 if L2 == 0.0 else ((px - ax) * dx + (py - ay) * dy) / L2
