@@ -175,17 +175,11 @@ def test_the_checker_sees_each_kind_of_violation(tmp_path):
 #: many lines
 MAX_FUNCTION_LINES, MAX_PARAMETERS, MAX_MODULE_LINES = 120, 12, 800
 
-_ADAPTIVE = "numba nopython kernel of the adaptive planner: arrays and scalars passed positionally"
-_NJIT = "numba nopython kernel: arrays and scalars passed positionally (no dataclass in nopython mode)"
 #: shrink-only allow-list: (what, module path, qualified name) -> (today's size, reason). The test fails
 #: when an entry grows, when an entry already fits (remove it) or no longer exists, and for any new
 #: offender. Sizes: lines for "lines"/"module", a count for "params".
 BUDGET_ALLOWED = {
     ("module", "cnclab/simulation/_kernels.py", ""): (860, "the numba kernels of both stocks in one module: cache=True does not see changes in other files (numba caching limits), a split would leave simulate_path stale"),
-    ("params", "cnclab/toolpath/adaptive/control.py", "root_bracket"): (18, _ADAPTIVE),
-    ("params", "cnclab/toolpath/adaptive/control.py", "search_heading"): (16, _ADAPTIVE),
-    ("lines", "cnclab/toolpath/adaptive/control.py", "pass_kernel"): (133, _ADAPTIVE),
-    ("params", "cnclab/toolpath/adaptive/control.py", "pass_kernel"): (26, _ADAPTIVE),
 }
 
 

@@ -92,10 +92,19 @@ def engagement2(M, x0, y0, h, cx, cy, r, psi, n, level, level2):
 ROOT_TOL = math.radians(1.0)
 
 
+@njit(cache=True, inline="always")
+def probe(Q, m):
+    """(engagement at the 1/2 level, at the guard level) rad of the step at heading ``m`` (rad) from
+    the probe ``Q`` = (M, x0, y0, h, r, px, py, ds, n_samp, guard_level): the stock, its grid, the tool
+    radius, the step's start (mm), length (mm), arc samples and guard level (:func:`engagement2`)."""
+    M, x0, y0, h, r, px, py, ds, n_samp, guard_level = Q
+    return engagement2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+
+
 @njit(cache=True)
-def root_bracket(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, e_a, g_a, bound, which):
+def root_bracket(Q, a, b, fa, fb, e_a, g_a, bound, which):
     """Heading between ``a`` (engagement <= bound: f(a) = fa <= 0, engagements e_a at the 1/2 level
-    and g_a at the guard level) and ``b`` (f(b) = fb > 0) of the step of length ``ds`` from (px, py)
+    and g_a at the guard level) and ``b`` (f(b) = fb > 0) of the step of the probe ``Q`` (:func:`probe`)
     whose engagement -- the 1/2 level (``which`` 0) or the guard level (1) -- is at most ``bound``
     and within ROOT_TOL of it (Illinois false position: a bracketing method, 2-4 evaluations where
     bisection needs 16). Returns (heading, engagement at 1/2, at the guard level, slope df/dheading
@@ -109,7 +118,7 @@ def root_bracket(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb,
         m = (a * fb - b * fa) / (fb - fa)
         if not (min(a, b) < m < max(a, b)):
             m = 0.5 * (a + b)
-        e, g = engagement2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+        e, g = probe(Q, m)
         fm = (e if which == 0 else g) - bound
         if fm > 0.0:
             b = m
@@ -139,23 +148,19 @@ BRACKET_STEP = math.radians(2.0)
 
 
 @njit(cache=True)
-def search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, bound, which, slope):
-    """Heading of the step of length ``ds`` from (px, py) whose engagement (1/2 level: ``which`` 0;
-    guard level: 1) is at most ``bound`` and within ROOT_TOL of it, searched in [hi, lo] (rad; ``lo``
-    the hard left turn, least engagement; ``hi`` the hard right turn or the wall) from the guess
-    ``m0``: a Newton step with ``slope`` (d engagement / d heading of the last step, < 0), then
-    bracketing steps (doubling) and :func:`root_bracket`. Returns (status, heading, engagement at 1/2, at
-    the guard level, slope): status 0 found (or the right end ``hi`` already holds: taken), 1 even
-    the hard left exceeds ``bound`` (stuck)."""
+def _first_guess(Q, lo, hi, m0, bound, which, slope):
+    """The first two evaluations of :func:`search_heading`: at ``m0`` (clipped to [hi, lo]) and at
+    the Newton (or bracketing) step from it. Returns (done, status, m0, e0, g0, f0, m1, e1, g1, f1,
+    slope): ``done`` True when the search ends there with (status, m1, e1, g1, slope)."""
     m0 = min(max(m0, hi), lo)
-    e0, g0 = engagement2(M, x0, y0, h, px + ds * math.cos(m0), py + ds * math.sin(m0), r, m0, n_samp, 0.5, guard_level)
+    e0, g0 = probe(Q, m0)
     f0 = (e0 if which == 0 else g0) - bound
     if -ROOT_TOL <= f0 <= 0.0:
-        return 0, m0, e0, g0, slope
+        return True, 0, m0, e0, g0, f0, m0, e0, g0, f0, slope
     if f0 <= 0.0 and (m0 <= hi or g0 == 0.0):
         m1 = hi                          # holds at the right end, or nothing in front: hard right
     elif f0 > 0.0 and m0 >= lo:
-        return 1, m0, e0, g0, slope
+        return True, 1, m0, e0, g0, f0, m0, e0, g0, f0, slope
     else:
         stp = -f0 / slope if slope < 0.0 else (BRACKET_STEP if f0 > 0.0 else -BRACKET_STEP)
         stp = min(max(stp, -4.0 * BRACKET_STEP), 4.0 * BRACKET_STEP)
@@ -163,13 +168,28 @@ def search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0,
     if m1 == m0:
         m1 = min(max(m0 + (BRACKET_STEP if f0 > 0.0 else -BRACKET_STEP), hi), lo)
         if m1 == m0:                     # a zero-width search interval
-            return (0 if f0 <= 0.0 else 1), m0, e0, g0, slope
-    e1, g1 = engagement2(M, x0, y0, h, px + ds * math.cos(m1), py + ds * math.sin(m1), r, m1, n_samp, 0.5, guard_level)
+            return True, (0 if f0 <= 0.0 else 1), m0, e0, g0, f0, m0, e0, g0, f0, slope
+    e1, g1 = probe(Q, m1)
     f1 = (e1 if which == 0 else g1) - bound
     if (f1 - f0) / (m1 - m0) < 0.0:
         slope = (f1 - f0) / (m1 - m0)
     if -ROOT_TOL <= f1 <= 0.0:
-        return 0, m1, e1, g1, slope
+        return True, 0, m0, e0, g0, f0, m1, e1, g1, f1, slope
+    return False, 0, m0, e0, g0, f0, m1, e1, g1, f1, slope
+
+
+@njit(cache=True)
+def search_heading(Q, lo, hi, m0, bound, which, slope):
+    """Heading of the step of the probe ``Q`` (:func:`probe`) whose engagement (1/2 level: ``which`` 0;
+    guard level: 1) is at most ``bound`` and within ROOT_TOL of it, searched in [hi, lo] (rad; ``lo``
+    the hard left turn, least engagement; ``hi`` the hard right turn or the wall) from the guess
+    ``m0``: a Newton step with ``slope`` (d engagement / d heading of the last step, < 0), then
+    bracketing steps (doubling) and :func:`root_bracket`. Returns (status, heading, engagement at 1/2, at
+    the guard level, slope): status 0 found (or the right end ``hi`` already holds: taken), 1 even
+    the hard left exceeds ``bound`` (stuck)."""
+    done, status, m0, e0, g0, f0, m1, e1, g1, f1, slope = _first_guess(Q, lo, hi, m0, bound, which, slope)
+    if done:
+        return status, m1, e1, g1, slope
     if (f0 > 0.0) != (f1 > 0.0):
         if f0 <= 0.0:
             a, fa, ea, ga, b, fb = m0, f0, e0, g0, m1, f1
@@ -182,7 +202,7 @@ def search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0,
             if a <= hi:
                 return 0, a, ea, ga, slope
             m = max(a - st, hi)
-            e, g = engagement2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+            e, g = probe(Q, m)
             f = (e if which == 0 else g) - bound
             if f > 0.0:
                 b, fb = m, f
@@ -198,14 +218,14 @@ def search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0,
             if b >= lo:
                 return 1, b, e1, g1, slope
             m = min(b + st, lo)
-            e, g = engagement2(M, x0, y0, h, px + ds * math.cos(m), py + ds * math.sin(m), r, m, n_samp, 0.5, guard_level)
+            e, g = probe(Q, m)
             f = (e if which == 0 else g) - bound
             if f <= 0.0:
                 a, fa, ea, ga = m, f, e, g
                 break
             b, fb = m, f
             st *= 2.0
-    psi, e, g, sl = root_bracket(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, a, b, fa, fb, ea, ga, bound, which)
+    psi, e, g, sl = root_bracket(Q, a, b, fa, fb, ea, ga, bound, which)
     if sl < 0.0:
         slope = sl
     return 0, psi, e, g, slope
@@ -229,15 +249,70 @@ def wall_heading(Amask, x0, y0, h, px, py, ds, lo, b):
 
 
 @njit(cache=True)
-def pass_kernel(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_steps, n_samp, air_stop, turn, turn_right, max_len,
-          guard, guard_level, D, hc, Mr, r_rapid, r_capsule, air_eng):
-    """One engagement-controlled pass from (sx, sy); cuts M (all disks flushed at the end) and the
-    rapid stock ``Mr`` (the same discs, radius ``r_rapid``) in step with it.
+def step_heading(M, Amask, D, K, px, py, phi, dpsi, was_air, slope, slope_g):
+    """The heading of a pass's next step from (px, py) mm (the last heading ``phi``, its change
+    ``dpsi``, rad; ``was_air``: the last step met no material, the guess is then the hard right
+    turn; ``slope``/``slope_g``: the last roots' slopes). ``K``: the pass's settings (x0, y0, h, hc, r,
+    ds, n_samp, guard_level, turn, turn_right, target, guard, air_reach) of :func:`pass_kernel`.
+    Returns (stop, psi, e, eg, slope, slope_g): ``stop`` -1 a step at psi with engagements e (1/2
+    level) and eg (guard level), rad; 0 the step would leave the region, 1 stuck."""
+    x0, y0, h, hc, r, ds, n_samp, guard_level, turn, turn_right, target, guard, air_reach = K
+    Q = (M, x0, y0, h, r, px, py, ds, n_samp, guard_level)
+    lo = phi + turn          # hard left: least engagement
+    hi = phi - turn_right    # hard right (curvature limited): most engagement
+    # the right end of the search: the hard right turn, or where it would leave the tool-centre
+    # region, the rightmost heading that stays inside (the pass slides along the wall)
+    if not inside_mask(Amask, x0, y0, h, px + ds * math.cos(hi), py + ds * math.sin(hi)):
+        hi = wall_heading(Amask, x0, y0, h, px, py, ds, lo, hi)
+        if hi != hi:
+            return 0, 0.0, 0.0, 0.0, slope, slope_g
+    jc = int(math.floor((py - y0) / hc))
+    ic = int(math.floor((px - x0) / hc))
+    if 0 <= jc < D.shape[0] and 0 <= ic < D.shape[1] and D[jc, ic] > air_reach:
+        psi = hi
+        e = 0.0
+        eg = 0.0
+    else:
+        st, psi, e, eg, slope = search_heading(Q, lo, hi, hi if was_air else phi + dpsi, target, 0, slope)
+        if st == 1:
+            return 1, psi, e, eg, slope, slope_g
+    if eg > guard:
+        # the guard: the engagement with every sliver of material counted (level GUARD_LEVEL) stays
+        # within ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests,
+        # crescents between passes) the 1/2 level can miss a few degrees of thin slivers: turn left
+        # until it holds
+        st, psi, e, eg, slope_g = search_heading(Q, lo, psi, psi, guard, 1, slope_g)
+        if st == 1:
+            return 1, psi, e, eg, slope, slope_g
+    if not inside_mask(Amask, x0, y0, h, px + ds * math.cos(psi), py + ds * math.sin(psi)):
+        # the headings that stay inside need not be contiguous (a corner of the region between the
+        # wall-limited right end and the hard left): slide to the inside boundary between the hard
+        # left and psi, where the engagement may exceed the target by at most 1 deg, else stop
+        psi = wall_heading(Amask, x0, y0, h, px, py, ds, lo, psi)
+        if psi != psi:
+            return 0, psi, e, eg, slope, slope_g
+        e, eg = probe(Q, psi)
+        if e > target + SLIDE_MARGIN:
+            return 1, psi, e, eg, slope, slope_g
+        if eg > guard:
+            st, psi, e, eg, slope_g = search_heading(Q, lo, psi, psi, guard, 1, slope_g)
+            if st == 1 or not inside_mask(Amask, x0, y0, h, px + ds * math.cos(psi), py + ds * math.sin(psi)):
+                return 1, psi, e, eg, slope, slope_g
+    return -1, psi, e, eg, slope, slope_g
+
+
+@njit(cache=True)
+def pass_kernel(M, Amask, Mr, D, grid, tool, start, control, steps):
+    """One engagement-controlled pass; cuts M (all disks flushed at the end) and the rapid stock
+    ``Mr`` (the same discs, radius ``r_rapid``) in step with it. ``grid`` (x0, y0, h, hc): the
+    stocks' origin and pixel, the coarse cell of ``D`` (mm); ``tool`` (r, r_rapid, r_capsule) mm;
+    ``start`` (sx, sy mm, heading rad); ``control`` (target, guard rad, guard_level, n_samp,
+    air_eng rad); ``steps`` (ds, lag mm, max_steps, air_stop mm, turn, turn_right rad, max_len mm).
 
     ``D``: the coarse distance field (cells of ``hc`` mm) of the stock as it was at the start or
     earlier (material only goes: a lower bound of the distance now); where it proves that no
     material lies within reach of any candidate step (r + ds + the cell and pixel margins), the
-    step is air without sampling the arc: the hard right turn, engagement 0.
+    step is air without sampling the arc: the hard right turn, engagement 0 (:func:`step_heading`).
 
     Returns (points (n, 2), removed area mm^2, reason, engagement (n,) rad of each step, free (n,)):
     reason 0 left the region, 1 stuck (cannot lower the engagement), 2 air, 3 step limit; ``free[k]``:
@@ -245,26 +320,25 @@ def pass_kernel(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_st
     within ``r_capsule`` (0: not checked): a G0 through cleared area. The steps of an air run are
     checked when the run ends (dropped runs never): the discs held back since its start are not yet
     cut, so the rapid stock then holds at least the material each of its steps meets."""
+    x0, y0, h, hc = grid
+    r, r_rapid, r_capsule = tool
+    target, guard, guard_level, n_samp, air_eng = control
+    ds, lag, max_steps, air_stop, turn, turn_right, max_len = steps
+    # no material pixel centre within r + ds + h of any arc sample point: the coarse cell centre may be
+    # hc/sqrt(2) from the point, the material pixel hc/sqrt(2) from its cell's centre
+    K = (x0, y0, h, hc, r, ds, n_samp, guard_level, turn, turn_right, target, guard, r + ds + h + math.sqrt(2.0) * hc)
     P = np.empty((max_steps + 1, 2))
     E = np.zeros(max_steps + 1)
     F = np.zeros(max_steps + 1, np.bool_)
-    P[0, 0] = sx
-    P[0, 1] = sy
-    n = 1
-    k_cut = 0
+    P[0, 0] = start[0]
+    P[0, 1] = start[1]
     s = np.zeros(max_steps + 1)
-    removed = 0.0
-    air = 0.0
-    n_air_start = 1
-    reason = 3
-    phi = heading
+    n, k_cut, removed, air, n_air_start, reason = 1, 0, 0.0, 0.0, 1, 3
+    phi = start[2]
     dpsi = 0.0       # the last heading change: the guess of the next one
     slope = -1.0     # d engagement / d heading (rad/rad) of the last root: the Newton step of the next
     slope_g = -1.0
     was_air = False  # the last step met no material at all: the next guess is the hard right turn
-    # no material pixel centre within r + ds + h of any arc sample point: the coarse cell centre may be
-    # hc/sqrt(2) from the point, the material pixel hc/sqrt(2) from its cell's centre
-    air_reach = r + ds + h + math.sqrt(2.0) * hc
     span = np.empty((M.shape[0], 4), np.int64)   # the last disc's row spans (see cut_disc_both)
     rows = np.array([1, 0], np.int64)
     for step in range(max_steps):
@@ -278,62 +352,10 @@ def pass_kernel(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_st
         while k_cut < k_hold and s[n - 1] - s[k_cut] > lag:
             removed += cut_disc_both(M, Mr, x0, y0, h, P[k_cut, 0], P[k_cut, 1], r, r_rapid, span, rows)
             k_cut += 1
-        lo = phi + turn          # hard left: least engagement
-        hi = phi - turn_right    # hard right (curvature limited): most engagement
-        # the right end of the search: the hard right turn, or where it would leave the tool-centre
-        # region, the rightmost heading that stays inside (the pass slides along the wall)
-        if not inside_mask(Amask, x0, y0, h, px + ds * math.cos(hi), py + ds * math.sin(hi)):
-            hi = wall_heading(Amask, x0, y0, h, px, py, ds, lo, hi)
-            if hi != hi:
-                reason = 0
-                break
-        jc = int(math.floor((py - y0) / hc))
-        ic = int(math.floor((px - x0) / hc))
-        if 0 <= jc < D.shape[0] and 0 <= ic < D.shape[1] and D[jc, ic] > air_reach:
-            psi = hi
-            e = 0.0
-            eg = 0.0
-        else:
-            m0 = hi if was_air else phi + dpsi
-            st, psi, e, eg, slope = search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, hi, m0, target, 0,
-                                             slope)
-            if st == 1:
-                reason = 1
-                break
-        if eg > guard:
-            # the guard: the engagement with every sliver of material counted (level GUARD_LEVEL) stays
-            # within ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests,
-            # crescents between passes) the 1/2 level can miss a few degrees of thin slivers: turn left
-            # until it holds
-            st, psi, e, eg, slope_g = search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi, guard, 1,
-                                               slope_g)
-            if st == 1:
-                reason = 1
-                break
-        qx = px + ds * math.cos(psi)
-        qy = py + ds * math.sin(psi)
-        if not inside_mask(Amask, x0, y0, h, qx, qy):
-            # the headings that stay inside need not be contiguous (a corner of the region between the
-            # wall-limited right end and the hard left): slide to the inside boundary between the hard
-            # left and psi, where the engagement may exceed the target by at most 1 deg, else stop
-            psi = wall_heading(Amask, x0, y0, h, px, py, ds, lo, psi)
-            if psi != psi:
-                reason = 0
-                break
-            qx = px + ds * math.cos(psi)
-            qy = py + ds * math.sin(psi)
-            e, eg = engagement2(M, x0, y0, h, qx, qy, r, psi, n_samp, 0.5, guard_level)
-            if e > target + SLIDE_MARGIN:
-                reason = 1
-                break
-            if eg > guard:
-                st, psi, e, eg, slope_g = search_heading(M, x0, y0, h, r, px, py, ds, n_samp, guard_level, lo, psi, psi,
-                                                   guard, 1, slope_g)
-                qx = px + ds * math.cos(psi)
-                qy = py + ds * math.sin(psi)
-                if st == 1 or not inside_mask(Amask, x0, y0, h, qx, qy):
-                    reason = 1
-                    break
+        stop, psi, e, eg, slope, slope_g = step_heading(M, Amask, D, K, px, py, phi, dpsi, was_air, slope, slope_g)
+        if stop >= 0:
+            reason = stop
+            break
         was_air = eg == 0.0
         if e < 0.3 * target:
             if air == 0.0:
@@ -348,8 +370,8 @@ def pass_kernel(M, Amask, x0, y0, h, r, sx, sy, heading, target, ds, lag, max_st
                 mark_free(Mr, x0, y0, h, P, E, F, n_air_start, n, air_eng, r_capsule)
                 bow_runs(Mr, Amask, (x0, y0, h), P, E, F, n_air_start, n, air_eng, r_capsule, 2.0 * h, 4)
             air = 0.0
-        P[n, 0] = qx
-        P[n, 1] = qy
+        P[n, 0] = px + ds * math.cos(psi)
+        P[n, 1] = py + ds * math.sin(psi)
         E[n] = e
         s[n] = s[n - 1] + ds
         n += 1

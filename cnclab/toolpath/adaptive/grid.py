@@ -124,12 +124,13 @@ class Grid:
         fast dispatch); ``step``: the plan's :class:`PassStep`; ``check_rapids``: mark the air steps
         whose chord is clear on the rapid stock."""
         ds, lag, n_samp, turn = step
-        P, removed, reason, E, F = pass_kernel(self.M, self.A, float(self.x0), float(self.y0), float(self.h), float(self.r),
-                                         float(start[0]), float(start[1]), float(heading), float(target), float(ds), float(lag),
-                                         int(max_steps), int(n_samp), float(air_stop), float(turn), float(turn_right),
-                                         float(max_len), float(guard), float(GUARD_LEVEL), self.free_field()[0],
-                                         float(self.hc), self.Mr, float(self.r_rapid),
-                                         float(self.r_capsule) if check_rapids else 0.0, float(air_eng))
+        P, removed, reason, E, F = pass_kernel(
+            self.M, self.A, self.Mr, self.free_field()[0],
+            (float(self.x0), float(self.y0), float(self.h), float(self.hc)),
+            (float(self.r), float(self.r_rapid), float(self.r_capsule) if check_rapids else 0.0),
+            (float(start[0]), float(start[1]), float(heading)),
+            (float(target), float(guard), float(GUARD_LEVEL), int(n_samp), float(air_eng)),
+            (float(ds), float(lag), int(max_steps), float(air_stop), float(turn), float(turn_right), float(max_len)))
         self.touch(P, self.r + self.h)
         return P, removed, reason, E, F
 
