@@ -271,6 +271,7 @@ class _Level:
         to ``rescue_max_fails`` failed passes in a row (``rescue_fails``: -1 outside a rescue), once
         between two passes that cut (``rescue_spent``); (cell, heading rad) or (None, None)."""
         if self.rescue_spent:
+            self.go_to_virtual(self.banned_fine)
             return None, None
         band_hi = self.r_free + 1.5 * self.g.hc
         self.rescue_fails = max(self.rescue_fails, 0)
