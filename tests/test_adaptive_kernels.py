@@ -364,3 +364,25 @@ def test_capsule_scans_only_the_capsule_rows_and_misses_no_pixel(seed, p, kind):
         assert capsule_free(M, x0, y0, h, *a, *b, rr) == (not near.any())
         if kind != "point":
             assert len(blocked_spans(M, x0, y0, h, *a, *b, rr)) == int(near.sum())
+
+
+@settings(**_SET)
+@given(st.integers(0, 2 ** 31 - 1), st.sampled_from([0.05, 0.3, 0.9]), st.integers(0, 40),
+       st.sampled_from([0.05, 0.7, 2.5]))
+def test_material_within_counts_the_pixels_the_pairwise_test_counts(seed, p, n_pts, r):
+    """:func:`material_within` (the finishing laps' rest within reach of a run of ring points) counts
+    exactly the material pixels whose centre lies within r of some point: the pairwise statement it
+    replaced (every material pixel against every point), points off the stock and on pixel centres
+    included."""
+    from cnclab.toolpath.adaptive.stock import material_within
+
+    rng = np.random.default_rng(seed)
+    M = (rng.random((70, 90)) < p).astype(np.uint8)
+    x0, y0, h = -1.3, 0.4, 0.1
+    P = rng.uniform([-3.0, -2.0], [10.0, 9.0], (n_pts, 2))
+    P[: n_pts // 3] = np.round(P[: n_pts // 3] / h) * h + [x0 % h, y0 % h] + 0.5 * h   # on pixel centres
+    jj, ii = np.nonzero(M)
+    C = np.c_[x0 + (ii + 0.5) * h, y0 + (jj + 0.5) * h]
+    ref = 0.0 if n_pts == 0 or len(C) == 0 else \
+        float(np.count_nonzero(((C[:, None, :] - P[None, :, :]) ** 2).sum(axis=2).min(axis=1) < r * r)) * h * h
+    assert material_within(M, x0, y0, h, P, r) == ref

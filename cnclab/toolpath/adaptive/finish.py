@@ -14,6 +14,7 @@ import shapely
 from .control import GUARD_LEVEL, replay
 from .narrow import NARROW_MIN_HALF_WIDTH_FRAC, medial_axis, medial_graph
 from ..path import resample_polyline
+from .stock import material_within
 
 __all__ = ["finish_part", "note_unvisited", "slot_strips"]
 
@@ -168,14 +169,7 @@ def _cyclic_runs(mask):
 def _rest_mm2(lv, P) -> float:
     """Area (mm^2) of the planning stock's material within the tool's reach (r) of the points P (n, 2)."""
     g = lv.g
-    lo, hi = P.min(axis=0) - lv.r, P.max(axis=0) + lv.r
-    wj, wi = g.window((lo[0], lo[1], hi[0], hi[1]))
-    jj, ii = np.nonzero(g.M[wj, wi])
-    if len(jj) == 0:
-        return 0.0
-    C = np.c_[g.x0 + (ii + wi.start + 0.5) * g.h, g.y0 + (jj + wj.start + 0.5) * g.h]
-    d2 = ((C[:, None, :] - P[None, :, :]) ** 2).sum(axis=2).min(axis=1)
-    return float(np.count_nonzero(d2 < lv.r * lv.r)) * g.h * g.h
+    return float(material_within(g.M, float(g.x0), float(g.y0), float(g.h), np.ascontiguousarray(P, float), float(lv.r)))
 
 
 def _peel(lv, wall, Rs):
