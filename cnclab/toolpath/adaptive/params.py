@@ -229,8 +229,9 @@ class AdaptiveParams:
     #: stops (1 mm: 0.040 against 0.040 s). 0: off (star_2, D 3 mm: 126 mm of such chords at feed)
     rapid_piece_min_mm: float = 2.0
     #: a link to a pass start whose pass emitted nothing (it ran into air and was dropped) is rolled
-    #: back with it, the next start sought from where the last pass that cut ended. False: kept (a
-    #: comb, D 4 mm: a chain of such links ran 750 mm of G0 through every finger)
+    #: back with it; the next start is sought from that start, as before, and linked to from the tool's
+    #: point (the same passes, shorter links). False: kept (a comb, D 4 mm: a chain of such links ran
+    #: 750 mm of G0 through every finger)
     drop_idle_links: bool = True
     #: fraction of r: the next pass starts at the upstream end of the band of starts through the
     #: nearest one (:func:`.links.upstream_end`), at most this far up it (0: the nearest)

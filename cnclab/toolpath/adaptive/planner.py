@@ -203,19 +203,29 @@ class _Level:
             return self.rescue_start()
         band_hi = self.r_free + 1.5 * self.g.hc
         max_cells = int(self.prm.upstream_start_frac * self.r / self.g.hc)
-        if self.virtual is not None:
-            return self._start_from_virtual(banned, band_hi, max_cells), None
-        if max_cells > 0 and self.cur is not None:
-            route = self.g.route(self.cur, self.r_free, band_hi, banned)
+        virtual = self.virtual
+        if (max_cells > 0 or virtual is not None) and self.cur is not None:
+            # after a pass that emitted nothing (its link rolled back): the start is sought from that
+            # pass's start, as if the tool had gone there, and linked to from the tool's point
+            route = self.g.route(self.cur if virtual is None else virtual, self.r_free, band_hi, banned)
+            if route is None and virtual is not None:
+                self.go_to_virtual(banned)
+                return None, None
             if route is not None and not isinstance(route, str):
-                j, i = (int(v) for v in route[-1])
-                D, Ac = self.g.free_field()
-                up = upstream_end(D, Ac, banned, float(self.r_free), float(band_hi), j, i, max_cells)
-                if up != (j, i):
-                    end = self.link_to(self.r_free, -np.inf, banned, cell=up)
-                    if end is not None:
-                        return end, None
-                return self.link_to(self.r_free, band_hi, banned, route=route), None
+                goal = tuple(int(v) for v in route[-1])
+                if max_cells > 0:
+                    D, Ac = self.g.free_field()
+                    up = upstream_end(D, Ac, banned, float(self.r_free), float(band_hi), goal[0], goal[1], max_cells)
+                    if up != goal:
+                        end = self.link_to(self.r_free, -np.inf, banned, cell=up)
+                        if end is not None:
+                            return end, None
+                if virtual is None:
+                    return self.link_to(self.r_free, band_hi, banned, route=route), None
+                end = self.link_to(self.r_free, -np.inf, banned, cell=goal)
+                if end is not None:
+                    return end, None
+            self._virtual = None
         end = self.link_to(self.r_free, band_hi, banned)
         return end, None
 
@@ -234,31 +244,6 @@ class _Level:
         if v is not None:
             self._virtual = None
             self.link_to(self.r_free, -np.inf, banned, cell=self.g.cell(*v), end_xy=v)
-
-    def _start_from_virtual(self, banned, band_hi, max_cells):
-        """:meth:`next_start` after a pass that emitted nothing (its link rolled back, ``virtual``: its
-        start): the next start is the one sought from there, as if the tool had gone there, and the
-        link runs to it straight from the tool's point (the start cell, or None)."""
-        route = self.g.route(self.virtual, self.r_free, band_hi, banned)
-        if route is None:
-            self.go_to_virtual(banned)
-            return None
-        if isinstance(route, str):
-            self._virtual = None
-            return self.link_to(self.r_free, band_hi, banned)
-        goal = tuple(int(v) for v in route[-1])
-        if max_cells > 0:
-            D, Ac = self.g.free_field()
-            up = upstream_end(D, Ac, banned, float(self.r_free), float(band_hi), goal[0], goal[1], max_cells)
-            if up != goal:
-                end = self.link_to(self.r_free, -np.inf, banned, cell=up)
-                if end is not None:
-                    return end
-        end = self.link_to(self.r_free, -np.inf, banned, cell=goal)
-        if end is None:
-            self._virtual = None
-            return self.link_to(self.r_free, band_hi, banned)
-        return end
 
     def rescue_start(self):
         """Before an entry (a lift): a pass start within the r-bans of failed passes, farther than
