@@ -168,7 +168,7 @@ def _same_as_previous(cols: dict, n: int) -> np.ndarray:
             a, b = v[1:], v[:-1]
             same[1:] &= (a == b) | (np.isnan(a) & np.isnan(b))
         else:
-            same[1:] &= np.array([x == y for x, y in zip(v[1:], v[:-1])], bool)
+            same[1:] &= np.asarray(v[1:] == v[:-1], bool)      # elementwise == (object arrays: each pair's)
     return same
 
 

@@ -590,8 +590,10 @@ class ToolPathBuilder:
             P = np.column_stack([P, np.broadcast_to(np.asarray(z, float), (m,))])
         elif P.shape[1] != 3:
             raise ValueError(f"points must be (m, 2) or (m, 3) mm, got shape {P.shape}")
-        names = np.broadcast_to(np.asarray(kind, dtype=object), (m,))
-        k = _kind_indices(names)
+        if isinstance(kind, str):           # one kind for every point (the planners' call): one lookup
+            k = _kind_indices((kind,)).repeat(m)
+        else:
+            k = _kind_indices(np.broadcast_to(np.asarray(kind, dtype=object), (m,)))
         ctr = np.full((m, 2), np.nan) if center is None else np.broadcast_to(np.asarray(center, float), (m, 2))
         self._chunks.append((P, k, np.broadcast_to(np.asarray(feed, float), (m,)),
                              np.broadcast_to(np.asarray(tag, dtype=object), (m,)),
