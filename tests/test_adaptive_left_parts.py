@@ -14,7 +14,7 @@ import pytest
 from shapely.geometry import box
 
 from cnclab.nc.program import check_program, write_program
-from cnclab.toolpath import planners
+from cnclab.toolpath import adaptive, planners
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import Job
 from cnclab.toolpath.path import Tool
@@ -49,3 +49,34 @@ def test_a_part_no_entry_can_open_is_left_and_stated_with_allow_uncut():
     # the bay (6.1 x 6.1 mm, its corners beyond r unreachable by any tool) is what is left; the
     # main rectangle is cleared as without the bay (measured 3.6 mm^2 uncut beyond the corners)
     assert 25.0 < tp.info["uncut"]["uncut_mm2"][0] < 45.0
+
+
+def _slot_job():
+    # a 30 x 20 pocket with a slot 6.6 mm wide (1.1 D) and 14 mm long off its right side: the slot's
+    # part of the tool-centre region is 0.6 mm wide (half-width 0.1 r < 0.2 r), no step enters it
+    # under the engagement bound
+    poly = box(0.0, 0.0, 30.0, 20.0).union(box(29.0, 6.7, 44.0, 13.3))
+    return Job(poly, Tool(2 * R), 60.0, 2.0, feed_mm_min=764.0, spindle_rpm=5968.0, rapid_mm_min=10000.0,
+               link_feed_mm_min=1500.0, v_fmax=1146.0, source="slot 1.1 D")
+
+
+def test_a_strip_too_narrow_for_the_bound_is_refused_with_its_place_and_the_remedies():
+    """The refusal says why and what to do: the strip (where, its size, the material left in its
+    reach), and the two ways (slot_narrow / --slot-narrow, a smaller tool); with slot_narrow the plan
+    leaves no more than its limit (the planner's own plan slots the strip, stating its engagement)."""
+    from cnclab.toolpath.adaptive import AdaptiveParams
+
+    with pytest.raises(planners.UncutError) as err:
+        planners.plan(_slot_job(), "adaptive", H)
+    msg = str(err.value)
+    assert msg.startswith("slot 1.1 D: ") and "too narrow to be cleared by the passes of this plan" in msg and "mm^2 of material is left" in msg
+    assert "--slot-narrow" in msg and "smaller tool" in msg
+    x, y = (float(v) for v in msg.split("region near (")[1].split(")")[0].split(", "))
+    assert 27.0 < x < 41.0 and abs(y - 10.0) < 0.5     # on the slot's axis (tool centres x 27..41: mouth to end)
+    slotted = adaptive.plan_job(_slot_job(), resolution_mm=R / 60, params=AdaptiveParams(slot_narrow=True))
+    assert any("cut by slotting at up to" in n for n in slotted.info["notes"]) and not slotted.info["left_parts"]
+    # plan() checks the promise and re-plans (its first re-plan, the tighter guard, clears the strip by passes)
+    tp = planners.plan(_slot_job(), "adaptive", H, params=AdaptiveParams(slot_narrow=True))
+    assert tp.info["uncut"]["over"] == []
+    ev = evaluate(tp, _slot_job(), H)
+    assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0

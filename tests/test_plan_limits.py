@@ -114,3 +114,24 @@ def test_cli_refuses_or_warns_in_output_and_header(one_pass, tmp_path, capsys):
     text = out.read_text()
     assert "warning:" in err and "region 0" in err
     assert "WARNING: " in text and "uncut beyond unreachable corners by region" in text
+
+
+SLOT = dict(polygon=[[0, 0], [30, 0], [30, 6.7], [44, 6.7], [44, 13.3], [30, 13.3], [30, 20], [0, 20]],
+            tool_diameter=6, theta_deg=60, a_p=2, v_c=100, f_z=0.05, teeth=2)
+
+
+def test_cli_slot_narrow_slots_the_strip_the_refusal_names(tmp_path, capsys):
+    """A 30 x 20 pocket with a slot 1.1 D wide: refused naming the strip and ``--slot-narrow``; with
+    it the program is written with no region over its uncut limit (no WARNING); with another strategy
+    the flag is an error (exit 2, nothing written)."""
+    job = tmp_path / "slot.json"
+    job.write_text(json.dumps(SLOT))
+    out = tmp_path / "slot.ngc"
+    assert cli_plan.main([str(job), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert not out.exists() and "slot.json" in err and "--slot-narrow" in err and "too narrow" in err
+    assert cli_plan.main([str(job), "-o", str(out), "--slot-narrow", "--strategy", "zig-zag"]) == 2
+    assert not out.exists() and "adaptive strategy only" in capsys.readouterr().err
+    assert cli_plan.main([str(job), "-o", str(out), "--slot-narrow"]) == 0
+    text = out.read_text()
+    assert "uncut beyond unreachable corners by region" in text and "WARNING" not in text

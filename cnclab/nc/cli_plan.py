@@ -27,6 +27,7 @@ from .program import COOLANT, DIALECTS, check_program, program_path, write_progr
 
 from ..geometry.drawing import CHORD_TOL_MM
 from ..toolpath.from_drawing import load_job_input
+from ..toolpath.adaptive import AdaptiveParams
 from ..toolpath.job import load_job
 from ..toolpath.planners import (CE_PROMISE_DEG, CE_SHARE_ABOVE_5_PCT, DEFAULT_STRATEGY, HYBRID_JACSO_MAX_DEG,
                                  HYBRID_JACSO_SHARE_ABOVE_5_PCT, MIN_RESOLUTION_MM,
@@ -168,6 +169,11 @@ def main(argv=None) -> int:
     ap.add_argument("--allow-engagement-breach", action="store_true",
                     help="write the program even when a level breaks the planner's engagement promise (adaptive: "
                          "theta + 10 deg, measured at r/30 after one re-plan), with a WARNING in the output and the header")
+    ap.add_argument("--slot-narrow", action="store_true",
+                    help="adaptive strategy: cut the strips too narrow for any step under the engagement bound (a "
+                         "slot less than 0.4 r wider than the tool) by slotting along their axis, their engagement "
+                         "[up to 180 deg] and feed stated in the header (default: left, and refused as uncut with "
+                         "that reason)")
     ap.add_argument("--dialect", default="linuxcnc", choices=DIALECTS,
                     help="controller dialect: linuxcnc (T M6, G43 H; default) or grbl (GRBL 1.1 words, lines <= 80 "
                          "characters, tool named in a comment)")
@@ -177,6 +183,13 @@ def main(argv=None) -> int:
                     help=f"planning dixel / sampling step, mm, in [{MIN_RESOLUTION_MM:g}, D/10] (default: the "
                          "planner's own, 0.1 mm; adaptive r/60)")
     args = ap.parse_args(argv)
+    extra = {}
+    if args.slot_narrow:
+        if (args.strategy or DEFAULT_STRATEGY) != "adaptive":
+            print(f"error: --slot-narrow applies to the adaptive strategy only, not {args.strategy!r}", file=sys.stderr)
+            return 2
+        extra["params"] = AdaptiveParams(slot_narrow=True)
+
     def message(exc):
         msg = str(exc)
         if args.resolution is not None and msg.startswith("resolution_mm "):
@@ -188,5 +201,5 @@ def main(argv=None) -> int:
         lambda: plan_program(args.job, args.output, args.strategy, cutting=args.cutting, layer=args.layer,
                              tolerance=args.tolerance, units=args.units, allow_uncut=args.allow_uncut,
                              dialect=args.dialect, coolant=args.coolant, resolution_mm=args.resolution,
-                             allow_engagement_breach=args.allow_engagement_breach),
+                             allow_engagement_breach=args.allow_engagement_breach, **extra),
         (ValueError, OSError, RuntimeError, KeyError), message)

@@ -450,11 +450,15 @@ def check_limits(job: Job) -> None:
                          "(the program's z resolution x 10): the cut would be written at or near the stock top")
 
 
-def _uncut_message(job: Job, strategy: str, rep: dict) -> str:
+def _uncut_message(job: Job, strategy: str, rep: dict, left=()) -> str:
+    """The uncut-area refusal (or warning): the regions over their limit, then how many parts the
+    planner stated it left (``info["left_parts"]``: each with where, its size and why) and the first."""
     parts = "; ".join(f"region {k}: {rep['uncut_mm2'][k]:.1f} of {rep['reach_mm2'][k]:.0f} mm^2 reachable "
                       f"(limit {rep['limit_mm2'][k]:.1f})" for k in rep["over"])
+    why = "" if not left else (f"; the plan states {len(left)} part(s) left" + (", the first" if len(left) > 1 else "")
+                               + f": {left[0]}")
     return (f"{job.source}: strategy {strategy} leaves material uncut beyond the corners no tool disc reaches: "
-            f"{parts}")
+            f"{parts}{why}")
 
 
 def _run_strategy(f, strategy: str, job: Job, resolution_mm: float, options: dict) -> ToolPath:
@@ -532,7 +536,7 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     rep = coverage.uncut_report(out, job)
     out.info["uncut"] = rep
     if rep["over"]:
-        msg = _uncut_message(job, strategy, rep)
+        msg = _uncut_message(job, strategy, rep, out.info.get("left_parts", ()))
         if not allow_uncut:
             raise UncutError(msg + " (accept it with allow_uncut=True, CLI --allow-uncut)", rep)
         out.info.setdefault("warnings", []).append(msg)

@@ -170,6 +170,7 @@ The loop of one level (``_Level.run``)::
         finish_part(each part)                # wall-following laps at theta + finish margin
     retract()
     note_unvisited()                          # parts no entry could open: left, stated
+    note_thin_strips()                        # strips only slotting clears (slot_narrow off): stated
 
 A part of the tool-centre region no entry opens, or one narrower than the tool whose rings hold no
 free place when its finish starts, is left and stated (``info["left_parts"]``, the notes, the program

@@ -16,7 +16,7 @@ from .narrow import NARROW_MIN_HALF_WIDTH_FRAC, medial_axis, medial_graph
 from ..path import resample_polyline
 from .stock import material_within
 
-__all__ = ["finish_part", "note_unvisited", "slot_strips"]
+__all__ = ["finish_part", "note_thin_strips", "note_unvisited", "slot_strips"]
 
 
 def finish_part(lv, part):
@@ -304,8 +304,7 @@ def slot_strips(lv, part) -> None:
     the nominal removal rate (``feed_mm_min`` x a_e / 2 r: the full tool width is engaged); its
     engagement (up to 180 deg) is stated in the result's notes (the program header)."""
     c_lim = NARROW_MIN_HALF_WIDTH_FRAC * lv.r
-    wide = part.buffer(-c_lim, quad_segs=16).buffer(c_lim, quad_segs=16)
-    strips = [q for q in shapely.get_parts(part.difference(wide)) if q.area >= c_lim * lv.r]
+    strips = _thin_strips(lv, part)
     if not strips:
         return
     spacing = min(2.0 * lv.h, lv.r / 8.0)
@@ -321,6 +320,37 @@ def slot_strips(lv, part) -> None:
         if ax is not None:
             P, c = ax
             _slot_along(lv, P if c[0] >= c[-1] else P[::-1], inside)
+
+
+def _thin_strips(lv, part) -> list:
+    """The strips of ``part`` thinner than 2 c (c = ``narrow.NARROW_MIN_HALF_WIDTH_FRAC`` r), of at
+    least c r mm^2: what a slot less than 0.4 r wider than the tool leaves of the tool-centre region."""
+    c_lim = NARROW_MIN_HALF_WIDTH_FRAC * lv.r
+    wide = part.buffer(-c_lim, quad_segs=16).buffer(c_lim, quad_segs=16)
+    return [q for q in shapely.get_parts(part.difference(wide)) if q.area >= c_lim * lv.r]
+
+
+def note_thin_strips(lv) -> None:
+    """After the level, without ``AdaptiveParams.slot_narrow``: every strip of the tool-centre region
+    that :func:`slot_strips` would slot and that keeps more than ``thin_strip_note_mm2`` of material
+    within the tool's reach of it (the planning stock's pixels within r of its points, every h or
+    r/10) is stated in ``lv.left_parts`` with that area and the two ways to cut it (``plan`` then
+    refuses the uncut area with that reason, or warns under ``allow_uncut``)."""
+    step = min(lv.h, 0.1 * lv.r)
+    parts = shapely.get_parts(lv.allowed.buffer(-1.5 * lv.h))     # the parts finish_part is given
+    for q in (q for part in parts for q in _thin_strips(lv, part)):
+        x0, y0, x1, y1 = q.bounds
+        X, Y = np.meshgrid(np.arange(x0, x1 + step, step), np.arange(y0, y1 + step, step))
+        pts = np.c_[X.ravel(), Y.ravel()]
+        pts = np.vstack([pts[shapely.contains_xy(q, pts[:, 0], pts[:, 1])], shapely.get_coordinates(q)])
+        rest = _rest_mm2(lv, pts)
+        if rest > lv.prm.thin_strip_note_mm2:
+            _state_left(lv, q, f"cleared by the passes of this plan (tool-centre half-width under "
+                               f"{NARROW_MIN_HALF_WIDTH_FRAC:g} r: a slot less than {2 * NARROW_MIN_HALF_WIDTH_FRAC:g} r "
+                               "wider than the tool, where a step meets nearly the whole front half of the tool): "
+                               f"{rest:.1f} mm^2 of material is left within its reach; slot it with "
+                               "AdaptiveParams(slot_narrow=True) (python -m cnclab plan --slot-narrow: its engagement "
+                               "stated) or use a smaller tool")
 
 
 def _slot_along(lv, P, inside) -> None:

@@ -46,6 +46,10 @@ class AdaptiveParams:
     #: by slotting along their medial axis, their engagement (up to 180 deg) stated in the notes
     #: (finish.slot_strips; off: they are left, and ``plan`` reports them as uncut)
     slot_narrow: bool = False
+    #: mm^2: without slot_narrow, a strip that slot_narrow would slot and that keeps more material than
+    #: this within the tool's reach after the finish is stated with the remedies (finish.note_thin_strips;
+    #: the floor of the plan's uncut limit, coverage.uncut_limit_mm2)
+    thin_strip_note_mm2: float = 1.0
     #: fraction of r: a part of the tool-centre region whose inscribed radius is below this and whose
     #: rings have no place free of material when its finish starts (it was entered, if at all, by a helix
     #: smaller than its ring) gets no finishing lap: the link to the ring and the lap would cut its rest

@@ -566,6 +566,8 @@ class _Level:
                 break
         self.retract()
         finish.note_unvisited(self, mark)
+        if self.finish and not self.prm.slot_narrow:
+            finish.note_thin_strips(self)         # strips only slotting would clear: stated with the remedies
 
 
 # ------------------------------------------------------------------------------------------------
