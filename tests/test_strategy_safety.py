@@ -89,10 +89,28 @@ def pockets(seed=2811, n=None):
 POCKETS = pockets()
 
 
+#: the pockets of the full set that fast mode leaves out: ``make test-slow`` (CI) plans them
+EXTRA = pockets(n=6)[len(POCKETS):]
+
+
 @pytest.mark.parametrize("strategy", sorted(planners.STRATEGIES))
 def test_every_strategy_safe_or_refusing(strategy):
+    _safe_or_refusing(strategy, POCKETS)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("strategy", sorted(planners.STRATEGIES))
+def test_every_strategy_safe_or_refusing_on_the_full_set(strategy):
+    """The same on the pockets of the full set that fast mode leaves out (none outside fast mode: the
+    test above then has them all)."""
+    if not EXTRA:
+        pytest.skip("outside fast mode the test above plans the full set")
+    _safe_or_refusing(strategy, EXTRA)
+
+
+def _safe_or_refusing(strategy, pockets_):
     planned, refused = [], []
-    for name, P in POCKETS:
+    for name, P in pockets_:
         job = Job(P, Tool(D), THETA, 1.0, v_c=100, f_z=0.05, source=f"{name}.json")
         try:
             path = planners.plan(job, strategy, 0.2, allow_uncut=True)
@@ -111,7 +129,7 @@ def test_every_strategy_safe_or_refusing(strategy):
         if strategy in SHARE5:
             assert ev.share_above_5_pct <= SHARE5[strategy], (strategy, name, ev.share_above_5_pct)
         planned.append(name)
-    need = int(np.ceil(MIN_PLANNED.get(strategy, 0.0) * len(POCKETS)))
+    need = int(np.ceil(MIN_PLANNED.get(strategy, 0.0) * len(pockets_)))
     assert len(planned) >= need, f"{strategy} planned only {planned}; refused {refused}"
 
 
