@@ -201,3 +201,48 @@ def test_plan_passes_resolution_through():
     with pytest.raises(ValueError, match="resolution_mm"):
         plan(job, "zig-zag", resolution_mm=0.0)
     assert dataclasses.is_dataclass(job)
+
+
+@pytest.mark.parametrize("name", sorted(STRATEGIES))
+def test_a_level_as_deep_as_the_first_is_its_plan_lowered(name):
+    """plan() plans a level as deep as the first once and lowers it (planners.lowered_level): for
+    every strategy that plan is what the strategy plans for the deeper level itself -- the same moves,
+    kinds, tags, feeds and info, z within 1e-9 mm (the helix's z steps rounded differently) -- on a
+    job with the parts that state z in their info (left parts: a 0.1 mm bay behind a 4 mm neck)."""
+    from cnclab.toolpath import planners
+
+    hole, island = (False, True) if name in ALWAYS else (True, False)
+    job = _job(3, hole, island)
+    if name in ALWAYS:
+        poly = job.polygon.union(box(29.0, 9.0, 31.0, 13.0)).union(box(30.8, 7.95, 36.9, 14.05))
+        job = dataclasses.replace(job, polygon=poly)
+    f = STRATEGIES[name][0]
+    levels = job.levels()
+    one = [dataclasses.replace(job, top_z=t, a_p=t - z, depth=t - z) for t, z in zip([job.top_z] + levels[:-1], levels)]
+    try:
+        first = planners._run_strategy(f, name, one[0], RES, {})
+    except ValueError as exc:
+        assert name not in ALWAYS, exc
+        return
+    for lv, z in zip(one[1:], levels[1:]):
+        own = planners._run_strategy(f, name, lv, RES, {})
+        low = planners.lowered_level(first, levels[0], z, job.clearance_z)
+        assert len(low) == len(own) and np.abs(low.xyz - own.xyz).max() < 1e-9
+        for col in ("kind", "tag", "feed", "arc", "arc_center", "cleared"):
+            assert np.array_equal(getattr(low, col), getattr(own, col), equal_nan=col in ("feed", "arc_center")), col
+        assert _untimed(low.info) == _untimed(own.info)
+    if name == "adaptive":
+        assert any(f"level z {levels[2]:g}:" in q for q in low.info["left_parts"])
+
+
+#: info keys that are wall times (s): the only info two plans of one level may differ in
+TIMES = ("plan_time_s", "plan_s", "evaluate_s")
+
+
+def _untimed(v):
+    """``v`` (an info value) without its wall times (:data:`TIMES`), at any depth."""
+    if isinstance(v, dict):
+        return {k: _untimed(q) for k, q in v.items() if k not in TIMES}
+    if isinstance(v, list):
+        return [_untimed(q) for q in v]
+    return v

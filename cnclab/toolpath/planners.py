@@ -28,6 +28,7 @@ kim-yang-modified        the same with Kim & Yang's §3.2 constant-MRR modificat
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import inspect
 import math
@@ -450,6 +451,34 @@ def check_limits(job: Job) -> None:
                          "(the program's z resolution x 10): the cut would be written at or near the stock top")
 
 
+def lowered_level(path: ToolPath, z_from: float, z_to: float, clearance_z: float) -> ToolPath:
+    """The one-level plan ``path`` of the level cutting at ``z_from`` (mm) as the plan of an equally deep
+    level cutting at ``z_to``: every point below the clearance plane ``clearance_z`` lowered by
+    ``z_from - z_to``, the rest (the clearance-plane moves) kept; the z in its info (``levels``, the
+    parts it states it left, the engagement-breach text) said of ``z_to``. What a strategy plans for
+    the deeper level itself, to float rounding (the helix's z steps)."""
+    dz = z_to - z_from
+    xyz = path.xyz.copy()
+    low = xyz[:, 2] < clearance_z - 1e-9
+    xyz[low, 2] += dz
+    xyz[low & (np.abs(path.xyz[:, 2] - z_from) < 1e-9), 2] = z_to     # the cutting moves at exactly z_to
+
+    def said(v):
+        if isinstance(v, str):
+            return v.replace(f"level z {z_from:g}:", f"level z {z_to:g}:").replace(f"level at z {z_from:g} mm",
+                                                                                   f"level at z {z_to:g} mm")
+        if isinstance(v, list):
+            return [said(q) for q in v]
+        return v
+
+    info = {k: said(copy.deepcopy(v)) for k, v in path.info.items()}
+    if "levels" in info:
+        info["levels"] = [z_to]
+    cols = {f.name: getattr(path, f.name).copy() for f in dataclasses.fields(path)
+            if isinstance(getattr(path, f.name), np.ndarray) and f.name != "xyz"}
+    return dataclasses.replace(path, xyz=xyz, info=info, **cols)
+
+
 def _uncut_message(job: Job, strategy: str, rep: dict, left=()) -> str:
     """The uncut-area refusal (or warning): the regions over their limit, then how many parts the
     planner stated it left (``info["left_parts"]``: each with where, its size and why) and the first."""
@@ -481,7 +510,9 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     to every strategy (None: each planner's own default, 0.1 mm, the adaptive planner's r/60; the
     adaptive planner plans at r/60 or finer, see ``info["resolution_mm"]``); ``options`` go to the
     planner. The levels (:meth:`Job.levels`, at most ``a_p`` each) are planned here, each as a
-    one-level job whose top is the floor above, and joined by
+    one-level job whose top is the floor above (a level as deep as the first -- with equal levels,
+    every one -- is the first's plan lowered, :func:`lowered_level`: each strategy plans the same 2D
+    problem one step down the same way, so it is planned and checked once), and joined by
     :func:`cnclab.toolpath.levels.join_levels`: a move through the levels above is marked cleared
     only where their swept area proves it, else the level enters by a helix from the stock top.
     Every helix and ramp entry then runs at the job's entry feed (:attr:`Job.entry_feed`, mm/min;
@@ -517,6 +548,11 @@ def plan(job: Job, strategy: str = DEFAULT_STRATEGY, resolution_mm: float | None
     tops = [job.top_z] + levels[:-1]
     paths = []
     for top, z in zip(tops, levels):
+        if paths and math.isclose(top - z, tops[0] - levels[0], rel_tol=0.0, abs_tol=1e-12):
+            # a level as deep as the first is the first level's 2D problem one step down: its plan,
+            # lowered (every strategy plans it so; tests/test_deep_pockets.py), as FreeCAD plans once
+            paths.append(lowered_level(paths[0], levels[0], z, job.clearance_z))
+            continue
         lv = job if len(levels) == 1 else dataclasses.replace(job, top_z=top, a_p=top - z, depth=top - z)
         paths.append(_run_strategy(f, strategy, lv, resolution_mm, options))
     out = with_entry_feed(join_levels(paths, tops, job), job)

@@ -345,12 +345,10 @@ def note_thin_strips(lv) -> None:
         pts = np.vstack([pts[shapely.contains_xy(q, pts[:, 0], pts[:, 1])], shapely.get_coordinates(q)])
         rest = _rest_mm2(lv, pts)
         if rest > lv.prm.thin_strip_note_mm2:
-            _state_left(lv, q, f"cleared by the passes of this plan (tool-centre half-width under "
-                               f"{NARROW_MIN_HALF_WIDTH_FRAC:g} r: a slot less than {2 * NARROW_MIN_HALF_WIDTH_FRAC:g} r "
-                               "wider than the tool, where a step meets nearly the whole front half of the tool): "
-                               f"{rest:.1f} mm^2 of material is left within its reach; slot it with "
-                               "AdaptiveParams(slot_narrow=True) (python -m cnclab plan --slot-narrow: its engagement "
-                               "stated) or use a smaller tool")
+            _state_left(lv, q, f"cleared by this plan's passes (tool-centre half-width under "
+                               f"{NARROW_MIN_HALF_WIDTH_FRAC:g} r, a step there meets nearly half the tool): "
+                               f"{rest:.1f} mm^2 of material is left within its reach; slot it "
+                               "(AdaptiveParams.slot_narrow, python -m cnclab plan --slot-narrow) or use a smaller tool")
 
 
 def _slot_along(lv, P, inside) -> None:
