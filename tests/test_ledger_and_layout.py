@@ -37,6 +37,9 @@ def test_notebook_folders_are_the_work_ids():
 def test_notebook_is_stripped_and_follows_template(nb):
     assert is_stripped(nb), f"{nb} is committed with outputs: run `python -m cnclab nb strip`"
     cells = json.loads(nb.read_text())["cells"]
+    # nbformat 4.5: every cell has a unique id (without, nbformat warns now and will refuse the file)
+    ids = [c.get("id") for c in cells]
+    assert None not in ids and len(set(ids)) == len(ids), f"{nb.name}: a cell without an id, or a repeated one"
     assert cells[0]["cell_type"] == "markdown" and "".join(cells[0]["source"]).startswith("# ")
     code = ["".join(c["source"]) for c in cells if c["cell_type"] == "code"]
     assert "notebook_setup(" in code[0], "first code cell must call cnclab.notebook_setup()"
