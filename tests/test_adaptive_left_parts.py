@@ -69,7 +69,7 @@ def test_a_strip_too_narrow_for_the_bound_is_refused_with_its_place_and_the_reme
     with pytest.raises(planners.UncutError) as err:
         planners.plan(_slot_job(), "adaptive", H)
     msg = str(err.value)
-    assert msg.startswith("slot 1.1 D: ") and "too narrow to be cleared by this plan's passes" in msg and "mm^2 of material is left" in msg
+    assert msg.startswith("slot 1.1 D: ") and "too narrow to be cleared by this plan's passes" in msg and "mm^2 of material within the tool's reach" in msg
     assert "--slot-narrow" in msg and "smaller tool" in msg
     x, y = (float(v) for v in msg.split("region near (")[1].split(")")[0].split(", "))
     assert 27.0 < x < 41.0 and abs(y - 10.0) < 0.5     # on the slot's axis (tool centres x 27..41: mouth to end)

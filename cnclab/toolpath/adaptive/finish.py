@@ -269,14 +269,29 @@ def _leave_part(lv, part) -> None:
                           "rest is left uncut")
 
 
-def _state_left(lv, part, why: str) -> None:
+def _state_left(lv, part, why: str, rest: float | None = None) -> None:
     """One line in ``lv.left_parts`` for a part of the tool-centre region left: where (its largest
-    inscribed circle, mm), its area (mm^2) and ``why`` (after "is too narrow to be ")."""
+    inscribed circle, mm), its area and the material within the tool's reach of it (mm^2: ``rest``,
+    else :func:`_part_rest_mm2`; a sliver of a tool-centre part can hold a whole corner's material)
+    and ``why`` (after "is too narrow to be ")."""
     ins = shapely.maximum_inscribed_circle(part)
     x, y = ins.coords[0]
+    rest = _part_rest_mm2(lv, part) if rest is None else rest
     lv.left_parts.append(f"level z {lv.z:g}: a part of the tool-centre region near ({x:.2f}, {y:.2f}) (area "
-                         f"{part.area:.2f} mm^2, inscribed radius {ins.length:.2f} mm) is too narrow to be {why}")
+                         f"{part.area:.2f} mm^2, inscribed radius {ins.length:.2f} mm, {rest:.1f} mm^2 of material "
+                         f"within the tool's reach of it) is too narrow to be {why}")
     lv.stats["parts_left"] = lv.stats.get("parts_left", 0) + 1
+
+
+def _part_rest_mm2(lv, part) -> float:
+    """The planning stock's material (mm^2) within r of the part ``part`` of the tool-centre region: of
+    its vertices and of a grid of points inside it every min(h, r/10) mm."""
+    step = min(lv.h, 0.1 * lv.r)
+    x0, y0, x1, y1 = part.bounds
+    X, Y = np.meshgrid(np.arange(x0, x1 + step, step), np.arange(y0, y1 + step, step))
+    pts = np.c_[X.ravel(), Y.ravel()]
+    pts = np.vstack([pts[shapely.contains_xy(part, pts[:, 0], pts[:, 1])], shapely.get_coordinates(part)])
+    return _rest_mm2(lv, pts)
 
 
 def note_unvisited(lv, mark) -> None:
@@ -336,19 +351,14 @@ def note_thin_strips(lv) -> None:
     within the tool's reach of it (the planning stock's pixels within r of its points, every h or
     r/10) is stated in ``lv.left_parts`` with that area and the two ways to cut it (``plan`` then
     refuses the uncut area with that reason, or warns under ``allow_uncut``)."""
-    step = min(lv.h, 0.1 * lv.r)
     parts = shapely.get_parts(lv.allowed.buffer(-1.5 * lv.h))     # the parts finish_part is given
     for q in (q for part in parts for q in _thin_strips(lv, part)):
-        x0, y0, x1, y1 = q.bounds
-        X, Y = np.meshgrid(np.arange(x0, x1 + step, step), np.arange(y0, y1 + step, step))
-        pts = np.c_[X.ravel(), Y.ravel()]
-        pts = np.vstack([pts[shapely.contains_xy(q, pts[:, 0], pts[:, 1])], shapely.get_coordinates(q)])
-        rest = _rest_mm2(lv, pts)
+        rest = _part_rest_mm2(lv, q)
         if rest > lv.prm.thin_strip_note_mm2:
             _state_left(lv, q, f"cleared by this plan's passes (tool-centre half-width under "
-                               f"{NARROW_MIN_HALF_WIDTH_FRAC:g} r, a step there meets nearly half the tool): "
-                               f"{rest:.1f} mm^2 of material is left within its reach; slot it "
-                               "(AdaptiveParams.slot_narrow, python -m cnclab plan --slot-narrow) or use a smaller tool")
+                               f"{NARROW_MIN_HALF_WIDTH_FRAC:g} r, a step there meets nearly half the tool): its "
+                               "material is left; slot it (AdaptiveParams.slot_narrow, python -m cnclab plan "
+                               "--slot-narrow) or use a smaller tool", rest)
 
 
 def _slot_along(lv, P, inside) -> None:
