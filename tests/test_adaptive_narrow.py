@@ -91,6 +91,34 @@ def test_spiral_out_reaches_the_slot_width():
     assert turn[-1] == pytest.approx(5.0, abs=1e-9)
 
 
+@pytest.mark.parametrize("theta", [25.6, 45.0, 80.0])
+def test_spiral_out_holds_the_engagement_from_the_helix_out(theta):
+    """The entry spiral of a narrow region (tool_r given): opened from the helix hole (rho 0.3 r) to
+    the slot's half-width 0.7 r, its engagement measured by the dixel simulator (r / 60 rows, the
+    helix's hole cut first): 99 % of its samples within theta + 1.5 deg, its maximum within theta + 4
+    (single samples where a row meets the wall of the last turn nearly tangentially: +3.1 at 25.6 deg);
+    the constant pitch a_e / 2 it replaces reaches theta + 10 deg and more at theta 25.6 and 45
+    (letters 11:0, 24:12, 27:12 of bench_letters broke the bound there)."""
+    from cnclab.simulation import dixel
+    from cnclab.simulation.common import simulate
+
+    r = 3.0
+    a_e = r * (1 - math.cos(math.radians(theta)))
+
+    def engagement(S):
+        st = dixel.Stock.from_polygon(box(-20, -20, 20, 20), r / 60)
+        for a in np.linspace(0, 2 * np.pi, 64):            # the helix's hole (ring radius 0.3 r)
+            st.cut_disk((0.3 * r * math.cos(a), 0.3 * r * math.sin(a)), r)
+        e = simulate(st, S, r, 1.0, 1.0, lag_rule="front").engagement_deg.to_numpy()[1:]
+        return e[np.isfinite(e)]
+
+    new = engagement(narrow.spiral_out((0.0, 0.0), 0.3 * r, 0.7 * r, a_e, r / 60, tool_r=r))
+    assert np.percentile(new, 99) <= theta + 1.5 and new.max() <= theta + 4.0
+    if theta < 60:
+        old = engagement(narrow.spiral_out((0.0, 0.0), 0.3 * r, 0.7 * r, 0.5 * a_e, r / 60))
+        assert old.max() > theta + 10.0
+
+
 def test_region_refused_by_the_trochoid_is_left_to_the_planner(monkeypatch):
     # every width class "crawls" (MIN_STEP_FRAC huge): the region is handed back to the level
     # planner, which plans the channel its own way (entries by helix) -- safely, and says no region

@@ -38,7 +38,8 @@ Steps (one role: the narrow regions, from detection to their moves):
   region, the leg joined to the axis by a rounded bend (:func:`join_axis`) -- with no lift;
   the wide part behind it is then reached through the cleared slot. Only when no place is left to
   enter is a region entered by a helix at its axis start (a closed end first), opened to the slot's
-  width by a spiral out (radial pitch a_e / 2) and a circle;
+  width by a spiral out (each turn gaining what keeps the engagement at theta: :func:`spiral_out`) and
+  a circle;
 * **moves** (:mod:`.narrow_level`: ``cut_region``, ``emit_trochoid``): the trochoid's cutting moves at the
   booklet's feed control (§4: roll-in, roll-out and the cutting part of the return hold the nominal
   MRR, up to ``v_fmax``), its returns through air as one G0 chord where the rapid stock proves it
@@ -596,21 +597,55 @@ def join_axis(reg: NarrowRegion, p) -> NarrowRegion:
     return NarrowRegion(reg.index, reg.polygon, Q, cq, (False, reg.dead[1]))
 
 
-def spiral_out(c_xy, rho0, rho1, pitch, ds, start_rad=0.0):
-    """Counter-clockwise Archimedean spiral about ``c_xy`` from radius ``rho0`` at angle ``start_rad``
-    (rad) out to ``rho1`` (mm) gaining at most ``pitch`` mm per turn, then one full circle at
-    ``rho1``; points about ``ds`` mm apart, (m, 2) mm.
+def spiral_out(c_xy, rho0, rho1, pitch, ds, start_rad=0.0, tool_r=None):
+    """Counter-clockwise spiral about ``c_xy`` from radius ``rho0`` at angle ``start_rad`` (rad) out to
+    ``rho1`` (mm), then one full circle at ``rho1``; points about ``ds`` mm apart, (m, 2) mm.
+
+    Without ``tool_r``: Archimedean, gaining at most ``pitch`` mm per turn. With ``tool_r`` (the tool
+    radius r, mm): ``pitch`` is the radial depth a_e of a straight cut at the target engagement theta
+    (cos theta = 1 - a_e / r), and a turn at radius rho gains g = rho + r - sqrt(rho^2 + r^2 +
+    2 rho r cos theta): the tool circle at rho meets the wall the last turn left (radius rho - g + r)
+    at the angle theta from the radial direction (law of cosines). It tends to a_e far out and to
+    a_e rho / r near the centre, where a constant pitch of a_e / 2 cuts 45 deg at rho = 0.2 r for
+    theta 25.6 deg.
 
     >>> S = spiral_out((0.0, 0.0), 1.0, 2.0, 0.5, 0.1)
     >>> S[0].round(9).tolist(), S[-1].round(9).tolist(), round(float(np.hypot(*S[-50].T)), 9)
     ([1.0, 0.0], [2.0, 0.0], 2.0)
+    >>> S = spiral_out((0.0, 0.0), 0.5, 2.0, 0.3, 0.05, tool_r=3.0)
+    >>> rad = np.hypot(*S.T); bool(np.all(np.diff(rad) >= -1e-12)), round(float(rad[-1]), 9)
+    (True, 2.0)
     """
-    turns = max(int(math.ceil((rho1 - rho0) / pitch - 1e-9)), 1) if rho1 > rho0 else 0
-    m = max(int(math.ceil(2 * math.pi * max(rho1, rho0) / ds)), 16)
-    t = np.linspace(0.0, turns + 1.0, m * (turns + 1) + 1)
-    rad = np.where(t < turns, rho0 + (rho1 - rho0) * t / max(turns, 1), max(rho1, rho0))
+    c = np.asarray(c_xy, float)
+    if tool_r is None or rho1 <= rho0:
+        turns = max(int(math.ceil((rho1 - rho0) / pitch - 1e-9)), 1) if rho1 > rho0 else 0
+        m = max(int(math.ceil(2 * math.pi * max(rho1, rho0) / ds)), 16)
+        t = np.linspace(0.0, turns + 1.0, m * (turns + 1) + 1)
+        rad = np.where(t < turns, rho0 + (rho1 - rho0) * t / max(turns, 1), max(rho1, rho0))
+    else:
+        rad, t = _engagement_spiral(rho0, rho1, pitch, ds, float(tool_r))
     a = start_rad + 2 * np.pi * t
-    P = np.asarray(c_xy, float) + rad[:, None] * np.c_[np.cos(a), np.sin(a)]
-    P[0] = np.asarray(c_xy, float) + rho0 * np.array([math.cos(start_rad), math.sin(start_rad)])
-    P[-1] = np.asarray(c_xy, float) + max(rho1, rho0) * np.array([math.cos(start_rad), math.sin(start_rad)])
+    P = c + rad[:, None] * np.c_[np.cos(a), np.sin(a)]
+    P[0] = c + rho0 * np.array([math.cos(start_rad), math.sin(start_rad)])
+    P[-1] = c + max(rho1, rho0) * np.array([math.cos(start_rad), math.sin(start_rad)])
     return P
+
+
+def _engagement_spiral(rho0, rho1, a_e, ds, r):
+    """(radius (m,) mm, turn parameter t (m,)) of :func:`spiral_out`'s spiral with the radial gain per
+    turn of its docstring, ending on a whole turn at ``rho1``, then one circle at ``rho1``: per turn the
+    gain at its start radius (it grows with rho: the turn's end keeps within the bound), the radius
+    linear in t within the turn, the last turn's gain shrunk to land on ``rho1``."""
+    cos_t = 1.0 - a_e / r
+    starts = [rho0]
+    while starts[-1] < rho1 - 1e-9:
+        rho = starts[-1]
+        g = rho + r - math.sqrt(rho * rho + r * r + 2.0 * rho * r * cos_t)
+        starts.append(min(rho + max(g, 1e-3 * a_e), rho1))
+    starts.append(rho1)                           # the closing circle
+    turns = len(starts) - 1
+    m = max(int(math.ceil(2 * math.pi * rho1 / ds)), 16)
+    t = np.linspace(0.0, float(turns), m * turns + 1)
+    k = np.minimum(t.astype(int), turns - 1)
+    rad = np.asarray(starts)[k] + (np.asarray(starts)[k + 1] - np.asarray(starts)[k]) * (t - k)
+    return rad, t

@@ -152,9 +152,10 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
         pe = helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg, tag="entry: narrow region")
         # the rapid stock along the written floor circle's chords (as entries.enter)
         lv.g.cut_path(helix_ring(c0, rho, 64), lv.written_floor(m_helix))
-        # the hole opened to the slot's width: a spiral out to radius c (radial pitch a_e / 2), a circle
-        S = spiral_out(c0, rho, c_start, 0.5 * r * (1 - math.cos(math.radians(lv.theta_deg))), 2 * h,
-                       start_rad=math.atan2(pe[1] - c0[1], pe[0] - c0[0]))
+        # the hole opened to the slot's width: a spiral out to radius c at the engagement theta (each
+        # turn gains what the wall of the last one leaves at theta: narrow.spiral_out), then a circle
+        S = spiral_out(c0, rho, c_start, r * (1 - math.cos(math.radians(lv.theta_deg))), 2 * h,
+                       start_rad=math.atan2(pe[1] - c0[1], pe[0] - c0[0]), tool_r=r)
         S[0] = pe
         b.cut(S[1:], lv.feed_mm_min, z=lv.z, tag="entry: narrow region, spiral out to the slot width")
         lv.g.cut_path(S)
