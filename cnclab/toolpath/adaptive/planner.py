@@ -40,6 +40,7 @@ class _Level:
         self.todo_parts = []
         self.r_free = np.nan
         self._wall = None      # the tool-centre limit's boundary (wall_sliver), made when first needed
+        self._remnant_cache = None     # (stock, its components) of the last sweep_remnant (_remnants)
         self._link_tail = None  # the last link's final G0 (join_link_to_pass)
         self._virtual = None    # (start of a pass that emitted nothing, its link rolled back; the tool's point then)
 
@@ -323,11 +324,11 @@ class _Level:
         of it; True if one was cut."""
         if self.cur is None:
             return False
-        lbl, nlab = label8(self.g.M)
+        lbl, nlab, discs = self._remnants()
         if nlab == 0:
             return False
         rho_max = self.r * math.sin(0.5 * self.target)
-        CX, CY, RAD = component_discs(lbl, nlab, self.g.x0, self.g.y0, self.h)
+        CX, CY, RAD = discs
         for lab in np.flatnonzero(RAD + self.h / math.sqrt(2.0) <= rho_max):
             c = np.array([CX[lab], CY[lab]])
             rho_b = float(RAD[lab]) + self.h / math.sqrt(2.0)
@@ -355,6 +356,19 @@ class _Level:
                 self.stats["remnant_sweeps"] += 1
                 return True
         return False
+
+    def _remnants(self):
+        """(labels, count, (centre x, centre y, radius) mm) of the planning stock's 8-connected material
+        components (:func:`label8`, :func:`component_discs`), computed again only when the stock differs
+        pixel for pixel from the one of the last call (a remnant sweep is often tried again before any
+        pass has cut)."""
+        c = self._remnant_cache
+        if c is not None and np.array_equal(c[0], self.g.M):
+            return c[1]
+        lbl, nlab = label8(self.g.M)
+        discs = component_discs(lbl, nlab, self.g.x0, self.g.y0, self.h) if nlab else None
+        self._remnant_cache = (self.g.M.copy(), (lbl, nlab, discs))
+        return self._remnant_cache[1]
 
     def min_yield(self, fine, P):
         """The least area (fraction of a_e per mm of the pass) the pass through the points P (n, 2)
