@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from cnclab.nc.gcode import read_gcode
-from cnclab.nc.program import ENTRY_FEED_FRACTION, GRBL_LINE_MAX, check_program, program_path, write_program
+from cnclab.nc.program import (ENTRY_FEED_FRACTION, GRBL_LINE_MAX, LINUXCNC_LINE_MAX, check_program, program_path,
+                               write_program)
 from cnclab.paths import data_path
 from cnclab.toolpath.job import Job
 from cnclab.toolpath.levels import with_entry_feed
@@ -167,3 +168,23 @@ def test_link_feed_of_a_path_traced_to_link_feed():
     p.feed[-3] = 0.01
     with pytest.raises(ValueError, match="move .* \\(link\\).*link_feed = 1500"):
         write_program(p, job)
+
+
+@pytest.mark.parametrize("dialect, limit", [("linuxcnc", LINUXCNC_LINE_MAX), ("grbl", GRBL_LINE_MAX)])
+def test_long_header_lines_are_wrapped_within_the_controller_line_limit(dialect, limit, tmp_path):
+    """A header line longer than the controller reads (a planner's note about a part it left runs to
+    ~300 characters) is wrapped into comment lines of at most ``limit`` characters, every word kept;
+    LinuxCNC's ``rs274`` reads the result (it refuses a line of 253 characters: "Command too long"),
+    when installed."""
+    from cnclab.nc.rs274 import rs274_available, run_rs274
+
+    job = _job()
+    note = "level z -2: a part of the tool-centre region near [3.60, 3.60] " + "word " * 60 + "END"
+    text = write_program(_path(job), job, header=[note], dialect=dialect)
+    assert max(len(line) for line in text.splitlines()) <= limit
+    words = " ".join(re.findall(r"\(([^)]*)\)", text)).split()
+    assert words.count("word") == 60 and "END" in words
+    if dialect == "linuxcnc" and rs274_available():
+        p = tmp_path / "long.ngc"
+        p.write_text(text)
+        run_rs274(p)

@@ -110,7 +110,7 @@ from .gcode import (MAX_COORD_MM, MAX_FEED_MM_MIN, MAX_SPINDLE_RPM, GcodeProgram
 
 __all__ = ["write_program", "write_moves", "write_linear_moves", "gcode_roundtrip_error", "program_path",
            "check_program", "ProgramCheck", "CLEARED_MARK", "cleared_mark", "START_BLOCK", "DIALECTS",
-           "TOOL_NUMBER_RANGE", "ENTRY_FEED_FRACTION", "GRBL_LINE_MAX", "COOLANT"]
+           "TOOL_NUMBER_RANGE", "ENTRY_FEED_FRACTION", "GRBL_LINE_MAX", "LINUXCNC_LINE_MAX", "COOLANT"]
 
 START_BLOCK = "G21 G90 G17 G94 G40 G49 G80"
 #: the structured marker (versioned) the writer puts on a block whose move the path flags ``cleared``
@@ -127,6 +127,10 @@ TOOL_NUMBER_RANGE = {"linuxcnc": (1, 2 ** 31 - 1), "grbl": (0, 255)}
 DIALECTS = tuple(TOOL_NUMBER_RANGE)
 #: GRBL 1.1 line buffer: at most 80 characters per line (``LINE_BUFFER_SIZE``, data/nc/grbl11_grammar.json)
 GRBL_LINE_MAX = 80
+#: LinuxCNC's interpreter reads at most 252 characters per line: ``rs274`` refuses a line of 253 or more
+#: with "Command too long" (its line buffer of 256 with the newline and the terminator; measured on the
+#: rs274 of linuxcnc-uspace: 252 passes, 253 fails; tests/test_dialects.py runs it when installed)
+LINUXCNC_LINE_MAX = 252
 #: coolant words: flood M8, mist M7 (M7 is off in GRBL's default build: refused for grbl)
 COOLANT = {"flood": "M8", "mist": "M7"}
 _FEED_DEC = 1
@@ -441,17 +445,26 @@ def _render(moves, comments, hdr, tool, dialect, decimals, coolant) -> str:
     if dialect == "linuxcnc":
         if tool is not None:
             start += [f"T{int(tool.number)} M6", f"G43 H{int(tool.number)}"]
-        return _write_gcode(moves, header=hdr, decimals=decimals, comments=comments, start_block=start,
-                           end_block=["M30"], after_spindle_on=cool_on, before_spindle_off=cool_off)
+        hdr = [piece for h in hdr for piece in textwrap.wrap(h, LINUXCNC_LINE_MAX - 2)]
+        text = _write_gcode(moves, header=hdr, decimals=decimals, comments=comments, start_block=start,
+                            end_block=["M30"], after_spindle_on=cool_on, before_spindle_off=cool_off)
+        return _lines_within(text, LINUXCNC_LINE_MAX, "linuxcnc", "LinuxCNC's interpreter")
     if tool is not None:
         hdr = hdr + [f"load tool T{int(tool.number)} before running: GRBL has no tool change M6 and no G43"]
     hdr = [piece for h in hdr for piece in textwrap.wrap(h, GRBL_LINE_MAX - 2)]
     text = _write_gcode(moves, header=hdr, decimals=decimals, comments=comments, start_block=start,
                        end_block=["M30"], after_spindle_on=cool_on, before_spindle_off=cool_off, percent=False)
+    return _lines_within(text, GRBL_LINE_MAX, "grbl", "GRBL 1.1")
+
+
+def _lines_within(text: str, limit: int, dialect: str, reader: str) -> str:
+    """``text`` when every line has at most ``limit`` characters, else ValueError naming the line (a
+    controller refuses such a program: the header comments are wrapped to fit, so only a move or
+    comment the writer cannot split gets here)."""
     for n, line in enumerate(text.splitlines(), 1):
-        if len(line) > GRBL_LINE_MAX:
-            raise ValueError(f"grbl line {n} has {len(line)} characters (GRBL 1.1 reads at most "
-                             f"{GRBL_LINE_MAX}): {line[:40]}...")
+        if len(line) > limit:
+            raise ValueError(f"{dialect} line {n} has {len(line)} characters ({reader} reads at most "
+                             f"{limit}): {line[:40]}...")
     return text
 
 
