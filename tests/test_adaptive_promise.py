@@ -72,8 +72,8 @@ def test_cli_refuses_a_breach_or_writes_it_with_the_option(tmp_path, capsys, mon
     assert "--allow-engagement-breach" in capsys.readouterr().err
     assert cli_plan.main([str(job), "-o", str(out), "--allow-engagement-breach"]) == 0
     assert "promises an engagement" in capsys.readouterr().err
-    header = [ln for ln in out.read_text().splitlines() if ln.startswith("(")]
-    assert any(ln.startswith("(WARNING: ") and "promises an engagement" in ln for ln in header)
+    header = " ".join(ln[1:-1] for ln in out.read_text().splitlines() if ln.startswith("("))   # wrapped lines joined
+    assert "WARNING: " in header and "promises an engagement" in header.split("WARNING: ", 1)[1]
     assert dataclasses.is_dataclass(AdaptiveParams())
 
 
