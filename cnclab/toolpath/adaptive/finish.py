@@ -349,10 +349,10 @@ def _thin_strips(lv, part) -> list:
 def note_thin_strips(lv) -> None:
     """After the level, without ``AdaptiveParams.slot_narrow``: every strip of the tool-centre region
     that :func:`slot_strips` would slot and that keeps more than ``thin_strip_note_mm2`` of material
-    within the tool's reach of it (:func:`_part_rest_mm2`) is stated in ``lv.left_parts`` with that area and the two ways to cut it (``plan`` then
-    refuses the uncut area with that reason, or warns under ``allow_uncut``)."""
-    parts = shapely.get_parts(lv.allowed.buffer(-1.5 * lv.h))     # the parts finish_part is given
-    for q in (q for part in parts for q in _thin_strips(lv, part)):
+    within the tool's reach of it (:func:`_part_rest_mm2`) is stated in ``lv.left_parts`` with that
+    area and the two ways to cut it (``plan`` then refuses the uncut area with that reason, or warns
+    under ``allow_uncut``)."""
+    for q in (q for part in lv.finish_parts() for q in _thin_strips(lv, part)):
         rest = _part_rest_mm2(lv, q)
         if rest > lv.prm.thin_strip_note_mm2:
             _state_left(lv, q, f"cleared by this plan's passes (tool-centre half-width under "

@@ -643,9 +643,9 @@ def _engagement_spiral(rho0, rho1, a_e, ds, r):
         g = rho + r - math.sqrt(rho * rho + r * r + 2.0 * rho * r * cos_t)
         starts.append(min(rho + max(g, 1e-3 * a_e), rho1))
     starts.append(rho1)                           # the closing circle
-    turns = len(starts) - 1
+    R = np.asarray(starts)
+    turns = len(R) - 1
     m = max(int(math.ceil(2 * math.pi * rho1 / ds)), 16)
     t = np.linspace(0.0, float(turns), m * turns + 1)
     k = np.minimum(t.astype(int), turns - 1)
-    rad = np.asarray(starts)[k] + (np.asarray(starts)[k + 1] - np.asarray(starts)[k]) * (t - k)
-    return rad, t
+    return R[k] + (R[k + 1] - R[k]) * (t - k), t

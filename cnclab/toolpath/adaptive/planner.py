@@ -312,6 +312,11 @@ class _Level:
         self.rescue_fails = self.rescue_fails + 1 if failed and self.rescue_fails >= 0 else -1
         self.rescue_spent = self.rescue_spent and failed
 
+    def finish_parts(self):
+        """The parts of the tool-centre region the finishing laps follow: the region 1.5 h inside its
+        limit (:meth:`finish_part` is given them oriented; :func:`.finish.note_thin_strips` reads them)."""
+        return list(shapely.get_parts(self.allowed.buffer(-1.5 * self.h)))
+
     def finish_part(self, part):
         """The wall-following finish laps of one part (:func:`.finish.finish_part`)."""
         return finish.finish_part(self, part)
@@ -464,7 +469,7 @@ class _Level:
 
     def run(self):
         """Plan the level: enter, clear (passes, links, remnants), finish; up to clean_rounds more rounds."""
-        self.todo_parts = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
+        self.todo_parts = [orient(q, 1.0) for q in self.finish_parts()] if self.finish else []
         self.r_free = self.r + self.prm.free_margin_hc * self.g.hc      # coarse cell centre to material, with the cell half-diagonal margin
         # narrow regions (narrow.py): out of the passes' view, each cut by Thesis IV's trochoid when reached
         self.narrow_state = narrow_level.LevelRegions(self, self.narrow_regs)
@@ -479,7 +484,7 @@ class _Level:
                 D, Ac = self.g.free_field()
                 if not (Ac & (D < self.r - 2 * self.g.hc)).any():
                     break
-                self.todo_parts[:] = [orient(q, 1.0) for q in shapely.get_parts(self.allowed.buffer(-1.5 * self.h))] if self.finish else []
+                self.todo_parts[:] = [orient(q, 1.0) for q in self.finish_parts()] if self.finish else []
                 saved = (self.b.mark(), self.g.snapshot(), self.cur, dict(self.stats))
             banned = np.zeros((self.g.ny // self.g.k, self.g.nx // self.g.k), bool)
             fine = False     # second chance (see below): failed passes ban only pass_ban_frac r
