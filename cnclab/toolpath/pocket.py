@@ -580,7 +580,8 @@ def contour_parallel_path(job: Job, stepover=None, resolution_mm: float = 0.1) -
     c = entry_hole(job)[0]
     levels = offset_levels(job.polygon, job.tool_radius, ae)
     passes = link_loops(levels, job.allowed(), start=c)
-    segs = [(np.vstack([c, passes[0][0]]), "link", "cp")]
+    inside = job.allowed().buffer(1e-6).contains(LineString([c, passes[0][0]]))    # else a jump past an island
+    segs = [(np.vstack([c, passes[0][0]]), "link" if inside else "rapid", "cp")]
     for i, P in enumerate(passes):
         if i > 0:
             segs.append((np.vstack([passes[i - 1][-1], P[0]]), "rapid", "cp"))
@@ -599,7 +600,10 @@ def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0
     A = _rot(allowed, -angle_deg, c)
     lines = raster_lines(A, ae, min_length=0.5 * ae)      # tangency stubs: left to the finishing lap
     guard = A.buffer(1e-6)
-    segs = [(np.vstack([c, _rot(lines[0][:1], angle_deg, c)[0]]), "cut", "zz")]     # slot from the entry hole
+    # the slot from the entry hole to the first raster line, where it stays in the tool-centre region;
+    # else (an island or a wall between them) a jump: retract, rapid, ramp down on the first line
+    first = _rot(lines[0][:1], angle_deg, c)[0]
+    segs = [(np.vstack([c, first]), "cut" if allowed.buffer(1e-6).contains(LineString([c, first])) else "rapid", "zz")]
     prev = None
     for q in lines:
         qq = _rot(q, angle_deg, c)
