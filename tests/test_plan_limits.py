@@ -39,7 +39,7 @@ def test_uncut_by_region_hand_computed(one_pass):
     (14 x 6 + pi 9 = 112.27) = 200 - 7.73 - 112.27 = 80.0 mm^2 (the pixel count is within 1 mm^2:
     pixel r / 25 = 0.12 mm along a 70 mm boundary, half a pixel each way)."""
     job = Job.from_dict(BOX)
-    with pytest.raises(planners.UncutError, match=r"region 0: (79|80)\.\d of 192 mm\^2 reachable \(limit 2\.9\)") as e:
+    with pytest.raises(planners.UncutError, match=r"region 0: (79|80)\.\d mm\^2 left of 192 mm\^2 reachable \(limit 2\.9\)") as e:
         planners.plan(job, one_pass)
     assert e.value.report["over"] == [0]
     p = planners.plan(job, one_pass, allow_uncut=True)

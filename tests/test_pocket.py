@@ -295,3 +295,20 @@ def test_plunge_into_the_predrilled_hole_is_marked_cleared():
             assert p.cleared[k] == inside
         chk = check_program(write_program(p, job), clearance_z=job.clearance_z, top_z=job.top_z)
         assert chk.plunges_into_material == 0
+
+
+def test_a_hybrid_arm_ends_where_its_period_would_cross_an_inner_corner():
+    """A U-shaped pocket (not star-shaped about its centre): an arm's constant-engagement period along
+    the ray from the centre met the U's inner corner, and one of its chords ran 4 mm into the wall
+    (plan()'s gouge guard then refused the job). The arm now ends before such a period: the tool disc
+    stays within the wall-gouge tolerance, and what the arms cannot reach is left (plan() refuses it as
+    uncut, naming the area)."""
+    from cnclab.toolpath import coverage, planners
+
+    U = [[0, 0], [50, 0], [50, 36], [36, 36], [36, 12], [14, 12], [14, 36], [0, 36]]
+    job = pk.Job.from_dict(dict(TOOL, tool_diameter=8.0, theta_deg=50.0, a_p=2.5, polygon=U))
+    hp = pk.hybrid_path(job, 0.1)        # at 0.2 mm the centre laps' chords round the corner cut 1.4 um
+    gouge, at = coverage.wall_gouge(hp, job)
+    assert gouge <= planners.GOUGE_TOL_MM, (gouge, at)
+    with pytest.raises(planners.UncutError, match="strategy hybrid leaves material uncut"):
+        planners.plan(job, "hybrid", 0.1)

@@ -482,7 +482,9 @@ def lowered_level(path: ToolPath, z_from: float, z_to: float, clearance_z: float
 def _uncut_message(job: Job, strategy: str, rep: dict, left=()) -> str:
     """The uncut-area refusal (or warning): the regions over their limit, then how many parts the
     planner stated it left (``info["left_parts"]``: each with where, its size and why) and the first."""
-    parts = "; ".join(f"region {k}: {rep['uncut_mm2'][k]:.1f} of {rep['reach_mm2'][k]:.0f} mm^2 reachable "
+    n = len(rep.get("levels", ())) or 1
+    per = "" if n == 1 else f" per level, summed over its {n} levels"   # the uncut area and its limit are sums
+    parts = "; ".join(f"region {k}: {rep['uncut_mm2'][k]:.1f} mm^2 left of {rep['reach_mm2'][k]:.0f} mm^2 reachable{per} "
                       f"(limit {rep['limit_mm2'][k]:.1f})" for k in rep["over"])
     why = "" if not left else (f"; the plan states {len(left)} part(s) left" + (", the first" if len(left) > 1 else "")
                                + f": {left[0]}")

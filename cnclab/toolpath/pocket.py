@@ -341,6 +341,12 @@ def choose_candidate(metrics, pocket_area_mm2, theta_deg=60.0, uncut_tol_frac=0.
     return i, why
 
 
+#: mm: a period of an arm may leave the tool-centre region by this much (its chords along a curved wall:
+#: up to 0.3 um on Jacsó's star and L); a period that leaves it by more (one chord across an inner
+#: corner of a U: 4 mm into the wall) ends its arm. The wall-gouge tolerance of ``planners.plan``
+PERIOD_TOL_MM = 1e-3
+
+
 def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds, arm_min_area_mm2,
                      max_wall_share):
     """:func:`hybrid_path` for one numeric ``max_wall_share``."""
@@ -391,6 +397,7 @@ def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, 
             loc_mat = _polygonal(_rot(material, -ang, c))
             loc_all = _polygonal(_rot(world_mat, -ang, c))
             loc_allowed = _rot(allowed, -ang, c)
+            loc_guard = loc_allowed.buffer(PERIOD_TOL_MM)
             loc = Stock.from_polygon(loc_mat, resolution_mm)          # this arm's front
             full = Stock.from_polygon(loc_all, resolution_mm)         # all material: engagement
             arm_segs, last = [], None
@@ -401,6 +408,8 @@ def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, 
                 if per is None:
                     break
                 Pl = per.xyz[:, :2]
+                if not loc_guard.contains(LineString(Pl)):
+                    break       # the period's chords leave the region (past an inner corner): the arm ends
                 df = simulate(loc, Pl, r, job.a_p, job.feed_mm_min)
                 simulate(full, Pl, r, job.a_p, job.feed_mm_min)
                 if float(df.removed_mm2.sum()) < 1e-3:
