@@ -312,3 +312,25 @@ def test_a_hybrid_arm_ends_where_its_period_would_cross_an_inner_corner():
     assert gouge <= planners.GOUGE_TOL_MM, (gouge, at)
     with pytest.raises(planners.UncutError, match="strategy hybrid leaves material uncut"):
         planners.plan(job, "hybrid", 0.1)
+
+
+def test_zigzag_cuts_each_cell_in_one_go():
+    """A U (two columns above a base; unseen before the fix): the raster rows of the columns are two
+    pieces each. In row order the zig-zag jumped (retract, rapid, ramp down) on every row from one column
+    to the other; in cell order (zigzag.cell_order) it cuts the base and the left column, jumps once to
+    the right column, and once more to the finishing lap (the links between rows round the inner corners
+    along the wall: zigzag.raster_link). Still safe: no plunge or rapid into material, no gouge, nothing
+    left above the limit."""
+    from cnclab.toolpath import coverage, planners
+    from cnclab.toolpath.evaluate import evaluate_engagement
+
+    U = [[0, 0], [50, 0], [50, 36], [36, 36], [36, 12], [14, 12], [14, 36], [0, 36]]
+    job = pk.Job.from_dict(dict(TOOL, tool_diameter=8.0, theta_deg=50.0, a_p=2.5, polygon=U))
+    p = pk.zigzag_path(job, resolution_mm=0.1)
+    X, k = p.xyz, p.kinds()
+    jumps = [i for i in np.flatnonzero(k == "rapid") if 0 < i < len(X) - 1 and X[i + 1:, 2].min() < job.top_z]
+    assert len(jumps) == 2, [(X[i - 1].round(2).tolist(), X[i].round(2).tolist()) for i in jumps]
+    assert coverage.wall_gouge(p, job)[0] <= planners.GOUGE_TOL_MM
+    safe = evaluate_engagement(p, job, 0.1)
+    assert safe.plunges_into_material == 0 and safe.rapids_into_material == 0
+    assert coverage.uncut_report(p, job)["over"] == []

@@ -46,7 +46,7 @@ from .job import Job, load_job, star_polygon
 from .offsets import link_loops, offset_levels
 from .path import ToolPath, subdivide
 from .trochoidal import ce_period, disk_has_material, pattern_kinds
-from .zigzag import raster_lines
+from .zigzag import cell_order, raster_lines, raster_link
 
 __all__ = ["Job", "load_job", "star_polygon", "medial_axis", "arm_branches", "arm_regions",
            "centre_lap", "hybrid_path", "choose_candidate", "contour_parallel_path", "zigzag_path",
@@ -249,7 +249,7 @@ def hybrid_path(job: Job, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=2
     if not isinstance(job.polygon, Polygon) or job.polygon.interiors:
         raise ValueError(f"{job.source}: the hybrid strategy (Jacsó §4: centre laps around one start hole, arms "
                          "along the medial axis) plans a simple pocket without islands; use the "
-                         "constant-engagement strategy for pockets with islands")
+                         "adaptive strategy for pockets with islands or several regions")
     if isinstance(max_wall_share, str):
         if max_wall_share != "auto":
             raise ValueError(f"max_wall_share must be a number in (0, 1] or 'auto', got {max_wall_share!r}")
@@ -598,6 +598,11 @@ def contour_parallel_path(job: Job, stepover=None, resolution_mm: float = 0.1) -
     return _to_toolpath(segs, job, "contour-parallel", {"stepover": ae}, resolution_mm)
 
 
+#: a_e: the longest link between two raster rows along the wall (round a convex corner of the wall or
+#: an island, where the straight chord leaves the tool-centre region); longer: a jump
+ZIGZAG_ALONG_AE = 3.0
+
+
 def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0.1) -> ToolPath:
     """Zig-zag (direction-parallel) raster over the tool-centre region at ``stepover`` (mm, default
     a_e), alternate directions (:func:`cnclab.toolpath.zigzag.raster_lines`), straight feed links along
@@ -607,7 +612,11 @@ def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0
     allowed = job.allowed()
     c = entry_hole(job)[0]
     A = _rot(allowed, -angle_deg, c)
-    lines = raster_lines(A, ae, min_length=0.5 * ae)      # tangency stubs: left to the finishing lap
+    # tangency stubs are left to the finishing lap; an island or a neck splits the rows into cells,
+    # each cut in one go (cell_order: one jump per cell, not one per row); a link between rows runs
+    # along the wall (at most ZIGZAG_ALONG_AE a_e) where the chord would leave the region
+    along = ZIGZAG_ALONG_AE * ae
+    lines = cell_order(raster_lines(A, ae, min_length=0.5 * ae), A, along)
     guard = A.buffer(1e-6)
     # the slot from the entry hole to the first raster line, where it stays in the tool-centre region;
     # else (an island or a wall between them) a jump: retract, rapid, ramp down on the first line
@@ -617,8 +626,9 @@ def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0
     for q in lines:
         qq = _rot(q, angle_deg, c)
         if prev is not None:
-            kind = "cut" if guard.contains(LineString([q[0], prev])) else "rapid"
-            segs.append((np.vstack([_rot(prev[None], angle_deg, c)[0], qq[0]]), kind, "zz"))
+            link = raster_link(prev, q[0], A, along, guard)
+            segs.append((_rot(link, angle_deg, c), "cut", "zz") if link is not None else
+                        (np.vstack([_rot(prev[None], angle_deg, c)[0], qq[0]]), "rapid", "zz"))
         segs.append((qq, "cut", "zz"))
         prev = q[-1]
     for part in shapely.get_parts(allowed):                # finishing laps: every outline and island

@@ -24,7 +24,7 @@ from shapely.geometry import LineString
 
 from .path import ToolPath, ToolPathBuilder
 
-__all__ = ["hoang_table1_points", "zigzag_points", "zigzag_path", "n_passes_covering", "raster_lines",
+__all__ = ["hoang_table1_points", "zigzag_points", "zigzag_path", "n_passes_covering", "raster_lines", "cell_order",
            "raster_passes"]
 
 
@@ -241,3 +241,107 @@ def raster_passes(region, stepover: float, angle_deg: float = 0.0, *, start_offs
     if rect is not None:
         passes = [np.clip(q, [rect[0], rect[2]], [rect[1], rect[3]]) for q in passes]
     return passes
+
+
+def raster_link(a, b, region, max_along_mm: float = 0.0, guard=None):
+    """The feed link (K, 2) from ``a`` to ``b`` (mm) inside ``region`` (1e-6 mm tolerance): the straight
+    chord if it stays inside, else, where both lie on one ring of the region's boundary, the shorter
+    way along that ring if it is at most ``max_along_mm`` long (round a convex corner of the wall,
+    where the chord between two rows leaves the tool-centre region); else None (a jump).
+
+    >>> from shapely.geometry import box
+    >>> R = box(0, 0, 10, 10).difference(box(4, 4, 6, 6))          # round the island's corner (6, 4)
+    >>> raster_link((5, 4), (6, 5), R) is None, raster_link((5, 4), (6, 5), R, 3.0).tolist()
+    (True, [[5.0, 4.0], [6.0, 4.0], [6.0, 5.0]])
+    """
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    guard = region.buffer(1e-6) if guard is None else guard
+    if guard.contains(LineString([a, b])):
+        return np.vstack([a, b])
+    if max_along_mm <= 0:
+        return None
+    for part in shapely.get_parts(region):
+        for ring in [part.exterior, *part.interiors]:
+            if ring.distance(shapely.Point(a)) > 1e-6 or ring.distance(shapely.Point(b)) > 1e-6:
+                continue
+            L, sa, sb = ring.length, ring.project(shapely.Point(a)), ring.project(shapely.Point(b))
+            fwd = (sb - sa) % L
+            if min(fwd, L - fwd) > max_along_mm:
+                return None
+            P = _along(ring, sa, sb, L, fwd <= L - fwd)
+            P[0], P[-1] = a, b
+            return P
+    return None
+
+
+def _along(ring, sa: float, sb: float, L: float, forward: bool) -> np.ndarray:
+    """The points of ``ring`` (its vertices kept) from arc length ``sa`` to ``sb`` (mm), forward (the
+    ring's direction, through its start if need be) or backward."""
+    from shapely.ops import substring
+
+    def piece(u, v):
+        return shapely.get_coordinates(substring(ring, u, v))
+
+    if forward:
+        return piece(sa, sb) if sb >= sa else np.vstack([piece(sa, L), piece(0.0, sb)[1:]])
+    return piece(sa, sb) if sb <= sa else np.vstack([piece(sa, 0.0), piece(L, sb)[1:]])
+
+
+def cell_order(pieces, region, max_along_mm: float = 0.0) -> list[np.ndarray]:
+    """The raster ``pieces`` (from :func:`raster_lines`: horizontal (M, 2) arrays, mm, row by row) in
+    boustrophedon-cell order: from the end of a piece the next is a piece of the row above that a
+    straight link inside ``region`` (a shapely (Multi)Polygon, 1e-6 mm tolerance) reaches, the nearest
+    such end first (the piece reversed if its far end is the nearer; :func:`raster_link`, along the wall up
+    to ``max_along_mm`` where the chord leaves the region); where none is, the tool jumps to
+    the nearest piece that has no unvisited piece below it overlapping it in x (the bottom of a part
+    the raster has not covered yet). An island or a narrow neck splits the rows into cells, and each
+    cell is cut in one go instead of one jump per row (the raster order crosses from cell to cell on
+    every row). The first piece stays first (the entry slot goes to it).
+
+    >>> from shapely.geometry import box
+    >>> U = box(0, 0, 10, 6).difference(box(4, 2, 6, 7))         # a U: two columns above a base
+    >>> P = cell_order(raster_lines(U, 1.0), U)
+    >>> [(round(float(q[0, 0]), 1), round(float(q[0, 1]))) for q in P]
+    [(0.0, 0), (10.0, 1), (0.0, 2), (4.0, 3), (0.0, 4), (4.0, 5), (6.0, 2), (10.0, 3), (6.0, 4), (10.0, 5)]
+    """
+    pieces = [np.asarray(q, float) for q in pieces]
+    if len(pieces) < 2:
+        return pieces
+    guard = region.buffer(1e-6)
+    shapely.prepare(guard)
+    ys = np.array([q[0, 1] for q in pieces])
+    levels = np.unique(np.round(ys, 6))
+    row = np.searchsorted(levels, np.round(ys, 6))
+    lo = np.array([q[:, 0].min() for q in pieces])
+    hi = np.array([q[:, 0].max() for q in pieces])
+    by_row: dict[int, set] = {}
+    for i, k in enumerate(row):
+        by_row.setdefault(int(k), set()).add(i)
+
+    def oriented(i, cur):
+        q = pieces[i]
+        return q if np.hypot(*(q[0] - cur)) <= np.hypot(*(q[-1] - cur)) else q[::-1]
+
+    def bottom(i):
+        below = by_row.get(int(row[i]) - 1, ())
+        return not any(lo[j] < hi[i] and lo[i] < hi[j] for j in below)
+
+    out, last = [pieces[0]], 0
+    by_row[int(row[0])].discard(0)
+    for _ in range(len(pieces) - 1):
+        cur = out[-1][-1]
+        best = None
+        for j in by_row.get(int(row[last]) + 1, ()):
+            q = oriented(j, cur)
+            d = float(np.hypot(*(q[0] - cur)))
+            if (best is None or d < best[0]) and raster_link(cur, q[0], region, max_along_mm, guard) is not None:
+                best = (d, j, q)
+        if best is None:          # a jump: the nearest bottom of what is left
+            left = [j for r in by_row.values() for j in r]
+            base = [j for j in left if bottom(j)] or left
+            j = min(base, key=lambda j: (min(np.hypot(*(pieces[j][0] - cur)), np.hypot(*(pieces[j][-1] - cur))), j))
+            best = (0.0, j, oriented(j, cur))
+        _, last, q = best
+        by_row[int(row[last])].discard(last)
+        out.append(q)
+    return out
