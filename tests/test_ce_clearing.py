@@ -13,7 +13,7 @@ from cnclab.nc.program import write_moves
 from cnclab.toolpath import ce_clearing as cc
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import Job
-from cnclab.toolpath.path import Tool, ToolPath
+from cnclab.toolpath.path import APPROACH_MM, Tool, ToolPath
 
 # one xdist group (make test: --dist loadgroup): all of this module runs in one worker, so that
 # the cached clearing paths (`_run`) are planned once
@@ -92,7 +92,8 @@ def test_path_stays_in_the_allowed_region_clears_the_pocket_and_is_machine_safe(
     assert shapely.contains_xy(allowed.buffer(1e-6), xy[:, 0], xy[:, 1]).all()
     assert ev.uncut_beyond_unreachable_mm2 < 1.0
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
-    assert np.all(path.xyz[path.is_kind("rapid"), 2] == job.clearance_z)
+    z_rapid = path.xyz[path.is_kind("rapid"), 2]          # at the clearance plane or down to 0.5 mm above the top
+    assert np.all((z_rapid == job.clearance_z) | (z_rapid == job.top_z + APPROACH_MM))
     assert ev.time_total_s == pytest.approx(path.time_s(job.rapid_mm_min)["total_s"])
 
 
@@ -241,7 +242,7 @@ def test_untagged_plunge_is_counted_by_the_checker():
 
     job, path, _ = _run("island")
     bare = ToolPath.build(path.xyz, kind=path.kinds(), tag=path.tag, feed=path.feed, spindle=path.spindle,
-                          tool=path.tool, cleared=False)
+                          tool=path.tool, cleared=path.cleared & path.is_kind("rapid"))   # the plunges' flags removed
     down = np.r_[False, np.diff(path.xyz[:, 2]) < 0]
     n = int((path.is_kind("plunge") & down & (path.xyz[:, 2] < job.top_z - 1e-9)).sum())
     chk = check_program(write_program(bare, job), clearance_z=job.clearance_z, top_z=job.top_z)

@@ -9,6 +9,7 @@ import shapely
 from cnclab.nc.program import gcode_roundtrip_error
 from cnclab.toolpath import pocket as pk
 from cnclab.toolpath.evaluate import evaluate
+from cnclab.toolpath.path import APPROACH_MM
 from cnclab.works.jacso2021.studies import design_star
 
 # one xdist group (make test: --dist loadgroup): all of this module runs in one worker, so that
@@ -205,9 +206,9 @@ def test_strategies_are_machine_safe_toolpaths():
     job = pk.Job.from_dict(RECT)
     for f in (pk.contour_parallel_path, pk.zigzag_path):
         p = f(job)
-        assert p.kinds()[0] == "rapid" and p.xyz[0, 2] == job.clearance_z and p.kinds()[-1] == "retract"
-        rapid = p.is_kind("rapid")
-        assert np.all(p.xyz[rapid, 2] == job.clearance_z)
+        assert p.kinds()[0] == "rapid" and p.xyz[0, 2] == job.clearance_z and p.kinds()[-1] == "rapid"
+        rapid = p.is_kind("rapid")      # at the clearance plane, or down to 0.5 mm above the stock top
+        assert np.all((p.xyz[rapid, 2] == job.clearance_z) | (p.xyz[rapid, 2] == job.top_z + APPROACH_MM))
         ev = evaluate(p, job, 0.1)
         assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
         assert ev.time_total_s == pytest.approx(p.time_s(job.rapid_mm_min)["total_s"])
@@ -328,8 +329,10 @@ def test_zigzag_cuts_each_cell_in_one_go():
     job = pk.Job.from_dict(dict(TOOL, tool_diameter=8.0, theta_deg=50.0, a_p=2.5, polygon=U))
     p = pk.zigzag_path(job, resolution_mm=0.1)
     X, k = p.xyz, p.kinds()
-    jumps = [i for i in np.flatnonzero(k == "rapid") if 0 < i < len(X) - 1 and X[i + 1:, 2].min() < job.top_z]
-    assert len(jumps) == 2, [(X[i - 1].round(2).tolist(), X[i].round(2).tolist()) for i in jumps]
+    lifts = np.flatnonzero((k == "rapid") & (X[:, 2] > X[np.r_[0, np.arange(len(X) - 1)], 2]) &
+                           (X[np.r_[0, np.arange(len(X) - 1)], 2] < job.top_z))
+    jumps = [i for i in lifts if X[i + 1:, 2].min(initial=np.inf) < job.top_z]     # lifts followed by more cutting
+    assert len(jumps) == 2, [X[i].round(2).tolist() for i in jumps]
     assert coverage.wall_gouge(p, job)[0] <= planners.GOUGE_TOL_MM
     safe = evaluate_engagement(p, job, 0.1)
     assert safe.plunges_into_material == 0 and safe.rapids_into_material == 0

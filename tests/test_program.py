@@ -112,7 +112,15 @@ def test_checker_accepts_marked_plunge_and_counts_ramps():
     # a free-text comment that says so is no mark: the plunge counts as into material
     free = check_program(text.replace("(cnclab:cleared/1)", "(cleared: start hole)"), clearance_z=5)
     assert free.plunges_into_material == 1
-    assert chk.entries == {"helix": 1, "ramp": 1, "plunge": 1} and chk.plunges_into_material == 0
+    # the ramp (G1 X5 Z-2) and the helix (G2 ... Z-3) descend without a pause: one entry, counted as
+    # the kind that descends the most in it (1 mm each: the first); the plunge before it is its own
+    assert chk.entries == {"helix": 0, "ramp": 1, "plunge": 1} and chk.plunges_into_material == 0
+    # a descent that alternates arcs and lines (a ramp along a curve the arc fit took in pieces) is one
+    # entry; a pause at depth (a level move) ends it
+    zz = ("G21\nS1000 M3\nG0 X0 Y0 Z5\nG0 Z0.5 (cnclab:cleared/1)\nG1 Z0 F100\nG3 X1 Y1 Z-0.2 I0 J1\n"
+          "G1 X0 Y2 Z-0.3\nG3 X-1 Y1 Z-0.5 I0 J-1\nG1 X0 Y0 Z-0.6\nG1 X3\nG1 Z-0.8\nG0 Z5\nM5\nM30\n")
+    got = check_program(zz, clearance_z=5)
+    assert got.entries == {"helix": 1, "ramp": 0, "plunge": 2} and got.plunges_into_material == 1, got
 
 
 def test_freecad_adaptive_rapids_at_depth_are_reported():

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from cnclab.nc.program import check_program, write_program
-from cnclab.toolpath.path import ToolPath, ToolPathBuilder, helix_ring, resample_polyline, subdivide
+from cnclab.toolpath.path import APPROACH_MM, ToolPath, ToolPathBuilder, helix_ring, resample_polyline, subdivide
 from cnclab.toolpath.reorder import ReorderResult, reordered_path
 from cnclab.toolpath.zigzag import zigzag_path
 
@@ -17,15 +17,21 @@ def test_from_segments_jump_and_helix():
             (np.array([[10.0, 0], [20, 0]]), "jump", ""), (np.array([[20.0, 0], [20, 5]]), "link", "")]
     p = ToolPath.from_segments(segs, z_cut=-2.0, feed=300.0, clearance_z=5.0, link_feed=1500.0)
     k = p.kinds()
-    assert k[0] == "rapid" and p.xyz[0, 2] == 5.0 and k[-1] == "retract" and p.xyz[-1, 2] == 5.0
+    assert k[0] == "rapid" and p.xyz[0, 2] == 5.0 and k[-1] == "rapid" and p.xyz[-1, 2] == 5.0
+    assert np.all(p.xyz[-1, :2] == p.xyz[-2, :2])                          # straight up at the end
+    # every descent from the clearance plane: a rapid to APPROACH_MM above the level top, then feed
+    down = np.flatnonzero((p.xyz[:-1, 2] == 5.0) & (p.xyz[1:, 2] < 5.0)) + 1
+    assert len(down) == 2 and np.all(k[down] == "rapid") and np.all(p.xyz[down, 2] == APPROACH_MM)
+    assert np.all(p.cleared[down]) and np.all(k[down + 1] != "rapid")
     hel = p.is_kind("helix")
     assert np.all(np.diff(p.xyz[hel, 2]) < 0) and p.xyz[hel, 2][-1] == pytest.approx(-2.0)
     assert (p.tag == "entry-floor").sum() == 32                          # the bored circle, flat at depth
-    # the jump: retract at (10, 0), rapid at clearance to (20, 0), plunge
-    j = int(np.flatnonzero(k == "retract")[0])
-    assert k[j:j + 3].tolist() == ["retract", "rapid", "plunge"]
-    assert p.xyz[j + 1].tolist() == [20.0, 0.0, 5.0] and p.xyz[j + 2].tolist() == [20.0, 0.0, -2.0]
-    assert np.all(p.xyz[p.is_kind("rapid"), 2] == 5.0)
+    # the jump: rapid straight up at (10, 0), rapid at clearance to (20, 0), rapid down to 0.5, plunge
+    j = int(np.flatnonzero((k == "rapid") & (p.xyz[:, 0] == 10.0))[0])
+    assert k[j:j + 4].tolist() == ["rapid", "rapid", "rapid", "plunge"]
+    assert p.xyz[j].tolist() == [10.0, 0.0, 5.0] and p.xyz[j + 1].tolist() == [20.0, 0.0, 5.0]
+    assert p.xyz[j + 2].tolist() == [20.0, 0.0, APPROACH_MM] and p.xyz[j + 3].tolist() == [20.0, 0.0, -2.0]
+    assert np.all((p.xyz[p.is_kind("rapid"), 2] == 5.0) | (p.xyz[p.is_kind("rapid"), 2] == APPROACH_MM))
     t = p.time_s(10000.0)
     assert t["link_s"] == pytest.approx(60 * 5 / 1500.0) and t["cut_s"] > 60 * 8 / 300.0
     with pytest.raises(ValueError, match="z_cut"):

@@ -38,7 +38,7 @@ post-processor's: :mod:`cnclab.nc.spindle_control` turns an APT CL file with its
 records into G-code through them) as it is, with the same text rules; the G-code text of every
 program cnclab writes comes from this module.
 
-:func:`check_program` reads a program (any post's) or a :class:`~cnclab.toolpath.path.ToolPath` and
+:func:`check_program` (:mod:`cnclab.nc.check`, re-exported here) reads a program (any post's) or a ToolPath and
 checks: the spindle is on before the first feed move, no G0 below the clearance plane (except
 straight up, or a move marked cleared), every Z-descending feed move classified (helix / ramp /
 plunge; a plunge below the stock top ``top_z`` is a plunge into material unless marked cleared),
@@ -103,19 +103,16 @@ from .. import __version__
 from ..fileio import atomic_write
 from ..toolpath.job import ENTRY_FEED_FRACTION
 from ..toolpath.path import Move, ToolPath
+from .check import CLEARED_MARK, ProgramCheck, check_program, cleared_mark  # noqa: F401  (re-exported)
 from .arcfit import DEFAULT_TOL_MM, ENGAGEMENT_BUDGET_DEG, Walls, engagement_tol_mm, fit_arcs
 from .machine import machine_for_dialect, machine_time
-from .gcode import (MAX_COORD_MM, MAX_FEED_MM_MIN, MAX_SPINDLE_RPM, GcodeProgram,
-                    parse_gcode, path_lengths, program_time, read_gcode, read_program_text)
+from .gcode import MAX_COORD_MM, MAX_FEED_MM_MIN, MAX_SPINDLE_RPM, parse_gcode, path_lengths, program_time
 
 __all__ = ["write_program", "write_moves", "write_linear_moves", "gcode_roundtrip_error", "program_path",
            "check_program", "ProgramCheck", "CLEARED_MARK", "cleared_mark", "START_BLOCK", "DIALECTS",
            "TOOL_NUMBER_RANGE", "ENTRY_FEED_FRACTION", "GRBL_LINE_MAX", "LINUXCNC_LINE_MAX", "COOLANT"]
 
 START_BLOCK = "G21 G90 G17 G94 G40 G49 G80"
-#: the structured marker (versioned) the writer puts on a block whose move the path flags ``cleared``
-#: (:attr:`ToolPath.cleared`, the planner's proof); read back only by :func:`cleared_mark`
-CLEARED_MARK = "cnclab:cleared/1"
 _TOL = 1e-6
 
 
@@ -479,112 +476,6 @@ def _check_rapids(path: ToolPath, clearance_z: float) -> None:
         if not (above or straight_up or path.cleared[k]):
             raise ValueError(f"move {k}: rapid from z {a[2]:g} to z {b[2]:g} mm below the clearance plane "
                              f"z {clearance_z:g} mm, not marked as inside cleared area (ToolPath.cleared)")
-
-
-@dataclasses.dataclass
-class ProgramCheck:
-    """Result of :func:`check_program`: ``errors`` (each naming ``source:line`` and the word),
-    ``entries`` (counts of entries by kind: helix, ramp, plunge -- an entry is a run of consecutive
-    Z-descending feed blocks of one kind, as :class:`~cnclab.toolpath.evaluate.Evaluation` counts them), ``plunges_into_material``,
-    ``rapids_below_clearance`` (unsafe G0 count), ``spindle_on_before_cut``, ``end_word``."""
-
-    errors: list
-    entries: dict
-    plunges_into_material: int
-    rapids_below_clearance: int
-    spindle_on_before_cut: bool
-    end_word: str | None
-
-    @property
-    def ok(self) -> bool:
-        return not self.errors
-
-
-def cleared_mark(comment: str) -> bool:
-    """Whether a block's comment (as :attr:`GcodeProgram.comments` holds it) is the writer's marker
-    :data:`CLEARED_MARK` — exactly (surrounding blanks aside), the one parser of it: any other text,
-    ``(cleared)`` or a marker of another version included, grants nothing.
-
-    >>> cleared_mark("cnclab:cleared/1"), cleared_mark("cleared"), cleared_mark("not cnclab:cleared/1")
-    (True, False, False)
-    """
-    return comment.strip() == CLEARED_MARK
-
-
-def check_program(program, clearance_z: float, top_z: float = 0.0, source: str | None = None) -> ProgramCheck:
-    """Static safety check of a program (text, a file path, or a :class:`GcodeProgram`) or of a
-    :class:`ToolPath` (its moves and its ``cleared`` column; no program end to check); see the module
-    docstring for the rules. ``clearance_z``/``top_z`` in mm."""
-    if isinstance(program, ToolPath):
-        moves = program.to_moves()
-        return _check_moves(moves, list(range(len(moves))), program.cleared, source or "<path>", clearance_z,
-                            top_z, None)
-    if isinstance(program, GcodeProgram):
-        prog = program
-    else:
-        if isinstance(program, Path) or (isinstance(program, str) and "\n" not in program):
-            p = Path(program)
-            prog = read_gcode(read_program_text(p), source=source or str(p))
-        else:
-            prog = read_gcode(program, source=source or "<string>")
-    return _check_moves(prog.moves, prog.lines, [cleared_mark(c) for c in prog.comments], prog.source,
-                        clearance_z, top_z, prog)
-
-
-def _check_moves(moves, lines, cleared, src, clearance_z, top_z, prog) -> ProgramCheck:
-    """The rules of :func:`check_program` over ``moves`` (``cleared``: per move, the data that marks
-    it cleared); ``prog``: the program whose end and spindle stop are checked too (None: a path)."""
-    errors = []
-    entries = {"helix": 0, "ramp": 0, "plunge": 0}
-    plunges = rapids_bad = 0
-    spindle_ok = True
-    seen_feed = False
-    prev_entry = None
-    if moves and moves[0].z < clearance_z - _TOL:
-        errors.append(f"{src}:{lines[0]}: word {moves[0].motion}: the first move ends below the clearance "
-                      f"plane Z{clearance_z:g} (start position unknown)")
-    for k, mv in enumerate(moves):
-        where = f"{src}:{lines[k]}"
-        ok_cleared = bool(cleared[k])
-        if mv.motion != "G0" and not seen_feed:
-            seen_feed = True
-            if mv.spindle is None:
-                spindle_ok = False
-                errors.append(f"{where}: word {mv.motion}: feed move before the spindle is started (M3/M4)")
-        if k == 0:
-            continue
-        a = moves[k - 1].xyz
-        b = mv.xyz
-        if mv.motion == "G0":
-            prev_entry = None
-            above = min(a[2], b[2]) >= clearance_z - _TOL
-            straight_up = b[2] >= a[2] and math.hypot(*(b[:2] - a[:2])) <= _TOL
-            if not (above or straight_up or ok_cleared):
-                rapids_bad += 1
-                errors.append(f"{where}: word G0: rapid below the clearance plane Z{clearance_z:g} "
-                              f"(z {a[2]:g} -> {b[2]:g} mm) not marked cleared")
-            continue
-        if b[2] < a[2] - _TOL:
-            kind = "helix" if mv.motion in ("G2", "G3") else (
-                "plunge" if math.hypot(*(b[:2] - a[:2])) <= _TOL else "ramp")
-            if kind != prev_entry:          # an entry is a run of descending blocks (a helix of n arcs: 1)
-                entries[kind] += 1
-            if kind == "plunge" and b[2] < top_z - _TOL and not ok_cleared:
-                plunges += 1
-                errors.append(f"{where}: word {mv.motion}: plunge into material below the stock top "
-                              f"Z{top_z:g} (not marked cleared)")
-            prev_entry = kind
-            continue
-        prev_entry = None
-    if prog is None:
-        return ProgramCheck(errors, entries, plunges, rapids_bad, spindle_ok, None)
-    if prog.end_word is None:
-        errors.append(f"{src}: no program end (M30 or M2)")
-    if prog.spindle_stop_line is None or (lines and prog.spindle_stop_line < lines[-1]):
-        errors.append(f"{src}: the spindle is not stopped (M5) after the last move")
-    return ProgramCheck(errors, entries, plunges, rapids_bad, spindle_ok, prog.end_word)
-
-
 
 
 # --------------------------------------------------------------------------------------------

@@ -31,9 +31,11 @@ import math
 import numpy as np
 
 from .helix import HELIX_CHORD_MM, helix_ring, helix_segments  # noqa: F401  (the path API re-exports them)
+from ..geometry.polyline import resample_polyline, subdivide  # noqa: F401  (the path API re-exports them)
 
 __all__ = ["MOTIONS", "Move", "KINDS", "ENTRY_KINDS", "Tool", "ToolPath", "ToolPathBuilder", "arc_geometry",
-           "helix_ring", "helix_segments", "HELIX_CHORD_MM", "sample_arc", "subdivide", "resample_polyline", "classify_moves"]
+           "helix_ring", "helix_segments", "HELIX_CHORD_MM", "sample_arc", "subdivide", "resample_polyline", "classify_moves",
+           "APPROACH_MM"]
 
 MOTIONS = ("G0", "G1", "G2", "G3")
 
@@ -85,6 +87,9 @@ class Move:
 
 
 KINDS = ("rapid", "helix", "ramp", "plunge", "cut", "link", "retract")
+#: mm: :meth:`ToolPath.from_segments` comes down from the clearance plane by a rapid to this height
+#: above the level top (air), the rest at feed (the adaptive planner's ``approach_above_mm``)
+APPROACH_MM = 0.5
 ENTRY_KINDS = ("helix", "ramp", "plunge")
 _KIND_INDEX = {k: i for i, k in enumerate(KINDS)}
 
@@ -307,12 +312,15 @@ class ToolPath:
         closed xy circle: a helical entry from ``top_z`` down to ``z_cut`` along it, then the same
         circle flat at ``z_cut`` as a cut tagged ``"entry-floor"``); ``kind`` and ``tag`` may also be
         per-point arrays (cut/link). The path starts with a rapid at ``clearance_z`` above the first
-        point and ends with a retract there. Descents not into a helix are vertical ``plunge`` moves:
-        the planner asserts their target is air (a start hole or cleared area; the evaluator checks).
+        point and ends with a rapid straight up there. Every descent from the clearance plane is a rapid
+        down to :data:`APPROACH_MM` above ``top_z`` (air), then the entry at feed; every lift a rapid
+        straight up (as the adaptive planner and FreeCAD lift). Descents not into a helix are vertical
+        ``plunge`` moves: the planner asserts their target is air (a start hole or cleared area; the
+        evaluator checks).
 
         >>> p = ToolPath.from_segments([(np.array([[0, 0], [10, 0]]), "cut", "")], z_cut=-2, feed=100)
         >>> p.kinds().tolist(), p.xyz[:, 2].tolist()
-        (['rapid', 'plunge', 'cut', 'retract'], [5.0, -2.0, -2.0, 5.0])
+        (['rapid', 'rapid', 'plunge', 'cut', 'rapid'], [5.0, 0.5, -2.0, -2.0, 5.0])
         """
         if not clearance_z > top_z >= z_cut:
             raise ValueError(f"need clearance_z > top_z >= z_cut (mm), got {clearance_z}, {top_z}, {z_cut}")
@@ -322,7 +330,9 @@ class ToolPath:
         b = ToolPathBuilder(tool=tool, spindle=spindle, info=info)
 
         def descend(P, k):
-            """Tool above P[0] at clearance: come down (helix along P, or plunge at P[0])."""
+            """Tool above P[0] at clearance: a rapid down to APPROACH_MM above the level top (air), then
+            down at feed (helix along P, or plunge at P[0])."""
+            b.rapid(P[:1], z=top_z + APPROACH_MM, tag="cleared: above the level top", cleared=True)
             if k == "helix":
                 b.add(P[:1], "plunge", feed, "approach", z=top_z)
                 b.helix(P, top_z, z_cut, feed)
@@ -339,7 +349,7 @@ class ToolPath:
         prev_kind = "helix" if isinstance(first[1], str) and first[1] == "helix" else None
         for i, (P, k, t) in enumerate(segs):
             if isinstance(k, str) and k == "jump":
-                b.add(P[:1], "retract", lf, z=clearance_z)
+                b.rapid(P[:1], z=clearance_z)              # straight up out of the tool's own cut
                 b.rapid(P[-1:], z=clearance_z)
                 nxt = segs[i + 1] if i + 1 < len(segs) else None
                 if nxt is not None and isinstance(nxt[1], str) and nxt[1] == "helix":
@@ -355,6 +365,7 @@ class ToolPath:
                         if np.hypot(*np.diff(Q, axis=0).T).sum() >= ramp_max_mm:
                             break
                     Q = np.vstack(ahead)
+                    b.rapid(P[-1:], z=top_z + APPROACH_MM, tag="cleared: above the level top", cleared=True)
                     b.ramp(Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]], top_z, z_cut, feed,
                            ramp_deg=ramp_deg, max_mm=ramp_max_mm)
                 else:
@@ -367,7 +378,7 @@ class ToolPath:
                             b.rapid(P[:1], z=clearance_z)
                         descend(P, "helix")
                     else:                                  # a helix from depth: retract first
-                        b.retract(clearance_z, lf)
+                        b.rapid(b.position[None, :2], z=clearance_z)
                         b.rapid(P[:1], z=clearance_z)
                         descend(P, "helix")
                 prev_kind = "helix"
@@ -380,7 +391,7 @@ class ToolPath:
             tt = np.broadcast_to(np.asarray(t, dtype=object), (len(P),))
             b.add(P[skip:], kk[skip:], np.where(kk[skip:] == "link", lf, float(feed)), tt[skip:], z=z_cut)
             prev_kind = None
-        b.retract(clearance_z, lf)
+        b.rapid(b.position[None, :2], z=clearance_z)
         return b.build()
 
     def __len__(self) -> int:
@@ -743,58 +754,3 @@ class ToolPathBuilder:
         f[col[1] == _KIND_INDEX["rapid"]] = np.nan
         return ToolPath(col[0], col[1], col[3].astype(object), f, self.spindle, col[4], col[5], self.tool,
                         {**self.info, **info}, col[6])
-
-
-def subdivide(points, max_step: float) -> np.ndarray:
-    """A polyline (N, 2) or (N, 3) mm with every segment split into equal pieces at most ``max_step``
-    mm long (the vertices kept, repeated points dropped): :func:`resample_polyline`.
-
-    >>> subdivide([[0, 0], [1, 0]], 0.4).tolist()
-    [[0.0, 0.0], [0.3333333333333333, 0.0], [0.6666666666666666, 0.0], [1.0, 0.0]]
-    """
-    P = np.asarray(points, float)
-    if P.ndim != 2 or P.shape[1] not in (2, 3) or len(P) < 1:
-        raise ValueError(f"points must be (N, 2) or (N, 3) mm with N >= 1, got shape {P.shape}")
-    Q = resample_polyline(P, max_step)
-    return Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]]          # zero-length segments dropped
-
-
-def resample_polyline(points, step_mm: float, *, uniform: bool = False, return_index: bool = False):
-    """The one polyline resampler: points (N, d) mm -> points at most ``step_mm`` mm apart.
-
-    ``uniform=False``: every segment split into ``ceil(L / step_mm)`` equal pieces, the vertices kept
-    exactly (a zero-length segment gives its end point once more); ``uniform=True``: ``ceil(L_total /
-    step_mm)`` equal pieces along the whole length (linear interpolation in the length travelled; the
-    inner vertices are not kept; a zero-length polyline gives its first point). With ``return_index``
-    also, per output point, the index k of the input segment ``P[k-1] -> P[k]`` it ends on (0 for
-    the first point): ``(points, index)``.
-
-    >>> resample_polyline([[0, 0], [1, 0], [1, 0.5]], 0.4).round(4).tolist()
-    [[0.0, 0.0], [0.3333, 0.0], [0.6667, 0.0], [1.0, 0.0], [1.0, 0.25], [1.0, 0.5]]
-    >>> resample_polyline([[0, 0], [1, 0], [1, 0.5]], 0.4, uniform=True)[:, 0].round(4).tolist()
-    [0.0, 0.375, 0.75, 1.0, 1.0]
-    """
-    P = np.asarray(points, float)
-    if P.ndim != 2 or len(P) < 1:
-        raise ValueError(f"points must be (N, d) mm with N >= 1, got shape {P.shape}")
-    if not (math.isfinite(step_mm) and step_mm > 0):
-        raise ValueError(f"step_mm must be a finite number > 0 mm, got {step_mm!r}")
-    D = np.diff(P, axis=0)
-    L = np.hypot(D[:, 0], D[:, 1]) if P.shape[1] == 2 else np.linalg.norm(D, axis=1)
-    if uniform:
-        s = np.r_[0.0, np.cumsum(L)]
-        if len(P) < 2 or s[-1] == 0:
-            Q, idx = P[:1].copy(), np.zeros(1, int)
-        else:
-            u = np.linspace(0, s[-1], max(int(math.ceil(s[-1] / step_mm)), 1) + 1)
-            Q = np.column_stack([np.interp(u, s, P[:, j]) for j in range(P.shape[1])])
-            idx = np.r_[0, np.minimum(np.searchsorted(s, u[1:], side="left"), len(P) - 1)]
-        return (Q, idx) if return_index else Q
-    m = np.maximum(1, np.ceil(L / step_mm - 1e-9)).astype(np.int64)
-    seg = np.repeat(np.arange(1, len(P)), m)                # segment (end index) of every new point
-    t = (np.arange(seg.size) - np.repeat(np.cumsum(m) - m, m) + 1) / m[seg - 1]
-    a = P[seg - 1]
-    Q = np.vstack([P[:1], a + t[:, None] * (P[seg] - a)])
-    Q[np.cumsum(m)] = P[1:]                                 # the vertices exactly
-    idx = np.r_[0, seg]
-    return (Q, idx) if return_index else Q

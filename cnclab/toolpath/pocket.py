@@ -24,8 +24,8 @@ Every strategy returns a :class:`~cnclab.toolpath.path.ToolPath` at the cutting 
 ...                      "v_c": 120, "f_z": 0.04, "a_p": 3, "theta_deg": 60,
 ...                      "start_hole": {"center": [20, 15], "diameter": 11}})
 >>> p = contour_parallel_path(job)
->>> p.kinds()[:2].tolist(), round(float(p.xyz[:, 2].min()), 6)
-(['rapid', 'plunge'], -3.0)
+>>> p.kinds()[:3].tolist(), p.xyz[:3, 2].tolist()          # G0 down to 0.5 mm, then into the start hole
+(['rapid', 'rapid', 'plunge'], [5.0, 0.5, -3.0])
 """
 from __future__ import annotations
 
