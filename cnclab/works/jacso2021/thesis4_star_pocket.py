@@ -311,3 +311,26 @@ def mrr_error_best_reading_pct() -> float:
     :func:`mrr_error_readings` (partial evidence beside the booklet's 1.5 %)."""
     d = mrr_error_readings()
     return float(d[d.error_on == "constant-engagement cuts"].mean_abs_pct.min())
+
+
+def discussion_numbers(resolution_mm=None) -> str:
+    """The numbers the s4 notebook's discussion cites, computed (Markdown bullets): the designed star's
+    hybrid path (engagement, uncut, program time with and without feed control against t_min and the
+    booklet's 134 s, MRR error) and the two own pockets (the same summaries :func:`star_strategies` and
+    :func:`user_pockets` give, at ``resolution_mm``, default the mode's: 0.05 mm full, 0.1 mm fast)."""
+    res = pick(0.05, 0.1) if resolution_mm is None else float(resolution_mm)
+    S, _ = star_strategies(res)
+    U, _ = user_pockets(res)
+    fc, cf, tm = S.loc["hybrid, feed control"], S.loc["hybrid, constant feed"], t_min_s()
+    out = [f"* Star ({res:g} mm dixels): max engagement {fc.engagement_max_deg:.1f}°, "
+           f"{100 * fc.share_above_theta_plus5:.1f} % of the cutting length above θ + 5°, uncut "
+           f"{fc.uncut_area_mm2:.2f} mm² (unreachable {fc.unreachable_area_mm2:.2f} mm²). Program time with feed "
+           f"control {fc.program_time_s:.1f} s = {fc.program_time_s / tm:.2f} × t_min (the booklet: 134 s, "
+           f"{134 / tm:.2f} ×); without, {cf.program_time_s:.1f} s ({cf.program_time_s / tm:.2f} ×). MRR error "
+           f"{fc.mrr_error_cut_pct:.1f} %."]
+    for case, r in U.iterrows():
+        out.append(f"* {case}: max engagement {r.engagement_max_deg:.1f}°, {100 * r.share_above_theta_plus5:.1f} % "
+                   f"above θ + 5°, uncut {r.uncut_area_mm2:.2f} mm² of which {r.unreachable_area_mm2:.2f} mm² "
+                   f"are the unreachable sharp corners ({r.uncut_beyond_unreachable_mm2:.2f} mm² beyond them), "
+                   f"{r.program_time_s:.0f} s = {r.program_time_s / r.t_min_s:.2f} × t_min ({r.t_min_s:.1f} s).")
+    return "\n".join(out)
