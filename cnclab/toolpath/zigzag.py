@@ -21,6 +21,7 @@ import math
 import numpy as np
 import shapely
 from shapely.geometry import LineString
+from shapely.ops import substring
 
 from .path import ToolPath, ToolPathBuilder
 
@@ -277,8 +278,6 @@ def raster_link(a, b, region, max_along_mm: float = 0.0, guard=None):
 def _along(ring, sa: float, sb: float, L: float, forward: bool) -> np.ndarray:
     """The points of ``ring`` (its vertices kept) from arc length ``sa`` to ``sb`` (mm), forward (the
     ring's direction, through its start if need be) or backward."""
-    from shapely.ops import substring
-
     def piece(u, v):
         return shapely.get_coordinates(substring(ring, u, v))
 
