@@ -327,12 +327,13 @@ class ToolPath:
         if reentry not in ("plunge", "ramp"):
             raise ValueError(f"reentry must be 'plunge' or 'ramp', got {reentry!r}")
         lf = float(feed if link_feed is None else link_feed)
+        z_near = min(top_z + APPROACH_MM, clearance_z)         # a clearance plane nearer the top than that
         b = ToolPathBuilder(tool=tool, spindle=spindle, info=info)
 
         def descend(P, k):
             """Tool above P[0] at clearance: a rapid down to APPROACH_MM above the level top (air), then
             down at feed (helix along P, or plunge at P[0])."""
-            b.rapid(P[:1], z=top_z + APPROACH_MM, tag="cleared: above the level top", cleared=True)
+            b.rapid(P[:1], z=z_near, tag="cleared: above the level top", cleared=True)
             if k == "helix":
                 b.add(P[:1], "plunge", feed, "approach", z=top_z)
                 b.helix(P, top_z, z_cut, feed)
@@ -365,7 +366,7 @@ class ToolPath:
                         if np.hypot(*np.diff(Q, axis=0).T).sum() >= ramp_max_mm:
                             break
                     Q = np.vstack(ahead)
-                    b.rapid(P[-1:], z=top_z + APPROACH_MM, tag="cleared: above the level top", cleared=True)
+                    b.rapid(P[-1:], z=z_near, tag="cleared: above the level top", cleared=True)
                     b.ramp(Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]], top_z, z_cut, feed,
                            ramp_deg=ramp_deg, max_mm=ramp_max_mm)
                 else:
