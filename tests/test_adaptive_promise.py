@@ -119,3 +119,26 @@ def test_the_check_measures_the_written_form_when_given(monkeypatch):
     assert tp.info["engagement_check"]["max_deg"] != plain.info["engagement_check"]["max_deg"]   # measured differently
     n = len(seen)
     assert len(planners.plan(job, "zig-zag", written=written)) > 0 and len(seen) == n
+
+
+def test_a_breach_on_a_finishing_lap_is_planned_again_with_the_laps_held_closer():
+    """Random pocket 86:11 (tests/fixtures/adaptive/random_pocket_86_11.json, drawn for validation
+    after the planner was built; theta 75, D 10): its first plan breaks the promise on a clearing pass
+    (theta + 13.4), the tighter guard moves the peak onto a finishing lap (theta + 10.1) and no other
+    retry helps; the last retry, the tighter guard with the laps held at theta +
+    ``retry_finish_margin_deg``, brings the written program within every bound."""
+    from cnclab.nc.program import program_path
+    from cnclab.paths import REPO_ROOT
+    from cnclab.toolpath.job import load_job
+
+    job = load_job(REPO_ROOT / "tests" / "fixtures" / "adaptive" / "random_pocket_86_11.json")
+    prm = AdaptiveParams()
+    p = planners.plan(job, "adaptive", allow_uncut=True, written=program_path)
+    chk = p.info["engagement_check"]
+    assert chk["retried"] and "engagement_breach" not in p.info
+    assert chk["max_deg"] <= job.theta_deg + prm.promise_max_deg - prm.written_margin_deg
+    assert chk["p95_deg"] <= job.theta_deg + prm.promise_p95_deg and chk["share_above_5_pct"] <= prm.promise_share_pct
+    # without the last retry (the laps at the default margin) it is refused
+    with pytest.raises(ValueError, match="promises an engagement"):
+        planners.plan(job, "adaptive", allow_uncut=True, written=program_path,
+                      params=AdaptiveParams(retry_finish_margin_deg=prm.finish_margin_deg))

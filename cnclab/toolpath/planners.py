@@ -360,7 +360,8 @@ def _adaptive(job: Job, resolution_mm: float, written=None, **options) -> ToolPa
 def _retries(prm):
     """The re-plans of a level beyond the engagement bounds, in order: the tighter sliver guard, the
     nearest pass starts, both, then the narrow regions' trochoids checked period by period
-    (``retry_narrow_check_deg``; :class:`cnclab.toolpath.adaptive.AdaptiveParams`)."""
+    (``retry_narrow_check_deg``), last the tighter guard with the finishing laps held closer to theta
+    (``retry_finish_margin_deg``; :class:`cnclab.toolpath.adaptive.AdaptiveParams`)."""
     guard = dataclasses.replace(prm, guard_deg=prm.retry_guard_deg)
     out = [guard, dataclasses.replace(prm, upstream_start_frac=0.0), dataclasses.replace(guard, upstream_start_frac=0.0)]
     if prm.narrow_check_margin_deg is None:
@@ -368,6 +369,8 @@ def _retries(prm):
         out.append(checked)
         if not prm.narrow_branches:
             out.append(dataclasses.replace(checked, narrow_branches=True))
+    if prm.finish_margin_deg > prm.retry_finish_margin_deg:      # last: a breach on a finishing lap
+        out.append(dataclasses.replace(guard, finish_margin_deg=prm.retry_finish_margin_deg))
     return out
 
 
