@@ -23,7 +23,8 @@ _TOL = 1e-6
 class ProgramCheck:
     """Result of :func:`check_program`: ``errors`` (each naming ``source:line`` and the word),
     ``entries`` (counts of entries by kind: helix, ramp, plunge -- an entry is a run of consecutive
-    Z-descending feed blocks of one kind, as :class:`~cnclab.toolpath.evaluate.Evaluation` counts them), ``plunges_into_material``,
+    Z-descending feed blocks: vertical ones (plunges) a run of their own, arcs and lines with xy motion
+    one run counted as the kind that descends most in it, :class:`_EntryRun`), ``plunges_into_material``,
     ``rapids_below_clearance`` (unsafe G0 count), ``spindle_on_before_cut``, ``end_word``."""
 
     errors: list
@@ -83,9 +84,6 @@ class _EntryRun:
     def add(self, kind, dz):
         self.drop[kind] = self.drop.get(kind, 0.0) + dz
 
-    def count(self, entries):
-        entries[self.kind] += 1
-
 
 def _check_moves(moves, lines, cleared, src, clearance_z, top_z, prog) -> ProgramCheck:
     """The rules of :func:`check_program` over ``moves`` (``cleared``: per move, the data that marks
@@ -95,7 +93,7 @@ def _check_moves(moves, lines, cleared, src, clearance_z, top_z, prog) -> Progra
     plunges = rapids_bad = 0
     spindle_ok = True
     seen_feed = False
-    prev_entry = None
+    runs, prev_entry = [], None      # the entries, and the one the last move belongs to (None: none)
     if moves and moves[0].z < clearance_z - _TOL:
         errors.append(f"{src}:{lines[0]}: word {moves[0].motion}: the first move ends below the clearance "
                       f"plane Z{clearance_z:g} (start position unknown)")
@@ -112,8 +110,6 @@ def _check_moves(moves, lines, cleared, src, clearance_z, top_z, prog) -> Progra
         a = moves[k - 1].xyz
         b = mv.xyz
         if mv.motion == "G0":
-            if prev_entry is not None:
-                prev_entry.count(entries)
             prev_entry = None
             above = min(a[2], b[2]) >= clearance_z - _TOL
             straight_up = b[2] >= a[2] and math.hypot(*(b[:2] - a[:2])) <= _TOL
@@ -129,20 +125,17 @@ def _check_moves(moves, lines, cleared, src, clearance_z, top_z, prog) -> Progra
             # alternate between arcs and lines (a ramp along a curve the arc fit took in pieces) is
             # one entry too, of the kind that descends the most in it (_EntryRun)
             if prev_entry is None or (kind == "plunge") != (prev_entry.kind == "plunge"):
-                if prev_entry is not None:
-                    prev_entry.count(entries)
                 prev_entry = _EntryRun()
+                runs.append(prev_entry)
             prev_entry.add(kind, a[2] - b[2])
             if kind == "plunge" and b[2] < top_z - _TOL and not ok_cleared:
                 plunges += 1
                 errors.append(f"{where}: word {mv.motion}: plunge into material below the stock top "
                               f"Z{top_z:g} (not marked cleared)")
             continue
-        if prev_entry is not None:
-            prev_entry.count(entries)
         prev_entry = None
-    if prev_entry is not None:
-        prev_entry.count(entries)
+    for run in runs:
+        entries[run.kind] += 1
     if prog is None:
         return ProgramCheck(errors, entries, plunges, rapids_bad, spindle_ok, None)
     if prog.end_word is None:
