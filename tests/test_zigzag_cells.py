@@ -35,7 +35,11 @@ def test_cell_order_cuts_every_piece_once(w, h, fx, fy, step):
     or reversed), and the first stays first."""
     R = box(0, 0, w, h).difference(box(fx * w - 4, fy * h - 3, fx * w + 4, fy * h + 3))
     pieces = raster_lines(R, step)
-    out = cell_order(pieces, R, 3 * step)
+    out, links = cell_order(pieces, R, 3 * step)
     assert len(out) == len(pieces) and np.array_equal(out[0], pieces[0])
+    # each link runs from the end of the piece before to the start of its piece (None: the first, a jump)
+    assert len(links) == len(out) and links[0] is None
+    assert all(np.allclose(L[0], a[-1]) and np.allclose(L[-1], b[0]) for a, b, L in zip(out, out[1:], links[1:])
+               if L is not None)
     key = lambda q: tuple(np.round(np.sort(q, axis=0).ravel(), 9))     # noqa: E731
     assert sorted(map(key, out)) == sorted(map(key, pieces))

@@ -587,9 +587,10 @@ def contour_parallel_path(job: Job, stepover=None, resolution_mm: float = 0.1) -
     default the nominal a_e); passes joined by jumps (retract, rapid, plunge)."""
     ae = job.a_e if stepover is None else stepover
     c = entry_hole(job)[0]
+    allowed = job.allowed()
     levels = offset_levels(job.polygon, job.tool_radius, ae)
-    passes = link_loops(levels, job.allowed(), start=c)
-    inside = job.allowed().buffer(1e-6).contains(LineString([c, passes[0][0]]))    # else a jump past an island
+    passes = link_loops(levels, allowed, start=c)
+    inside = raster_link(c, passes[0][0], allowed) is not None          # else a jump past an island
     segs = [(np.vstack([c, passes[0][0]]), "link" if inside else "rapid", "cp")]
     for i, P in enumerate(passes):
         if i > 0:
@@ -605,9 +606,10 @@ ZIGZAG_ALONG_AE = 3.0
 
 def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0.1) -> ToolPath:
     """Zig-zag (direction-parallel) raster over the tool-centre region at ``stepover`` (mm, default
-    a_e), alternate directions (:func:`cnclab.toolpath.zigzag.raster_lines`), straight feed links along
-    the boundary side when inside the region (else a jump, re-entering by a ramp), then a finishing
-    lap of every ring of the region (outlines and islands: removes the scallops)."""
+    a_e), alternate directions (:func:`cnclab.toolpath.zigzag.raster_lines`) cut cell by cell
+    (:func:`cnclab.toolpath.zigzag.cell_order`: feed links between rows inside the region, along the
+    wall round a corner; else a jump, re-entering by a ramp), then a finishing lap of every ring of the
+    region (outlines and islands: removes the scallops)."""
     ae = job.a_e if stepover is None else stepover
     allowed = job.allowed()
     c = entry_hole(job)[0]
@@ -615,22 +617,17 @@ def zigzag_path(job: Job, stepover=None, angle_deg=0.0, resolution_mm: float = 0
     # tangency stubs are left to the finishing lap; an island or a neck splits the rows into cells,
     # each cut in one go (cell_order: one jump per cell, not one per row); a link between rows runs
     # along the wall (at most ZIGZAG_ALONG_AE a_e) where the chord would leave the region
-    along = ZIGZAG_ALONG_AE * ae
-    lines = cell_order(raster_lines(A, ae, min_length=0.5 * ae), A, along)
-    guard = A.buffer(1e-6)
-    # the slot from the entry hole to the first raster line, where it stays in the tool-centre region;
-    # else (an island or a wall between them) a jump: retract, rapid, ramp down on the first line
+    lines, links = cell_order(raster_lines(A, ae, min_length=0.5 * ae), A, ZIGZAG_ALONG_AE * ae)
+    # the slot from the entry hole (the rotation's centre) to the first raster line, where it stays in the
+    # tool-centre region; else (an island or a wall between them) a jump: retract, rapid, ramp down on it
     first = _rot(lines[0][:1], angle_deg, c)[0]
-    segs = [(np.vstack([c, first]), "cut" if allowed.buffer(1e-6).contains(LineString([c, first])) else "rapid", "zz")]
-    prev = None
-    for q in lines:
+    segs = [(np.vstack([c, first]), "cut" if raster_link(c, lines[0][0], A) is not None else "rapid", "zz")]
+    for q, link, prev in zip(lines, links, [None] + lines[:-1]):
         qq = _rot(q, angle_deg, c)
         if prev is not None:
-            link = raster_link(prev, q[0], A, along, guard)
             segs.append((_rot(link, angle_deg, c), "cut", "zz") if link is not None else
-                        (np.vstack([_rot(prev[None], angle_deg, c)[0], qq[0]]), "rapid", "zz"))
+                        (np.vstack([_rot(prev[-1:], angle_deg, c)[0], qq[0]]), "rapid", "zz"))
         segs.append((qq, "cut", "zz"))
-        prev = q[-1]
     for part in shapely.get_parts(allowed):                # finishing laps: every outline and island
         for ring in [np.asarray(part.exterior.coords)] + [np.asarray(i.coords) for i in part.interiors]:
             segs.append((np.vstack([segs[-1][0][-1], ring[0]]), "rapid", "zz"))

@@ -286,26 +286,30 @@ def _along(ring, sa: float, sb: float, L: float, forward: bool) -> np.ndarray:
     return piece(sa, sb) if sb <= sa else np.vstack([piece(sa, 0.0), piece(L, sb)[1:]])
 
 
-def cell_order(pieces, region, max_along_mm: float = 0.0) -> list[np.ndarray]:
+def cell_order(pieces, region, max_along_mm: float = 0.0) -> tuple[list[np.ndarray], list]:
     """The raster ``pieces`` (from :func:`raster_lines`: horizontal (M, 2) arrays, mm, row by row) in
-    boustrophedon-cell order: from the end of a piece the next is a piece of the row above that a
-    straight link inside ``region`` (a shapely (Multi)Polygon, 1e-6 mm tolerance) reaches, the nearest
-    such end first (the piece reversed if its far end is the nearer; :func:`raster_link`, along the wall up
-    to ``max_along_mm`` where the chord leaves the region); where none is, the tool jumps to
-    the nearest piece that has no unvisited piece below it overlapping it in x (the bottom of a part
-    the raster has not covered yet). An island or a narrow neck splits the rows into cells, and each
-    cell is cut in one go instead of one jump per row (the raster order crosses from cell to cell on
-    every row). The first piece stays first (the entry slot goes to it).
+    boustrophedon-cell order, with the feed link into each: ``(pieces, links)``, ``links[k]`` the
+    :func:`raster_link` (K, 2) from the end of piece k - 1 to the start of piece k, or None (the first
+    piece, and a jump). From the end of a piece the next is a piece of the row above that a link inside
+    ``region`` (a shapely (Multi)Polygon, 1e-6 mm tolerance; along the wall up to ``max_along_mm`` where
+    the chord leaves the region) reaches, the nearest such end first (the piece reversed if its far end
+    is the nearer); where none is, the tool jumps to the nearest piece that has no unvisited piece below
+    it overlapping it in x (the bottom of a part the raster has not covered yet). An island or a narrow
+    neck splits the rows into cells, and each cell is cut in one go instead of one jump per row (the
+    raster order crosses from cell to cell on every row). The first piece stays first (the entry slot
+    goes to it).
 
     >>> from shapely.geometry import box
     >>> U = box(0, 0, 10, 6).difference(box(4, 2, 6, 7))         # a U: two columns above a base
-    >>> P = cell_order(raster_lines(U, 1.0), U)
+    >>> P, links = cell_order(raster_lines(U, 1.0), U)
     >>> [(round(float(q[0, 0]), 1), round(float(q[0, 1]))) for q in P]
     [(0.0, 0), (10.0, 1), (0.0, 2), (4.0, 3), (0.0, 4), (4.0, 5), (6.0, 2), (10.0, 3), (6.0, 4), (10.0, 5)]
+    >>> [k for k, link in enumerate(links) if link is None]               # the first piece, one jump
+    [0, 6]
     """
     pieces = [np.asarray(q, float) for q in pieces]
     if len(pieces) < 2:
-        return pieces
+        return pieces, [None] * len(pieces)
     guard = region.buffer(1e-6)
     shapely.prepare(guard)
     ys = np.array([q[0, 1] for q in pieces])
@@ -325,7 +329,7 @@ def cell_order(pieces, region, max_along_mm: float = 0.0) -> list[np.ndarray]:
         below = by_row.get(int(row[i]) - 1, ())
         return not any(lo[j] < hi[i] and lo[i] < hi[j] for j in below)
 
-    out, last = [pieces[0]], 0
+    out, links, last = [pieces[0]], [None], 0
     by_row[int(row[0])].discard(0)
     for _ in range(len(pieces) - 1):
         cur = out[-1][-1]
@@ -333,14 +337,18 @@ def cell_order(pieces, region, max_along_mm: float = 0.0) -> list[np.ndarray]:
         for j in by_row.get(int(row[last]) + 1, ()):
             q = oriented(j, cur)
             d = float(np.hypot(*(q[0] - cur)))
-            if (best is None or d < best[0]) and raster_link(cur, q[0], region, max_along_mm, guard) is not None:
-                best = (d, j, q)
-        if best is None:          # a jump: the nearest bottom of what is left
+            if best is None or d < best[0]:
+                link = raster_link(cur, q[0], region, max_along_mm, guard)
+                if link is not None:
+                    best = (d, j, q, link)
+        if best is None:          # a jump: the nearest bottom of what is left (linked if a link reaches it)
             left = [j for r in by_row.values() for j in r]
             base = [j for j in left if bottom(j)] or left
             j = min(base, key=lambda j: (min(np.hypot(*(pieces[j][0] - cur)), np.hypot(*(pieces[j][-1] - cur))), j))
-            best = (0.0, j, oriented(j, cur))
-        _, last, q = best
+            q = oriented(j, cur)
+            best = (0.0, j, q, raster_link(cur, q[0], region, max_along_mm, guard))
+        _, last, q, link = best
         by_row[int(row[last])].discard(last)
         out.append(q)
-    return out
+        links.append(link)
+    return out, links
