@@ -87,8 +87,9 @@ class Move:
 
 
 KINDS = ("rapid", "helix", "ramp", "plunge", "cut", "link", "retract")
-#: mm: :meth:`ToolPath.from_segments` comes down from the clearance plane by a rapid to this height
-#: above the level top (air), the rest at feed (the adaptive planner's ``approach_above_mm``)
+#: mm: the paths of :meth:`ToolPath.from_segments` and the adaptive planner (its default
+#: ``AdaptiveParams.approach_above_mm``) come down from the clearance plane by a rapid to this height
+#: above the level top (air), the rest at feed (Kim & Yang's ``constant_mrr.passes_path`` does not yet)
 APPROACH_MM = 0.5
 ENTRY_KINDS = ("helix", "ramp", "plunge")
 _KIND_INDEX = {k: i for i, k in enumerate(KINDS)}

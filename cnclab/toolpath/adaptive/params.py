@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 
+from ..path import APPROACH_MM
+
 __all__ = ["AdaptiveParams"]
 
 
@@ -100,8 +102,9 @@ class AdaptiveParams:
     #: fraction of r: a place too narrow for a helix, or entered before, bans the cells within this
     #: radius (no endless re-entry at one spot)
     entry_ban_frac: float = 2.0
-    #: mm: an entry rapids down to this height above the level's top before its feed descent
-    approach_above_mm: float = 0.5
+    #: mm: an entry rapids down to this height above the level's top before its feed descent (the
+    #: package's one approach height, :data:`cnclab.toolpath.path.APPROACH_MM`, as ToolPath.from_segments)
+    approach_above_mm: float = APPROACH_MM
     #: mm and fraction of a_e: a further finishing lap runs only while material deeper than
     #: max(finish_rest_min_mm, finish_rest_frac_ae a_e) is left along the ring
     finish_rest_min_mm: float = 0.3
