@@ -86,8 +86,14 @@ def _memo_planner(name, f):
     def planner(job, resolution_mm, **options):
         key = pickle.dumps((name, job, resolution_mm, sorted(options.items())))
         if key not in _LEVEL_PLANS:
-            _LEVEL_PLANS[key] = f(job, resolution_mm, **options)
-        return copy.deepcopy(_LEVEL_PLANS[key])
+            try:
+                _LEVEL_PLANS[key] = f(job, resolution_mm, **options)
+            except ValueError as exc:        # a refusal is as deterministic as a plan: kept, raised anew
+                _LEVEL_PLANS[key] = exc
+        got = _LEVEL_PLANS[key]
+        if isinstance(got, ValueError):
+            raise copy.copy(got).with_traceback(None)
+        return copy.deepcopy(got)
     return planner
 
 
@@ -98,7 +104,7 @@ def memo_levels(monkeypatch):
     plan. The key is the pickled (strategy, job, resolution, options): a job differing in any field is
     planned anew. The planners are deterministic (golden-digest tests), so a test sees the path it
     would have planned; plan() still joins the levels, checks gouges and uncut area, and the test
-    still writes and checks its own program. Refusals (exceptions) are not memoised."""
+    still writes and checks its own program. A refusal (ValueError) is memoised too and raised anew."""
     from cnclab.toolpath.planners import STRATEGIES
 
     for name, (f, desc) in list(STRATEGIES.items()):
