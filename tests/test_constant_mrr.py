@@ -8,7 +8,7 @@ from shapely.geometry import LineString, Point, box
 from cnclab.simulation import pixel
 from cnclab.toolpath import constant_mrr as cm
 from cnclab.toolpath.job import Job
-from cnclab.toolpath.path import Tool
+from cnclab.toolpath.path import APPROACH_MM, Tool
 from cnclab.nc import gcode
 from cnclab.nc.program import write_moves
 
@@ -88,7 +88,11 @@ def test_program_round_trip_and_arc_geometry():
     p = np.vstack([[[-5.0, 10.0]], np.column_stack([10 * np.cos(t), 10 * np.sin(t)])[::-1][::-1]])
     job = Job(box(-20, -20, 20, 20), Tool(10.0), 66.42, 0.5, feed_mm_min=500, spindle_rpm=2000)
     path = cm.passes_path([p], job, tol_mm=1e-6, short_mm=2.0)
-    assert path.kinds()[[0, 1, -1]].tolist() == ["rapid", "plunge", "retract"]
+    # G0 to the clearance plane, G0 down to APPROACH_MM above the stock top, the plunge at feed, and a
+    # G0 straight up at the end (as every planner comes down and lifts)
+    assert path.kinds()[[0, 1, 2, -1]].tolist() == ["rapid", "rapid", "plunge", "rapid"]
+    assert path.xyz[[0, 1, 2, -1], 2].tolist() == [job.clearance_z, job.top_z + APPROACH_MM, -0.5, job.clearance_z]
+    assert np.allclose(path.xyz[-1, :2], path.xyz[-2, :2]) and path.cleared[1] and path.feed[2] == 500
     moves = path.to_moves()
     assert any(m.motion == "G2" for m in moves)
     text = write_moves(moves)

@@ -342,31 +342,32 @@ def kim_yang_passes(job: Job, spiral: bool = True, modified: bool = False, pixel
 
 def passes_path(passes, job: Job, arcs: bool = True, entry: str = "plunge", **fit_kw) -> ToolPath:
     """A :class:`ToolPath` of contour-parallel ``passes`` (mm) at the job's cutting level: rapid at
-    the clearance plane above each pass start, the entry, the pass as lines and fitted arcs
-    (:func:`fit_arcs`, ``fit_kw``), retract. ``entry="plunge"``: straight down onto the pass start
+    the clearance plane above each pass start and down to :data:`~cnclab.toolpath.path.APPROACH_MM`
+    above the stock top (:meth:`~cnclab.toolpath.path.ToolPathBuilder.approach`), the entry at feed,
+    the pass as lines and fitted arcs (:func:`fit_arcs`, ``fit_kw``), a rapid straight up. ``entry="plunge"``: straight down onto the pass start
     (Kim & Yang's program: the pass starts at the centre of its region, its spiral entry);
     ``"helix"``: one helical turn of tool-centre radius r/4 about the pass start from the stock top
     to the cutting level, the circle once more flat, back to the start (a machine-safe entry)."""
     if entry not in ("plunge", "helix"):
         raise ValueError(f"entry must be 'plunge' or 'helix', got {entry!r}")
     z, zc = job.top_z - job.a_p, job.clearance_z
-    f, lf = job.feed_mm_min, job.link_feed_mm_min
+    f = job.feed_mm_min
     b = ToolPathBuilder(tool=job.tool, spindle=job.spindle_rpm, info={"name": "Kim & Yang contour-parallel"})
     e = 0.25 * job.tool_radius
     for pas in passes:
         p = np.asarray(pas, float)
         if entry == "helix":
             ring = helix_ring(p[0], e, 32)
-            b.rapid(ring[:1], z=zc)
-            b.plunge(ring[0], job.top_z, f)
+            b.approach(ring[0], job.top_z, zc)
+            b.plunge(ring[0], job.top_z, f, tag="approach")
             b.helix(ring, job.top_z, z, f, equal_steps=True)
             b.cut(ring[1:], f, z=z)
             b.cut(p[:1], f, z=z)
         else:
-            b.rapid(p[:1], z=zc)
+            b.approach(p[0], job.top_z, zc)
             b.plunge(p[0], z, f)
         items = _pass_segments(p, fit_kw) if arcs else [(q, 0, (np.nan, np.nan)) for q in p[1:]]
         for end, a, c in items:
             b.add(np.asarray(end, float)[None, :2], "cut", f, z=z, arc=a, center=np.asarray(c, float)[None])
-        b.retract(zc, lf)
+        b.lift(zc)
     return b.build()

@@ -87,9 +87,9 @@ class Move:
 
 
 KINDS = ("rapid", "helix", "ramp", "plunge", "cut", "link", "retract")
-#: mm: the paths of :meth:`ToolPath.from_segments` and the adaptive planner (its default
-#: ``AdaptiveParams.approach_above_mm``) come down from the clearance plane by a rapid to this height
-#: above the level top (air), the rest at feed (Kim & Yang's ``constant_mrr.passes_path`` does not yet)
+#: mm: every planner's path comes down from the clearance plane by a rapid to this height above the
+#: level top (air; :meth:`ToolPathBuilder.approach`; the adaptive planner's default
+#: ``AdaptiveParams.approach_above_mm``), the rest at feed
 APPROACH_MM = 0.5
 ENTRY_KINDS = ("helix", "ramp", "plunge")
 _KIND_INDEX = {k: i for i, k in enumerate(KINDS)}
@@ -328,13 +328,12 @@ class ToolPath:
         if reentry not in ("plunge", "ramp"):
             raise ValueError(f"reentry must be 'plunge' or 'ramp', got {reentry!r}")
         lf = float(feed if link_feed is None else link_feed)
-        z_near = min(top_z + APPROACH_MM, clearance_z)         # a clearance plane nearer the top than that
         b = ToolPathBuilder(tool=tool, spindle=spindle, info=info)
 
         def descend(P, k):
-            """Tool above P[0] at clearance: a rapid down to APPROACH_MM above the level top (air), then
+            """To P[0] at clearance, a rapid down to APPROACH_MM above the level top (air), then
             down at feed (helix along P, or plunge at P[0])."""
-            b.rapid(P[:1], z=z_near, tag="cleared: above the level top", cleared=True)
+            b.approach(P[0], top_z, clearance_z)
             if k == "helix":
                 b.add(P[:1], "plunge", feed, "approach", z=top_z)
                 b.helix(P, top_z, z_cut, feed)
@@ -346,12 +345,11 @@ class ToolPath:
         if not segs:
             raise ValueError("segments: no points")
         first = segs[0]
-        b.rapid(first[0][:1], z=clearance_z)
         descend(first[0], first[1] if isinstance(first[1], str) else "cut")
         prev_kind = "helix" if isinstance(first[1], str) and first[1] == "helix" else None
         for i, (P, k, t) in enumerate(segs):
             if isinstance(k, str) and k == "jump":
-                b.rapid(P[:1], z=clearance_z)              # straight up out of the tool's own cut
+                b.lift(clearance_z)                        # straight up out of the tool's own cut
                 b.rapid(P[-1:], z=clearance_z)
                 nxt = segs[i + 1] if i + 1 < len(segs) else None
                 if nxt is not None and isinstance(nxt[1], str) and nxt[1] == "helix":
@@ -367,7 +365,7 @@ class ToolPath:
                         if np.hypot(*np.diff(Q, axis=0).T).sum() >= ramp_max_mm:
                             break
                     Q = np.vstack(ahead)
-                    b.rapid(P[-1:], z=z_near, tag="cleared: above the level top", cleared=True)
+                    b.approach(P[-1], top_z, clearance_z)
                     b.ramp(Q[np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]], top_z, z_cut, feed,
                            ramp_deg=ramp_deg, max_mm=ramp_max_mm)
                 else:
@@ -375,14 +373,9 @@ class ToolPath:
                 continue
             if isinstance(k, str) and k == "helix":
                 if i > 0:
-                    if prev_kind == "pending-helix":               # above the jump's end at clearance
-                        if np.hypot(*(P[0] - b.position[:2])) > 1e-9:
-                            b.rapid(P[:1], z=clearance_z)
-                        descend(P, "helix")
-                    else:                                  # a helix from depth: retract first
-                        b.rapid(b.position[None, :2], z=clearance_z)
-                        b.rapid(P[:1], z=clearance_z)
-                        descend(P, "helix")
+                    if prev_kind != "pending-helix":               # a helix from depth: lift first
+                        b.lift(clearance_z)
+                    descend(P, "helix")
                 prev_kind = "helix"
                 continue
             kk = np.broadcast_to(np.asarray(k, dtype=object), (len(P),))
@@ -393,7 +386,7 @@ class ToolPath:
             tt = np.broadcast_to(np.asarray(t, dtype=object), (len(P),))
             b.add(P[skip:], kk[skip:], np.where(kk[skip:] == "link", lf, float(feed)), tt[skip:], z=z_cut)
             prev_kind = None
-        b.rapid(b.position[None, :2], z=clearance_z)
+        b.lift(clearance_z)
         return b.build()
 
     def __len__(self) -> int:
@@ -629,6 +622,32 @@ class ToolPathBuilder:
     def plunge(self, xy, z, feed, *, tag="", cleared=False) -> None:
         """A straight-down feed move to (xy, ``z``) — into air or cleared area only (``cleared``)."""
         self.add(np.asarray(xy, float).reshape(1, -1)[:, :2], "plunge", feed, tag, z=z, cleared=cleared)
+
+    def lift(self, clearance_z, *, tag="") -> None:
+        """A rapid straight up from the current position to ``clearance_z`` (mm): out of the tool's own
+        cut, as FreeCAD and every cnclab planner lift (nothing to do when the tool is already there)."""
+        if self.position is None:
+            raise ValueError("lift: no position yet")
+        if self.position[2] < clearance_z:
+            self.add(self.position[None, :2], "rapid", np.nan, tag, z=clearance_z)
+
+    def approach(self, xy, top_z, clearance_z, *, above_mm: float = APPROACH_MM) -> None:
+        """From the clearance plane down towards the level whose material starts at ``top_z`` (mm; the
+        stock top, or the floor a level above cleared): a rapid to ``xy`` at ``clearance_z`` (where the
+        tool is not there yet), then a rapid down to ``above_mm`` (default :data:`APPROACH_MM`) above
+        ``top_z`` (air), or to the clearance plane where that is lower. The entry at feed follows.
+
+        >>> b = ToolPathBuilder()
+        >>> b.approach((3, 4), top_z=0.0, clearance_z=5.0)
+        >>> b.build().xyz.tolist(), b.build().kinds().tolist()
+        ([[3.0, 4.0, 5.0], [3.0, 4.0, 0.5]], ['rapid', 'rapid'])
+        """
+        xy = np.asarray(xy, float).reshape(-1)[:2]
+        pos = self.position
+        if pos is None or np.hypot(*(pos[:2] - xy)) > 1e-9 or abs(pos[2] - clearance_z) > 1e-9:
+            self.add(xy[None], "rapid", np.nan, z=clearance_z)
+        self.add(xy[None], "rapid", np.nan, "cleared: above the level top", z=min(top_z + above_mm, clearance_z),
+                 cleared=True)
 
     def retract(self, z, feed, *, tag="") -> None:
         """Straight up from the current position to ``z`` mm at ``feed`` mm/min."""

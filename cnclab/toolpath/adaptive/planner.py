@@ -48,7 +48,7 @@ class _Level:
         if self.cur is not None:
             # straight up out of the tool's own cut: G0 (as FreeCAD lifts); the writer and the
             # static check accept a rapid only so below the clearance plane
-            self.b.rapid([(self.cur[0], self.cur[1], self.clearance_z)])
+            self.b.lift(self.clearance_z)
             self.stats["retracts"] += 1
             self.cur = self._virtual = None
 
