@@ -7,7 +7,7 @@ import pytest
 from cnclab.paths import data_path
 from cnclab.toolpath.evaluate import evaluate
 from cnclab.toolpath.job import load_job
-from cnclab.toolpath.path import ToolPath
+from cnclab.toolpath.path import APPROACH_MM, ToolPath
 from cnclab.toolpath.planners import STRATEGIES, plan
 
 RES = 0.25
@@ -31,8 +31,15 @@ def test_every_strategy_plans_a_safe_toolpath(rect, name):
     # rapids at clearance, or below it only where the planner marks them inside cleared area (the
     # evaluator below proves that no rapid removes material)
     assert p.cleared[low].all()
-    # the end: a feed retract or a G0 straight up, to the clearance plane
-    assert p.kinds()[0] == "rapid" and p.kinds()[-1] in ("retract", "rapid")
+    # one rule for lifts and descents (ToolPathBuilder.lift / approach): no feed move above
+    # APPROACH_MM over the stock top (every descent from the clearance plane is a G0 down to there,
+    # the entry at feed), every move up to the clearance plane a G0 straight up
+    feed = np.flatnonzero(~rapid)
+    assert np.maximum(p.xyz[feed, 2], p.xyz[feed - 1, 2]).max() <= rect.top_z + APPROACH_MM + 1e-9
+    up = np.r_[False, (np.diff(p.xyz[:, 2]) > 1e-9) & (p.xyz[1:, 2] == rect.clearance_z)]
+    assert rapid[up].all() and np.allclose(p.xyz[up, :2], p.xyz[np.flatnonzero(up) - 1, :2])
+    # the end: a G0 straight up to the clearance plane
+    assert p.kinds()[0] == "rapid" and p.kinds()[-1] == "rapid"
     assert p.xyz[-1, 2] == rect.clearance_z and np.allclose(p.xyz[-1, :2], p.xyz[-2, :2])
     assert p.xyz[:, 2].min() == pytest.approx(rect.top_z - rect.a_p)
     ev = evaluate(p, rect, RES)

@@ -10,6 +10,22 @@ from cnclab.toolpath.reorder import ReorderResult, reordered_path
 from cnclab.toolpath.zigzag import zigzag_path
 
 
+def test_lift_and_approach_by_hand():
+    b = ToolPathBuilder()
+    b.approach((3, 4), top_z=-1.0, clearance_z=5.0)                 # the floor a level above cleared at -1
+    b.plunge((3, 4), -2.0, 300.0)
+    b.cut([[8, 4]], 300.0, z=-2.0)
+    b.lift(5.0)
+    b.lift(5.0)                                                       # already there: nothing added
+    b.approach((8, 4), top_z=4.8, clearance_z=5.0)                    # the clearance plane is nearer: stays there
+    p = b.build()
+    assert p.kinds().tolist() == ["rapid", "rapid", "plunge", "cut", "rapid"]
+    assert p.xyz.tolist() == [[3, 4, 5], [3, 4, -1 + APPROACH_MM], [3, 4, -2], [8, 4, -2], [8, 4, 5]]
+    assert p.cleared.tolist() == [False, True, False, False, False]
+    with pytest.raises(ValueError, match="lift: no position"):
+        ToolPathBuilder().lift(5.0)
+
+
 def test_from_segments_jump_and_helix():
     circle = np.c_[1 + np.cos(np.linspace(0, 2 * np.pi, 33)), np.sin(np.linspace(0, 2 * np.pi, 33))]
     circle[-1] = circle[0]

@@ -646,8 +646,8 @@ class ToolPathBuilder:
         pos = self.position
         if pos is None or np.hypot(*(pos[:2] - xy)) > 1e-9 or abs(pos[2] - clearance_z) > 1e-9:
             self.add(xy[None], "rapid", np.nan, z=clearance_z)
-        self.add(xy[None], "rapid", np.nan, "cleared: above the level top", z=min(top_z + above_mm, clearance_z),
-                 cleared=True)
+        if top_z + above_mm < clearance_z:
+            self.add(xy[None], "rapid", np.nan, "cleared: above the level top", z=top_z + above_mm, cleared=True)
 
     def retract(self, z, feed, *, tag="") -> None:
         """Straight up from the current position to ``z`` mm at ``feed`` mm/min."""
