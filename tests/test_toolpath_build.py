@@ -24,6 +24,11 @@ def test_lift_and_approach_by_hand():
     assert p.cleared.tolist() == [False, True, False, False, False]
     with pytest.raises(ValueError, match="lift: no position"):
         ToolPathBuilder().lift(5.0)
+    b.plunge((8, 4), -2.0, 300.0)
+    b.approach((0, 0), top_z=0.0, clearance_z=5.0)                   # from depth: straight up first
+    q = b.build()
+    assert q.kinds()[-4:].tolist() == ["plunge", "rapid", "rapid", "rapid"]
+    assert q.xyz[-3:].tolist() == [[8, 4, 5], [0, 0, 5], [0, 0, APPROACH_MM]]
 
 
 def test_from_segments_jump_and_helix():

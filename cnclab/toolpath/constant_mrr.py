@@ -344,9 +344,9 @@ def passes_path(passes, job: Job, arcs: bool = True, entry: str = "plunge", **fi
     """A :class:`ToolPath` of contour-parallel ``passes`` (mm) at the job's cutting level: rapid at
     the clearance plane above each pass start and down to :data:`~cnclab.toolpath.path.APPROACH_MM`
     above the stock top (:meth:`~cnclab.toolpath.path.ToolPathBuilder.approach`), the entry at feed,
-    the pass as lines and fitted arcs (:func:`fit_arcs`, ``fit_kw``), a rapid straight up. ``entry="plunge"``: straight down onto the pass start
-    (Kim & Yang's program: the pass starts at the centre of its region, its spiral entry);
-    ``"helix"``: one helical turn of tool-centre radius r/4 about the pass start from the stock top
+    the pass as lines and fitted arcs (:func:`fit_arcs`, ``fit_kw``), a rapid straight up.
+    ``entry="plunge"``: straight down onto the pass start (Kim & Yang's program: the pass starts at
+    the centre of its region, its spiral entry); ``"helix"``: one helical turn of tool-centre radius r/4 about the pass start from the stock top
     to the cutting level, the circle once more flat, back to the start (a machine-safe entry)."""
     if entry not in ("plunge", "helix"):
         raise ValueError(f"entry must be 'plunge' or 'helix', got {entry!r}")

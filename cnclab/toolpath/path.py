@@ -633,9 +633,10 @@ class ToolPathBuilder:
 
     def approach(self, xy, top_z, clearance_z, *, above_mm: float = APPROACH_MM) -> None:
         """From the clearance plane down towards the level whose material starts at ``top_z`` (mm; the
-        stock top, or the floor a level above cleared): a rapid to ``xy`` at ``clearance_z`` (where the
-        tool is not there yet), then a rapid down to ``above_mm`` (default :data:`APPROACH_MM`) above
-        ``top_z`` (air), or to the clearance plane where that is lower. The entry at feed follows.
+        stock top, or the floor a level above cleared): from below the clearance plane first a
+        :meth:`lift`, then a rapid to ``xy`` at ``clearance_z`` (where the tool is not there yet) and a
+        rapid down to ``above_mm`` (default :data:`APPROACH_MM`) above ``top_z`` (air), or to the
+        clearance plane where that is lower. The entry at feed follows.
 
         >>> b = ToolPathBuilder()
         >>> b.approach((3, 4), top_z=0.0, clearance_z=5.0)
@@ -643,6 +644,8 @@ class ToolPathBuilder:
         ([[3.0, 4.0, 5.0], [3.0, 4.0, 0.5]], ['rapid', 'rapid'])
         """
         xy = np.asarray(xy, float).reshape(-1)[:2]
+        if self.position is not None and self.position[2] < clearance_z:
+            self.lift(clearance_z)              # never a rapid across from below the clearance plane
         pos = self.position
         if pos is None or np.hypot(*(pos[:2] - xy)) > 1e-9 or abs(pos[2] - clearance_z) > 1e-9:
             self.add(xy[None], "rapid", np.nan, z=clearance_z)
