@@ -14,6 +14,7 @@ import json
 import numpy as np
 import pandas as pd
 
+from ...cache import cached
 from ...claims import Interval
 from ...cutting.speeds import cutting_speed, feed_speed, spindle_speed
 from ...cutting.spindle_model import feed_directions, working_diameters
@@ -252,8 +253,11 @@ def original_deff(direction: str = "move", step_mm: float | None = None) -> np.n
     return working_diameters(nrm, af, t["D"], t["a_p"], "max")[0]
 
 
+@cached()
 def reorder_path_job(dense, nrm, D, a_p, k, start, A_f, direction, neighbours, a_e):
-    """One reordering of :func:`reorder_cases` (a module-level function: a sweep item)."""
+    """One reordering of :func:`reorder_cases` (a module-level function: a sweep item), cached on disk
+    (build/cache, keyed by the code and the arguments): the notebook, the figure recipes and the
+    claims report each need the same 24 reorderings of the six readings, in different processes."""
     return reorder_path(dense, nrm, tool_diameter=D, a_p=a_p, k=k, start=start, feed_direction_deg=A_f,
                         direction=direction, neighbours=neighbours, radius_step=a_e,
                         adjacent_mm=1.5 * a_e if neighbours == "unvisited" else None)
