@@ -346,8 +346,9 @@ def passes_path(passes, job: Job, arcs: bool = True, entry: str = "plunge", **fi
     above the stock top (:meth:`~cnclab.toolpath.path.ToolPathBuilder.approach`), the entry at feed,
     the pass as lines and fitted arcs (:func:`fit_arcs`, ``fit_kw``), a rapid straight up.
     ``entry="plunge"``: straight down onto the pass start (Kim & Yang's program: the pass starts at
-    the centre of its region, its spiral entry); ``"helix"``: one helical turn of tool-centre radius r/4 about the pass start from the stock top
-    to the cutting level, the circle once more flat, back to the start (a machine-safe entry)."""
+    the centre of its region, its spiral entry); ``"helix"``: one helical turn of tool-centre radius
+    r/4 about the pass start from the stock top to the cutting level, the circle once more flat, back
+    to the start (a machine-safe entry)."""
     if entry not in ("plunge", "helix"):
         raise ValueError(f"entry must be 'plunge' or 'helix', got {entry!r}")
     z, zc = job.top_z - job.a_p, job.clearance_z

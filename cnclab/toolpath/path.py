@@ -644,7 +644,7 @@ class ToolPathBuilder:
         ([[3.0, 4.0, 5.0], [3.0, 4.0, 0.5]], ['rapid', 'rapid'])
         """
         xy = np.asarray(xy, float).reshape(-1)[:2]
-        if self.position is not None and self.position[2] < clearance_z:
+        if self.position is not None:
             self.lift(clearance_z)              # never a rapid across from below the clearance plane
         pos = self.position
         if pos is None or np.hypot(*(pos[:2] - xy)) > 1e-9 or abs(pos[2] - clearance_z) > 1e-9:
