@@ -18,8 +18,8 @@ from shapely.geometry import Point, Polygon, box
 from cnclab.toolpath.adaptive.control import engagement2
 from cnclab.toolpath.adaptive.grid import Grid
 from cnclab.toolpath.adaptive.links import blocked_spans, bow_runs, chord_free, rapid_legs, rapid_pieces, shortcut
-from cnclab.toolpath.adaptive.stock import (capsule_free, cut_disc, cut_disc_both, cut_path, dist_window, material_fraction, label8,
-                                            max_filter, raster)
+from cnclab.toolpath.adaptive.stock import (capsule_free, capsule_free_of, cut_disc, cut_disc_both, cut_path, dist_window,
+                                            material_fraction, label8, max_filter, raster)
 
 _SET = dict(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
 
@@ -364,6 +364,25 @@ def test_capsule_scans_only_the_capsule_rows_and_misses_no_pixel(seed, p, kind):
         assert capsule_free(M, x0, y0, h, *a, *b, rr) == (not near.any())
         if kind != "point":
             assert len(blocked_spans(M, x0, y0, h, *a, *b, rr)) == int(near.sum())
+
+
+@settings(**_SET)
+@given(st.integers(0, 2 ** 31 - 1), st.sampled_from([0.01, 0.05, 0.2]))
+def test_capsule_free_of_sets_one_component_aside(seed, p):
+    """:func:`capsule_free_of` with component k of :func:`label8` set aside answers as
+    :func:`capsule_free` on the stock with that component removed (the remnant sweep's test), and
+    with none set aside (``skip`` 0) as :func:`capsule_free` itself; checked against brute force."""
+    rng = np.random.default_rng(seed)
+    M = (rng.random((60, 80)) < p).astype(np.uint8)
+    lbl, n = label8(M)
+    x0, y0, h = 0.1, -0.2, 0.1
+    for _ in range(20):
+        a, b = rng.uniform([-0.5, -0.5], [8.5, 6.0]), rng.uniform([-0.5, -0.5], [8.5, 6.0])
+        rr, k = float(rng.uniform(0.05, 1.5)), int(rng.integers(0, n + 1))
+        others = np.where(lbl == k, 0, M).astype(np.uint8) if k else M
+        want = not _near_segment(others, x0, y0, h, a, b, rr).any()
+        assert capsule_free_of(M, lbl, k, x0, y0, h, *a, *b, rr) == want
+        assert capsule_free(others, x0, y0, h, *a, *b, rr) == want
 
 
 @settings(**_SET)

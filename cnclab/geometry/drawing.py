@@ -57,7 +57,6 @@ from pathlib import Path
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 from shapely.geometry import MultiPolygon, Polygon
 
 __all__ = ["CHORD_TOL_MM", "JOIN_TOL_MM", "Drawing", "Region", "Ring", "arc_points", "bulge_arc",
@@ -239,6 +238,8 @@ def _chain(pieces: list, join_tol: float, source: str) -> list:
     """Join open pieces whose ends meet within ``join_tol`` into closed rings (lists of Ring)."""
     if not pieces:
         return []
+    from scipy.spatial import cKDTree     # here: every Job imports this module, few read a drawing (0.3 s)
+
     ends = np.array([p.points[k] for p in pieces for k in (0, -1)], float)     # end 2i: start, 2i+1: end
     tree = cKDTree(ends)
     partners = [[j for j in tree.query_ball_point(e, join_tol) if j != i] for i, e in enumerate(ends)]

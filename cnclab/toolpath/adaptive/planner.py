@@ -18,7 +18,7 @@ from .entries import PlanningError
 from .grid import Grid, PassStep
 from .params import AdaptiveParams
 from .links import boundary_gradient, rapid_legs, rapid_pieces, shortcut, solid_within, upstream_end
-from .stock import capsule_free, component_discs, label8, segment_inside
+from .stock import capsule_free_of, component_discs, label8, segment_inside
 
 _RAPID, _PLUNGE = KINDS.index("rapid"), KINDS.index("plunge")
 _UNTRIED = object()    # a chord whose rapid_legs were not computed yet (merge_rapid_chords)
@@ -334,32 +334,34 @@ class _Level:
             return False
         rho_max = self.r * math.sin(0.5 * self.target)
         CX, CY, RAD = discs
-        for lab in np.flatnonzero(RAD + self.h / math.sqrt(2.0) <= rho_max):
-            c = np.array([CX[lab], CY[lab]])
-            rho_b = float(RAD[lab]) + self.h / math.sqrt(2.0)
-            others = None
-            D, Ac = self.g.free_field()
-            for ang in np.arange(8) * (math.pi / 4):
-                u = np.array([math.cos(ang), math.sin(ang)])
-                # from a free point before the remnant to where the tool disc holds all of it
-                S, E = c - (self.r + rho_b + self.g.hc) * u, c - (self.r - rho_b - self.h) * u
-                jS, iS = self.g.cell(*S)
-                if not (0 <= jS < D.shape[0] and 0 <= iS < D.shape[1] and Ac[jS, iS] and D[jS, iS] >= self.r_free):
-                    continue
-                if not segment_inside(self.g.A, self.g.x0, self.g.y0, self.h, S[0], S[1], E[0], E[1], 2.0 * self.h):
-                    continue
-                if others is None:
-                    others = np.where(lbl == lab, 0, self.g.M).astype(np.uint8)
-                if not capsule_free(others, self.g.x0, self.g.y0, self.h, S[0], S[1], E[0], E[1], self.r + self.h):
-                    continue                       # the sweep would meet other material too
-                if self.link_to(self.r_free, cell=(jS, iS), end_xy=(S[0], S[1])) is None:
-                    continue
-                Q = resample_polyline(np.vstack([S, E]), self.ds, uniform=True)
-                self.b.cut(Q[1:], self.feed_mm_min, z=self.z, tag="remnant sweep")
-                self.g.cut_path(np.ascontiguousarray(Q))
-                self.cur = (float(E[0]), float(E[1]))
-                self.stats["remnant_sweeps"] += 1
-                return True
+        labs = np.flatnonzero(RAD + self.h / math.sqrt(2.0) <= rho_max)
+        if len(labs) == 0:
+            return False
+        D, Ac = self.g.free_field()
+        # the 8 sweep directions of every candidate at once: start S (a free cell) and end E
+        U = np.array([[math.cos(a), math.sin(a)] for a in np.arange(8) * (math.pi / 4)])
+        C = np.stack([CX[labs], CY[labs]], axis=1)[:, None, :]
+        rho_b = (RAD[labs] + self.h / math.sqrt(2.0))[:, None, None]
+        S_all, E_all = C - (self.r + rho_b + self.g.hc) * U, C - (self.r - rho_b - self.h) * U
+        J, I = (S_all[..., 1] - self.g.y0) // self.g.hc, (S_all[..., 0] - self.g.x0) // self.g.hc     # Grid.cell
+        ok = (J >= 0) & (J < D.shape[0]) & (I >= 0) & (I < D.shape[1])
+        Jc, Ic = np.where(ok, J, 0).astype(int), np.where(ok, I, 0).astype(int)
+        ok &= Ac[Jc, Ic] & (D[Jc, Ic] >= self.r_free)
+        for n, m in zip(*np.nonzero(ok)):          # candidate-major, direction-minor: the order of the search
+            lab, S, E, jS, iS = labs[n], S_all[n, m], E_all[n, m], int(Jc[n, m]), int(Ic[n, m])
+            if not segment_inside(self.g.A, self.g.x0, self.g.y0, self.h, S[0], S[1], E[0], E[1], 2.0 * self.h):
+                continue
+            if not capsule_free_of(self.g.M, lbl, lab, self.g.x0, self.g.y0, self.h, S[0], S[1], E[0], E[1],
+                                   self.r + self.h):
+                continue                       # the sweep would meet other material too
+            if self.link_to(self.r_free, cell=(jS, iS), end_xy=(S[0], S[1])) is None:
+                continue
+            Q = resample_polyline(np.vstack([S, E]), self.ds, uniform=True)
+            self.b.cut(Q[1:], self.feed_mm_min, z=self.z, tag="remnant sweep")
+            self.g.cut_path(np.ascontiguousarray(Q))
+            self.cur = (float(E[0]), float(E[1]))
+            self.stats["remnant_sweeps"] += 1
+            return True
         return False
 
     def _remnants(self):
@@ -405,7 +407,7 @@ class _Level:
         if self._wall is None:
             self._wall = shapely.boundary(self.allowed)
             shapely.prepare(self._wall)
-        return bool(shapely.distance(self._wall, shapely.points(taken)).max() <= self.r - 3 * self.h)
+        return bool(shapely.dwithin(self._wall, shapely.points(taken), self.r - 3 * self.h).all())   # prepared: indexed
 
     def in_band(self, P):
         """Whether the pass through the points P (n, 2) runs where the tool-centre region is narrower

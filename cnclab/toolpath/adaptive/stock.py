@@ -177,11 +177,16 @@ def capsule_row(x0, h, ax, ay, dx, dy, rr, py, i0, i1):
     return lo, hi
 
 
+#: a label image for :func:`capsule_free_of` when no component is set aside (never indexed: ``skip`` 0)
+_NO_LABELS = np.zeros((1, 1), np.int32)
+
+
 @njit(cache=True)
-def capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
-    """True when no material pixel centre lies within ``rr`` of the segment (a, b): the tool disc
-    (radius < rr - h/sqrt(2)) swept along it removes nothing. Each row is scanned only over the
-    capsule's span in it (:func:`capsule_row`), not over the segment's whole box."""
+def capsule_free_of(M, labels, skip, x0, y0, h, ax, ay, bx, by, rr):
+    """True when no material pixel centre lies within ``rr`` of the segment (a, b), the pixels of
+    component ``skip`` of the label image ``labels`` (same shape as ``M``; :func:`label8`) set aside
+    (``skip`` 0: none, ``labels`` not read). Each row is scanned only over the capsule's span in it
+    (:func:`capsule_row`), not over the segment's whole box."""
     i0, i1, j0, j1 = capsule_window(M, x0, y0, h, ax, ay, bx, by, rr)
     dx = bx - ax
     dy = by - ay
@@ -190,7 +195,7 @@ def capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
         py = y0 + (j + 0.5) * h
         lo, hi = capsule_row(x0, h, ax, ay, dx, dy, rr, py, i0, i1)
         for i in range(lo, hi + 1):
-            if M[j, i]:
+            if M[j, i] and (skip == 0 or labels[j, i] != skip):
                 px = x0 + (i + 0.5) * h
                 t = 0.0 if L2 == 0.0 else ((px - ax) * dx + (py - ay) * dy) / L2
                 t = min(max(t, 0.0), 1.0)
@@ -199,6 +204,14 @@ def capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
                 if ex * ex + ey * ey < rr * rr:
                     return False
     return True
+
+
+@njit(cache=True)
+def capsule_free(M, x0, y0, h, ax, ay, bx, by, rr):
+    """True when no material pixel centre lies within ``rr`` of the segment (a, b): the tool disc
+    (radius < rr - h/sqrt(2)) swept along it removes nothing (:func:`capsule_free_of`, no component
+    set aside)."""
+    return capsule_free_of(M, _NO_LABELS, 0, x0, y0, h, ax, ay, bx, by, rr)
 
 
 @njit(cache=True)

@@ -7,7 +7,6 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-import pandas as pd
 import shapely
 from shapely.geometry import box
 
@@ -526,6 +525,8 @@ def ce_trochoid_iteration(width, tool_radius, theta_deg, n_periods=8, resolution
         cuts.append(P)
         periods.append(per)
         links.append(lk)
+    import pandas as pd      # here: the planners import this module, most never build a table (0.3 s)
+
     return CEIteration(cuts, pd.DataFrame(rows), st, periods, links)
 
 
