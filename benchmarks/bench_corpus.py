@@ -13,10 +13,11 @@ plan-time ratio is then measured on the same machine in the same session.
                                                 [--out DIR]
 
 FreeCAD Adaptive is not deterministic (two runs of a job write different programs), so the committed
-programs stay the comparison's; ``--live-freecad-time`` runs FreeCAD on every job first (programs to
-a temporary folder, not scored) and takes its plan time from that run, so that the plan-time ratio
-is measured in the same session as ours while every other column still scores the committed
-programs (``corpus_run.json`` says which).
+programs stay the comparison's; ``--live-freecad-time`` runs FreeCAD on each job just before our
+planner plans it, in the same worker (programs to a temporary folder, not scored), and takes its plan
+time from that run, so that the plan-time ratio is measured back to back with ours (the machine's
+speed drifts: up to 1.8 x within one 13-minute run, when FreeCAD's times were all taken first) while
+every other column still scores the committed programs (``corpus_run.json`` says which).
 
 Writes ``DIR/corpus_rows.csv`` (one row per job), ``DIR/corpus_families.csv`` (per family) and
 ``DIR/corpus_targets.csv`` (the targets, met or not), ``DIR/corpus_bounded.csv`` (the program-time,
@@ -67,19 +68,25 @@ def update_fixtures(names) -> None:
         print(f"{name}: FreeCAD {res['plan_time_s']:.2f} s plan, {time.perf_counter() - t0:.1f} s wall", flush=True)
 
 
-def live_freecad_times(names) -> dict:
-    """FreeCAD Adaptive's plan time (s, in its process, as the fixtures record it) of each job, run
-    now into a temporary folder (the programs are not kept); a job FreeCAD fails on is left out."""
+def live_freecad_time(name: str) -> float:
+    """FreeCAD Adaptive's plan time (s, in its process, as the fixtures record it) of job ``name``, run
+    now into a temporary folder (the program is not kept); NaN where FreeCAD fails."""
     import tempfile
 
-    out = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for name in names:
-            try:
-                out[name] = float(run_freecad(cc.job(name), Path(tmp) / f"{name}.ngc")["plan_time_s"])
-            except Exception as exc:       # noqa: BLE001 -- as update_fixtures: recorded, not fatal
-                print(f"{name}: FreeCAD failed: {str(exc)[-200:]}", flush=True)
-    return out
+        try:
+            return float(run_freecad(cc.job(name), Path(tmp) / f"{name}.ngc")["plan_time_s"])
+        except Exception as exc:       # noqa: BLE001 -- as update_fixtures: recorded, not fatal
+            print(f"{name}: FreeCAD failed: {str(exc)[-200:]}", flush=True)
+            return float("nan")
+
+
+def score_with_live_freecad(name: str, fast: bool) -> dict:
+    """:func:`cc.score_job` with FreeCAD's plan time of the job measured just before ours, in the same
+    worker (``plan_time_s_fc_live``): the two planners of a job run back to back, so a drift of the
+    machine's speed during the run (this one's: up to 1.8 x within 13 minutes) hits both alike."""
+    t_fc = live_freecad_time(name)
+    return cc.score_job(name, fast) | {"plan_time_s_fc_live": t_fc}
 
 
 def main(argv=None):
@@ -104,18 +111,16 @@ def main(argv=None):
             return None
     t_start = time.perf_counter()
     commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
-    live = {}
-    if a.live_freecad_time:
-        if not freecad_available():
-            raise SystemExit("--live-freecad-time needs FreeCAD (apt-get install -y --no-install-recommends freecad)")
-        live = live_freecad_times(names)
+    live = a.live_freecad_time
+    if live and not freecad_available():
+        raise SystemExit("--live-freecad-time needs FreeCAD (apt-get install -y --no-install-recommends freecad)")
     cc.warm()
-    rows = sweep(cc.score_job, [(n, a.fast) for n in names])
+    rows = sweep(score_with_live_freecad if live else cc.score_job, [(n, a.fast) for n in names])
     df = pd.DataFrame(rows).set_index("job")
     if live:
         # only where the committed program is scored (FreeCAD planned the job): a live time of a job whose
         # fixture records a failure or no cutting motion is not a plan time of a compared program
-        live_s = pd.Series(live).reindex(df.index)
+        live_s = df.pop("plan_time_s_fc_live")
         df["plan_time_s_fc"] = df["plan_time_s_fc"].where(df["plan_time_s_fc"].isna(), live_s)
     fam, tg, tb = cc.family_table(df), cc.targets(df), cc.bounded_targets(df)
     out = Path(a.out)
@@ -125,7 +130,8 @@ def main(argv=None):
         atomic_write(out / fname, T.to_csv())
     run = {"commit": commit, "date_utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()), "fast": bool(a.fast),
            "jobs": len(names), "freecad": "live-regenerated fixtures" if a.update_fixtures else "committed fixtures",
-           "freecad_plan_time": "live, this session (programs not kept)" if live else "from the fixtures' provenance",
+           "freecad_plan_time": ("live, each job's just before ours (programs not kept)" if live
+                                 else "from the fixtures' provenance"),
            "wall_s": round(time.perf_counter() - t_start, 1)}
     atomic_write(out / "corpus_run.json", json.dumps(run, indent=1) + "\n")
     with pd.option_context("display.width", 250, "display.max_columns", 40, "display.precision", 3):
