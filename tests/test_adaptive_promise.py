@@ -138,7 +138,48 @@ def test_a_breach_on_a_finishing_lap_is_planned_again_with_the_laps_held_closer(
     assert chk["retried"] and "engagement_breach" not in p.info
     assert chk["max_deg"] <= job.theta_deg + prm.promise_max_deg - prm.written_margin_deg
     assert chk["p95_deg"] <= job.theta_deg + prm.promise_p95_deg and chk["share_above_5_pct"] <= prm.promise_share_pct
-    # without the last retry (the laps at the default margin) it is refused
-    with pytest.raises(ValueError, match="promises an engagement"):
-        planners.plan(job, "adaptive", allow_uncut=True, written=program_path,
+    assert "coarse" not in chk              # within the bounds at r / 30: no finer measure needed
+    # without the last retry (the laps at the default margin) every plan is beyond the bounds at r / 30
+    # (refused before session 17); the kept one is measured again at r / 60 (planners._refined_check)
+    q = planners.plan(job, "adaptive", allow_uncut=True, written=program_path,
                       params=AdaptiveParams(retry_finish_margin_deg=prm.finish_margin_deg))
+    c = q.info["engagement_check"]
+    assert c["coarse"]["max_deg"] > job.theta_deg + prm.promise_max_deg - prm.written_margin_deg
+    assert c["resolution_mm"] == pytest.approx(0.5 * c["coarse"]["resolution_mm"])
+
+
+def test_a_coarse_breach_is_measured_again_at_half_the_dixel():
+    """planners._refined_check: a level beyond the bounds after every retry is measured again at half
+    the check's dixel, the coarse measure kept; a real breach (a full-width slot, 180 deg at any
+    dixel) stays one."""
+    from cnclab.toolpath.path import ToolPath
+
+    job = _job()
+    prm = AdaptiveParams()
+    slot = ToolPath.build([[2, 5.5, 5], [2, 5.5, -1], [14, 5.5, -1], [14, 5.5, 5]], kind=["rapid", "plunge", "cut", "rapid"],
+                          feed=300.0)
+    coarse = planners.adaptive_engagement_check(slot, job, prm)
+    fine = planners._refined_check(slot, job, prm, dict(coarse, retried=True))
+    assert coarse["resolution_mm"] == pytest.approx(0.05) and fine["resolution_mm"] == pytest.approx(0.025)
+    assert fine["coarse"] == coarse and fine["retried"]
+    assert not fine["ok"] and fine["max_deg"] > 170.0
+
+
+@pytest.mark.slow
+def test_a_peak_on_a_sliver_thinner_than_a_dixel_row_is_no_breach():
+    """Random pocket 97:7 (tests/fixtures/adaptive/random_pocket_97_7.json, a validation seed drawn in
+    session 17; r 5 mm, theta 40): after every retry the check at r / 30 reads theta + 12.6 where a
+    clearing pass ends in the pinched tip of the tool-centre region; at r / 60 the written program
+    reads theta + 4.4, and the evaluator at 0.025 mm (r / 200) agrees within the bound: plan() keeps
+    it (it refused it before), the coarse measure stated beside the verdict."""
+    from cnclab.nc.program import program_path
+    from cnclab.paths import REPO_ROOT
+    from cnclab.toolpath.evaluate import evaluate
+    from cnclab.toolpath.job import load_job
+
+    job = load_job(REPO_ROOT / "tests" / "fixtures" / "adaptive" / "random_pocket_97_7.json")
+    p = planners.plan(job, "adaptive", allow_uncut=True, written=program_path)
+    chk = p.info["engagement_check"]
+    assert chk["coarse"]["max_deg"] > job.theta_deg + 10.0 and chk["ok"] and chk["max_deg"] <= job.theta_deg + 10.0
+    ev = evaluate(program_path(p, job), job, 0.025)
+    assert ev.engagement_max_deg <= job.theta_deg + 10.0 and ev.plunges_into_material == ev.rapids_into_material == 0

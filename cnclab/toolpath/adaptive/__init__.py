@@ -182,8 +182,9 @@ Levels (a pocket deeper than ``a_p``) are planned one by one by
 ``AdaptiveParams.promise_max_deg``, measured by the evaluator at r / 30,
 :func:`cnclab.toolpath.planners.adaptive_engagement_check`): a level beyond it, or within
 ``written_margin_deg`` (1 deg, what the arc fit of the written program may add) below it, is planned
-again (the tighter sliver guard, the nearest pass starts, ...); a maximum still beyond the promise is
-refused unless ``allow_engagement_breach``.
+again (the tighter sliver guard, the nearest pass starts, ...); a maximum still beyond the promise,
+measured again at r / 60 (a sliver thinner than a dixel row can read high at r / 30), is refused
+unless ``allow_engagement_breach``.
 
 >>> import numpy as np
 >>> from shapely.geometry import box
