@@ -366,8 +366,9 @@ def _refined_check(path: ToolPath, job: Job, prm, chk: dict) -> dict:
     ``"coarse"``. The evaluator converges as its dixel shrinks, and at r / 30 a sliver thinner than a
     dixel row can read high where the tool takes it at the end of a pass: random pocket 97:7 (r 5 mm,
     theta 40, a pass ending in the pinched tip of the tool-centre region) reads theta + 12.6 at
-    r / 30 and theta + 4.7, + 3.4, + 3.4 at r / 60, r / 100, r / 400. A level that is beyond the
-    promise at the finer dixel too stays refused."""
+    r / 30 and theta + 4.4 at r / 60 (the evaluator on its written program: + 4.7, + 3.4, + 2.4,
+    + 3.4 at r / 60, r / 100, r / 200, r / 400). A level beyond the promise at the finer dixel too
+    stays refused."""
     fine = adaptive_engagement_check(path, job, prm, resolution_mm=0.5 * chk["resolution_mm"])
     coarse = {k: v for k, v in chk.items() if k != "retried"}
     return dict(fine, coarse=coarse, **({"retried": chk["retried"]} if "retried" in chk else {}))
