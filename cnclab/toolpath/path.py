@@ -346,15 +346,14 @@ class ToolPath:
             raise ValueError("segments: no points")
         first = segs[0]
         descend(first[0], first[1] if isinstance(first[1], str) else "cut")
-        prev_kind = "helix" if isinstance(first[1], str) and first[1] == "helix" else None
         for i, (P, k, t) in enumerate(segs):
             if isinstance(k, str) and k == "jump":
                 b.lift(clearance_z)                        # straight up out of the tool's own cut
                 b.rapid(P[-1:], z=clearance_z)
                 nxt = segs[i + 1] if i + 1 < len(segs) else None
                 if nxt is not None and isinstance(nxt[1], str) and nxt[1] == "helix":
-                    prev_kind = "pending-helix"
-                elif reentry == "ramp" and nxt is not None and (not isinstance(nxt[1], str)
+                    continue                           # the helix segment approaches its own start
+                if reentry == "ramp" and nxt is not None and (not isinstance(nxt[1], str)
                                                                 or nxt[1] in ("cut", "link")):
                     ahead = [P[-1:]]                   # the path ahead at depth, up to ramp_max_mm
                     for Pn, kn, _ in segs[i + 1:]:
@@ -373,10 +372,7 @@ class ToolPath:
                 continue
             if isinstance(k, str) and k == "helix":
                 if i > 0:
-                    if prev_kind != "pending-helix":               # a helix from depth: lift first
-                        b.lift(clearance_z)
-                    descend(P, "helix")
-                prev_kind = "helix"
+                    descend(P, "helix")            # from depth, approach lifts first
                 continue
             kk = np.broadcast_to(np.asarray(k, dtype=object), (len(P),))
             if np.any(~np.isin(kk, ("cut", "link"))):
@@ -385,7 +381,6 @@ class ToolPath:
             skip = 1 if last is not None and np.hypot(*(P[0] - last[:2])) < 1e-9 and abs(last[2] - z_cut) < 1e-9 else 0
             tt = np.broadcast_to(np.asarray(t, dtype=object), (len(P),))
             b.add(P[skip:], kk[skip:], np.where(kk[skip:] == "link", lf, float(feed)), tt[skip:], z=z_cut)
-            prev_kind = None
         b.lift(clearance_z)
         return b.build()
 

@@ -340,18 +340,20 @@ def _adaptive(job: Job, resolution_mm: float, written=None, **options) -> ToolPa
     prm = options.pop("params", None) or adaptive.AdaptiveParams()
     form = (lambda p, j: p) if written is None else written
     path = adaptive.plan_job(job, resolution_mm=h, params=prm, **options)
-    chk = adaptive_engagement_check(form(path, job), job, prm)
+    shown = form(path, job)                        # what the check measures: the path as written
+    chk = adaptive_engagement_check(shown, job, prm)
     if chk is None:
         return path
     for again_prm in _retries(prm):
         if _within_bounds(chk, job, prm):
             break
         again = adaptive.plan_job(job, resolution_mm=h, params=again_prm, **options)
-        chk2 = adaptive_engagement_check(form(again, job), job, prm)
+        shown2 = form(again, job)
+        chk2 = adaptive_engagement_check(shown2, job, prm)
         if _within_bounds(chk2, job, prm) or (not _within_bounds(chk, job, prm) and chk2["max_deg"] < chk["max_deg"]):
-            path, chk = again, dict(chk2, retried=True)
+            path, shown, chk = again, shown2, dict(chk2, retried=True)
     if not _within_bounds(chk, job, prm):
-        chk = _refined_check(form(path, job), job, prm, chk)
+        chk = _refined_check(shown, job, prm, chk)
     path.info["engagement_check"] = chk
     if not chk["ok"]:
         path.info["engagement_breach"] = (

@@ -74,7 +74,7 @@ def enter(lv, banned=None):
     if lv.hole is not None and lv.lev == 0 and lv.stats["entries"] == 0:
         c = np.array(lv.hole[:2])
         rho = 0.0
-        lv.b.approach(c, lv.z_prev, lv.clearance_z, above_mm=lv.prm.approach_above_mm)
+        lv.approach(c)
         lv.b.plunge(c, lv.z, lv.feed_mm_min, tag="cleared: pre-drilled start hole", cleared=True)
     elif rho < rho_min:
         raise PlanningError(f"{lv.source}: no room for a helical entry at ({c[0]:.2f}, {c[1]:.2f}): "
@@ -83,7 +83,7 @@ def enter(lv, banned=None):
         p0 = (c[0] + rho, c[1])
         # down to 0.5 mm above the level's top: air above the stock top (level 0) or the floor
         # the previous level cleared (marked cleared: the program writer allows a rapid there only so)
-        lv.b.approach(p0, lv.z_prev, lv.clearance_z, above_mm=lv.prm.approach_above_mm)
+        lv.approach(p0)
         lv.b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
         # the helix ends where it reaches z (the last turn partial); at least one full turn, so
         # that the floor circle after it cuts in the helix's own groove (the package's one entry helix)
@@ -189,7 +189,7 @@ def ramp_entry(lv, a, b):
     legs = 2 * max(1, math.ceil(dz / math.tan(math.radians(lv.helix_angle_deg)) / (2.0 * L)))
     deg = math.degrees(math.atan2(dz, legs * L))
     lv.retract()
-    lv.b.approach(a, lv.z_prev, lv.clearance_z, above_mm=lv.prm.approach_above_mm)
+    lv.approach(a)
     lv.b.ramp(np.array([a, b]), lv.z_prev, lv.z, lv.feed_mm_min, ramp_deg=deg, max_mm=L)
     # the floor pass: the last leg (b -> a) leaves the wedge under it, dz / legs high at b, which no
     # move at depth has swept (as the helix's floor circle takes the wedge under its last turn); the

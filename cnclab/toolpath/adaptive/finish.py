@@ -90,7 +90,7 @@ def _laps(lv, part):
                 return
             if e is None:
                 lv.retract()
-                lv.b.approach(Rl[0], lv.z_prev, lv.clearance_z, above_mm=lv.prm.approach_above_mm)
+                lv.approach(Rl[0])
                 # free of material under the tool: feed down into cleared area
                 lv.b.plunge(Rl[0], lv.z, lv.feed_mm_min, tag="cleared", cleared=True)
             else:
@@ -384,7 +384,7 @@ def _slot_along(lv, P, inside) -> None:
         e = None
     if e is None:
         lv.retract()
-        lv.b.approach(Q[0], lv.z_prev, lv.clearance_z, above_mm=lv.prm.approach_above_mm)
+        lv.approach(Q[0])
         lv.b.plunge(Q[0], lv.z, lv.feed_mm_min, tag="cleared", cleared=True)   # dm[k0] >= r_free: free
     lv.cur = (float(Q[0, 0]), float(Q[0, 1]))
     slot_feed = lv.feed_mm_min * min(1.0, lv.a_e / (2.0 * lv.r))

@@ -145,7 +145,7 @@ def cut_region(lv, reg: NarrowRegion, from_cleared: bool = False) -> bool:
     else:
         lv.retract()
         p0 = (c0[0] + rho, c0[1])
-        b.approach(p0, lv.z_prev, lv.clearance_z, above_mm=prm.approach_above_mm)
+        lv.approach(p0)
         b.plunge(p0, lv.z_prev, lv.feed_mm_min, tag="air")
         m_helix = b.mark()
         pe = helix_entry(b, c0, rho, lv.z_prev, lv.z, lv.feed_mm_min, lv.helix_angle_deg, tag="entry: narrow region")

@@ -52,6 +52,12 @@ class _Level:
             self.stats["retracts"] += 1
             self.cur = self._virtual = None
 
+    def approach(self, xy):
+        """From the clearance plane to ``approach_above_mm`` above the level's top (the stock top or the
+        floor the level above cleared) at ``xy`` (mm; :meth:`ToolPathBuilder.approach`): air; the entry
+        at feed follows."""
+        self.b.approach(xy, self.z_prev, self.clearance_z, above_mm=self.prm.approach_above_mm)
+
     def enter(self, banned=None):
         """An entry (:func:`.entries.enter`): True; False if none is left; None when banned."""
         return entries.enter(self, banned)
