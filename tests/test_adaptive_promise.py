@@ -1,5 +1,5 @@
 """The adaptive strategy's engagement promise checked per job (issue 28 item 2): ``plan`` measures
-every planned level with the package's one evaluator (exact vector stock) at r / 30 -- the corpus
+every planned level with the package's one evaluator (its dixel stock) at r / 30 -- the corpus
 benchmark's resolution -- and refuses a level beyond theta + ``AdaptiveParams.promise_max_deg`` unless
 ``allow_engagement_breach`` (then stated in the warnings and the program header), as the
 constant-engagement strategy does with its own promise. The check can fail: with the bound lowered
@@ -140,12 +140,16 @@ def test_a_breach_on_a_finishing_lap_is_planned_again_with_the_laps_held_closer(
     assert chk["p95_deg"] <= job.theta_deg + prm.promise_p95_deg and chk["share_above_5_pct"] <= prm.promise_share_pct
     assert "coarse" not in chk              # within the bounds at r / 30: no finer measure needed
     # without the last retry (the laps at the default margin) every plan is beyond the bounds at r / 30
-    # (refused before session 17); the kept one is measured again at r / 60 (planners._refined_check)
+    # (refused before session 17); the kept one is measured again at r / 60, r / 120, r / 240
+    # (planners._refined_check: theta + 9.9, 9.84, 9.82, within the promise but inside the written
+    # margin, so measured down to the last halving; session 18), the finest the verdict
     q = planners.plan(job, "adaptive", allow_uncut=True, written=program_path,
                       params=AdaptiveParams(retry_finish_margin_deg=prm.finish_margin_deg))
     c = q.info["engagement_check"]
     assert c["coarse"]["max_deg"] > job.theta_deg + prm.promise_max_deg - prm.written_margin_deg
-    assert c["resolution_mm"] == pytest.approx(0.5 * c["coarse"]["resolution_mm"])
+    steps = c["refined"]
+    assert [hf for hf, _ in steps] == pytest.approx([c["coarse"]["resolution_mm"] / 2 ** k for k in range(1, len(steps) + 1)])
+    assert (c["resolution_mm"], c["max_deg"]) == steps[-1] and c["ok"] == (c["max_deg"] <= job.theta_deg + prm.promise_max_deg)
 
 
 def test_a_coarse_breach_is_measured_again_at_half_the_dixel():
@@ -163,6 +167,49 @@ def test_a_coarse_breach_is_measured_again_at_half_the_dixel():
     assert coarse["resolution_mm"] == pytest.approx(0.05) and fine["resolution_mm"] == pytest.approx(0.025)
     assert fine["coarse"] == coarse and fine["retried"]
     assert not fine["ok"] and fine["max_deg"] > 170.0
+
+
+def _fake_checks(monkeypatch, readings):
+    """planners.adaptive_engagement_check replaced by ``readings`` (deg over theta per dixel in mm)."""
+    seen = []
+
+    def fake(path, job, prm, resolution_mm=None):
+        seen.append(resolution_mm)
+        mx = THETA + readings[round(resolution_mm, 6)]
+        return {"resolution_mm": resolution_mm, "max_deg": mx, "p95_deg": THETA, "share_above_5_pct": 0.0,
+                "ok": mx <= THETA + 10.0, "where": f"max {mx}"}
+    monkeypatch.setattr(planners, "adaptive_engagement_check", fake)
+    return seen
+
+
+@pytest.mark.parametrize("readings, steps, ok", [
+    ({0.025: 8.0}, [0.025], True),                                       # within at half: stops there
+    ({0.025: 10.9, 0.0125: 11.1, 0.00625: 7.1}, [0.025, 0.0125, 0.00625], True),     # letter E 32:8's shape
+    ({0.025: 12.0, 0.0125: 11.0, 0.00625: 10.5}, [0.025, 0.0125, 0.00625], False),   # beyond at the finest
+    ({0.025: 9.5, 0.0125: 9.9, 0.00625: 9.8}, [0.025, 0.0125, 0.00625], True),       # inside the written margin
+])
+def test_the_refinement_halves_while_beyond_the_bounds_and_the_finest_decides(monkeypatch, readings, steps, ok):
+    """planners._refined_check (faked measures, deg over theta): halves the dixel while the level reads
+    beyond the bounds with the written margin, at most ``refine_halvings`` times; the last measure is
+    the verdict and every step is recorded."""
+    prm = AdaptiveParams(check_min_resolution_mm=0.001)
+    seen = _fake_checks(monkeypatch, readings)
+    coarse = {"resolution_mm": 0.05, "max_deg": THETA + 13.0, "p95_deg": THETA, "share_above_5_pct": 0.0, "ok": False,
+              "where": "coarse"}
+    v = planners._refined_check(None, _job(), prm, coarse)
+    assert seen == pytest.approx(steps) and [hf for hf, _ in v["refined"]] == pytest.approx(steps)
+    assert v["ok"] is ok and v["resolution_mm"] == pytest.approx(steps[-1]) and v["coarse"] == coarse
+
+
+@pytest.mark.parametrize("limit", [{"check_min_resolution_mm": 0.03}, {"refine_max_pixels": 100_000}, {"refine_halvings": 0}])
+def test_the_refinement_stops_at_its_limits(monkeypatch, limit):
+    """No finer dixel than ``check_min_resolution_mm``, no grid over ``refine_max_pixels`` (the 16 x 11
+    pocket grown by r at 0.025 mm: 0.54 M dixels), no halving at all with ``refine_halvings`` 0: the
+    coarse measure stays the verdict, unchanged."""
+    seen = _fake_checks(monkeypatch, {})
+    coarse = {"resolution_mm": 0.05, "max_deg": THETA + 13.0, "p95_deg": THETA, "share_above_5_pct": 0.0, "ok": False,
+              "where": "coarse"}
+    assert planners._refined_check(None, _job(), AdaptiveParams(**limit), coarse) is coarse and seen == []
 
 
 @pytest.mark.slow
@@ -183,3 +230,36 @@ def test_a_peak_on_a_sliver_thinner_than_a_dixel_row_is_no_breach():
     assert chk["coarse"]["max_deg"] > job.theta_deg + 10.0 and chk["ok"] and chk["max_deg"] <= job.theta_deg + 10.0
     ev = evaluate(program_path(p, job), job, 0.025)
     assert ev.engagement_max_deg <= job.theta_deg + 10.0 and ev.plunges_into_material == ev.rapids_into_material == 0
+
+
+@pytest.mark.slow
+def test_a_wall_skin_read_beyond_the_promise_is_measured_finer_and_on_the_vector_stock():
+    """Letter E 32:8 (benchmarks/bench_letters.py --seed 32 --w-lo 1.1 --w-hi 1.8, the 8th job: bars
+    17.7 mm = 1.77 D wide, D 10 mm, theta 26.7 deg; a validation seed drawn in session 17): passes
+    end at the wall of a bar, where the wall skins the earlier passes left (thinner than a dixel row)
+    read as contact. Refused in session 17 (theta + 13.5 at r / 30, + 10.9 at r / 60). Now measured
+    down to r / 240 (+ 11.1 at r / 120, + 7.1 at r / 240) and kept; the peaks the r / 30 check saw
+    beyond the promise, measured on the vector stock (chips of 2 um and more), are within it."""
+    import numpy as np
+
+    from cnclab.nc.program import program_path
+    from cnclab.simulation.vector import vector_engagement
+    from cnclab.toolpath.evaluate import evaluate
+    from cnclab.works.jacso2021.letter_pockets import letter
+
+    job = Job(letter("E", 17.7, 58.1), Tool(10.0), 26.7, 1.0, v_c=100, f_z=0.05, source="E w17.7 L58.1")
+    p = planners.plan(job, "adaptive", 5.0 / 30, allow_uncut=True, written=program_path)
+    chk = p.info["engagement_check"]
+    assert chk["coarse"]["max_deg"] > job.theta_deg + 10.0 and len(chk["refined"]) >= 2
+    assert chk["ok"] and chk["max_deg"] <= job.theta_deg + 10.0 and "engagement_breach" not in p.info
+    t = evaluate(program_path(p, job), job, 5.0 / 30).trace
+    eng = np.where(np.asarray(t["cutting"], bool), np.nan_to_num(np.asarray(t["engagement_deg"], float)), -1.0)
+    peaks = []
+    for k in np.argsort(-eng):
+        if eng[k] <= job.theta_deg + 10.0 or len(peaks) == 3:
+            break
+        if all(abs(k - q) > 200 for q in peaks):
+            peaks.append(int(k))
+    assert peaks                                          # the dixel of r / 30 does read beyond the promise
+    exact = vector_engagement(job.polygon, np.c_[t["x"], t["y"]], peaks, job.tool_radius, cutting=t["z"] < -0.5)
+    assert (exact <= job.theta_deg + 10.0).all()

@@ -364,16 +364,32 @@ def _adaptive(job: Job, resolution_mm: float, written=None, **options) -> ToolPa
 
 def _refined_check(path: ToolPath, job: Job, prm, chk: dict) -> dict:
     """The verdict on a level still beyond the bounds after every retry: ``path`` measured again at
-    half the check's dixel (:func:`adaptive_engagement_check`), the coarse measure kept under
-    ``"coarse"``. The evaluator converges as its dixel shrinks, and at r / 30 a sliver thinner than a
-    dixel row can read high where the tool takes it at the end of a pass: random pocket 97:7 (r 5 mm,
-    theta 40, a pass ending in the pinched tip of the tool-centre region) reads theta + 12.6 at
-    r / 30 and theta + 4.4 at r / 60 (the evaluator on its written program: + 4.7, + 3.4, + 2.4,
-    + 3.4 at r / 60, r / 100, r / 200, r / 400). A level beyond the promise at the finer dixel too
-    stays refused."""
-    fine = adaptive_engagement_check(path, job, prm, resolution_mm=0.5 * chk["resolution_mm"])
+    half the check's dixel (:func:`adaptive_engagement_check`), and at half that while it stays beyond
+    the bounds (:func:`_within_bounds`), at most ``prm.refine_halvings`` times, never finer than
+    ``prm.check_min_resolution_mm`` nor over ``prm.refine_max_pixels`` dixels; the finest measure is
+    the verdict, the coarse one kept under ``"coarse"`` and every dixel's maximum under
+    ``"refined"`` (``[(resolution_mm, max_deg), ...]``). The evaluator converges as its dixel shrinks,
+    and at r / 30 a sliver thinner than a dixel row can read high where the tool takes it at the end
+    of a pass: random pocket 97:7 (r 5 mm, theta 40, a pass ending in the pinched tip of the
+    tool-centre region) reads theta + 12.6 at r / 30 and theta + 4.4 at r / 60 (the evaluator on its
+    written program: + 4.7, + 3.4, + 2.4, + 3.4 at r / 60, r / 100, r / 200, r / 400). A level beyond
+    the promise at the finest dixel stays refused. With no finer dixel allowed, ``chk`` is the verdict."""
+    x0, y0, x1, y1 = job.polygon.bounds
+    r = job.tool_radius
+    area = (x1 - x0 + 2 * r) * (y1 - y0 + 2 * r)
+    fine, steps = chk, []
+    for _ in range(prm.refine_halvings):
+        hf = 0.5 * fine["resolution_mm"]
+        if hf < prm.check_min_resolution_mm or area / (hf * hf) > prm.refine_max_pixels:
+            break
+        fine = adaptive_engagement_check(path, job, prm, resolution_mm=hf)
+        steps.append((hf, fine["max_deg"]))
+        if _within_bounds(fine, job, prm):
+            break
+    if not steps:
+        return chk
     coarse = {k: v for k, v in chk.items() if k != "retried"}
-    return dict(fine, coarse=coarse, **({"retried": chk["retried"]} if "retried" in chk else {}))
+    return dict(fine, coarse=coarse, refined=steps, **({"retried": chk["retried"]} if "retried" in chk else {}))
 
 
 def _retries(prm):
@@ -403,7 +419,7 @@ def _within_bounds(chk: dict, job: Job, prm) -> bool:
 
 def adaptive_engagement_check(path: ToolPath, job: Job, prm, resolution_mm: float | None = None) -> dict | None:
     """The adaptive planner's promise measured on its own ``path`` of one level: the evaluator
-    (:func:`cnclab.toolpath.evaluate.evaluate_engagement`, the exact vector stock) at ``prm.check_resolution_frac`` r
+    (:func:`cnclab.toolpath.evaluate.evaluate_engagement`, its dixel stock) at ``prm.check_resolution_frac`` r
     (at least ``prm.check_min_resolution_mm``; ``resolution_mm``, mm: that dixel instead); None when
     the check is off (frac 0). A dict:
     ``resolution_mm``, ``max_deg`` (over the cutting samples; with ``prm.slot_narrow`` its slots, whose

@@ -289,7 +289,7 @@ class AdaptiveParams:
 
     # -- the promise, checked per job (issue 28 item 2) -------------------------------------------
     #: deg over theta: the engagement maximum the planner promises (the issue-29 target), measured on
-    #: every planned level by the package's one evaluator (cnclab.toolpath.evaluate, the exact vector
+    #: every planned level by the package's one evaluator (cnclab.toolpath.evaluate, the dixel
     #: stock the corpus benchmark scores) in ``plan``'s adaptive registration: a level beyond it is
     #: planned once more (``retry_guard_deg``), then stated in the result and the program header, and
     #: refused unless ``allow_engagement_breach``
@@ -337,3 +337,13 @@ class AdaptiveParams:
     #: maximum lies 0.8 deg above the planned paths' on average, and dwg_forms_3 read theta + 9.24
     #: planned, + 10.06 written (session 11)
     written_margin_deg: float = 1.0
+    #: a level still beyond the bounds after every retry is measured again at half the check's dixel,
+    #: and again at half that while it stays beyond them, at most this many times (``planners._refined_check``;
+    #: the finest measure is the verdict). The evaluator converges as its dixel shrinks, and a wall skin
+    #: or crescent thinner than a dixel row reads as contact over up to acos(1 - h / r) on each side:
+    #: letter E 32:8 (r 5 mm, theta 26.7, a pass ending at the wall of a 1.77 D bar) reads theta + 13.5,
+    #: + 10.9, + 11.1 and + 7.1 at r / 30, 60, 120 and 240 (session 18)
+    refine_halvings: int = 3
+    #: mm and pixels: ... never finer than ``check_min_resolution_mm`` nor over this many dixels over
+    #: the pocket's bounding box grown by r (the evaluator's grid: about 8 bytes each per array)
+    refine_max_pixels: int = 20_000_000
