@@ -68,3 +68,24 @@ def test_the_period_check_is_what_holds_a_u_channel_corner():
     on = planners.plan(jb, "adaptive", h, allow_uncut=True)
     assert on.info["engagement_check"].get("retried")
     assert any("laid closer or refused" in s for s in on.info.get("narrow_regions", []))
+
+
+@pytest.mark.slow
+def test_a_trochoid_return_never_meets_material():
+    """Letter E 34:11 (bench_letters.py --seed 34 --w-lo 1.1 --w-hi 1.8, drawn in session 18: bars 7.4 mm
+    = 1.48 D, D 5 mm, theta 24 deg): the period check replayed only a period's cutting points, so a
+    return through the slot (a G1 at the link feed) that ended in the other bar at a junction went
+    unchecked (theta + 26.9 deg on that return). Now every point of a period is checked: the returns
+    of the trochoids meet at most theta + 10 deg of material (the level is still beyond the promise
+    elsewhere, theta + 12.8 at a period's end, and ``plan`` refuses it without the option)."""
+    jb, _ = _job("E", 5.0, 7.4, 29.1, 24.0)
+    h = 5.0 / 2 / 30
+    from cnclab.nc.program import program_path
+
+    tp = planners.plan(jb, "adaptive", h, allow_uncut=True, allow_engagement_breach=True, written=program_path)
+    t = evaluate(tp, jb, h).trace
+    eng = np.nan_to_num(np.asarray(t["engagement_deg"], float))
+    kind = np.asarray(t["kind"]).astype(str)
+    tags = np.array([str(g) for g in t["tag"]])
+    returns = (kind == "link") & np.char.startswith(tags, "narrow region")
+    assert returns.sum() > 100 and eng[returns].max() <= jb.theta_deg + 10.0

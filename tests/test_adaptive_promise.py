@@ -154,8 +154,8 @@ def test_a_breach_on_a_finishing_lap_is_planned_again_with_the_laps_held_closer(
 
 def test_a_coarse_breach_is_measured_again_at_half_the_dixel():
     """planners._refined_check: a level beyond the bounds after every retry is measured again at half
-    the check's dixel, the coarse measure kept; a real breach (a full-width slot, 180 deg at any
-    dixel) stays one."""
+    the check's dixel (and again while beyond), the coarse measure kept; a real breach (a full-width
+    slot, 180 deg at any dixel) stays one."""
     from cnclab.toolpath.path import ToolPath
 
     job = _job()
@@ -164,7 +164,9 @@ def test_a_coarse_breach_is_measured_again_at_half_the_dixel():
                           feed=300.0)
     coarse = planners.adaptive_engagement_check(slot, job, prm)
     fine = planners._refined_check(slot, job, prm, dict(coarse, retried=True))
-    assert coarse["resolution_mm"] == pytest.approx(0.05) and fine["resolution_mm"] == pytest.approx(0.025)
+    # r 1.5 mm: 0.05 -> 0.025 -> 0.0125 mm, the next (0.00625) under refine_min_resolution_mm
+    assert coarse["resolution_mm"] == pytest.approx(0.05) and fine["resolution_mm"] == pytest.approx(0.0125)
+    assert [hf for hf, _ in fine["refined"]] == pytest.approx([0.025, 0.0125])
     assert fine["coarse"] == coarse and fine["retried"]
     assert not fine["ok"] and fine["max_deg"] > 170.0
 
@@ -192,7 +194,7 @@ def test_the_refinement_halves_while_beyond_the_bounds_and_the_finest_decides(mo
     """planners._refined_check (faked measures, deg over theta): halves the dixel while the level reads
     beyond the bounds with the written margin, at most ``refine_halvings`` times; the last measure is
     the verdict and every step is recorded."""
-    prm = AdaptiveParams(check_min_resolution_mm=0.001)
+    prm = AdaptiveParams(refine_min_resolution_mm=0.001)
     seen = _fake_checks(monkeypatch, readings)
     coarse = {"resolution_mm": 0.05, "max_deg": THETA + 13.0, "p95_deg": THETA, "share_above_5_pct": 0.0, "ok": False,
               "where": "coarse"}
@@ -201,9 +203,9 @@ def test_the_refinement_halves_while_beyond_the_bounds_and_the_finest_decides(mo
     assert v["ok"] is ok and v["resolution_mm"] == pytest.approx(steps[-1]) and v["coarse"] == coarse
 
 
-@pytest.mark.parametrize("limit", [{"check_min_resolution_mm": 0.03}, {"refine_max_pixels": 100_000}, {"refine_halvings": 0}])
+@pytest.mark.parametrize("limit", [{"refine_min_resolution_mm": 0.03}, {"refine_max_pixels": 100_000}, {"refine_halvings": 0}])
 def test_the_refinement_stops_at_its_limits(monkeypatch, limit):
-    """No finer dixel than ``check_min_resolution_mm``, no grid over ``refine_max_pixels`` (the 16 x 11
+    """No finer dixel than ``refine_min_resolution_mm``, no grid over ``refine_max_pixels`` (the 16 x 11
     pocket grown by r at 0.025 mm: 0.54 M dixels), no halving at all with ``refine_halvings`` 0: the
     coarse measure stays the verdict, unchanged."""
     seen = _fake_checks(monkeypatch, {})

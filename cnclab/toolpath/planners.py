@@ -366,7 +366,7 @@ def _refined_check(path: ToolPath, job: Job, prm, chk: dict) -> dict:
     """The verdict on a level still beyond the bounds after every retry: ``path`` measured again at
     half the check's dixel (:func:`adaptive_engagement_check`), and at half that while it stays beyond
     the bounds (:func:`_within_bounds`), at most ``prm.refine_halvings`` times, never finer than
-    ``prm.check_min_resolution_mm`` nor over ``prm.refine_max_pixels`` dixels; the finest measure is
+    ``prm.refine_min_resolution_mm`` nor over ``prm.refine_max_pixels`` dixels; the finest measure is
     the verdict, the coarse one kept under ``"coarse"`` and every dixel's maximum under
     ``"refined"`` (``[(resolution_mm, max_deg), ...]``). The evaluator converges as its dixel shrinks,
     and at r / 30 a sliver thinner than a dixel row can read high where the tool takes it at the end
@@ -380,7 +380,7 @@ def _refined_check(path: ToolPath, job: Job, prm, chk: dict) -> dict:
     fine, steps = chk, []
     for _ in range(prm.refine_halvings):
         hf = 0.5 * fine["resolution_mm"]
-        if hf < prm.check_min_resolution_mm or area / (hf * hf) > prm.refine_max_pixels:
+        if hf < prm.refine_min_resolution_mm or area / (hf * hf) > prm.refine_max_pixels:
             break
         fine = adaptive_engagement_check(path, job, prm, resolution_mm=hf)
         steps.append((hf, fine["max_deg"]))

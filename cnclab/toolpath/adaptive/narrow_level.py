@@ -25,9 +25,10 @@ class PeriodCheck:
     """The closed loop of a region's trochoid (``axis_trochoid(check=...)``): each period is replayed
     (:func:`cnclab.toolpath.adaptive.control.replay`, the level planner's engagement model) on a
     working copy of the planning stock about the region -- with the material hidden for the other
-    narrow regions still pending put back (the evaluator sees it) -- and refused where its cutting
-    points' engagement exceeds ``limit_rad``; an accepted period is cut into the copy. The open-loop
-    pattern is made for a straight slot of the narrowest width nearby: at a corner of a channel, a
+    narrow regions still pending put back (the evaluator sees it) -- and refused where the engagement
+    of any of its points (the cuts and the returns through the slot) exceeds ``limit_rad``; an
+    accepted period is cut into the copy. The open-loop pattern is made for a straight slot of the
+    narrowest width nearby: at a corner of a channel, a
     junction with another channel or the mouth of a wider area the material beside or ahead of it
     is more (fresh letter-shaped pockets, D 3-12 mm, channels 1.1-1.8 D: up to theta + 132 deg
     before this check). ``refused``: how many periods were laid again or ended the trochoid."""
@@ -67,7 +68,11 @@ class PeriodCheck:
         sub = np.ascontiguousarray(self.M[b0:b1, a0:a1])
         E, _ = replay(sub, g.x0 + (self.i0 + a0) * g.h, g.y0 + (self.j0 + b0) * g.h, g.h, self.r,
                       np.ascontiguousarray(Q, float), self.lag, self.n_samp, GUARD_LEVEL)
-        if cutting.any() and float(E[cutting].max()) > self.limit + (self.first_slack if first else 0.0):
+        # every point after the first (the tool's place before the period, measured already): a cut, or a
+        # return through the slot that meets material where the slot is not straight (at a junction the
+        # return of letter E 34:11, D 5 mm, theta 24, ended in the other bar: theta + 26.9 on a G1 at
+        # the link feed; session 18)
+        if len(E) > 1 and float(E[1:].max()) > self.limit + (self.first_slack if first else 0.0):
             self.refused += 1
             return False
         self.M[b0:b1, a0:a1] = sub

@@ -344,6 +344,8 @@ class AdaptiveParams:
     #: letter E 32:8 (r 5 mm, theta 26.7, a pass ending at the wall of a 1.77 D bar) reads theta + 13.5,
     #: + 10.9, + 11.1 and + 7.1 at r / 30, 60, 120 and 240 (session 18)
     refine_halvings: int = 3
-    #: mm and pixels: ... never finer than ``check_min_resolution_mm`` nor over this many dixels over
-    #: the pocket's bounding box grown by r (the evaluator's grid: about 8 bytes each per array)
+    #: mm and pixels: ... never finer than ``refine_min_resolution_mm`` (half the check's floor: a
+    #: 3 mm tool is measured at r / 30, 60 and 120) nor over ``refine_max_pixels`` dixels over the
+    #: pocket's bounding box grown by r (the evaluator's grid: about 8 bytes each per array)
+    refine_min_resolution_mm: float = 0.01
     refine_max_pixels: int = 20_000_000
