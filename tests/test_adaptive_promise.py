@@ -142,14 +142,18 @@ def test_a_breach_on_a_finishing_lap_is_planned_again_with_the_laps_held_closer(
     # without the last retry (the laps at the default margin) every plan is beyond the bounds at r / 30
     # (refused before session 17); the kept one is measured again at r / 60, r / 120, r / 240
     # (planners._refined_check: theta + 9.9, 9.84, 9.82, within the promise but inside the written
-    # margin, so measured down to the last halving; session 18), the finest the verdict
+    # margin, so measured down to the last halving; session 18)
     q = planners.plan(job, "adaptive", allow_uncut=True, written=program_path,
                       params=AdaptiveParams(retry_finish_margin_deg=prm.finish_margin_deg))
     c = q.info["engagement_check"]
     assert c["coarse"]["max_deg"] > job.theta_deg + prm.promise_max_deg - prm.written_margin_deg
     steps = c["refined"]
     assert [hf for hf, _ in steps] == pytest.approx([c["coarse"]["resolution_mm"] / 2 ** k for k in range(1, len(steps) + 1)])
-    assert (c["resolution_mm"], c["max_deg"]) == steps[-1] and c["ok"] == (c["max_deg"] <= job.theta_deg + prm.promise_max_deg)
+    # the verdict: the finest dixel or, where it reads more, the vector stock at the measures' peaks
+    # (theta + 9.93 there against + 9.82 at r / 240)
+    assert c["resolution_mm"] == steps[-1][0] and len(c["vector_peaks"]) >= 5
+    assert c["max_deg"] == pytest.approx(max(steps[-1][1], max(v for *_, v in c["vector_peaks"])), abs=1e-3)   # listed to 3 decimals
+    assert c["ok"] == (c["max_deg"] <= job.theta_deg + prm.promise_max_deg)
 
 
 def test_a_coarse_breach_is_measured_again_at_half_the_dixel():
@@ -179,8 +183,8 @@ def _fake_checks(monkeypatch, readings):
         seen.append(resolution_mm)
         mx = THETA + readings[round(resolution_mm, 6)]
         return {"resolution_mm": resolution_mm, "max_deg": mx, "p95_deg": THETA, "share_above_5_pct": 0.0,
-                "ok": mx <= THETA + 10.0, "where": f"max {mx}"}
-    monkeypatch.setattr(planners, "adaptive_engagement_check", fake)
+                "ok": mx <= THETA + 10.0, "where": f"max {mx}"}, None, None
+    monkeypatch.setattr(planners, "_engagement_eval", fake)
     return seen
 
 
@@ -194,13 +198,27 @@ def test_the_refinement_halves_while_beyond_the_bounds_and_the_finest_decides(mo
     """planners._refined_check (faked measures, deg over theta): halves the dixel while the level reads
     beyond the bounds with the written margin, at most ``refine_halvings`` times; the last measure is
     the verdict and every step is recorded."""
-    prm = AdaptiveParams(refine_min_resolution_mm=0.001)
+    prm = AdaptiveParams(refine_min_resolution_mm=0.001, refine_vector_peaks=0)
     seen = _fake_checks(monkeypatch, readings)
     coarse = {"resolution_mm": 0.05, "max_deg": THETA + 13.0, "p95_deg": THETA, "share_above_5_pct": 0.0, "ok": False,
               "where": "coarse"}
     v = planners._refined_check(None, _job(), prm, coarse)
     assert seen == pytest.approx(steps) and [hf for hf, _ in v["refined"]] == pytest.approx(steps)
     assert v["ok"] is ok and v["resolution_mm"] == pytest.approx(steps[-1]) and v["coarse"] == coarse
+
+
+@pytest.mark.parametrize("vector_deg, ok", [(THETA + 10.5, False), (THETA + 6.0, True)])
+def test_the_vector_stock_decides_where_it_reads_more(monkeypatch, vector_deg, ok):
+    """planners._vector_verdict: the peaks measured on the vector stock are listed; one reading more
+    than the finest dixel's maximum (theta + 7 here) is the verdict (a dixel can read low: letter U
+    33:2 reads theta + 9.4 at r / 120 and theta + 10.5 on the vector stock); one reading less changes
+    nothing."""
+    monkeypatch.setattr(planners, "vector_peaks", lambda ev, job, counted, n: [(1.0, 2.0, THETA + 12.0, vector_deg)])
+    fine = {"resolution_mm": 0.0125, "max_deg": THETA + 7.0, "p95_deg": THETA, "share_above_5_pct": 0.0, "ok": True,
+            "where": "dixel"}
+    v = planners._vector_verdict(fine, [(None, None)], _job(), AdaptiveParams())
+    assert v["vector_peaks"] == [(1.0, 2.0, THETA + 12.0, vector_deg)] and v["ok"] is ok
+    assert v["max_deg"] == max(THETA + 7.0, vector_deg) and (("vector stock" in v["where"]) is (not ok))
 
 
 @pytest.mark.parametrize("limit", [{"refine_min_resolution_mm": 0.03}, {"refine_max_pixels": 100_000}, {"refine_halvings": 0}])

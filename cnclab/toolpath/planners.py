@@ -42,6 +42,7 @@ from .evaluate import evaluate, evaluate_engagement
 from .job import Job
 from .levels import join_levels, with_entry_feed
 from .path import ToolPath
+from .vector_check import vector_peaks
 
 __all__ = ["STRATEGIES", "DEFAULT_STRATEGY", "MAX_LEVELS", "MIN_LEVEL_STEP_MM", "GOUGE_TOL_MM", "CE_PROMISE_DEG",
            "CE_SHARE_ABOVE_5_PCT", "CE_CORNER_FRACTION",
@@ -372,24 +373,49 @@ def _refined_check(path: ToolPath, job: Job, prm, chk: dict) -> dict:
     and at r / 30 a sliver thinner than a dixel row can read high where the tool takes it at the end
     of a pass: random pocket 97:7 (r 5 mm, theta 40, a pass ending in the pinched tip of the
     tool-centre region) reads theta + 12.6 at r / 30 and theta + 4.4 at r / 60 (the evaluator on its
-    written program: + 4.7, + 3.4, + 2.4, + 3.4 at r / 60, r / 100, r / 200, r / 400). A level beyond
-    the promise at the finest dixel stays refused. With no finer dixel allowed, ``chk`` is the verdict."""
+    written program: + 4.7, + 3.4, + 2.4, + 3.4 at r / 60, r / 100, r / 200, r / 400). The highest
+    samples of every measure are also measured on the exact vector stock (``prm.refine_vector_peaks``,
+    :func:`_vector_verdict`): where that reads more, it decides. A level beyond the promise stays
+    refused. With no finer dixel allowed, ``chk`` is the verdict."""
     x0, y0, x1, y1 = job.polygon.bounds
     r = job.tool_radius
     area = (x1 - x0 + 2 * r) * (y1 - y0 + 2 * r)
-    fine, steps = chk, []
+    fine, steps, evs = chk, [], []
     for _ in range(prm.refine_halvings):
         hf = 0.5 * fine["resolution_mm"]
         if hf < prm.refine_min_resolution_mm or area / (hf * hf) > prm.refine_max_pixels:
             break
-        fine = adaptive_engagement_check(path, job, prm, resolution_mm=hf)
+        fine, ev, counted = _engagement_eval(path, job, prm, hf)
         steps.append((hf, fine["max_deg"]))
+        evs.append((ev, counted))
         if _within_bounds(fine, job, prm):
             break
     if not steps:
         return chk
     coarse = {k: v for k, v in chk.items() if k != "retried"}
-    return dict(fine, coarse=coarse, refined=steps, **({"retried": chk["retried"]} if "retried" in chk else {}))
+    out = dict(fine, coarse=coarse, refined=steps, **({"retried": chk["retried"]} if "retried" in chk else {}))
+    if prm.refine_vector_peaks > 0:
+        evs.insert(0, _engagement_eval(path, job, prm, chk["resolution_mm"])[1:])     # the coarse measure's peaks
+        out = _vector_verdict(out, evs, job, prm)
+    return out
+
+
+def _vector_verdict(out: dict, evs: list, job: Job, prm) -> dict:
+    """``out`` (the refined verdict) with the ``prm.refine_vector_peaks`` highest samples of each
+    evaluation in ``evs`` (``[(Evaluation, counted), ...]``) measured on the vector stock
+    (:func:`cnclab.toolpath.vector_check.vector_peaks`), listed under ``"vector_peaks"`` (x, y mm,
+    dixel deg, vector deg); where the vector stock reads more than ``out["max_deg"]`` it is the maximum."""
+    pk = [q for ev, counted in evs for q in vector_peaks(ev, job, counted, prm.refine_vector_peaks)]
+    out = dict(out, vector_peaks=[tuple(round(v, 3) for v in q) for q in pk])
+    if not pk:
+        return out
+    x, y, dix, vmax = max(pk, key=lambda q: q[3])
+    if vmax > out["max_deg"]:
+        th = job.theta_deg
+        out.update(max_deg=vmax, ok=bool(vmax <= th + prm.promise_max_deg),
+                   where=f"max {vmax:.1f} deg (theta {th:g} + {vmax - th:.1f}) at ({x:.2f}, {y:.2f}) on the exact vector "
+                         f"stock (chips of 2 um and more; the dixel there reads {dix:.1f}); " + out["where"])
+    return out
 
 
 def _retries(prm):
@@ -436,6 +462,12 @@ def adaptive_engagement_check(path: ToolPath, job: Job, prm, resolution_mm: floa
     """
     if not prm.check_resolution_frac > 0:
         return None
+    return _engagement_eval(path, job, prm, resolution_mm)[0]
+
+
+def _engagement_eval(path: ToolPath, job: Job, prm, resolution_mm: float | None) -> tuple:
+    """``(check dict, Evaluation, counted (N,) bool)`` of :func:`adaptive_engagement_check`: the
+    measure, the evaluation it was read from and the samples it counts."""
     hc = max(prm.check_resolution_frac * job.tool_radius, prm.check_min_resolution_mm) if resolution_mm is None \
         else float(resolution_mm)
     ev = evaluate_engagement(path, job, hc)     # gouge and uncut area: plan measures them itself
@@ -446,14 +478,14 @@ def adaptive_engagement_check(path: ToolPath, job: Job, prm, resolution_mm: floa
     counted = np.asarray(t["cutting"], bool) & ~((tags == "slot") if prm.slot_narrow else np.zeros(len(tags), bool))
     if not counted.any():
         return {"resolution_mm": hc, "max_deg": float("nan"), "p95_deg": float("nan"), "share_above_5_pct": float("nan"),
-                "ok": True, "where": "no cutting"}
+                "ok": True, "where": "no cutting"}, ev, counted
     eng, k = _engagement_peak(t, counted)
     mx = float(eng[k])
     where = (f"max {mx:.1f} deg (theta {th:g} + {mx - th:.1f}) at ({t['x'][k]:.2f}, {t['y'][k]:.2f}) in a move "
              f"'{tags[k] or 'clearing pass'}', p95 {ev.engagement_p95_deg:.1f} deg, {ev.share_above_5_pct:.2f} % of "
              "the cutting length above theta + 5 deg")
     return {"resolution_mm": hc, "max_deg": mx, "p95_deg": float(ev.engagement_p95_deg),
-            "share_above_5_pct": float(ev.share_above_5_pct), "ok": bool(mx <= th + prm.promise_max_deg), "where": where}
+            "share_above_5_pct": float(ev.share_above_5_pct), "ok": bool(mx <= th + prm.promise_max_deg), "where": where}, ev, counted
 
 
 #: the strategy :func:`plan` (and ``python -m cnclab plan``) uses when none is named

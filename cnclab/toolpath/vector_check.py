@@ -19,7 +19,7 @@ import numpy as np
 
 from ..simulation.vector import vector_engagement
 
-__all__ = ["vector_audit"]
+__all__ = ["vector_audit", "vector_peaks"]
 
 
 def _peaks(eng: np.ndarray, n: int, min_gap: int) -> list:
@@ -85,3 +85,18 @@ def vector_audit(ev, job, n_peaks: int = 5, n_random: int = 300, seed: int = 0, 
             "random_diff_max": float(diff.max()) if diff.size else nan,
             "random_diff_min": float(diff.min()) if diff.size else nan,
             "random_absdiff_p95": float(np.percentile(np.abs(diff), 95)) if diff.size else nan}
+
+
+def vector_peaks(ev, job, counted=None, n_peaks: int = 5, min_gap: int = 200) -> list:
+    """The ``n_peaks`` highest samples of the evaluation ``ev`` among ``counted`` ((N,) bool, default
+    the cutting samples that moved), ``min_gap`` samples apart, measured on the vector stock:
+    ``[(x mm, y mm, dixel deg, vector deg), ...]``, highest dixel first."""
+    t = ev.trace
+    eng = np.asarray(t["engagement_deg"], float)
+    moved = np.r_[False, np.hypot(np.diff(t["x"]), np.diff(t["y"])) > 1e-9]
+    base = np.asarray(t["cutting"], bool) if counted is None else np.asarray(counted, bool)
+    peaks = _peaks(np.where(base & moved & np.isfinite(eng), eng, np.nan), n_peaks, min_gap)
+    if not peaks:
+        return []
+    v = _measured(t, job.polygon, job.tool_radius, peaks, job.top_z)
+    return [(float(t["x"][k]), float(t["y"][k]), float(eng[k]), float(x)) for k, x in zip(peaks, v)]

@@ -349,3 +349,10 @@ class AdaptiveParams:
     #: pocket's bounding box grown by r (the evaluator's grid: about 8 bytes each per array)
     refine_min_resolution_mm: float = 0.01
     refine_max_pixels: int = 20_000_000
+    #: the highest samples (at least 200 samples apart) of each measure of the refinement -- the
+    #: coarse one and every finer one -- measured again on the exact vector stock
+    #: (:func:`cnclab.toolpath.vector_check.vector_peaks`: the pocket less the swept discs as polygons,
+    #: chips thinner than 2 um not counted); where one reads more than the finest dixel, it is the
+    #: verdict. A dixel can read low too: letter U 33:2 (D 4, theta 25) reads theta + 9.4 at r / 120,
+    #: + 10.5 on the vector stock at the peak r / 30 found (session 18). 0: no vector measure
+    refine_vector_peaks: int = 5
