@@ -327,8 +327,8 @@ def _adaptive(job: Job, resolution_mm: float, written=None, **options) -> ToolPa
     ``promise_share_pct``) is planned again (:func:`_retries`: the tighter sliver guard
     ``retry_guard_deg``, the nearest pass starts, both, the narrow regions' trochoids checked period
     by period) and the first plan within all three kept, else
-    the lowest maximum; a level still beyond the bounds is measured again at half the dixel, the
-    verdict (:func:`_refined_check`); a maximum still beyond the promise: ``info["engagement_breach"]`` says
+    the lowest maximum; a level still beyond the bounds is measured again at finer dixels and its
+    peaks on the exact vector stock, the verdict (:func:`_refined_check`); a maximum still beyond the promise: ``info["engagement_breach"]`` says
     where and how far (:func:`plan` refuses it unless ``allow_engagement_breach``, then states it in
     ``info["warnings"]`` and the program header); ``info["engagement_check"]`` holds the measure.
     ``written`` (default None: the planned path is measured): ``written(path, job)`` is the path as the

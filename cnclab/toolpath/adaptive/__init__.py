@@ -182,9 +182,12 @@ Levels (a pocket deeper than ``a_p``) are planned one by one by
 ``AdaptiveParams.promise_max_deg``, measured by the evaluator at r / 30,
 :func:`cnclab.toolpath.planners.adaptive_engagement_check`): a level beyond it, or within
 ``written_margin_deg`` (1 deg, what the arc fit of the written program may add) below it, is planned
-again (the tighter sliver guard, the nearest pass starts, ...); a maximum still beyond the promise,
-measured again at r / 60 (a sliver thinner than a dixel row can read high at r / 30), is refused
-unless ``allow_engagement_breach``.
+again (the tighter sliver guard, the nearest pass starts, ...); a level still beyond the bounds is
+measured again at r / 60, r / 120, r / 240 while it stays beyond them (a sliver thinner than a dixel
+row can read high at r / 30), and the highest samples of every measure on the exact vector stock
+(:mod:`cnclab.simulation.vector`; a dixel can read low too): a maximum beyond the promise on the
+finest dixel or on the vector stock is refused unless ``allow_engagement_breach``
+(``AdaptiveParams.refine_*``).
 
 >>> import numpy as np
 >>> from shapely.geometry import box
