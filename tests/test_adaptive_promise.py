@@ -166,8 +166,8 @@ def test_a_coarse_breach_is_measured_again_at_half_the_dixel():
     prm = AdaptiveParams()
     slot = ToolPath.build([[2, 5.5, 5], [2, 5.5, -1], [14, 5.5, -1], [14, 5.5, 5]], kind=["rapid", "plunge", "cut", "rapid"],
                           feed=300.0)
-    coarse = planners.adaptive_engagement_check(slot, job, prm)
-    fine = planners._refined_check(slot, job, prm, dict(coarse, retried=True))
+    coarse, *seen = planners._engagement_eval(slot, job, prm, None)
+    fine = planners._refined_check(slot, job, prm, dict(coarse, retried=True), tuple(seen))
     # r 1.5 mm: 0.05 -> 0.025 -> 0.0125 mm, the next (0.00625) under refine_min_resolution_mm
     assert coarse["resolution_mm"] == pytest.approx(0.05) and fine["resolution_mm"] == pytest.approx(0.0125)
     assert [hf for hf, _ in fine["refined"]] == pytest.approx([0.025, 0.0125])
@@ -202,7 +202,7 @@ def test_the_refinement_halves_while_beyond_the_bounds_and_the_finest_decides(mo
     seen = _fake_checks(monkeypatch, readings)
     coarse = {"resolution_mm": 0.05, "max_deg": THETA + 13.0, "p95_deg": THETA, "share_above_5_pct": 0.0, "ok": False,
               "where": "coarse"}
-    v = planners._refined_check(None, _job(), prm, coarse)
+    v = planners._refined_check(None, _job(), prm, coarse, (None, None))
     assert seen == pytest.approx(steps) and [hf for hf, _ in v["refined"]] == pytest.approx(steps)
     assert v["ok"] is ok and v["resolution_mm"] == pytest.approx(steps[-1]) and v["coarse"] == coarse
 
@@ -229,7 +229,7 @@ def test_the_refinement_stops_at_its_limits(monkeypatch, limit):
     seen = _fake_checks(monkeypatch, {})
     coarse = {"resolution_mm": 0.05, "max_deg": THETA + 13.0, "p95_deg": THETA, "share_above_5_pct": 0.0, "ok": False,
               "where": "coarse"}
-    assert planners._refined_check(None, _job(), AdaptiveParams(**limit), coarse) is coarse and seen == []
+    assert planners._refined_check(None, _job(), AdaptiveParams(**limit), coarse, (None, None)) is coarse and seen == []
 
 
 @pytest.mark.slow

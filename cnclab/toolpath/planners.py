@@ -341,20 +341,20 @@ def _adaptive(job: Job, resolution_mm: float, written=None, **options) -> ToolPa
     prm = options.pop("params", None) or adaptive.AdaptiveParams()
     form = (lambda p, j: p) if written is None else written
     path = adaptive.plan_job(job, resolution_mm=h, params=prm, **options)
-    shown = form(path, job)                        # what the check measures: the path as written
-    chk = adaptive_engagement_check(shown, job, prm)
-    if chk is None:
+    if not prm.check_resolution_frac > 0:       # the check is off
         return path
+    shown = form(path, job)                        # what the check measures: the path as written
+    chk, *seen = _engagement_eval(shown, job, prm, None)     # seen: its evaluation, kept for _refined_check
     for again_prm in _retries(prm):
         if _within_bounds(chk, job, prm):
             break
         again = adaptive.plan_job(job, resolution_mm=h, params=again_prm, **options)
         shown2 = form(again, job)
-        chk2 = adaptive_engagement_check(shown2, job, prm)
+        chk2, *seen2 = _engagement_eval(shown2, job, prm, None)
         if _within_bounds(chk2, job, prm) or (not _within_bounds(chk, job, prm) and chk2["max_deg"] < chk["max_deg"]):
-            path, shown, chk = again, shown2, dict(chk2, retried=True)
+            path, shown, chk, seen = again, shown2, dict(chk2, retried=True), seen2
     if not _within_bounds(chk, job, prm):
-        chk = _refined_check(shown, job, prm, chk)
+        chk = _refined_check(shown, job, prm, chk, tuple(seen))
     path.info["engagement_check"] = chk
     if not chk["ok"]:
         path.info["engagement_breach"] = (
@@ -363,7 +363,7 @@ def _adaptive(job: Job, resolution_mm: float, written=None, **options) -> ToolPa
     return path
 
 
-def _refined_check(path: ToolPath, job: Job, prm, chk: dict) -> dict:
+def _refined_check(path: ToolPath, job: Job, prm, chk: dict, coarse_eval: tuple) -> dict:
     """The verdict on a level still beyond the bounds after every retry: ``path`` measured again at
     half the check's dixel (:func:`adaptive_engagement_check`), and at half that while it stays beyond
     the bounds (:func:`_within_bounds`), at most ``prm.refine_halvings`` times, never finer than
@@ -376,7 +376,8 @@ def _refined_check(path: ToolPath, job: Job, prm, chk: dict) -> dict:
     written program: + 4.7, + 3.4, + 2.4, + 3.4 at r / 60, r / 100, r / 200, r / 400). The highest
     samples of every measure are also measured on the exact vector stock (``prm.refine_vector_peaks``,
     :func:`_vector_verdict`): where that reads more, it decides. A level beyond the promise stays
-    refused. With no finer dixel allowed, ``chk`` is the verdict."""
+    refused. With no finer dixel allowed, ``chk`` is the verdict. ``coarse_eval``: ``(Evaluation,
+    counted)`` of ``chk`` (:func:`_engagement_eval`), whose peaks are measured on the vector stock too."""
     x0, y0, x1, y1 = job.polygon.bounds
     r = job.tool_radius
     area = (x1 - x0 + 2 * r) * (y1 - y0 + 2 * r)
@@ -395,8 +396,7 @@ def _refined_check(path: ToolPath, job: Job, prm, chk: dict) -> dict:
     coarse = {k: v for k, v in chk.items() if k != "retried"}
     out = dict(fine, coarse=coarse, refined=steps, **({"retried": chk["retried"]} if "retried" in chk else {}))
     if prm.refine_vector_peaks > 0:
-        evs.insert(0, _engagement_eval(path, job, prm, chk["resolution_mm"])[1:])     # the coarse measure's peaks
-        out = _vector_verdict(out, evs, job, prm)
+        out = _vector_verdict(out, [coarse_eval] + evs, job, prm)
     return out
 
 

@@ -33,6 +33,17 @@ def _peaks(eng: np.ndarray, n: int, min_gap: int) -> list:
     return out
 
 
+def _measurable(ev, counted) -> tuple:
+    """(engagement (N,) deg, mask): the samples of ``ev`` that can be measured on the vector stock --
+    ``counted`` (default the cutting samples) with a finite engagement and a step in the plane before
+    them (the direction the front half faces)."""
+    t = ev.trace
+    eng = np.asarray(t["engagement_deg"], float)
+    moved = np.r_[False, np.hypot(np.diff(t["x"]), np.diff(t["y"])) > 1e-9]
+    base = np.asarray(t["cutting"], bool) if counted is None else np.asarray(counted, bool)
+    return eng, base & moved & np.isfinite(eng)
+
+
 def _measured(t, polygon, r, at, top_z) -> np.ndarray:
     """Vector engagement (deg) at the trace samples ``at``, each on the slice of its own height."""
     xy, z = np.c_[t["x"], t["y"]], np.asarray(t["z"], float)
@@ -65,21 +76,17 @@ def vector_audit(ev, job, n_peaks: int = 5, n_random: int = 300, seed: int = 0, 
     (180, True)
     """
     t = ev.trace
-    eng = np.asarray(t["engagement_deg"], float)
-    moved = np.r_[False, np.hypot(np.diff(t["x"]), np.diff(t["y"])) > 1e-9]     # a step direction to face
-    cut = np.asarray(t["cutting"], bool) & np.isfinite(eng) & moved
-    eng_cut = np.where(cut, eng, np.nan)
-    peaks = _peaks(eng_cut, n_peaks, min_gap)
+    eng, cut = _measurable(ev, None)
+    pk = vector_peaks(ev, job, None, n_peaks, min_gap)
+    vp = np.array([q[3] for q in pk])
     rng = np.random.default_rng(seed)
     idx = np.flatnonzero(cut)
     rand = np.sort(rng.choice(idx, size=min(n_random, idx.size), replace=False)) if idx.size else np.array([], int)
-    r = job.tool_radius
-    vp = _measured(t, job.polygon, r, peaks, job.top_z) if peaks else np.array([])
-    vr = _measured(t, job.polygon, r, rand, job.top_z) if rand.size else np.array([])
+    vr = _measured(t, job.polygon, job.tool_radius, rand, job.top_z) if rand.size else np.array([])
     diff = vr - eng[rand]
     nan = float("nan")
-    return {"dixel_max": float(np.nanmax(eng_cut)) if cut.any() else nan,
-            "peaks_dixel": [float(eng[k]) for k in peaks], "peaks_vector": [float(v) for v in vp],
+    return {"dixel_max": float(eng[cut].max()) if cut.any() else nan,
+            "peaks_dixel": [q[2] for q in pk], "peaks_vector": vp.tolist(),
             "vector_peak_max": float(vp.max()) if vp.size else nan, "n_random": int(rand.size),
             "random_vector_max": float(vr.max()) if vr.size else nan,
             "random_diff_max": float(diff.max()) if diff.size else nan,
@@ -92,10 +99,8 @@ def vector_peaks(ev, job, counted=None, n_peaks: int = 5, min_gap: int = 200) ->
     the cutting samples that moved), ``min_gap`` samples apart, measured on the vector stock:
     ``[(x mm, y mm, dixel deg, vector deg), ...]``, highest dixel first."""
     t = ev.trace
-    eng = np.asarray(t["engagement_deg"], float)
-    moved = np.r_[False, np.hypot(np.diff(t["x"]), np.diff(t["y"])) > 1e-9]
-    base = np.asarray(t["cutting"], bool) if counted is None else np.asarray(counted, bool)
-    peaks = _peaks(np.where(base & moved & np.isfinite(eng), eng, np.nan), n_peaks, min_gap)
+    eng, ok = _measurable(ev, counted)
+    peaks = _peaks(np.where(ok, eng, np.nan), n_peaks, min_gap)
     if not peaks:
         return []
     v = _measured(t, job.polygon, job.tool_radius, peaks, job.top_z)

@@ -56,8 +56,10 @@ class PeriodCheck:
         self.refused = 0
 
     def __call__(self, Q, cutting, first=False) -> bool:
+        """``axis_trochoid``'s check of one period (``cutting``, its cut flags, is part of that protocol:
+        every point is held to the limit here, the returns through the slot too)."""
         if first and self.start is not None:
-            Q, cutting = np.vstack([self.start[None], Q]), np.r_[False, cutting]
+            Q = np.vstack([self.start[None], Q])
         g, pad = self.g, self.r + 2.0 * self.g.h
         lo, hi = Q.min(axis=0) - pad, Q.max(axis=0) + pad
         wj, wi = g.window((lo[0], lo[1], hi[0], hi[1]))      # grid pixels, then within the copy
