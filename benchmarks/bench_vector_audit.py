@@ -14,6 +14,7 @@ Through :func:`cnclab.sweep.sweep` (joblib processes, or a Dask cluster with ``$
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
 from pathlib import Path
 
@@ -32,14 +33,16 @@ from cnclab.works.jacso2021 import freecad_comparison as fx  # noqa: E402
 COLS = ["dixel_max", "vector_peak_max", "random_vector_max", "random_diff_max", "random_diff_min", "random_absdiff_p95", "n_random"]
 
 
-def audit_job(name: str) -> list:
-    """Rows (ours, FreeCAD's where it wrote a program) of job ``name``: the audit's values over theta."""
+def audit_job(name: str, ours_only: bool = False) -> list:
+    """Rows (ours, FreeCAD's where it wrote a program, unless ``ours_only``) of job ``name``: the
+    audit's values over theta."""
     jb = cc.job(name)
     h = cc.resolution_mm(jb, False)
     tp = planners.plan(jb, "adaptive", h, allow_uncut=True, allow_engagement_breach=True, written=program_path)
     progs = [("ours", fx.as_written(tp, jb))]
     try:
-        progs.append(("FreeCAD", fx.freecad_path(name, jb.tool, cc.FIXTURES)))
+        if not ours_only:
+            progs.append(("FreeCAD", fx.freecad_path(name, jb.tool, cc.FIXTURES)))
     except (ValueError, FileNotFoundError):
         pass
     rows = []
@@ -56,10 +59,17 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("jobs", nargs="*")
     ap.add_argument("--out", default="benchmarks/results/vector_audit_corpus.csv")
+    ap.add_argument("--ours-only", action="store_true", help="audit our programs only (FreeCAD's fixtures do not change)")
     a = ap.parse_args(argv)
     names = a.jobs or cc.job_names()
-    df = pd.DataFrame([r for rows in sweep(audit_job, names) for r in rows])
+    df = pd.DataFrame([r for rows in sweep(functools.partial(audit_job, ours_only=a.ours_only), names) for r in rows])
     df = df.rename(columns={c: c + "_minus_theta" for c in ("dixel_max", "vector_peak_max", "random_vector_max")})
+    if a.ours_only and Path(a.out).exists():
+        # FreeCAD's rows (its committed programs) kept from the earlier run of the file, in job order
+        old = pd.read_csv(a.out)
+        df = pd.concat([df, old[old["program"] != "ours"]]).sort_values(["job", "program"], key=lambda c: c.map(
+            {n: i for i, n in enumerate(cc.job_names())}) if c.name == "job" else c.map({"ours": 0}).fillna(1),
+            kind="stable").reset_index(drop=True)
     atomic_write(Path(a.out), df.to_csv(index=False))
     with pd.option_context("display.width", 200, "display.max_rows", 500, "display.precision", 2):
         print(df.to_string())

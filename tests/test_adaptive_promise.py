@@ -126,14 +126,21 @@ def test_a_breach_on_a_finishing_lap_is_planned_again_with_the_laps_held_closer(
     after the planner was built; theta 75, D 10): its first plan breaks the promise on a clearing pass
     (theta + 13.4), the tighter guard moves the peak onto a finishing lap (theta + 10.1) and no other
     retry helps; the last retry, the tighter guard with the laps held at theta +
-    ``retry_finish_margin_deg``, brings the written program within every bound."""
+    ``retry_finish_margin_deg``, brings the written program within every bound. That first breach
+    stood at a square corner the pixel stock under-read: with the corners checked on the exact stock
+    (``corner_exact_cap_deg``, session 19) the first plan is within the bounds, so the retries are
+    exercised with that check off."""
     from cnclab.nc.program import program_path
     from cnclab.paths import REPO_ROOT
     from cnclab.toolpath.job import load_job
 
     job = load_job(REPO_ROOT / "tests" / "fixtures" / "adaptive" / "random_pocket_86_11.json")
-    prm = AdaptiveParams()
-    p = planners.plan(job, "adaptive", allow_uncut=True, written=program_path)
+    first = planners.plan(job, "adaptive", allow_uncut=True, written=program_path)
+    c0 = first.info["engagement_check"]
+    assert "retried" not in c0 and c0["ok"] and first.info["corner_cuts"] >= 1
+    assert c0["max_deg"] <= job.theta_deg + AdaptiveParams().promise_max_deg - AdaptiveParams().written_margin_deg
+    prm = AdaptiveParams(corner_exact_cap_deg=None)
+    p = planners.plan(job, "adaptive", allow_uncut=True, written=program_path, params=prm)
     chk = p.info["engagement_check"]
     assert chk["retried"] and "engagement_breach" not in p.info
     assert chk["max_deg"] <= job.theta_deg + prm.promise_max_deg - prm.written_margin_deg
@@ -144,7 +151,7 @@ def test_a_breach_on_a_finishing_lap_is_planned_again_with_the_laps_held_closer(
     # (planners._refined_check: theta + 9.9, 9.84, 9.82, within the promise but inside the written
     # margin, so measured down to the last halving; session 18)
     q = planners.plan(job, "adaptive", allow_uncut=True, written=program_path,
-                      params=AdaptiveParams(retry_finish_margin_deg=prm.finish_margin_deg))
+                      params=AdaptiveParams(retry_finish_margin_deg=prm.finish_margin_deg, corner_exact_cap_deg=None))
     c = q.info["engagement_check"]
     assert c["coarse"]["max_deg"] > job.theta_deg + prm.promise_max_deg - prm.written_margin_deg
     steps = c["refined"]

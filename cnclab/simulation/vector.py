@@ -25,7 +25,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, Point, box
 
-__all__ = ["vector_engagement"]
+__all__ = ["engagement_along", "vector_engagement"]
 
 
 def _swept(xy: np.ndarray, cutting: np.ndarray, k: int, r: float, quad_segs: int):
@@ -92,3 +92,51 @@ def vector_engagement(polygon, xy, at, tool_radius: float, cutting=None, min_chi
         inside = np.zeros(n_arc, bool) if stock.is_empty else shapely.contains(stock, rim)
         out.append(180.0 * float(inside.mean()))
     return np.asarray(out)
+
+
+def engagement_along(stock, path, tool_radius: float, min_chip_mm: float = 0.002, n_arc: int = 361,
+                     quad_segs: int = 64, exact_above: float = 0.0) -> np.ndarray:
+    """Engagement angle (deg) at each point ``path[1:]`` of a flat end mill of radius ``tool_radius``
+    (mm) moving along ``path`` ((n, 2) mm, from where the tool stands) through the vector ``stock``
+    (shapely geometry, mm: the material there before the move), which it cuts as it goes: at
+    ``path[k]``, 180 deg times the share of the front half of the tool circle (front: the step
+    ``path[k] - path[k-1]``) inside the stock less the discs swept along ``path[:k]`` (the disc at
+    ``path[0]`` included), material
+    thinner than ``min_chip_mm`` (default 2 um) not counted; ``n_arc`` points on the half circle
+    (180 / (n_arc - 1) deg apart). Zero-length steps read 0. The local counterpart of
+    :func:`vector_engagement` for one run of moves (a planner checking a stretch before it keeps it). ``exact_above``
+    (deg): a point whose engagement with no material discounted is at most this keeps that value, an
+    upper bound (the thin material is sought only above it: a check against a cap is exact and
+    cheaper).
+
+    >>> from shapely.geometry import box
+    >>> xy = np.c_[np.linspace(-5, 25, 61), np.full(61, 5.0)]           # a full-width slot, r 2
+    >>> float(engagement_along(box(0, 0, 20, 10), xy, 2.0)[30])
+    180.0
+    """
+    P = np.asarray(path, float)
+    if P.ndim != 2 or P.shape[1] != 2:
+        raise ValueError(f"path must be an (n, 2) array of tool-centre points (mm); got shape {P.shape}")
+    r = float(tool_radius)
+    if not (np.isfinite(r) and r > 0):
+        raise ValueError(f"tool_radius must be a finite number > 0 mm, got {tool_radius!r}")
+    out = np.zeros(max(len(P) - 1, 0))
+    half = np.linspace(-0.5 * np.pi, 0.5 * np.pi, n_arc)
+    if len(P):
+        stock = stock.difference(Point(P[0]).buffer(r, quad_segs=quad_segs))      # where the tool stands
+    for k in range(1, len(P)):
+        d = P[k] - P[k - 1]
+        if k > 1:
+            stock = stock.difference(LineString(P[k - 2:k]).buffer(r, quad_segs=quad_segs))
+        if not np.hypot(*d) > 0 or stock.is_empty:
+            continue
+        near = stock.intersection(box(*(P[k] - r - 0.01), *(P[k] + r + 0.01)))
+        if near.is_empty:
+            continue
+        phi = np.arctan2(d[1], d[0]) + half
+        rim = shapely.points(P[k, 0] + r * np.cos(phi), P[k, 1] + r * np.sin(phi))
+        out[k - 1] = 180.0 * float(shapely.contains(near, rim).mean())
+        if min_chip_mm > 0 and out[k - 1] > exact_above:
+            near = near.buffer(-0.5 * min_chip_mm, quad_segs=quad_segs).buffer(0.5 * min_chip_mm, quad_segs=quad_segs)
+            out[k - 1] = 0.0 if near.is_empty else 180.0 * float(shapely.contains(near, rim).mean())
+    return out

@@ -141,12 +141,23 @@ Design (the ideas and where they come from; the code is cnclab's own)
   ``plan``'s last re-plan of such a level replays each period on the planning stock, laying it closer
   or ending the trochoid where its engagement would exceed theta + 4 deg (``narrow_level.PeriodCheck``,
   ``retry_narrow_check_deg``; the notes say where).
+* **Sharp corners on the exact stock** (``corners``; session 19): at a convex vertex of the
+  tool-centre region (a pocket corner sharper than the tool) the rim of a tool moving into the corner
+  meets the rest there over up to the angle the limit turns (90 deg in a square corner) however thin
+  the rest is, and the pixel stock reads a rest thinner than a pixel as a fraction of material: short
+  passes that took a square corner micrometres at a time read theta + 4 to 6 on the r/30 dixel and
+  theta + 13 on the exact stock (corpus rectilinear_1, comb_1). Every pass and lap point within
+  ``corner_reach_frac`` r of such a vertex whose planning engagement comes within
+  ``corner_screen_deg`` of the cap is measured on polygons (the pocket less the discs of every move
+  the level made at depth, chips of 2 um and more: :func:`cnclab.simulation.vector.engagement_along`),
+  and the pass or lap ends before the first point above theta + ``corner_exact_cap_deg`` (8): the
+  corner rest stays, counted as uncut (``info["corner_cuts"]``: how many were so ended).
 * **Refusal**: a pocket in which the tool does not fit (the tool-centre region is empty or thinner
   than the resolution) raises ValueError naming the job source and the reason.
 
 Package layout (one role per module)
 -----------------------------------
-``stock`` pixel-stock kernels; ``control`` the engagement controller (heading search, guard, a
+``corners`` the sharp-corner check on the exact stock; ``stock`` pixel-stock kernels; ``control`` the engagement controller (heading search, guard, a
 pass); ``links`` links at depth and the rapid proofs; ``grid`` the per-level state (stocks, masks,
 free field); ``entries`` the entry choice, helix and bans; ``finish`` the wall-following laps;
 ``params`` :class:`AdaptiveParams` (every tuning constant with its unit and reason); ``narrow`` the

@@ -253,11 +253,26 @@ def _run_lap(lv, wall, Rl, L_ring):
         lv.g.restore(snap)
         E = lv.g.replay(Q, lv.lag, lv.n_samp)
         P = Q
+    P, E = _corner_cut(lv, P, E, snap)
     ai = E[1:] < lv.air_rad
     lv.b.add(P[1:], np.where(ai, "link", "cut").astype(object), np.where(ai, lv.link_feed_mm_min, lv.feed_mm_min),
              "finish", z=lv.z)
     lv.cur = (float(P[-1, 0]), float(P[-1, 1]))
     return P
+
+
+def _corner_cut(lv, P, E, snap):
+    """The lap ``P`` (planning engagement ``E``) ended before its first point near a sharp corner over
+    the exact-stock cap (:class:`.corners.CornerCheck`), the stock replayed from ``snap`` without the
+    rest; (P, E) unchanged when none is (or the check is off: ``corner_exact_cap_deg`` None)."""
+    chk = lv.corner_check()
+    k = None if chk is None else chk.first_over(lambda: lv.b.tail(lv.mark0)[0], lv.z, P, E)
+    if k is None:
+        return P, E
+    lv.stats["corner_cuts"] = lv.stats.get("corner_cuts", 0) + 1
+    lv.g.restore(snap)
+    P = P[:k]
+    return P, (lv.g.replay(P, lv.lag, lv.n_samp) if len(P) > 1 else np.zeros(len(P)))
 
 
 def _leave_part(lv, part) -> None:

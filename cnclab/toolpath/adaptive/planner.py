@@ -13,7 +13,7 @@ from shapely.geometry import MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 
 from ..path import KINDS, ToolPath, ToolPathBuilder, resample_polyline
-from . import entries, finish, narrow, narrow_level
+from . import corners, entries, finish, narrow, narrow_level
 from .entries import PlanningError
 from .grid import Grid, PassStep
 from .params import AdaptiveParams
@@ -43,6 +43,35 @@ class _Level:
         self._remnant_cache = None     # (stock, its components) of the last sweep_remnant (_remnants)
         self._link_tail = None  # the last link's final G0 (join_link_to_pass)
         self._virtual = None    # (start of a pass that emitted nothing, its link rolled back; the tool's point then)
+        self.mark0 = self.b.mark()     # the builder before the level's first move
+        self._corners = None    # the level's CornerCheck (corner_check), made when first needed
+
+    def corner_check(self):
+        """The exact-stock check of the laps near the sharp corners (:class:`.corners.CornerCheck`),
+        made when first asked; None when ``AdaptiveParams.corner_exact_cap_deg`` is None."""
+        p = self.prm
+        if p.corner_exact_cap_deg is None:
+            return None
+        if self._corners is None:
+            pts = corners.sharp_points(self.allowed, p.corner_min_turn_deg, p.corner_window_frac * self.r)
+            self._corners = corners.CornerCheck(self.pocket, pts, self.r, self.theta_deg + p.corner_exact_cap_deg,
+                                                p.corner_reach_frac * self.r, p.corner_screen_deg)
+        return self._corners
+
+    def corner_trim(self, P, removed, E, free):
+        """The pass just run (``P``, ``removed`` mm^2, ``E``, ``free``) ended before its first point near a
+        sharp corner over the exact-stock cap (:meth:`corner_check`), the stock rolled back and replayed
+        without the rest; unchanged when none is."""
+        chk = self.corner_check()
+        k = None if chk is None else chk.first_over(lambda: self.b.tail(self.mark0)[0], self.z, P, E)
+        if k is None:
+            return P, removed, E, free
+        self.stats["corner_cuts"] = self.stats.get("corner_cuts", 0) + 1
+        self.g.rollback()
+        m0 = float(self.g.M.sum())
+        P = P[:k]
+        E = self.g.replay(P, self.lag, self.n_samp) if len(P) > 1 else E[:1]
+        return P, (m0 - float(self.g.M.sum())) * self.h * self.h, E, free[:k]
 
     def retract(self):
         if self.cur is not None:
@@ -71,10 +100,13 @@ class _Level:
         return np.ascontiguousarray(resample_polyline(xyz[np.abs(xyz[:, 2] - self.z) < 1e-9, :2], 0.5 * self.h))
 
     def clearing_pass(self, heading, a_stop):
-        """A clearing pass from the tool's point (:meth:`Grid.run_pass`) with ``a_stop`` mm of air."""
-        return self.g.run_pass(self.cur, heading, self.target, self.pass_step, self.prm.pass_max_steps, a_stop,
-                               min(self.turn, self.ds / self.turn_radius), 1e18, self.guard_pass, self.air_rad,
-                               self.rapid_links)
+        """A clearing pass from the tool's point (:meth:`Grid.run_pass`) with ``a_stop`` mm of air, ended
+        before a sharp corner where the exact stock reads it over the cap (:meth:`corner_trim`)."""
+        P, removed, reason, E, free = self.g.run_pass(self.cur, heading, self.target, self.pass_step,
+                                                      self.prm.pass_max_steps, a_stop, min(self.turn, self.ds / self.turn_radius),
+                                                      1e18, self.guard_pass, self.air_rad, self.rapid_links)
+        P, removed, E, free = self.corner_trim(P, removed, E, free)
+        return P, removed, reason, E, free
 
     def link_to(self, r_free, band_hi=-np.inf, banned=None, cell=(-1, -1), end_xy=None, route=None):
         """Link at depth through free cells to the nearest goal cell (:meth:`Grid.route`); its
