@@ -8,7 +8,7 @@ import math
 import numpy as np
 from shapely.geometry import Point, Polygon, box
 
-from cnclab.simulation.vector import engagement_along, vector_engagement
+from cnclab.simulation.vector import SweptDiscs, engagement_along, engagement_swept, vector_engagement
 from cnclab.toolpath.adaptive.corners import CornerCheck, sharp_points
 
 
@@ -60,37 +60,79 @@ def test_sharp_points_are_the_convex_corners_of_the_region():
 
 
 def _corner_job():
-    """A 20 x 20 pocket, r 2: the tool-centre region is [2, 18]^2, its corner (2, 2). The level has
-    cleared the pocket except the corner rest beyond the disc at (2.1, 2.1)."""
+    """A 20 x 20 pocket, r 2: the tool-centre region is [2, 18]^2, its corner (2, 2). The level (at
+    z -1, after a rapid above it) has cleared the pocket except the corner rest beyond the disc at
+    (2.1, 2.1): its moves in a ToolPathBuilder."""
+    from cnclab.toolpath.path import ToolPathBuilder
+
     pocket = box(0, 0, 20, 20)
     moves = np.array([[10, 10, -1], [2.1, 10, -1], [2.1, 2.1, -1], [10, 2.1, -1], [10, 10, -1]], float)
-    return pocket, moves
+    b = ToolPathBuilder()
+    b.rapid([[10, 10]], z=5.0)
+    b.cut(moves, 300.0)
+    return pocket, moves, b
 
 
 def test_a_jab_into_a_square_corner_is_stopped_before_the_rest():
     """From (3, 3) straight into the corner (2, 2): the last steps meet the corner rest (the rim over
     about the 90 deg the limit turns there, a chip of up to 0.14 mm) -- over a cap of theta + 8 with
     theta 50; the lap is cut before the first such point. With a cap of 100 deg, nothing is."""
-    pocket, moves = _corner_job()
+    pocket, moves, b = _corner_job()
     P = np.c_[np.linspace(3.0, 2.0, 11), np.linspace(3.0, 2.0, 11)]
     E = np.full(len(P), math.radians(50.0))
     chk = CornerCheck(pocket, [[2.0, 2.0]], 2.0, 58.0, 1.0, 30.0)
-    k = chk.first_over(lambda: moves, -1.0, P, E)
+    k = chk.first_over(b, 0, -1.0, P, E)
     assert k is not None and np.hypot(*(P[k] - 2.0)) < np.hypot(0.1, 0.1) + 1e-9     # past the earlier reach
-    exact = engagement_along(pocket.difference(_swept(moves, 2.0)), P, 2.0)
+    sw = SweptDiscs(2.0)
+    sw.add(moves[:, :2])
+    exact = engagement_swept(pocket, sw, P)
     assert exact[k - 1] > 58.0 and np.all(exact[:k - 1] <= 58.0)
-    assert CornerCheck(pocket, [[2.0, 2.0]], 2.0, 100.0, 1.0, 30.0).first_over(lambda: moves, -1.0, P, E) is None
+    # (the polygon measure reads 90 deg at (2.1, 2.1), where the tool stands where it stood before: the
+    # rim lies 0.15 um outside the 64-segment polygon of the old disc, on thick material beyond it)
+    assert CornerCheck(pocket, [[2.0, 2.0]], 2.0, 100.0, 1.0, 30.0).first_over(b, 0, -1.0, P, E) is None
+    # the moves rolled back (the level never went there): the corner is all rest, over the cap sooner
+    m = b.mark()
+    b.rollback(1)
+    b.cut(moves[:2], 300.0)
+    k2 = chk.first_over(b, 0, -1.0, P, E)
+    assert k2 is not None and k2 <= k and len(chk.sweep.tag) < m * 1000
 
 
 def test_only_points_near_a_corner_and_near_the_cap_are_measured():
-    pocket, moves = _corner_job()
+    pocket, moves, b = _corner_job()
     P = np.c_[np.linspace(3.0, 2.0, 11), np.linspace(3.0, 2.0, 11)]
     far = CornerCheck(pocket, [[18.0, 18.0]], 2.0, 58.0, 1.0, 30.0)           # no corner within reach
-    assert far.first_over(lambda: moves, -1.0, P, np.full(len(P), math.radians(50.0))) is None and far.measured == 0
+    assert far.first_over(b, 0, -1.0, P, np.full(len(P), math.radians(50.0))) is None and far.measured == 0
     low = CornerCheck(pocket, [[2.0, 2.0]], 2.0, 58.0, 1.0, 30.0)             # planning engagement 20 < 58 - 30
-    assert low.first_over(lambda: moves, -1.0, P, np.full(len(P), math.radians(20.0))) is None and low.measured == 0
+    assert low.first_over(b, 0, -1.0, P, np.full(len(P), math.radians(20.0))) is None and low.measured == 0
 
 
-def _swept(moves, r):
+def test_the_swept_discs_answer_as_the_polygons_do():
+    """SweptDiscs (pieces in a k-d tree, a brute-forced tail, truncation by tag) against the exact
+    point-segment distances, and engagement_swept against the polygon measure engagement_along on
+    random passes (equal: both sample the same 361 rim points)."""
     from shapely.geometry import LineString
-    return LineString(moves[:, :2]).buffer(r, quad_segs=64)
+
+    from cnclab.simulation.vector import _seg_dist_min
+    rng = np.random.default_rng(7)
+    s = SweptDiscs(1.5, tail=40)
+    runs = [np.cumsum(rng.normal(0, 0.4, (60, 2)), axis=0) + rng.uniform(2, 18, 2) for _ in range(5)]
+    for i, run in enumerate(runs):
+        s.add(run, tag=i)
+    q = rng.uniform(0, 20, (400, 2))
+    assert np.allclose(s.distance(q), _seg_dist_min(q, s.A, s.B))
+    s.truncate(3)                                   # the last two runs rolled back
+    ref = SweptDiscs(1.5)
+    for run in runs[:3]:
+        ref.add(run)
+    assert np.allclose(s.distance(q), ref.distance(q))
+    path = np.c_[np.linspace(0, 20, 120), 10 + 3 * np.sin(np.linspace(0, 6, 120))]
+    stock = box(0, 0, 20, 20).difference(shapely_union([LineString(r).buffer(1.5, quad_segs=64) for r in runs[:3]]))
+    a = engagement_along(stock, path, 1.5)
+    b = engagement_swept(box(0, 0, 20, 20), s, path)
+    assert np.max(np.abs(a - b)) <= 0.5 + 1e-9        # one rim sample (0.5 deg) at the most
+
+
+def shapely_union(geoms):
+    import shapely
+    return shapely.union_all(geoms)

@@ -147,7 +147,7 @@ Design (the ideas and where they come from; the code is cnclab's own)
   the rest is, and the pixel stock reads a rest thinner than a pixel as a fraction of material: short
   passes that took a square corner micrometres at a time read theta + 4 to 6 on the r/30 dixel and
   theta + 13 on the exact stock (corpus rectilinear_1, comb_1). Every pass and lap point within
-  ``corner_reach_frac`` r of such a vertex whose planning engagement comes within
+  ``corner_reach_h`` h of such a vertex whose planning engagement comes within
   ``corner_screen_deg`` of the cap is measured on polygons (the pocket less the discs of every move
   the level made at depth, chips of 2 um and more: :func:`cnclab.simulation.vector.engagement_along`),
   and the pass or lap ends before the first point above theta + ``corner_exact_cap_deg`` (8): the

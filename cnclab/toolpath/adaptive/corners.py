@@ -21,10 +21,9 @@ import math
 
 import numpy as np
 import shapely
-from shapely.geometry import LineString, box
 from shapely.geometry.polygon import orient
 
-from ...simulation.vector import engagement_along
+from ...simulation.vector import SweptDiscs, engagement_swept
 
 __all__ = ["CornerCheck", "sharp_points"]
 
@@ -68,91 +67,72 @@ def sharp_points(allowed, min_turn_deg: float, window_mm: float) -> np.ndarray:
 
 
 class CornerCheck:
-    """The exact-stock check of one level's finishing laps near the sharp corners of its tool-centre
-    region. ``pocket`` (shapely, mm) the level's material outline; ``corners`` (K, 2) mm
+    """The exact-stock check of one level's passes and finishing laps near the sharp corners of its
+    tool-centre region. ``pocket`` (shapely, mm) the level's material outline; ``corners`` (K, 2) mm
     (:func:`sharp_points`); ``r`` tool radius mm; ``cap_deg`` the cap on the exact engagement (deg);
-    ``reach_mm`` how far from a corner a lap point is measured; ``screen_deg`` only points whose
-    planning engagement is at least ``cap_deg - screen_deg`` are measured."""
+    ``reach_mm`` how far from a corner a point is measured; ``screen_deg`` only points whose planning
+    engagement is at least ``cap_deg - screen_deg`` are measured. The level's moves at its height are
+    kept as a :class:`cnclab.simulation.vector.SweptDiscs`, synchronised with the builder before each
+    check (moves rolled back are dropped)."""
 
     def __init__(self, pocket, corners, r: float, cap_deg: float, reach_mm: float, screen_deg: float):
         self.pocket, self.corners, self.r = pocket, np.asarray(corners, float).reshape(-1, 2), float(r)
         self.cap_deg, self.reach, self.screen = float(cap_deg), float(reach_mm), math.radians(cap_deg - screen_deg)
-        self.measured = 0                              # lap points measured on the exact stock (stats)
-        self._swept = {}      # corner index -> ([(moves included, the last one, their discs near it)], union)
+        self.measured = 0                              # points measured on the exact stock (stats)
+        self.sweep = SweptDiscs(self.r)
+        self._seen = np.zeros((0, 3))                  # the level's moves the sweep holds
 
-    def first_over(self, moves, z: float, P: np.ndarray, E: np.ndarray) -> int | None:
-        """The index k >= 1 of the first point of the lap ``P`` ((n, 2) mm, from where the tool stands;
-        ``E`` (n,) its planning engagement, rad) whose exact engagement exceeds the cap, the level
-        having made the moves ``moves()`` ((m, 3) mm, asked only when a point is measured; those at
-        height ``z`` cut); None if none."""
-        self._moves = None
+    def first_over(self, builder, mark0: int, z: float, P: np.ndarray, E: np.ndarray) -> int | None:
+        """The index k >= 1 of the first point of the stretch ``P`` ((n, 2) mm, from where the tool
+        stands; ``E`` (n,) its planning engagement, rad) whose exact engagement exceeds the cap, the
+        level having made the moves of ``builder`` since its mark ``mark0`` (those at height ``z``
+        cut); None if none."""
         if not len(self.corners) or len(P) < 2:
             return None
         dd = np.hypot(P[:, None, 0] - self.corners[None, :, 0], P[:, None, 1] - self.corners[None, :, 1])
-        c_of, d = np.argmin(dd, axis=1), np.min(dd, axis=1)
-        ask = (d <= self.reach) & (np.asarray(E) >= self.screen)
+        ask = (np.min(dd, axis=1) <= self.reach) & (np.asarray(E) >= self.screen)
         ask[0] = False
         if not ask.any():
             return None
+        self._sync(builder, mark0, z)
         idx = np.flatnonzero(ask)
-        # one stretch per visit of one corner (consecutive asked points nearest to the same corner)
-        for run in np.split(idx, np.flatnonzero((np.diff(idx) > 1) | (np.diff(c_of[idx]) != 0)) + 1):
-            k = self._over_in(moves, z, P, int(run[0]) - 1, int(run[-1]) + 1, ask, int(c_of[run[0]]))
-            if k is not None:
-                return k
+        for run in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1):      # one stretch per corner visit
+            a, b = int(run[0]) - 1, int(run[-1]) + 1
+            eng = engagement_swept(self.pocket, self.sweep, P[a:b], lead=P[:a + 1])    # eng[j] at P[a + 1 + j]
+            self.measured += b - a - 1
+            over = np.flatnonzero((eng > self.cap_deg) & ask[a + 1:b])
+            if over.size:
+                return int(a + 1 + over[0])
         return None
 
-    def _over_in(self, moves, z, P, a, b, ask, c):
-        """The first asked point of ``P[a + 1:b]`` (each within reach of corner ``c``) over the cap,
-        measured from ``P[a]``; None if none."""
-        if self._moves is None:
-            self._moves = np.asarray(moves(), float).reshape(-1, 3)
-        m = self.corners[c]
-        stock = self.pocket.intersection(box(*(m - self.reach - self.r - 0.05), *(m + self.reach + self.r + 0.05)))
-        for swept in (self._level_swept(c, z), _swept_at(P[:a + 1], None, m, self.reach + 2.0 * self.r + 0.05, self.r)):
-            if swept is not None:
-                stock = stock.difference(swept)
-        eng = engagement_along(stock, P[a:b], self.r, exact_above=self.cap_deg)      # eng[j] at P[a + 1 + j]
-        self.measured += int(b - a - 1)
-        over = np.flatnonzero((eng > self.cap_deg) & ask[a + 1:b])
-        return None if not over.size else int(a + 1 + over[0])
+    def _sync(self, builder, mark0, z):
+        """Bring the sweep up to the builder's moves since ``mark0``: the moves added since the last
+        check swept in; where moves were rolled back, the sweep cut back to the first changed one."""
+        n = len(self._seen)
+        if len(builder) - mark0 >= n and n:
+            head = builder.tail(mark0 + n - 1)[0]
+            if np.array_equal(head[0], self._seen[-1]):
+                self._add(np.vstack([self._seen[-1:], head[1:]]), n - 1, z)
+                self._seen = np.vstack([self._seen, head[1:]])
+                return
+        M = builder.tail(mark0)[0]
+        m = min(len(M), n)
+        diff = np.flatnonzero(np.any(M[:m] != self._seen[:m], axis=1))
+        j = int(diff[0]) if diff.size else m          # the first move that changed (or the old end)
+        self.sweep.truncate(j)
+        self._add(M[max(j - 1, 0):], max(j - 1, 0), z)
+        self._seen = M.copy()
 
-    def _level_swept(self, c, z):
-        """The discs of the level's moves at height ``z`` near corner ``c``, cached per corner as chunks
-        of moves (a chunk whose moves were rolled back is dropped; the moves added since are swept into a
-        new one)."""
-        M = self._moves
-        chunks, union = self._swept.get(c, ([], None))
-        ok = 0
-        while ok < len(chunks) and chunks[ok][0] <= len(M) and tuple(M[chunks[ok][0] - 1]) == chunks[ok][1]:
-            ok += 1
-        if ok < len(chunks):
-            chunks = chunks[:ok]
-            geoms = [q[2] for q in chunks if q[2] is not None]
-            union = shapely.union_all(geoms) if geoms else None
-        n = chunks[-1][0] if chunks else 0
-        if n < len(M):
-            new = _swept_at(M[max(n - 1, 0):], z, self.corners[c], self.reach + 2.0 * self.r + 0.05, self.r)
-            chunks = chunks + [(len(M), tuple(M[-1]), new)]
-            union = new if union is None else (union if new is None else union.union(new))
-        self._swept[c] = (chunks, union)
-        return union
-
-
-def _swept_at(xyz: np.ndarray, z, centre, half: float, r: float):
-    """The union of the tool discs (radius ``r`` mm) along the moves ``xyz`` ((n, 3) mm, those at height
-    ``z`` only; or (n, 2) with ``z`` None: all) whose points lie within ``half`` mm of ``centre`` (and the steps into and out of it); None if none."""
-    xyz = np.asarray(xyz, float)
-    at = np.ones(len(xyz), bool) if z is None else np.abs(xyz[:, 2] - z) < 1e-9
-    xy = xyz[:, :2]
-    inb = at & (np.hypot(*(xy - np.asarray(centre)).T) <= half)
-    if not inb.any():
-        return None
-    # the points in the square and one either side of each stretch of them, at the height only
-    keep = (inb | np.r_[inb[1:], False] | np.r_[False, inb[:-1]]) & at
-    idx = np.flatnonzero(keep)
-    parts = []
-    for q in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1):
-        g = shapely.points(xy[q[0]]) if len(q) == 1 else LineString(xy[q])
-        parts.append(g.buffer(r, quad_segs=64))
-    return shapely.union_all(parts)
+    def _add(self, xyz, i0, z):
+        """Sweep the moves ``xyz`` (move i0 first; the segment into move i is tagged i) that run at height z."""
+        at = np.abs(xyz[:, 2] - z) < 1e-9
+        if not at.any():
+            return
+        idx = np.flatnonzero(at)
+        for run in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1):
+            if len(run) == 1:
+                if run[0] == 0 and i0 > 0:
+                    continue                       # the joint move, swept with the run before
+                self.sweep.add(xyz[run, :2], tag=i0 + int(run[0]))
+            else:
+                self.sweep.add(xyz[run, :2], tag=i0 + run[1:])     # the segment into move i tagged i

@@ -266,7 +266,7 @@ def _corner_cut(lv, P, E, snap):
     the exact-stock cap (:class:`.corners.CornerCheck`), the stock replayed from ``snap`` without the
     rest; (P, E) unchanged when none is (or the check is off: ``corner_exact_cap_deg`` None)."""
     chk = lv.corner_check()
-    k = None if chk is None else chk.first_over(lambda: lv.b.tail(lv.mark0)[0], lv.z, P, E)
+    k = None if chk is None else chk.first_over(lv.b, lv.mark0, lv.z, P, E)
     if k is None:
         return P, E
     lv.stats["corner_cuts"] = lv.stats.get("corner_cuts", 0) + 1

@@ -369,8 +369,12 @@ class AdaptiveParams:
     #: turns 90 at one vertex; a fillet a little wider than the tool, many small turns)
     corner_min_turn_deg: float = 20.0
     corner_window_frac: float = 0.25
-    #: fraction of r: lap points within this of a sharp corner are checked
-    corner_reach_frac: float = 0.5
+    #: pixels (h): pass and lap points within this of a sharp corner are checked. The rests the
+    #: planning stock can under-read there are the sub-pixel wall skins (the passes keep h/sqrt(2)
+    #: inside the limit, the laps snap within 2 h of it): a tool d from the corner along one wall meets
+    #: the other wall's skin only where d is under the skin's thickness. The two found stood 1.2 h and
+    #: 0.4 h from the corner
+    corner_reach_h: float = 4.0
     #: deg: ... those whose planning engagement is at least the cap less this (the pixel stock read
     #: 4 to 9 deg under the exact one at the two corners above)
     corner_screen_deg: float = 30.0

@@ -55,7 +55,7 @@ class _Level:
         if self._corners is None:
             pts = corners.sharp_points(self.allowed, p.corner_min_turn_deg, p.corner_window_frac * self.r)
             self._corners = corners.CornerCheck(self.pocket, pts, self.r, self.theta_deg + p.corner_exact_cap_deg,
-                                                p.corner_reach_frac * self.r, p.corner_screen_deg)
+                                                p.corner_reach_h * self.h, p.corner_screen_deg)
         return self._corners
 
     def corner_trim(self, P, removed, E, free):
@@ -63,7 +63,7 @@ class _Level:
         sharp corner over the exact-stock cap (:meth:`corner_check`), the stock rolled back and replayed
         without the rest; unchanged when none is."""
         chk = self.corner_check()
-        k = None if chk is None else chk.first_over(lambda: self.b.tail(self.mark0)[0], self.z, P, E)
+        k = None if chk is None else chk.first_over(self.b, self.mark0, self.z, P, E)
         if k is None:
             return P, removed, E, free
         self.stats["corner_cuts"] = self.stats.get("corner_cuts", 0) + 1
