@@ -105,6 +105,13 @@ class CornerCheck:
                 return int(a + 1 + over[0])
         return None
 
+    def past_corner(self, P: np.ndarray, k: int) -> int | None:
+        """The index of the first point of ``P`` after ``k`` beyond the reach of the corner nearest to
+        ``P[k]`` (where a lap can go on past that corner), or None if the stretch ends first."""
+        c = self.corners[np.argmin(np.hypot(*(self.corners - P[k]).T))]
+        far = np.flatnonzero(np.hypot(*(P[k + 1:] - c).T) > self.reach)
+        return None if not far.size else int(k + 1 + far[0])
+
     def _sync(self, builder, mark0, z):
         """Bring the sweep up to the builder's moves since ``mark0``: the moves added since the last
         check swept in; where moves were rolled back, the sweep cut back to the first changed one."""

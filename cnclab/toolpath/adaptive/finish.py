@@ -262,17 +262,35 @@ def _run_lap(lv, wall, Rl, L_ring):
 
 
 def _corner_cut(lv, P, E, snap):
-    """The lap ``P`` (planning engagement ``E``) ended before its first point near a sharp corner over
-    the exact-stock cap (:class:`.corners.CornerCheck`), the stock replayed from ``snap`` without the
-    rest; (P, E) unchanged when none is (or the check is off: ``corner_exact_cap_deg`` None)."""
+    """The lap ``P`` (planning engagement ``E``) past the sharp corners where the exact stock reads it
+    over the cap (:class:`.corners.CornerCheck`): the stretch from the first such point to the first
+    point beyond the corner's reach replaced by the chord across (inside the region: the corner is
+    convex), the chord's points ``ds`` apart; where the chord too is over the cap (exact stock, or
+    the planning stock over the finish target), the lap ends before it. The stock is replayed from
+    ``snap``; (P, E) unchanged when no point is over (or the check is off:
+    ``corner_exact_cap_deg`` None)."""
     chk = lv.corner_check()
-    k = None if chk is None else chk.first_over(lv.b, lv.mark0, lv.z, P, E)
-    if k is None:
+    if chk is None:
         return P, E
-    lv.stats["corner_cuts"] = lv.stats.get("corner_cuts", 0) + 1
-    lv.g.restore(snap)
-    P = P[:k]
-    return P, (lv.g.replay(P, lv.lag, lv.n_samp) if len(P) > 1 else np.zeros(len(P)))
+    for _ in range(lv.prm.corner_skips + 1):
+        k = chk.first_over(lv.b, lv.mark0, lv.z, P, E)
+        if k is None:
+            return P, E
+        lv.stats["corner_cuts"] = lv.stats.get("corner_cuts", 0) + 1
+        m = chk.past_corner(P, k)
+        lv.g.restore(snap)
+        if m is None or _ == lv.prm.corner_skips:
+            P = P[:k]                 # no way past this corner: the lap ends before it
+            return P, (lv.g.replay(P, lv.lag, lv.n_samp) if len(P) > 1 else np.zeros(len(P)))
+        chord = resample_polyline(P[[k - 1, m]], lv.ds, uniform=True)
+        Q = np.vstack([P[:k - 1], chord, P[m + 1:]])
+        E2 = lv.g.replay(Q, lv.lag, lv.n_samp)
+        if np.any(E2[k - 1:k - 1 + len(chord)] > lv.target_finish):
+            lv.g.restore(snap)
+            P = P[:k]
+            return P, (lv.g.replay(P, lv.lag, lv.n_samp) if len(P) > 1 else np.zeros(len(P)))
+        P, E = Q, E2
+    return P, E
 
 
 def _leave_part(lv, part) -> None:

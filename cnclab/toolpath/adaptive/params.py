@@ -375,6 +375,10 @@ class AdaptiveParams:
     #: the other wall's skin only where d is under the skin's thickness. The two found stood 1.2 h and
     #: 0.4 h from the corner
     corner_reach_h: float = 4.0
+    #: corners: a finishing lap over the cap at a corner goes on past it along the chord across the
+    #: corner (checked the same way) at most this many times, then ends (a lap cut short there left
+    #: the rest of its ring: neck_3 4.3 mm^2 more uncut, session 19)
+    corner_skips: int = 8
     #: deg: ... those whose planning engagement is at least the cap less this (the pixel stock read
     #: 4 to 9 deg under the exact one at the two corners above)
     corner_screen_deg: float = 30.0
