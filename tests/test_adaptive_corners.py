@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import shapely
 from shapely.geometry import Point, Polygon, box
 
 from cnclab.simulation.vector import SweptDiscs, engagement_along, engagement_swept, vector_engagement
@@ -34,16 +35,6 @@ def test_stepwise_engagement_matches_the_sample_by_sample_measure():
     at = np.arange(1, len(xy))
     e_ref = vector_engagement(stock, xy, at, 2.0)
     assert np.max(np.abs(e_step - e_ref)) <= 0.6
-
-
-def test_the_cap_shortcut_keeps_exact_values_above_it():
-    """exact_above: values at or below it may be upper bounds (no thin material discounted); above it
-    they are exact."""
-    xy = np.c_[np.linspace(-5, 25, 61), np.full(61, 5.0)]
-    stock = box(0, 0, 20, 10).difference(box(-1, 6.999, 21, 11))    # a 1 um skin above a 2 mm slot
-    full = engagement_along(stock, xy, 2.0)
-    fast = engagement_along(stock, xy, 2.0, exact_above=170.0)
-    assert np.all(fast >= full - 1e-9) and np.allclose(fast[fast > 170.0], full[fast > 170.0])
 
 
 def test_sharp_points_are_the_convex_corners_of_the_region():
@@ -95,7 +86,8 @@ def test_a_jab_into_a_square_corner_is_stopped_before_the_rest():
     b.rollback(1)
     b.cut(moves[:2], 300.0)
     k2 = chk.first_over(b, 0, -1.0, P, E)
-    assert k2 is not None and k2 <= k and len(chk.sweep.tag) < m * 1000
+    assert k2 is not None and k2 <= k
+    assert chk.sweep.tag.max() < len(b) < m     # the swept pieces of the rolled-back moves dropped
 
 
 def test_only_points_near_a_corner_and_near_the_cap_are_measured():
@@ -127,12 +119,8 @@ def test_the_swept_discs_answer_as_the_polygons_do():
         ref.add(run)
     assert np.allclose(s.distance(q), ref.distance(q))
     path = np.c_[np.linspace(0, 20, 120), 10 + 3 * np.sin(np.linspace(0, 6, 120))]
-    stock = box(0, 0, 20, 20).difference(shapely_union([LineString(r).buffer(1.5, quad_segs=64) for r in runs[:3]]))
+    stock = box(0, 0, 20, 20).difference(shapely.union_all([LineString(r).buffer(1.5, quad_segs=64) for r in runs[:3]]))
     a = engagement_along(stock, path, 1.5)
     b = engagement_swept(box(0, 0, 20, 20), s, path)
     assert np.max(np.abs(a - b)) <= 0.5 + 1e-9        # one rim sample (0.5 deg) at the most
 
-
-def shapely_union(geoms):
-    import shapely
-    return shapely.union_all(geoms)

@@ -34,9 +34,7 @@ def _swept(xy: np.ndarray, cutting: np.ndarray, k: int, r: float, quad_segs: int
     a cutting sample with no such step: its own disc. None when there is none."""
     c = xy[k]
     a, b = xy[:k - 1], xy[1:k]
-    ab = b - a
-    t = np.clip(np.einsum("ij,ij->i", c - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0.0, 1.0)
-    near = np.hypot(*(a + t[:, None] * ab - c).T) <= 2.0 * r + 1e-9
+    near = _point_seg(np.broadcast_to(c, a.shape), a, b) <= 2.0 * r + 1e-9
     step = near & cutting[:k - 1] & cutting[1:k]              # step i: xy[i] -> xy[i + 1]
     parts = []
     idx = np.flatnonzero(step)
@@ -95,7 +93,7 @@ def vector_engagement(polygon, xy, at, tool_radius: float, cutting=None, min_chi
 
 
 def engagement_along(stock, path, tool_radius: float, min_chip_mm: float = 0.002, n_arc: int = 361,
-                     quad_segs: int = 64, exact_above: float = 0.0) -> np.ndarray:
+                     quad_segs: int = 64) -> np.ndarray:
     """Engagement angle (deg) at each point ``path[1:]`` of a flat end mill of radius ``tool_radius``
     (mm) moving along ``path`` ((n, 2) mm, from where the tool stands) through the vector ``stock``
     (shapely geometry, mm: the material there before the move), which it cuts as it goes: at
@@ -103,11 +101,8 @@ def engagement_along(stock, path, tool_radius: float, min_chip_mm: float = 0.002
     ``path[k] - path[k-1]``) inside the stock less the discs swept along ``path[:k]`` (the disc at
     ``path[0]`` included), material
     thinner than ``min_chip_mm`` (default 2 um) not counted; ``n_arc`` points on the half circle
-    (180 / (n_arc - 1) deg apart). Zero-length steps read 0. The local counterpart of
-    :func:`vector_engagement` for one run of moves (a planner checking a stretch before it keeps it). ``exact_above``
-    (deg): a point whose engagement with no material discounted is at most this keeps that value, an
-    upper bound (the thin material is sought only above it: a check against a cap is exact and
-    cheaper).
+    (180 / (n_arc - 1) deg apart). Zero-length steps read 0. The polygon counterpart of
+    :func:`engagement_swept` for one run of moves (its reference in the tests).
 
     >>> from shapely.geometry import box
     >>> xy = np.c_[np.linspace(-5, 25, 61), np.full(61, 5.0)]           # a full-width slot, r 2
@@ -135,10 +130,9 @@ def engagement_along(stock, path, tool_radius: float, min_chip_mm: float = 0.002
             continue
         phi = np.arctan2(d[1], d[0]) + half
         rim = shapely.points(P[k, 0] + r * np.cos(phi), P[k, 1] + r * np.sin(phi))
-        out[k - 1] = 180.0 * float(shapely.contains(near, rim).mean())
-        if min_chip_mm > 0 and out[k - 1] > exact_above:
+        if min_chip_mm > 0:
             near = near.buffer(-0.5 * min_chip_mm, quad_segs=quad_segs).buffer(0.5 * min_chip_mm, quad_segs=quad_segs)
-            out[k - 1] = 0.0 if near.is_empty else 180.0 * float(shapely.contains(near, rim).mean())
+        out[k - 1] = 0.0 if near.is_empty else 180.0 * float(shapely.contains(near, rim).mean())
     return out
 
 
@@ -290,7 +284,7 @@ def _seg_dist_min(pts, A, B, chunk: int = 2_000_000):
 
 
 def engagement_swept(pocket, swept: SweptDiscs, path, min_chip_mm: float = 0.002, n_arc: int = 361,
-                     lead=None) -> np.ndarray:
+                     lead=None, wall=None) -> np.ndarray:
     """Engagement angle (deg) at each point ``path[1:]`` of a flat end mill (radius ``swept.r`` mm)
     moving along ``path`` ((n, 2) mm, from where the tool stands) through the material of ``pocket``
     (shapely, mm) less the region ``swept`` (:class:`SweptDiscs`, the moves before) and less its own
@@ -298,8 +292,9 @@ def engagement_swept(pocket, swept: SweptDiscs, path, min_chip_mm: float = 0.002
     stock, material thinner than ``min_chip_mm`` not counted (a rim point counts when some point
     within ``min_chip_mm`` / 2 of it carries a disc of that radius inside the stock: the opening of
     :func:`vector_engagement`, tested on 8 directions). The point-wise counterpart of
-    :func:`engagement_along` (no polygon booleans: for long levels). ``lead`` ((m, 2) mm): moves
-    before ``path`` not in ``swept`` (swept too).
+    :func:`engagement_along` (no polygon booleans: for long levels; the planner's corner check).
+    ``lead`` ((m, 2) mm): moves before ``path`` not in ``swept`` (swept too). ``wall``:
+    ``pocket.boundary``, when the caller has it.
 
     >>> from shapely.geometry import box
     >>> xy = np.c_[np.linspace(-10, 40, 101), np.full(101, 20 + 3 - 1.5)]   # r 3, a_e 1.5
@@ -315,7 +310,7 @@ def engagement_swept(pocket, swept: SweptDiscs, path, min_chip_mm: float = 0.002
     if len(P):
         own.add(P[:1])
     half = np.linspace(-0.5 * np.pi, 0.5 * np.pi, n_arc)
-    wall = pocket.boundary
+    wall = pocket.boundary if wall is None else wall
     shapely.prepare(pocket)
     shapely.prepare(wall)
     out = np.zeros(max(len(P) - 1, 0))
@@ -343,7 +338,7 @@ def _in_stock(pocket, wall, swept, own, pts, r, dl):
     thin = np.zeros(len(pts), bool)
     thin[np.flatnonzero(ok)] = (ds[ok] < dl) | shapely.dwithin(wall, shapely.points(pts[ok]), dl)
     for i in np.flatnonzero(thin):
-        q = pts[i] + dl * np.vstack([[0.0, 0.0], ring_dirs()])
+        q = pts[i] + dl * _OPENING_STEPS
         dq = np.minimum(swept.distance(q, cap, r), own.distance(q, cap, r)) - r
         wq = shapely.distance(wall, shapely.points(q))
         iq = shapely.contains_xy(pocket, q[:, 0], q[:, 1])
@@ -351,7 +346,5 @@ def _in_stock(pocket, wall, swept, own, pts, r, dl):
     return ok
 
 
-def ring_dirs() -> np.ndarray:
-    """The 8 unit directions (8, 2) the opening test of :func:`engagement_swept` tries."""
-    a = np.linspace(0, 2 * np.pi, 8, endpoint=False)
-    return np.c_[np.cos(a), np.sin(a)]
+#: the offsets (9, 2) of the opening test of :func:`engagement_swept`: the point itself and 8 directions
+_OPENING_STEPS = np.vstack([[0.0, 0.0], np.c_[np.cos(np.arange(8) * np.pi / 4), np.sin(np.arange(8) * np.pi / 4)]])

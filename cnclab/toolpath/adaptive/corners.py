@@ -1,17 +1,19 @@
-"""The finishing laps checked on the exact stock where the tool-centre limit turns sharply (a pocket
-corner the tool cannot fill): :func:`sharp_points`, :class:`CornerCheck`.
+"""The passes and finishing laps checked on the exact stock where the tool-centre limit turns sharply
+(a pocket corner the tool cannot fill): :func:`sharp_points`, :class:`CornerCheck`.
 
 At a convex vertex of the tool-centre region (a pocket corner sharper than the tool) the rim of a
 tool that moves into the corner meets the corner's rest over up to the angle the limit turns there
 (90 deg in a square corner), however thin that rest is: a chip of 10 um still counts (contact: chips
 of 2 um and more). The planning stock (pixels of side h) reads a rest thinner than a pixel as a
-fraction of material, so the peel laps that take a corner micrometres at a time read within the
-finish target where the exact stock reads theta + 13 deg (corpus jobs rectilinear_1 and comb_1,
-``benchmarks/bench_vector_audit.py``). Every lap point within reach of such a corner whose planning
-engagement comes near the cap is therefore measured on the exact stock -- the pocket less the discs
-of every move the level made at depth (:func:`cnclab.simulation.vector.engagement_along`) -- and the
-lap ends before the first point above ``theta + corner_exact_cap_deg``: the rest in the corner stays
-(the evaluator counts it as uncut).
+fraction of material, so the short passes that took a corner micrometres at a time read within the
+target where the exact stock reads theta + 13 deg (corpus jobs rectilinear_1 and comb_1,
+``benchmarks/bench_vector_audit.py``). Every pass and lap point within reach of such a corner whose
+planning engagement comes near the cap is therefore measured on the exact stock -- the pocket less
+the discs of every move the level made at depth (:class:`cnclab.simulation.vector.SweptDiscs`,
+:func:`cnclab.simulation.vector.engagement_swept`) -- and a pass ends before the first point above
+``theta + corner_exact_cap_deg`` (the planner's ``corner_trim``); a finishing lap goes on past the
+corner along the chord across it (``finish._corner_cut``). The rest in the corner stays (the
+evaluator counts it as uncut).
 
 Units: mm, deg at the API (the planning engagement ``E`` in rad).
 """
@@ -57,13 +59,27 @@ def sharp_points(allowed, min_turn_deg: float, window_mm: float) -> np.ndarray:
             if len(R) < 3:
                 continue
             turn, s = _ring_turns(R)
-            L = float(s[-1] + math.hypot(*(R[0] - R[-1])))
-            gap = np.abs(s[:, None] - s[None, :])
-            near = np.minimum(gap, L - gap) <= 0.5 * window_mm + 1e-12
-            conv = near @ np.maximum(turn, 0.0)            # the convex turning within the window
-            keep = (conv >= math.radians(min_turn_deg)) & (turn > 0)
+            keep = (_window_sum(np.maximum(turn, 0.0), s, float(s[-1] + math.hypot(*(R[0] - R[-1]))),
+                                0.5 * window_mm) >= math.radians(min_turn_deg)) & (turn > 0)
             out.extend(R[keep].tolist())
     return np.asarray(out, float).reshape(-1, 2)
+
+
+def _window_sum(v: np.ndarray, s: np.ndarray, L: float, half: float) -> np.ndarray:
+    """(n,) the sum of ``v`` over the vertices within ``half`` (mm of arc length) of each vertex of a
+    closed ring of length ``L`` (``s`` (n,) increasing arc lengths from 0): cumulative sums over the
+    ring laid out three times, so memory and time grow with n, not n^2.
+
+    >>> _window_sum(np.array([1.0, 2.0, 4.0, 8.0]), np.array([0.0, 1.0, 2.0, 3.0]), 4.0, 1.0).tolist()
+    [11.0, 7.0, 14.0, 13.0]
+    """
+    if 2.0 * half >= L:
+        return np.full(len(v), float(v.sum()))          # the window holds the whole ring (each vertex once)
+    s3 = np.r_[s - L, s, s + L]
+    c = np.r_[0.0, np.cumsum(np.r_[v, v, v])]
+    lo = np.searchsorted(s3, s - half - 1e-12, side="left")
+    hi = np.searchsorted(s3, s + half + 1e-12, side="right")
+    return c[hi] - c[lo]
 
 
 class CornerCheck:
@@ -80,6 +96,7 @@ class CornerCheck:
         self.cap_deg, self.reach, self.screen = float(cap_deg), float(reach_mm), math.radians(cap_deg - screen_deg)
         self.measured = 0                              # points measured on the exact stock (stats)
         self.sweep = SweptDiscs(self.r)
+        self._wall = pocket.boundary                   # made once (engagement_swept asks it at every point)
         self._seen = np.zeros((0, 3))                  # the level's moves the sweep holds
 
     def first_over(self, builder, mark0: int, z: float, P: np.ndarray, E: np.ndarray) -> int | None:
@@ -98,7 +115,7 @@ class CornerCheck:
         idx = np.flatnonzero(ask)
         for run in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1):      # one stretch per corner visit
             a, b = int(run[0]) - 1, int(run[-1]) + 1
-            eng = engagement_swept(self.pocket, self.sweep, P[a:b], lead=P[:a + 1])    # eng[j] at P[a + 1 + j]
+            eng = engagement_swept(self.pocket, self.sweep, P[a:b], lead=P[:a + 1], wall=self._wall)  # eng[j] at P[a + 1 + j]
             self.measured += b - a - 1
             over = np.flatnonzero((eng > self.cap_deg) & ask[a + 1:b])
             if over.size:

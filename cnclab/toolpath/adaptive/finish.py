@@ -272,25 +272,30 @@ def _corner_cut(lv, P, E, snap):
     chk = lv.corner_check()
     if chk is None:
         return P, E
-    for _ in range(lv.prm.corner_skips + 1):
+    for skip in range(lv.prm.corner_skips + 1):
         k = chk.first_over(lv.b, lv.mark0, lv.z, P, E)
         if k is None:
             return P, E
         lv.stats["corner_cuts"] = lv.stats.get("corner_cuts", 0) + 1
         m = chk.past_corner(P, k)
         lv.g.restore(snap)
-        if m is None or _ == lv.prm.corner_skips:
-            P = P[:k]                 # no way past this corner: the lap ends before it
-            return P, (lv.g.replay(P, lv.lag, lv.n_samp) if len(P) > 1 else np.zeros(len(P)))
+        if m is None or skip == lv.prm.corner_skips:
+            return _end_before(lv, P, k, snap)          # no way past this corner
         chord = resample_polyline(P[[k - 1, m]], lv.ds, uniform=True)
         Q = np.vstack([P[:k - 1], chord, P[m + 1:]])
         E2 = lv.g.replay(Q, lv.lag, lv.n_samp)
         if np.any(E2[k - 1:k - 1 + len(chord)] > lv.target_finish):
-            lv.g.restore(snap)
-            P = P[:k]
-            return P, (lv.g.replay(P, lv.lag, lv.n_samp) if len(P) > 1 else np.zeros(len(P)))
+            return _end_before(lv, P, k, snap)
         P, E = Q, E2
     return P, E
+
+
+def _end_before(lv, P, k, snap):
+    """(P[:k], its planning engagement): the lap ended before point ``k``, the stock replayed from
+    ``snap`` along what is left of it."""
+    lv.g.restore(snap)
+    P = P[:k]
+    return P, (lv.g.replay(P, lv.lag, lv.n_samp) if len(P) > 1 else np.zeros(len(P)))
 
 
 def _leave_part(lv, part) -> None:

@@ -356,12 +356,13 @@ class AdaptiveParams:
     #: verdict. A dixel can read low too: letter U 33:2 (D 4, theta 25) reads theta + 9.4 at r / 120,
     #: + 10.5 on the vector stock at the peak r / 30 found (session 18). 0: no vector measure
     refine_vector_peaks: int = 5
-    #: deg over theta: a finishing lap ends before its first point near a sharp corner of the
+    #: deg over theta: a clearing pass ends before its first point near a sharp corner of the
     #: tool-centre region whose engagement on the exact stock (the pocket less the level's swept discs,
-    #: chips of 2 um and more: :class:`.corners.CornerCheck`) exceeds theta + this. The planning stock
-    #: reads a corner rest thinner than a pixel as a fraction of material: the peel laps of
-    #: rectilinear_1 (D 4, theta 50.1) and comb_1 (D 6, theta 65.3) took square corners micrometres at a
-    #: time at theta + 13 on the exact stock, + 6 to + 4 on the r / 30 dixel (session 19). 2 deg under
+    #: chips of 2 um and more: :class:`.corners.CornerCheck`) exceeds theta + this; a finishing lap
+    #: goes past that corner on the chord across it (``corner_skips``). The planning stock reads a
+    #: corner rest thinner than a pixel as a fraction of material: short passes of rectilinear_1 (D 4,
+    #: theta 50.1) and comb_1 (D 6, theta 65.3) took square corners micrometres at a time at theta + 13
+    #: on the exact stock, + 6 to + 4 on the r / 30 dixel (session 19). 2 deg under
     #: the bound of + 10 (``written_margin_deg`` and the arc fit). None: no check
     corner_exact_cap_deg: float | None = 8.0
     #: deg and fraction of r: a sharp corner is where the tool-centre limit turns convexly by at least
