@@ -5,6 +5,8 @@ import json
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from cnclab.nc.program import gcode_roundtrip_error
 from cnclab.toolpath import pocket as pk
@@ -303,16 +305,45 @@ def test_a_hybrid_arm_ends_where_its_period_would_cross_an_inner_corner():
     the ray from the centre met the U's inner corner, and one of its chords ran 4 mm into the wall
     (plan()'s gouge guard then refused the job). The arm now ends before such a period: the tool disc
     stays within the wall-gouge tolerance, and what the arms cannot reach is left (plan() refuses it as
-    uncut, naming the area)."""
+    uncut, naming the area). At 0.2 mm the centre laps, clamped point by point to the tool-centre
+    region, also cut its reflex corners by 1.4 um between two points (chords of its concave arcs):
+    their chords are now clamped too (``clamp_chords``)."""
     from cnclab.toolpath import coverage, planners
 
     U = [[0, 0], [50, 0], [50, 36], [36, 36], [36, 12], [14, 12], [14, 36], [0, 36]]
     job = pk.Job.from_dict(dict(TOOL, tool_diameter=8.0, theta_deg=50.0, a_p=2.5, polygon=U))
-    hp = pk.hybrid_path(job, 0.1)        # at 0.2 mm the centre laps' chords round the corner cut 1.4 um
+    hp = pk.hybrid_path(job, 0.2)
     gouge, at = coverage.wall_gouge(hp, job)
     assert gouge <= planners.GOUGE_TOL_MM, (gouge, at)
     with pytest.raises(planners.UncutError, match="strategy hybrid leaves material uncut"):
-        planners.plan(job, "hybrid", 0.1)
+        planners.plan(job, "hybrid", 0.2)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.floats(-9, 9), st.floats(-9, 9)), min_size=2, max_size=30),
+       st.floats(1.0, 6.0), st.sampled_from([0.5e-3, 1e-3]))
+def test_clamped_chords_stay_out_of_a_reflex_arc(pts, R, tol):
+    """Points around a round island of radius R (the tool-centre region's concave arc at a reflex
+    wall corner): after ``clamp_chords`` every point lies in the region and every segment at least
+    ``R - tol`` from the island's centre (exact segment distance); the clamped inputs are kept in
+    order (only points are inserted)."""
+    from shapely.geometry import Point, box
+    from cnclab.toolpath.constant_engagement import clamp_chords, clamp_to_region
+
+    outer = box(-10, -10, 10, 10)
+    region = outer.difference(Point(0, 0).buffer(R, 64))
+    guard = outer.difference(Point(0, 0).buffer(R - tol, 256))
+    P0 = clamp_to_region(np.array(pts, float), region)
+    P = clamp_chords(np.array(pts, float), region, guard, max_rounds=12)
+    segs = shapely.linestrings(np.stack([P[:-1], P[1:]], axis=1))
+    ok = shapely.distance(Point(0, 0), segs) >= R - tol - 1e-5 * R      # 256-gon of the guard
+    assert ok.all(), P[:-1][~ok]
+    assert shapely.distance(region, shapely.points(P)).max() < 1e-9
+    i = 0
+    for q in P0:                       # P0 is a subsequence of P
+        while i < len(P) and not np.allclose(P[i], q, atol=1e-12):
+            i += 1
+        assert i < len(P)
 
 
 def test_zigzag_cuts_each_cell_in_one_go():

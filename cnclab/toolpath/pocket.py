@@ -40,7 +40,7 @@ from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from ..simulation import dixel
 from ..simulation.common import simulate
 from .evaluate import SEGMENT_KINDS, entry_hole, evaluate, planar_view
-from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
+from .constant_engagement import (ShiftedContour, clamp_chords, clamp_to_region, cleared_boundary_contour, lap_start,
                                   resample_path, thesis3_path)
 from .job import Job, load_job, star_polygon
 from .offsets import link_loops, offset_levels
@@ -191,7 +191,8 @@ def _label_lap(eng, theta_deg, margin_deg=5.0):
     return k
 
 
-def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05):
+def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed, dt=0.1, step_mm=0.05,
+               guard=None):
     """One spiral-like constant-engagement lap around the cleared region containing ``seed_xy``.
 
     The boundary of the cleared region is read from the dixel ``stock``
@@ -199,7 +200,10 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
     at the boundary point touched by the tool at ``start_xy`` (the previous lap's end, or a point
     touching the start hole), and Thesis III runs one full turn from ``start_xy``: the lap blends in
     from the previous one (engagement 0 -> theta, no radial plunge) and closes on its own start.
-    Tool centres are clamped to ``allowed``. Returns the (n, 2) centre points (mm).
+    Tool centres are clamped to ``allowed``, and with a ``guard`` (:func:`period_guard`) so are the
+    chords between them (:func:`~cnclab.toolpath.constant_engagement.clamp_chords`). Returns the
+    (n, 2) centre points (mm) and a boolean mask of the points inserted on the chords (the lap's
+    spacing is ``step_mm`` without them).
     """
     r = tool_radius
     c = cleared_boundary_contour(stock, seed_xy, domain)
@@ -212,7 +216,10 @@ def centre_lap(stock, domain, seed_xy, start_xy, tool_radius, theta_deg, allowed
             continue
     else:
         raise ValueError("Thesis III lap failed at every step size")
-    return clamp_to_region(resample_path(res.P, step_mm), allowed)
+    P = resample_path(res.P, step_mm)
+    if guard is None:
+        return clamp_to_region(P, allowed), np.zeros(len(P), bool)
+    return clamp_chords(P, allowed, guard, return_inserted=True)
 
 
 WALL_SHARE_CANDIDATES = (0.3, 0.5)
@@ -343,8 +350,25 @@ def choose_candidate(metrics, pocket_area_mm2, theta_deg=60.0, uncut_tol_frac=0.
 
 #: mm: a period of an arm may leave the tool-centre region by this much (its chords along a curved wall:
 #: up to 0.3 um on Jacsó's star and L); a period that leaves it by more (one chord across an inner
-#: corner of a U: 4 mm into the wall) ends its arm. The wall-gouge tolerance of ``planners.plan``
+#: corner of a U: 4 mm into the wall) ends its arm. The wall-gouge tolerance of ``planners.plan``.
+#: Measured from the exact tool-centre region (:func:`period_guard`), not from ``job.allowed()``, whose
+#: 64-segment arcs round a reflex wall corner by chords already up to r (1 - cos(pi/256)) inside it
+#: (0.3 um at r = 4 mm). The centre laps' chords are held to half of it: clamped to ``allowed`` point by
+#: point, a lap on a 64 x 46 L (D8) reached 1.29 um into its reflex corner between two points
 PERIOD_TOL_MM = 1e-3
+
+
+def period_guard(pocket: Polygon, r: float, tol: float = PERIOD_TOL_MM) -> Polygon:
+    """The tool centres (mm) whose disc of radius ``r`` reaches at most ``tol`` (+ ``5e-6 r``, the
+    sagitta of its 256-segment arcs) past the walls of ``pocket``: the pocket shrunk by ``r - tol``.
+
+    >>> from shapely.geometry import Point
+    >>> g = period_guard(Polygon([(0, 0), (20, 0), (20, 10), (10, 10), (10, 20), (0, 20)]), 4.0)
+    >>> d = g.boundary.distance(Point(10, 10))      # the reflex corner to the guard's nearest chord
+    >>> bool(4.0 - 1e-3 - 2e-5 <= d <= 4.0 - 1e-3)
+    True
+    """
+    return pocket.buffer(-(r - tol), 256)
 
 
 def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds, arm_min_area_mm2,
@@ -360,13 +384,16 @@ def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, 
     E = c + np.array([0.5 * hole_d - r, 0.0])       # touches the hole wall
     segs = [(subdivide(np.vstack([c, E]), resolution_mm), "link", "centre")]
     laps, stop_share = 0, None
+    guard = period_guard(pocket, r)          # arms' periods (checked whole): within 1 um of the walls
+    lap_guard = period_guard(pocket, r, 0.5 * PERIOD_TOL_MM).union(allowed)   # laps' chords (a margin)
     domain = pocket.buffer(-2 * resolution_mm)   # 2 rows: wall slivers must not join the cleared region
     for _ in range(int(max_laps)):
         try:
-            P = centre_lap(stock, domain, tuple(c), E, r, th, allowed, dt, resolution_mm)
+            P, inserted = centre_lap(stock, domain, tuple(c), E, r, th, allowed, dt, resolution_mm, lap_guard)
         except ValueError:
             break
-        on_wall = shapely.distance(shapely.points(P), allowed.exterior) < 1e-6
+        # the share of the lap's points (every step_mm; not the chords' inserted ones) on the wall
+        on_wall = shapely.distance(shapely.points(P[~inserted]), allowed.exterior) < 1e-6
         if on_wall.mean() > max_wall_share:
             stop_share = float(on_wall.mean())
             break               # this lap would run along the final contour: the arms take over
@@ -397,7 +424,7 @@ def _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, 
             loc_mat = _polygonal(_rot(material, -ang, c))
             loc_all = _polygonal(_rot(world_mat, -ang, c))
             loc_allowed = _rot(allowed, -ang, c)
-            loc_guard = loc_allowed.buffer(PERIOD_TOL_MM)
+            loc_guard = _rot(guard, -ang, c)
             loc = Stock.from_polygon(loc_mat, resolution_mm)          # this arm's front
             full = Stock.from_polygon(loc_all, resolution_mm)         # all material: engagement
             arm_segs, last = [], None
