@@ -319,6 +319,25 @@ def test_a_hybrid_arm_ends_where_its_period_would_cross_an_inner_corner():
         planners.plan(job, "hybrid", 0.2)
 
 
+def test_a_hybrid_arm_advances_along_its_leg():
+    """An L whose legs (10 and 15 mm wide) do not pass through the start centre (the largest
+    inscribed circle, in the corner square): seen from the centre, the long leg lies at -10 deg; its
+    periods advanced along that ray, met the leg's wall after 42 of them and left 9.8 mm^2 of a
+    510.7 mm^2 level (limit 6.1). They now advance along the leg's long axis (``arm_axis``): the level
+    is cleared within the limit and the tool stays within the wall-gouge tolerance."""
+    from cnclab.toolpath import coverage, planners
+
+    L = [[0, 0], [32, 0], [32, 10], [15, 10], [15, 23], [0, 23]]
+    job = pk.Job.from_dict(dict(TOOL, tool_diameter=4.0, theta_deg=47.0, a_p=1.5, polygon=L))
+    hp = pk.hybrid_path(job, 0.1, max_wall_share=0.5)
+    leg = min(hp.info["arms"], key=lambda a: abs(a["angle_deg"] + 10))
+    # the long axis of what the laps left of that arm (the leg and a rest of the corner square: 6.3 deg)
+    assert leg["angle_deg"] == pytest.approx(-10, abs=2) and abs(leg["axis_deg"]) < 8
+    rep = coverage.uncut_report(hp, job)
+    assert not rep["over"] and rep["uncut_mm2"][0] < 0.5 * rep["limit_mm2"][0], rep
+    assert coverage.wall_gouge(hp, job)[0] <= planners.GOUGE_TOL_MM
+
+
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.tuples(st.floats(-9, 9), st.floats(-9, 9)), min_size=2, max_size=30),
        st.floats(1.0, 6.0), st.sampled_from([0.5e-3, 1e-3]))
