@@ -80,3 +80,23 @@ def test_a_strip_too_narrow_for_the_bound_is_refused_with_its_place_and_the_reme
     assert tp.info["uncut"]["over"] == []
     ev = evaluate(tp, _slot_job(), H)
     assert ev.plunges_into_material == 0 and ev.rapids_into_material == 0
+
+
+def test_a_slot_narrower_than_the_tool_centre_lap_gets_its_walls_finished():
+    """data/pockets/long_slot.json (7.2 mm wide, D6: a tool-centre strip 1.2 mm wide, narrower than
+    the tool, so no place on its ring is free of material): the passes left a skin of 30-150 um on
+    both walls (9.3 mm^2 at r / 30 by the evaluator) and the finish skipped the strip's lap. The
+    tool stands in the strip after its passes: it now steps onto the ring at the cutting feed (the
+    step's engagement within the finish target) and laps it. What is left is under 1.5 mm^2 by
+    ``plan``'s count and the evaluator's, the engagement bound and safety kept."""
+    from cnclab.paths import data_path
+    from cnclab.toolpath.job import load_job
+
+    job = load_job(data_path("pockets", "long_slot.json"))
+    p = planners.plan(job, "adaptive", 0.1)                       # no UncutError: within the limit
+    assert p.info["uncut"]["uncut_mm2"][0] < 1.5
+    assert any(t == "finish: onto a skin" for t in p.tag)
+    ev = evaluate(p, job, job.tool_radius / 30)
+    assert ev.uncut_beyond_unreachable_mm2 < 1.5
+    assert ev.engagement_max_deg <= job.theta_deg + 10 and ev.plunges_into_material == 0
+    assert ev.rapids_into_material == 0 and ev.wall_gouge_max_mm <= planners.GOUGE_TOL_MM

@@ -5,6 +5,7 @@ any planning, naming the key and the number it would need."""
 import dataclasses
 import json
 
+import numpy as np
 import pytest
 from shapely.geometry import MultiPolygon, Point, box
 
@@ -63,11 +64,47 @@ def test_uncut_per_region_and_level():
     assert rep["over"] == [1] and rep["levels"] == [-2.0, -4.0]
 
 
+@pytest.mark.parametrize("cut_mm", [0.0, 0.4, 0.8])
+def test_thin_rests_count_and_a_micrometre_off_the_wall_does_not(cut_mm):
+    """A 30 x 20 box, r 3: a zig-zag over the middle and a finishing lap 1 um inside the tool-centre
+    rectangle that takes each corner by a chord ``cut_mm`` long on each side (what the adaptive lap
+    does at a square corner to hold theta). The report equals the exact area the swept discs leave
+    (shapely, discs of r + 2 um: a rest thinner than a chip is no rest) within the pixels' half
+    width along the rests' outline: 0 without chords (the 1 um skin along the walls is not uncut),
+    the four crescents with them (0.28 and 0.57 mm thick: the 3 x 3 opening of the pixels, before,
+    dropped the thinner ones and reported 0.0)."""
+    from shapely.geometry import LineString
+    from shapely.ops import unary_union
+
+    r, e, c = 3.0, 1e-3, cut_mm
+    job = Job(box(0, 0, 30, 20), Tool(2 * r), 60.0, 2.0, v_c=100, f_z=0.05)
+    z = -2.0
+    zz = [[x, y, z] for k, y in enumerate(np.arange(5.0, 16.0, 2.0)) for x in ((5, 25) if k % 2 == 0 else (25, 5))]
+    a, b = r + e, (27 - e, 17 - e)
+    lap = [[a + c, a], [b[0] - c, a], [b[0], a + c], [b[0], b[1] - c], [b[0] - c, b[1]], [a + c, b[1]],
+           [a, b[1] - c], [a, a + c], [a + c, a]]
+    lap = [q for i, q in enumerate(lap) if i == 0 or q != lap[i - 1]]
+    pts = [[5, 5, 5]] + zz + [[x, y, z] for x, y in lap] + [[a + c, a, 5]]
+    kinds = ["rapid"] + ["cut"] * (len(zz) + len(lap)) + ["retract"]
+    rep = coverage.uncut_report(ToolPath.build(pts, kind=kinds, feed=300), job)
+    reach = job.polygon.buffer(-r, quad_segs=256).buffer(r, quad_segs=256)
+    swept = unary_union([LineString([q[:2] for q in zz]).buffer(r + 2e-3, 256),
+                         LineString(lap).buffer(r + 2e-3, 256)])
+    rest = reach.difference(swept)
+    exact = sum(g.area for g in getattr(rest, "geoms", [rest]) if g.area > 1e-6)
+    h = r / 25
+    assert rep["uncut_mm2"][0] == pytest.approx(exact, abs=0.05 + 0.5 * h * rest.length), (rep, exact)
+    if c == 0:
+        assert rep["uncut_mm2"][0] < 0.05
+    else:
+        assert exact > 0.1 and rep["uncut_mm2"][0] > 0.5 * exact
+
+
 def test_uncut_agrees_with_the_evaluator_on_a_real_plan():
     """The geometric count and the dixel evaluator's ``uncut_beyond_unreachable_mm2`` (dixel
     0.05 mm) agree within 2 mm^2 + 2 % on a thin L the default planner cannot fully clear at theta
     (the two measure the same area; they differ by the raster fringes: half a pixel / dixel along
-    ~200 mm of boundary and the opening that drops strips narrower than r / 12)."""
+    the rests' outline)."""
     from shapely.ops import unary_union
 
     P = unary_union([box(0, 0, 50, 7), box(0, 0, 7, 40)])

@@ -7,10 +7,14 @@ morphological opening by the disc of radius r, shapely) is rasterised (pixel sto
 :mod:`cnclab.simulation.pixel`, pixel h = r / 25, pixel centres inside) and the tool disc is stamped
 every r / 10 along every move whose two ends are at that z (arcs sampled with chords of at most
 r / 10): the stamped discs' edge is within (r/10)^2 / (8 r) = r / 800 (a thirtieth of a pixel) of the
-swept band's. Pixels left are
-opened by a 3 x 3 square (pieces narrower than about 2 h = r / 12 are dropped: a pass that follows a
-wall leaves a one-pixel fringe of the rasterised opening). Uncut areas are summed over the levels
-(as :func:`cnclab.toolpath.evaluate.evaluate` sums them). Units: mm, mm^2.
+swept band's. A pixel left counts when its centre is farther than r + :data:`CONTACT_MM` (2 um)
+from every move at z, measured exactly (:class:`cnclab.simulation.vector.SweptDiscs`): the stamps'
+scallops and a pass that follows a wall a micrometre off leave nothing, a rest of any thickness
+above that counts (until 2026-11-28 the pixels were opened by a 3 x 3 square instead, which also
+dropped real rests up to about 2 h = r / 12 thick: the 0.18 mm crescents a finishing lap leaves
+when it takes a square corner by its chord, 0.8 mm^2 a corner on a 64 x 46 L, D8, reported as 0.0
+where ``cnclab analyze`` read 11.9 mm^2). Uncut areas are summed over the levels (as
+:func:`cnclab.toolpath.evaluate.evaluate` sums them). Units: mm, mm^2.
 
 >>> from shapely.geometry import box
 >>> from cnclab.toolpath.path import Tool, ToolPath
@@ -27,9 +31,8 @@ import math
 
 import numpy as np
 import shapely
-from scipy.ndimage import binary_opening
-
 from ..simulation.pixel import Stock
+from ..simulation.vector import SweptDiscs
 
 from .job import Job
 from .path import ToolPath
@@ -41,6 +44,9 @@ __all__ = ["UNCUT_ABS_MM2", "UNCUT_REL", "uncut_report", "uncut_limit_mm2", "wal
 #: left along a pass is far below this; a skipped neck, finger or annulus is far above it)
 UNCUT_ABS_MM2 = 1.0
 UNCUT_REL = 0.01
+#: mm: a pixel whose centre is within r + this of a swept segment is cut (a rest thinner than the chip
+#: the engagement counts as contact, :func:`cnclab.simulation.vector.vector_engagement`'s 2 um)
+CONTACT_MM = 2e-3
 
 
 def uncut_limit_mm2(reach_area_mm2: float) -> float:
@@ -49,25 +55,32 @@ def uncut_limit_mm2(reach_area_mm2: float) -> float:
     return UNCUT_ABS_MM2 + UNCUT_REL * float(reach_area_mm2)
 
 
-def _centres(path: ToolPath, z: float, r: float, step: float) -> np.ndarray:
-    """Tool centres (x, y) every ``step`` mm of arc length along each run of moves whose two ends
-    are at ``z`` (and each run's last point; single points at z are kept)."""
+def _runs(path: ToolPath, z: float, r: float) -> list:
+    """The (m, 2) polylines (mm) of the runs of moves whose two ends are at ``z`` (arcs by chords of
+    at most r / 10), and single points at z as (1, 2) arrays."""
     P, _ = path.polyline(max(r / 10.0, 1e-3))
     at = np.abs(P[:, 2] - z) <= 1e-6
     seg = at[1:] & at[:-1]
-    pts = []
     edges = np.flatnonzero(np.diff(np.r_[0, seg.astype(int), 0]))
-    for i0, i1 in zip(edges[0::2], edges[1::2]):          # segments i0..i1-1: points i0..i1
-        Q = P[i0:i1 + 1, :2]
+    runs = [P[i0:i1 + 1, :2] for i0, i1 in zip(edges[0::2], edges[1::2])]      # segments i0..i1-1
+    lone = at & ~np.r_[seg, False] & ~np.r_[False, seg]
+    return runs + [p[None, :] for p in P[lone, :2]]
+
+
+def _centres(runs: list, step: float) -> np.ndarray:
+    """Tool centres (x, y) every ``step`` mm of arc length along each run (and its last point)."""
+    pts = [np.zeros((0, 2))]
+    for Q in runs:
         sc = np.r_[0.0, np.cumsum(np.hypot(*np.diff(Q, axis=0).T))]
         t = np.r_[np.arange(0.0, sc[-1], step), sc[-1]]
         pts.append(np.c_[np.interp(t, sc, Q[:, 0]), np.interp(t, sc, Q[:, 1])])
-    lone = at & ~np.r_[seg, False] & ~np.r_[False, seg]
-    pts.append(P[lone, :2])
     return np.vstack(pts)
 
 
-def _left_mm2(region, centres, r: float) -> float:
+def _left_mm2(region, centres, r: float, swept: SweptDiscs) -> float:
+    """Area (mm^2) of ``region`` no disc of radius ``r`` along ``swept`` reaches: the pixels the discs
+    at ``centres`` leave, each kept only when its centre is farther than r + :data:`CONTACT_MM` from
+    every swept segment (exact: the stamps' scallops and a rest thinner than a chip are not uncut)."""
     if region.is_empty:
         return 0.0
     h = r / 25.0
@@ -75,7 +88,11 @@ def _left_mm2(region, centres, r: float) -> float:
     h = max(h, math.sqrt((x1 - x0) * (y1 - y0) / 2e7))          # at most ~2e7 pixels
     st = Stock.from_polygon(region, h)
     st.cut_disks_pixels(centres, r)
-    return float(np.count_nonzero(binary_opening(st.grid, np.ones((3, 3), bool)))) * h * h
+    j, i = np.nonzero(st.grid)
+    if not len(j) or not len(swept):
+        return float(len(j)) * h * h
+    xy = np.c_[st.x0 + (i + 0.5) * h, st.y0 + (j + 0.5) * h]
+    return float(np.count_nonzero(swept.distance(xy) > r + CONTACT_MM)) * h * h
 
 
 def uncut_report(path: ToolPath, job: Job) -> dict:
@@ -89,11 +106,15 @@ def uncut_report(path: ToolPath, job: Job) -> dict:
     levels = job.levels()
     uncut = np.zeros(len(regions))
     for z in levels:
-        c = _centres(path, z, r, r / 10.0)
+        runs = _runs(path, z, r)
+        c = _centres(runs, r / 10.0)
+        swept = SweptDiscs(r)
+        for Q in runs:
+            swept.add(Q)
         for k, R in enumerate(reach):
             x0, y0, x1, y1 = R.bounds if not R.is_empty else (0, 0, 0, 0)
             near = c[(c[:, 0] > x0 - r) & (c[:, 0] < x1 + r) & (c[:, 1] > y0 - r) & (c[:, 1] < y1 + r)]
-            uncut[k] += _left_mm2(R, near, r)
+            uncut[k] += _left_mm2(R, near, r, swept)
     # the limit holds per level: the sum over n levels may reach n times it (a deep pocket repeats
     # the one-level plan; the sum of three levels of a plan accepted at one level is no worse)
     lim = [uncut_limit_mm2(R.area) * len(levels) for R in reach]

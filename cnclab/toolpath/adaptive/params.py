@@ -58,7 +58,8 @@ class AdaptiveParams:
     #: at the link feed (dwg_many_holes_inner, D 4: theta + 71.7 deg on a link after a 0.06 mm helix,
     #: + 49.4 after a 0.1 mm one; fuzz_random_pockets --seed 1, 100 pockets: 2 above the bound, theta +
     #: 24.1 on a link, now 0; "free" as for every link end: D >= r_free). Left uncut and stated
-    #: (finish._leave_part); ``plan`` measures it
+    #: (finish._leave_part); ``plan`` measures it. Unless the tool stands in the part and the step onto
+    #: its ring stays within the finish target (a skin along the walls: finish._skin_step)
     lap_skip_inscribed_frac: float = 1.0
     #: deg: the finish is held at theta + finish_margin_deg (the simulator measures up to ~3 deg more
     #: than the planning stock on thin wall rests; theta + 10 is the bound). Was 6: above theta + 5 by
