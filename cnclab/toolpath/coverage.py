@@ -87,12 +87,19 @@ def _left_mm2(region, centres, r: float, swept: SweptDiscs) -> float:
     x0, y0, x1, y1 = region.bounds
     h = max(h, math.sqrt((x1 - x0) * (y1 - y0) / 2e7))          # at most ~2e7 pixels
     st = Stock.from_polygon(region, h)
+    far = st.copy()
     st.cut_disks_pixels(centres, r)
-    j, i = np.nonzero(st.grid)
-    if not len(j) or not len(swept):
-        return float(len(j)) * h * h
-    xy = np.c_[st.x0 + (i + 0.5) * h, st.y0 + (j + 0.5) * h]
-    return float(np.count_nonzero(swept.distance(xy) > r + CONTACT_MM)) * h * h
+    # a pixel beyond r + 2 h of every stamp is beyond r + 2 h - r / 20 > r + CONTACT_MM of the moves
+    # (stamps every r / 10 along them, h >= r / 25): uncut without asking; only the ring between asked
+    far.cut_disks_pixels(centres, r + 2.0 * h)
+    j, i = np.nonzero(st.grid & ~far.grid)
+    n = float(np.count_nonzero(far.grid))
+    if len(j) and len(swept):
+        xy = np.c_[st.x0 + (i + 0.5) * h, st.y0 + (j + 0.5) * h]
+        n += float(np.count_nonzero(swept.distance(xy) > r + CONTACT_MM))
+    else:
+        n += len(j)
+    return n * h * h
 
 
 def uncut_report(path: ToolPath, job: Job) -> dict:
