@@ -10,6 +10,8 @@ the corpus); now the bay is left, named in ``info["left_parts"]`` and the progra
 ``plan`` measures it as uncut: above the limit (:func:`cnclab.toolpath.coverage.uncut_limit_mm2`,
 1 mm^2 + 1 % of the reachable area) an :class:`UncutError` unless ``allow_uncut``. The rest of the
 pocket is planned safely (0 plunges or rapids into material, scored by the evaluator at r / 30)."""
+import dataclasses
+
 import pytest
 from shapely.geometry import box
 
@@ -100,3 +102,17 @@ def test_a_slot_narrower_than_the_tool_centre_lap_gets_its_walls_finished():
     assert ev.uncut_beyond_unreachable_mm2 < 1.5
     assert ev.engagement_max_deg <= job.theta_deg + 10 and ev.plunges_into_material == 0
     assert ev.rapids_into_material == 0 and ev.wall_gouge_max_mm <= planners.GOUGE_TOL_MM
+
+
+def test_a_level_with_skin_laps_is_planned_again_without_them_first():
+    """A level beyond the bounds that lapped sliver parts from a skin step is planned again first
+    without those laps, then with every retry of that plan (dwg_many_holes_inner: with them a link
+    later in the level read theta + 43.5 deg; the plan without them, retried, theta + 8.0); a level
+    without skin laps keeps its retries."""
+    prm = adaptive.AdaptiveParams()
+    plain = planners._retries(prm)
+    assert all(p.finish_skin_step for p in plain)
+    again = planners._retries(prm, skin_steps=2)
+    assert again[0] == adaptive.AdaptiveParams(finish_skin_step=False)
+    assert again[1:] == planners._retries(again[0]) and not any(p.finish_skin_step for p in again)
+    assert [dataclasses.replace(p, finish_skin_step=True) for p in again[1:]] == plain

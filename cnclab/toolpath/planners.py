@@ -345,7 +345,7 @@ def _adaptive(job: Job, resolution_mm: float, written=None, **options) -> ToolPa
         return path
     shown = form(path, job)                        # what the check measures: the path as written
     chk, *seen = _engagement_eval(shown, job, prm, None)     # seen: its evaluation, kept for _refined_check
-    for again_prm in _retries(prm):
+    for again_prm in _retries(prm, path.info.get("skin_steps", 0)):
         if _within_bounds(chk, job, prm):
             break
         again = adaptive.plan_job(job, resolution_mm=h, params=again_prm, **options)
@@ -418,11 +418,16 @@ def _vector_verdict(out: dict, evs: list, job: Job, prm) -> dict:
     return out
 
 
-def _retries(prm):
-    """The re-plans of a level beyond the engagement bounds, in order: the tighter sliver guard, the
+def _retries(prm, skin_steps: int = 0):
+    """The re-plans of a level beyond the engagement bounds, in order: (when the level lapped
+    ``skin_steps`` sliver parts from a skin step) the level without them, the tighter sliver guard, the
     nearest pass starts, both, then the narrow regions' trochoids checked period by period
     (``retry_narrow_check_deg``), last the tighter guard with the finishing laps held closer to theta
     (``retry_finish_margin_deg``; :class:`cnclab.toolpath.adaptive.AdaptiveParams`)."""
+    if prm.finish_skin_step and skin_steps:
+        # first the level without skin laps, then every retry of that one (the plans made before them)
+        plain = dataclasses.replace(prm, finish_skin_step=False)
+        return [plain] + _retries(plain)
     guard = dataclasses.replace(prm, guard_deg=prm.retry_guard_deg)
     out = [guard, dataclasses.replace(prm, upstream_start_frac=0.0), dataclasses.replace(guard, upstream_start_frac=0.0)]
     if prm.narrow_check_margin_deg is None:

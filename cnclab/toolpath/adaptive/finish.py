@@ -75,7 +75,8 @@ def _laps(lv, part):
                     # helix smaller than its ring): the link to the ring and the lap would cut its rest at
                     # the link feed, far beyond the bound (AdaptiveParams.lap_skip_inscribed_frac); unless
                     # the tool stands in the part and its rest there is a skin (_skin_step)
-                    if not _skin_step(lv, part, Rl[0]):
+                    undo = (lv.b.mark(), lv.g.snapshot(), lv.cur)
+                    if not (lv.prm.finish_skin_step and _skin_step(lv, part, Rl[0])):
                         _leave_part(lv, part)
                         return
                     stepped = True
@@ -114,7 +115,18 @@ def _laps(lv, part):
             if resume is not None:
                 L_ring = min(L_ring, float(sl[(origin - k0) % len(Rs)]) + lv.prm.finish_run_on_frac * lv.r)
             P = _run_lap(lv, wall, Rl, L_ring)
-            if float(np.hypot(*np.diff(P, axis=0).T).sum()) < L_ring - lv.prm.finish_run_on_frac * lv.r:
+            short = float(np.hypot(*np.diff(P, axis=0).T).sum()) < L_ring - lv.prm.finish_run_on_frac * lv.r
+            if stepped and short:
+                # a skin lap that stopped short (a thicker rest on the ring): step and lap taken back,
+                # the part left as without the step (its resumed laps would link past that rest)
+                lv.b.rollback(undo[0])
+                lv.g.restore(undo[1])
+                lv.cur = undo[2]
+                _leave_part(lv, part)
+                return
+            if stepped:
+                lv.stats["skin_steps"] = lv.stats.get("skin_steps", 0) + 1
+            if short:
                 # the lap stopped short (the control found no way on at the finish target): the next
                 # one starts past where it stopped, the ring's rest not left for want of a thick rest
                 resume, segs = int(np.argmin(np.hypot(Rs[:, 0] - P[-1, 0], Rs[:, 1] - P[-1, 1]))), segs + 1
@@ -127,10 +139,11 @@ def _laps(lv, part):
 def _skin_step(lv, part, xy) -> bool:
     """The start of the lap of a part narrower than the tool whose ring has no place free of material:
     when the tool stands at depth inside the part (the passes that cleared it ended there) and the
-    straight move from it to the ring point ``xy`` (mm) stays in the part, that move at the cutting
-    feed, if its engagement replayed on the planning stock stays within the finish target (the rest
-    there is a skin the passes left along the walls: a 7.2 mm slot, D6, kept 30-150 um on both walls,
-    9.3 mm^2, for want of this step). Emitted and cut into the stock: True; else nothing: False."""
+    straight move from it to the ring point ``xy`` (mm) stays in the tool-centre region, that move at
+    the cutting feed, if its engagement replayed on the planning stock stays within the finish target
+    (the rest there is a skin the passes left along the walls: a 7.2 mm slot, D6, kept 30-150 um on
+    both walls, 9.3 mm^2, for want of this step). Emitted and cut into the stock: True; else nothing:
+    False. The caller takes the step and the lap back if the lap stops short (:func:`_laps`)."""
     if lv.cur is None or not shapely.contains_xy(part.buffer(2.0 * lv.h), *lv.cur):
         return False
     if math.hypot(xy[0] - lv.cur[0], xy[1] - lv.cur[1]) <= 1e-9:

@@ -61,6 +61,11 @@ class AdaptiveParams:
     #: (finish._leave_part); ``plan`` measures it. Unless the tool stands in the part and the step onto
     #: its ring stays within the finish target (a skin along the walls: finish._skin_step)
     lap_skip_inscribed_frac: float = 1.0
+    #: whether such a part gets its lap from where the tool stands when the step onto its ring stays
+    #: within the finish target (finish._skin_step; ``info["skin_steps"]`` counts them). ``plan`` plans
+    #: a level beyond the engagement bounds again without them first (dwg_many_holes_inner: with them a
+    #: link later in the level read theta + 43.5 deg, without them theta + 8.0)
+    finish_skin_step: bool = True
     #: deg: the finish is held at theta + finish_margin_deg (the simulator measures up to ~3 deg more
     #: than the planning stock on thin wall rests; theta + 10 is the bound). Was 6: above theta + 5 by
     #: design, the laps alone put 2.0 % (spiral_0) and 1.27 % (rectilinear_0) of the cutting length
