@@ -276,10 +276,14 @@ def test_tapered_slot_is_left_and_plan_says_so():
     assert s2.plunges_into_material == 0 and s2.rapids_into_material == 0 and _wall_gouge(slotted, TAPERED) <= 1e-3
     assert s2.uncut_beyond_unreachable_mm2 <= 0.01 * TAPERED.area + 1.0 + _corner_allowance_mm2(TAPERED)   # 1.0 of 3.3
     assert slotted.info["slots"] >= 1 and any("slotting at up to" in n for n in slotted.info["notes"])
-    assert "uncut" in plan(job, resolution_mm=H, params=AdaptiveParams(slot_narrow=True)).info
+    # plan() with the slots leaves a fraction of what it leaves without them (1.5 against 4.8 mm^2 by
+    # its count, whose limit here is 1.3: since 2026-11-28 it counts the thin rest the slots leave
+    # along the walls, which a pixel opening used to drop)
+    sl = plan(job, resolution_mm=H, params=AdaptiveParams(slot_narrow=True), allow_uncut=True)
+    assert sl.info["uncut"]["uncut_mm2"][0] < 0.5 * ok.info["uncut"]["uncut_mm2"][0]
     # the report says what the evaluator measures on that plan (plan() plans at r/60 = 0.025 mm, a
     # finer pixel than the 0.05 mm above: it gets further into the strip, 7.3 against 11.6 mm^2);
-    # 0.5 mm^2: the report's r/25 pixels and dropped fringes against the 0.05 mm dixels
+    # 0.5 mm^2: the report's r/25 pixels against the 0.05 mm dixels
     left = evaluate(ok, job, H).uncut_beyond_unreachable_mm2
     assert ok.info["uncut"]["uncut_mm2"][0] == pytest.approx(left, abs=0.5)
     assert ok.info["uncut"]["uncut_mm2"][0] > ok.info["uncut"]["limit_mm2"][0]
