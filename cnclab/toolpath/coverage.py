@@ -55,10 +55,9 @@ def uncut_limit_mm2(reach_area_mm2: float) -> float:
     return UNCUT_ABS_MM2 + UNCUT_REL * float(reach_area_mm2)
 
 
-def _runs(path: ToolPath, z: float, r: float) -> list:
-    """The (m, 2) polylines (mm) of the runs of moves whose two ends are at ``z`` (arcs by chords of
-    at most r / 10), and single points at z as (1, 2) arrays."""
-    P, _ = path.polyline(max(r / 10.0, 1e-3))
+def _runs(P: np.ndarray, z: float) -> list:
+    """The (m, 2) polylines (mm) of the runs of ``P`` ((n, 3) mm, the path's polyline) whose two ends
+    are at ``z``, and single points at z as (1, 2) arrays."""
     at = np.abs(P[:, 2] - z) <= 1e-6
     seg = at[1:] & at[:-1]
     edges = np.flatnonzero(np.diff(np.r_[0, seg.astype(int), 0]))
@@ -112,8 +111,9 @@ def uncut_report(path: ToolPath, job: Job) -> dict:
     reach = [g.buffer(-r, quad_segs=64).buffer(r, quad_segs=64) for g in regions]
     levels = job.levels()
     uncut = np.zeros(len(regions))
+    P, _ = path.polyline(max(r / 10.0, 1e-3))          # arcs by chords of at most r / 10
     for z in levels:
-        runs = _runs(path, z, r)
+        runs = _runs(P, z)
         c = _centres(runs, r / 10.0)
         swept = SweptDiscs(r)
         for Q in runs:

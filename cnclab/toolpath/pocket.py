@@ -486,13 +486,9 @@ def arm_axis(material, center, ray_deg: float, tool_radius: float) -> float:
     >>> arm_axis(box(-5, 10, 5, 14), (0, 0), 90.0, 3.0)      # wider than long across the ray: the ray
     90.0
     """
-    x0, y0, x1, y1 = material.bounds
-    h = tool_radius / 6.0
-    X, Y = np.meshgrid(np.arange(x0 + 0.5 * h, x1, h), np.arange(y0 + 0.5 * h, y1, h))
-    m = shapely.contains_xy(material, X, Y)
-    if m.sum() < 20:
+    P = _area_samples(material, tool_radius / 6.0)
+    if len(P) < 20:
         return float(ray_deg)
-    P = np.c_[X[m], Y[m]]
     w, V = np.linalg.eigh(np.cov((P - P.mean(axis=0)).T))
     if not w[0] > 0 or math.sqrt(w[1] / w[0]) < ARM_AXIS_ELONGATION:
         return float(ray_deg)
@@ -552,6 +548,15 @@ def arm_regions(material, center, tool_radius, min_area_mm2=1.0, open_mm=None):
     return out
 
 
+def _area_samples(geom, h: float) -> np.ndarray:
+    """(n, 2) mm: the centres of an ``h``-mm grid over ``geom``'s bounds that lie inside it (the area
+    samples of :func:`_angular_lobes` and :func:`arm_axis`)."""
+    x0, y0, x1, y1 = geom.bounds
+    X, Y = np.meshgrid(np.arange(x0 + 0.5 * h, x1, h), np.arange(y0 + 0.5 * h, y1, h))
+    m = shapely.contains_xy(geom, X, Y)
+    return np.c_[X[m], Y[m]]
+
+
 def _angular_lobes(part, center, tool_radius, bin_deg=5.0, valley=0.35, min_share=0.05):
     """Directions (deg) and areas (mm^2) of the lobes of ``part`` seen from ``center``.
 
@@ -562,11 +567,8 @@ def _angular_lobes(part, center, tool_radius, bin_deg=5.0, valley=0.35, min_shar
     area join their neighbour. Returns [(direction deg, area mm^2)], one item for a single lobe.
     """
     c = np.asarray(center, float)
-    x0, y0, x1, y1 = part.bounds
-    h = tool_radius / 6.0
-    X, Y = np.meshgrid(np.arange(x0 + 0.5 * h, x1, h), np.arange(y0 + 0.5 * h, y1, h))
-    m = shapely.contains_xy(part, X, Y)
-    a = np.degrees(np.arctan2(Y[m] - c[1], X[m] - c[0]))
+    S = _area_samples(part, tool_radius / 6.0)
+    a = np.degrees(np.arctan2(S[:, 1] - c[1], S[:, 0] - c[0]))
     whole = [(math.degrees(math.atan2(part.centroid.y - c[1], part.centroid.x - c[0])), part.area)]
     if a.size < 20:
         return whole

@@ -66,7 +66,7 @@ def _laps(lv, part):
             origin = k0 if resume is None else origin    # a resumed lap runs on only to where its lap began
             # free: as for every link end, a coarse cell at least r_free (r + the cell half-diagonal
             # margin) from material; D at the cell of a point is not the point's own distance
-            stepped = False
+            undo = None          # a skin step's (builder mark, stock snapshot, tool point): _skin_step
             if dm[k0] < lv.r_free and lap == 0:
                 if sliver is None:
                     sliver = shapely.maximum_inscribed_circle(part).length < lv.prm.lap_skip_inscribed_frac * lv.r
@@ -75,11 +75,11 @@ def _laps(lv, part):
                     # helix smaller than its ring): the link to the ring and the lap would cut its rest at
                     # the link feed, far beyond the bound (AdaptiveParams.lap_skip_inscribed_frac); unless
                     # the tool stands in the part and its rest there is a skin (_skin_step)
-                    undo = (lv.b.mark(), lv.g.snapshot(), lv.cur)
-                    if not (lv.prm.finish_skin_step and _skin_step(lv, part, Rl[0])):
+                    undo = _skin_step(lv, part, Rl[0]) if lv.prm.finish_skin_step else None
+                    if undo is None:
                         _leave_part(lv, part)
                         return
-                    stepped = True
+            stepped = undo is not None
             if stepped:
                 e = lv.g.cell(*lv.cur)
             elif lv.cur is not None:
@@ -136,29 +136,30 @@ def _laps(lv, part):
             _peel(lv, wall, Rs)
 
 
-def _skin_step(lv, part, xy) -> bool:
+def _skin_step(lv, part, xy):
     """The start of the lap of a part narrower than the tool whose ring has no place free of material:
     when the tool stands at depth inside the part (the passes that cleared it ended there) and the
     straight move from it to the ring point ``xy`` (mm) stays in the tool-centre region, that move at
     the cutting feed, if its engagement replayed on the planning stock stays within the finish target
     (the rest there is a skin the passes left along the walls: a 7.2 mm slot, D6, kept 30-150 um on
-    both walls, 9.3 mm^2, for want of this step). Emitted and cut into the stock: True; else nothing:
-    False. The caller takes the step and the lap back if the lap stops short (:func:`_laps`)."""
+    both walls, 9.3 mm^2, for want of this step). Emitted and cut into the stock: its undo (builder
+    mark, stock snapshot and tool point before it), with which the caller takes the step and the lap
+    back if the lap stops short (:func:`_laps`); else nothing: None."""
     if lv.cur is None or not shapely.contains_xy(part.buffer(2.0 * lv.h), *lv.cur):
-        return False
+        return None
+    undo = (lv.b.mark(), lv.g.snapshot(), lv.cur)
     if math.hypot(xy[0] - lv.cur[0], xy[1] - lv.cur[1]) <= 1e-9:
-        return True
+        return undo
     if not lv.allowed.buffer(1e-6).contains(shapely.LineString([lv.cur, xy])):
-        return False
+        return None
     P = resample_polyline(np.array([lv.cur, xy], float), lv.ds)
-    snap = lv.g.snapshot()
     E = lv.g.replay(np.ascontiguousarray(P), lv.lag, lv.n_samp)
     if len(E) and float(np.max(E)) > lv.target_finish:
-        lv.g.restore(snap)
-        return False
+        lv.g.restore(undo[1])
+        return None
     lv.b.cut(P[1:], lv.feed_mm_min, z=lv.z, tag="finish: onto a skin")
     lv.cur = (float(xy[0]), float(xy[1]))
-    return True
+    return undo
 
 
 def _step_onto(lv, xy):
