@@ -15,6 +15,7 @@ def pytest_configure(config):
         import tempfile
 
         os.environ["CNCLAB_BUILD_DIR"] = tempfile.mkdtemp(prefix="cnclab-test-build-")
+        config._cnclab_made_build_dir = os.environ["CNCLAB_BUILD_DIR"]
     # Expensive results (trained MLP weights, ...) are content-addressed (cnclab.cache: keyed by the
     # code, data and arguments that produce them), so the tests share the repository's build/cache/
     # with `make reproduce`; CNCLAB_NO_CACHE=1 recomputes everything.
@@ -22,6 +23,21 @@ def pytest_configure(config):
         from pathlib import Path
 
         os.environ["CNCLAB_CACHE_DIR"] = str(Path(__file__).resolve().parents[1] / "build" / "cache")
+
+
+def pytest_unconfigure(config):
+    # The per-session build folder is removed when the session that made it ends (about 80 MB of
+    # figures and executed notebooks a run: left behind, every `make test` added one to /tmp).
+    # CNCLAB_KEEP_TEST_BUILD=1 keeps it (its path is printed) to look at what the tests wrote.
+    made = getattr(config, "_cnclab_made_build_dir", None)
+    if made is None or hasattr(config, "workerinput"):
+        return
+    if os.environ.get("CNCLAB_KEEP_TEST_BUILD"):
+        print(f"\ntest build folder kept: {made}")
+        return
+    import shutil
+
+    shutil.rmtree(made, ignore_errors=True)
 
 
 # Hypothesis: examples are derandomised (a fixed seed per test), so every run of `make test` -- CI or

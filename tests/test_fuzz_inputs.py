@@ -14,7 +14,8 @@ Every case must end in one of two outcomes:
 
 For every case the input files are unchanged (hash before/after) and no file is left in the output
 folder except complete outputs of a successful run. Outcome counts are printed at the end of the
-module (``pytest -s``) and written to ``$CNCLAB_BUILD_DIR/fuzz_outcomes.json``.
+module (``pytest -s``) and written to ``$CNCLAB_BUILD_DIR/fuzz_outcomes.json`` (the session's
+temporary build folder is removed at the end unless ``CNCLAB_KEEP_TEST_BUILD=1``).
 """
 from __future__ import annotations
 

@@ -250,6 +250,10 @@ class _Level:
             if route is None and virtual is not None:
                 self.go_to_virtual(banned)
                 return None, None
+            if virtual is None and (route is None or isinstance(route, str)):
+                # the search of the last line from the same point on the same stock: this answer
+                self._virtual = None
+                return (None if route is None else self.link_to(self.r_free, band_hi, banned, route=route)), None
             if route is not None and not isinstance(route, str):
                 goal = tuple(int(v) for v in route[-1])
                 if max_cells > 0:
