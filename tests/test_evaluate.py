@@ -136,3 +136,21 @@ def test_engagement_only_evaluation_skips_gouge_and_uncut_and_nothing_else():
     out = ToolPath.build([[5, 10, 5], [5, 10, -1], [5, -5, -1], [5, -5, 5]],
                          kind=["rapid", "plunge", "rapid", "retract"], feed=F)     # a G0 through the wall
     assert evaluate_engagement(out, job, H).rapids_into_material == 1
+
+
+@pytest.mark.parametrize("h", [0.05, 0.25, 0.5])
+def test_an_arc_round_an_island_corner_reads_no_gouge_at_any_resolution(h):
+    """A G2 of radius exactly r about the corner of a square island (the tool goes round it touching
+    it) gouges nothing. Sampled by arc length (the analyzer's sampling) on chords as long as the
+    step, it read up to step^2 / (8 r): 0.8 um at h = 0.25 and 1.6 um at 0.5 on r = 5 (session 21's
+    fuzz campaign: a written zig-zag program read as a 1.5 um gouge). Tolerance 0.2 um: the
+    samples' 0.1 um (evaluate.ARC_SAGITTA_MM) and the float noise."""
+    r = 5.0
+    island = box(40, 40, 50, 50)
+    job = Job(box(0, 0, 100, 100).difference(island), Tool(2 * r), 60.0, 1.0, v_c=100, f_z=0.05)
+    c = (50.0, 50.0)                                    # the island's top-right corner
+    p = ToolPath.build([[45, 55, 5], [45, 55, -1], [50, 55, -1], [55, 50, -1], [55, 45, -1]],
+                       kind=["rapid", "plunge", "cut", "cut", "cut"], feed=300,
+                       arc=[0, 0, 0, 2, 0], arc_center=[[np.nan] * 2] * 3 + [list(c), [np.nan] * 2])
+    ev = evaluate(p, job, h, sampling="arc_length")
+    assert ev.wall_gouge_max_mm < 2e-4 and ev.gouges == 0

@@ -103,6 +103,12 @@ UNITS = {"deg": "deg", "pct": "%", "mm2": "mm^2", "mm": "mm", "_s": "s", "nomina
 #: or more decimals (0.00127 mm); a G20 copy of a mm program then reports the same events.
 POSITION_TOL_MM = 0.002
 
+#: largest sagitta (mm) of the chords an arc is sampled on (:func:`resample_by_length`): the samples
+#: lie within 0.1 um of the arc, so a wall gouge read on them is the program's, not the chords' (chords
+#: as long as the step lie step^2 / (8 r) inside an arc of radius r: 1.3 um at r / 22 on r = 5 mm,
+#: read as a gouge round every convex wall corner an arc goes round)
+ARC_SAGITTA_MM = 1e-4
+
 #: columns of :attr:`Evaluation.events` (one row per event; ``move`` indexes the path's points,
 #: ``line`` the program line when the path came from a program (``path.info["line"]``), else -1)
 EVENT_COLUMNS = ("event", "move", "line", "x", "y", "z", "value", "unit")
@@ -632,7 +638,8 @@ def resample_by_length(path: ToolPath, step_mm: float, corner_tol: float | None 
     before and after it (arc length), so a line written as 1 or as 100 collinear blocks, or an arc as
     one G2 or as many chords, gives the same samples (up to the chords' sagitta) — while
     :meth:`ToolPath.resample` keeps every block end, so blocks shorter than the step would give
-    steps shorter than the dixel resolution. Arcs are first tessellated with chords <= ``step_mm``.
+    steps shorter than the dixel resolution. Arcs are first tessellated with chords <= ``step_mm``
+    and of sagitta <= :data:`ARC_SAGITTA_MM`.
     ``index`` is the move of each sample (the move whose span holds its arc length).
 
     >>> p = ToolPath.build([[0, 0, 0], [0.3, 0, 0], [0.31, 0, 0], [1, 0, 0]], feed=100)
@@ -644,7 +651,7 @@ def resample_by_length(path: ToolPath, step_mm: float, corner_tol: float | None 
     if not (math.isfinite(h) and h > 0):
         raise ValueError(f"step_mm must be a finite number > 0 mm, got {step_mm!r}")
     tol = 0.1 * h if corner_tol is None else float(corner_tol)
-    Q, qsrc = path.polyline(h)
+    Q, qsrc = path.polyline(h, max_sagitta=ARC_SAGITTA_MM)
     keep = np.r_[True, np.any(np.diff(Q, axis=0) != 0, axis=1)]
     kind = path.kind[qsrc]
     keep |= np.r_[True, kind[1:] != kind[:-1]]          # a kind change is kept even without length

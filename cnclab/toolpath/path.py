@@ -429,12 +429,20 @@ class ToolPath:
         out["total_s"] = float(t.sum())
         return out
 
-    def polyline(self, max_segment: float = 0.5):
+    def polyline(self, max_segment: float = 0.5, max_sagitta: float | None = None):
         """Sampled points: ``(points (M, 3) mm, move (M,) index of the move each point belongs to)``;
-        arcs are sampled with chords of at most ``max_segment`` mm, lines are kept as they are (use
-        :meth:`resample` to subdivide lines)."""
+        arcs are sampled with chords of at most ``max_segment`` mm (arc length) and, with
+        ``max_sagitta``, of at most that sagitta (mm: how far a chord's middle lies inside its arc);
+        lines are kept as they are (use :meth:`resample` to subdivide lines).
+
+        >>> p = ToolPath.build([[5, 0, 0], [-5, 0, 0]], feed=100, arc=[0, 3], arc_center=[[0, 0], [0, 0]])
+        >>> len(p.polyline(2.0)[0]), len(p.polyline(2.0, max_sagitta=1e-4)[0])   # r 5: chords 1.96 / 0.063 mm
+        (9, 250)
+        """
         if not max_segment > 0:
             raise ValueError(f"max_segment must be > 0 mm, got {max_segment}")
+        if max_sagitta is not None and not max_sagitta > 0:
+            raise ValueError(f"max_sagitta must be > 0 mm, got {max_sagitta}")
         arcs = np.flatnonzero(self.arc[1:] != 0) + 1
         if len(arcs) == 0:
             return self.xyz.copy(), np.arange(len(self))
@@ -442,6 +450,10 @@ class ToolPath:
         P0, P1 = self.xyz[arcs - 1], self.xyz[arcs]
         r, a0, sweep = _arcs_geometry(P0, P1, self.arc_center[arcs], self.arc[arcs] == 3)
         n = np.maximum(2, np.ceil(np.abs(sweep) * r / max_segment).astype(int) + 1)   # points per arc
+        if max_sagitta is not None:
+            # a chord of angle a on radius r lies r (1 - cos(a / 2)) inside its arc at its middle
+            step = 2.0 * np.arccos(np.clip(1.0 - max_sagitta / np.maximum(r, 1e-12), -1.0, 1.0))
+            n = np.maximum(n, np.ceil(np.abs(sweep) / np.maximum(step, 1e-9)).astype(int) + 1)
         count = np.ones(len(self), int)                  # output points per move: 1 per line, n - 1 per arc
         count[arcs] = n - 1
         idx = np.repeat(np.arange(len(self)), count)
