@@ -413,3 +413,52 @@ def test_excursions_and_units_are_flagged(tmp_path, job, capsys):
     inch_as_mm = _to_inch(_loops_program()).replace("G20", "G21")
     res = _run(tmp_path, job, inch_as_mm, "inch_as_mm.ngc")
     assert any("units look wrong: Its numbers look like inches without G20" in w for w in res["warnings"])
+
+
+def test_exact_uncut_does_not_depend_on_the_resolution(tmp_path):
+    """``uncut_exact_mm2`` (coverage.uncut_report, moves at or below each level) reads the same at two
+    resolutions of the analyzer on FreeCAD's two-region program, while the dixel count
+    ``uncut_beyond_unreachable_mm2`` (the rows' slivers along the walls, about proportional to the
+    resolution) comes down towards it (2.77, 2.45 against 2.175 mm^2 when written)."""
+    from cnclab.paths import REPO_ROOT
+
+    prog = REPO_ROOT / "tests" / "fixtures" / "freecad" / "two_regions.ngc"
+    job = REPO_ROOT / "data" / "pockets" / "two_regions.json"
+    got = {}
+    for h in (0.25, 0.1):
+        res = cli_analyze.analyze(prog, job, resolution_mm=h, outdir=tmp_path / f"o{h}", quiet=True)
+        tab = pd.read_csv(res["files"][0]).set_index("metric")["value"]
+        got[h] = (float(tab["uncut_exact_mm2"]), float(tab["uncut_beyond_unreachable_mm2"]))
+    assert got[0.25][0] == got[0.1][0] > 0
+    exact = got[0.1][0]
+    assert 0 <= got[0.1][1] - exact < got[0.25][1] - exact
+
+
+def test_a_deeper_move_clears_the_floor_above_it():
+    """uncut_report(at_or_below=True): level 1 cut by one pass, level 2 cleared by four: a level-2 move
+    also clears level 1's floor above it (the tool passes through), so both levels read what the
+    four passes leave -- twice the one-level figure of those passes; counted at the level's own
+    depth only (plan()'s count of its own levels) level 1 keeps the strips its one pass left."""
+    from shapely.geometry import box
+
+    from cnclab.toolpath import coverage
+    from cnclab.toolpath.job import Job
+    from cnclab.toolpath.path import Tool, ToolPath
+
+    def lines(ys, z, x0=3, x1=37):
+        pts, kinds = [], []
+        for y in ys:
+            pts += [[x0, y, 5], [x0, y, z], [x1, y, z], [x1, y, 5]]
+            kinds += ["rapid", "plunge", "cut", "rapid"]
+        return pts, kinds
+
+    four = lines((3, 8, 12, 17), -2.0)
+    one, k1 = lines((10,), -1.0, 10, 30)        # its discs inside those of the four passes
+    deep = ToolPath.build(one + four[0], kind=k1 + four[1], feed=300)
+    job2 = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 1.0, depth=2.0, v_c=100, f_z=0.05)
+    four1 = ToolPath.build(lines((3, 8, 12, 17), -1.0)[0], kind=four[1], feed=300)
+    f = sum(coverage.uncut_report(four1, Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 1.0, v_c=100, f_z=0.05))["uncut_mm2"])
+    below = sum(coverage.uncut_report(deep, job2, at_or_below=True)["uncut_mm2"])
+    at = sum(coverage.uncut_report(deep, job2)["uncut_mm2"])
+    assert below == pytest.approx(2 * f, abs=1e-9)
+    assert at > below + 2 * 20 * 3          # level 1 by its own pass: a 26 x 6 mm slot of 40 x 20

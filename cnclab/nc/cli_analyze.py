@@ -9,6 +9,12 @@ and evaluated by :func:`cnclab.toolpath.evaluate.evaluate` against the pocket of
 * ``summary.csv`` — one row per metric (metric, value, unit), also printed; ``time_machine_s`` is
   the program's time on the small-VMC machine model (:mod:`cnclab.nc.machine`: acceleration,
   junction deviation) beside the evaluator's length / feed ``time_total_s``;
+  ``uncut_exact_mm2`` is the uncut area beyond the unreachable corners independent of the
+  resolution (:func:`cnclab.toolpath.coverage.uncut_report` with ``at_or_below``: a point of a
+  level's floor is uncut when no move at or below that level passes within r + 2 um of it, summed
+  over the levels) -- the dixel count ``uncut_beyond_unreachable_mm2`` also holds the rows' slivers
+  along the walls, about proportional to the resolution (on a 67 x 87 mm T with D10, three levels:
+  6.3, 2.7 and 1.3 mm^2 at 0.225, 0.1 and 0.05 mm where the exact count reads 0.0);
 * ``trace.csv`` — the evaluator's trace along the path (s, x, y, engagement, MRR, feed, kind, wall
   gouge, move index and program line of every sample);
 * ``events.csv`` — rapids and plunges into material and wall gouges, one row per block, with its
@@ -37,6 +43,7 @@ from ..paths import build_dir
 from ..plotting import figsize, with_style
 from .gcode import GcodeError, read_toolpath
 
+from ..toolpath.coverage import uncut_report
 from ..toolpath.evaluate import POSITION_TOL_MM, evaluate
 from ..toolpath.job import load_job
 from ..toolpath.planners import MAX_RESOLUTION_TOOL_FRACTION, MIN_RESOLUTION_MM
@@ -235,6 +242,11 @@ def analyze(program, job_file, resolution_mm: float = 0.05, outdir=None, quiet: 
     ev = evaluate(path, job, resolution_mm, sampling="arc_length")
     notes = list(path.info.get("warnings", [])) + _bbox_warnings(path, job, ev, program, job_file)
     table = ev.summary_table()      # with time_machine_s: the program on the small-VMC model (cnclab.nc.machine)
+    import pandas as pd
+
+    exact = float(sum(uncut_report(path, job, at_or_below=True)["uncut_mm2"]))
+    table = pd.concat([table, pd.DataFrame([{"metric": "uncut_exact_mm2", "value": exact, "unit": "mm^2"}])],
+                      ignore_index=True)
     trace = ev.trace
     blobs = {"summary.csv": table.to_csv(index=False, lineterminator="\n"), "trace.csv": _trace_csv(trace),
              "events.csv": ev.events.to_csv(index=False, float_format="%.6g", lineterminator="\n")}

@@ -55,10 +55,10 @@ def uncut_limit_mm2(reach_area_mm2: float) -> float:
     return UNCUT_ABS_MM2 + UNCUT_REL * float(reach_area_mm2)
 
 
-def _runs(P: np.ndarray, z: float) -> list:
+def _runs(P: np.ndarray, z: float, at_or_below: bool = False) -> list:
     """The (m, 2) polylines (mm) of the runs of ``P`` ((n, 3) mm, the path's polyline) whose two ends
-    are at ``z``, and single points at z as (1, 2) arrays."""
-    at = np.abs(P[:, 2] - z) <= 1e-6
+    are at ``z`` (``at_or_below``: at or below it), and single such points as (1, 2) arrays."""
+    at = (P[:, 2] <= z + 1e-6) if at_or_below else (np.abs(P[:, 2] - z) <= 1e-6)
     seg = at[1:] & at[:-1]
     edges = np.flatnonzero(np.diff(np.r_[0, seg.astype(int), 0]))
     runs = [P[i0:i1 + 1, :2] for i0, i1 in zip(edges[0::2], edges[1::2])]      # segments i0..i1-1
@@ -101,11 +101,14 @@ def _left_mm2(region, centres, r: float, swept: SweptDiscs) -> float:
     return n * h * h
 
 
-def uncut_report(path: ToolPath, job: Job) -> dict:
+def uncut_report(path: ToolPath, job: Job, at_or_below: bool = False) -> dict:
     """Uncut area beyond the unreachable corners, by region of ``job.polygon`` (largest first as
     shapely lists them), summed over the levels (the limit too: :func:`uncut_limit_mm2` per level):
     ``{"uncut_mm2": [..], "reach_mm2": [..],
-    "limit_mm2": [..], "over": [region indices above their limit], "levels": [z ..]}``."""
+    "limit_mm2": [..], "over": [region indices above their limit], "levels": [z ..]}``.
+    A level's floor counts as cut where the moves at its depth swept it (a planner's own levels);
+    ``at_or_below``: the moves at or below its depth (any program: a deeper move clears the floor
+    above it too, and a floor cut 0.1 mm above the level is not the level's)."""
     r = job.tool_radius
     regions = list(shapely.get_parts(job.polygon))
     reach = [g.buffer(-r, quad_segs=64).buffer(r, quad_segs=64) for g in regions]
@@ -113,7 +116,7 @@ def uncut_report(path: ToolPath, job: Job) -> dict:
     uncut = np.zeros(len(regions))
     P, _ = path.polyline(max(r / 10.0, 1e-3))          # arcs by chords of at most r / 10
     for z in levels:
-        runs = _runs(P, z)
+        runs = _runs(P, z, at_or_below)
         c = _centres(runs, r / 10.0)
         swept = SweptDiscs(r)
         for Q in runs:
