@@ -76,3 +76,22 @@ def test_levels_and_unknown_strategy(rect):
         plan(rect, "spiral-of-doom")
     with pytest.raises(ValueError, match="pocket_120x85.json: the hybrid strategy"):
         plan(load_job(data_path("kim_yang2006", "pocket_120x85.json")), "hybrid")
+
+
+@pytest.mark.parametrize("name", ["kim-yang-original", "kim-yang-modified"])
+def test_kim_yang_strategies_plan_a_polygonal_circle_without_gouging(name):
+    """A 100-gon of radius 20 (D6, theta 45): the strategies' arcs are fitted on the points and the
+    chords (constant_mrr.fit_arcs(chords=True)); fitted on the points only (the paper's §3.3 rule)
+    one arc ran through the vertices of the outer offset and bulged past its sides by their sagitta
+    (11.6 um here), so plan() refused the job as a gouge (a 200-gon of radius 42.3 with D5.8 in
+    session 21's fuzz campaign: 5.1 um)."""
+    from shapely.geometry import Polygon
+
+    from cnclab.toolpath import coverage
+    from cnclab.toolpath.job import Job
+    from cnclab.toolpath.path import Tool
+
+    a = np.linspace(0, 2 * np.pi, 100, endpoint=False)
+    job = Job(Polygon(np.column_stack([20 * np.cos(a), 20 * np.sin(a)])), Tool(6.0), 45.0, 1.0, v_c=100, f_z=0.05)
+    p = plan(job, name)
+    assert coverage.wall_gouge(p, job)[0] <= 1e-3

@@ -271,8 +271,9 @@ def _zigzag(job: Job, resolution_mm: float, **options) -> ToolPath:
 
 
 #: arc-fit tolerance (mm) of the Kim & Yang strategies' programs: the paper's 0.02 mm lets an arc
-#: bulge up to ~0.035 mm past the tool-centre region (into the wall); 0.5 um keeps it inside
-#: :data:`GOUGE_TOL_MM`
+#: bulge up to ~0.035 mm past the tool-centre region (into the wall); 0.5 um, on the points and the
+#: chords alike (``chords=True``: an arc through a polygon's vertices bulges past its sides by their
+#: sagitta), keeps it inside :data:`GOUGE_TOL_MM`
 ARC_FIT_TOL_MM = 5e-4
 
 
@@ -289,7 +290,7 @@ def _kim_yang_original(job: Job, resolution_mm: float, **options) -> ToolPath:
 
     _no_islands(job, "kim-yang-original")
     return constant_mrr.passes_path(constant_mrr.kim_yang_passes(job, **options), job, entry="helix",
-                                    tol_mm=ARC_FIT_TOL_MM)
+                                    tol_mm=ARC_FIT_TOL_MM, chords=True)
 
 
 @register("kim-yang-modified", "Kim & Yang 2006 constant-MRR modified contour-parallel path")
@@ -298,7 +299,7 @@ def _kim_yang_modified(job: Job, resolution_mm: float, **options) -> ToolPath:
 
     _no_islands(job, "kim-yang-modified")
     passes = _snap_inside(constant_mrr.kim_yang_passes(job, modified=True, **options), job)
-    return constant_mrr.passes_path(passes, job, entry="helix", tol_mm=ARC_FIT_TOL_MM)
+    return constant_mrr.passes_path(passes, job, entry="helix", tol_mm=ARC_FIT_TOL_MM, chords=True)
 
 
 def _snap_inside(passes, job: Job) -> list:
