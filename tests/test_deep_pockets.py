@@ -246,3 +246,30 @@ def _untimed(v):
     if isinstance(v, list):
         return [_untimed(q) for q in v]
     return v
+
+
+@pytest.mark.parametrize("t_um, proven", [(1.0, True), (10.0, False)])
+def test_a_move_along_the_rest_of_a_level_above_is_proven_only_when_thinner_than_the_polygons_chords(t_um, proven):
+    """Level 1 cuts a slot (y 7..13 mm, r 3); level 2 comes down and runs 20 mm through slab 1 at
+    y = 10 + t: its disc reaches t past the slot's side, a strip 20 mm x t of the material level 1
+    left. 1 um (0.02 mm^2, over PROOF_TOL_MM2 by area) is thinner than twice the tool-disc buffers'
+    chord error (levels.sliver_mm(3) = 0.9 um): the polygons' chords, not material (the zig-zag
+    refused 7 of 30 deep fuzz pockets for 1.19 um scallops along a round wall); 10 um is material and
+    the move is refused by name."""
+    from cnclab.toolpath.levels import PROOF_TOL_MM2, join_levels, sliver_mm
+
+    job = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 1.0, depth=2.0, v_c=100, f_z=0.05, start_hole=(5, 10, 7))
+    t = t_um * 1e-3
+    lv1 = ToolPath.build([[5, 10, 5], [5, 10, -1], [35, 10, -1], [35, 10, 5]],
+                         kind=["rapid", "plunge", "cut", "rapid"], feed=300, cleared=[False, True, False, False])
+    lv2 = ToolPath.build([[10, 10 + t, 5], [10, 10 + t, -0.5], [30, 10 + t, -0.5], [30, 10 + t, -2],
+                          [32, 10 + t, -2], [32, 10 + t, 5]],
+                         kind=["rapid", "rapid", "rapid", "plunge", "cut", "rapid"], feed=300,
+                         cleared=[False, True, True, True, False, False])
+    assert 20 * t > PROOF_TOL_MM2 and (t < 2 * sliver_mm(3.0)) == proven
+    if proven:
+        out = join_levels([lv1, lv2], [0.0, -1.0], job)
+        assert out.cleared[len(lv1) + 2] and "cleared: levels above" in out.tag[len(lv1) + 2]
+    else:
+        with pytest.raises(LevelError, match=r"level 2 .* move 1 at x 10.000 y 10.010 mm runs through material"):
+            join_levels([lv1, lv2], [0.0, -1.0], job)

@@ -44,7 +44,7 @@ from .helix import HELIX_CHORD_MM, helix_ring, helix_segments
 from .path import KINDS, ToolPath, ToolPathBuilder
 
 __all__ = ["swept_region", "join_levels", "with_entry_feed", "ENTRY_MOVE_KINDS", "LevelError", "PROOF_TOL_MM2",
-           "CLEARED_ABOVE"]
+           "CLEARED_ABOVE", "sliver_mm"]
 
 #: material area (mm^2) a proven move may meet: a sliver 0.01 mm wide over 0.1 mm (the buffer
 #: polygons' chord error at r = 4 mm with 32 segments a quarter is 0.005 mm)
@@ -54,6 +54,22 @@ CLEARED_ABOVE = "cleared: levels above"
 _K = {k: i for i, k in enumerate(KINDS)}
 _CHUNK = 200
 _EPS = 1e-9
+#: segments a quarter circle of the tool-disc buffers (:func:`swept_region`)
+_QUAD_SEGS = 32
+
+
+def sliver_mm(r: float) -> float:
+    """Half the thickness (mm) of the thinnest rest :func:`join_levels` counts when it proves a move
+    through the levels above: the chord error of the tool-disc buffers (radius ``r`` mm, 32 segments
+    a quarter: r (1 - cos(pi / 128)), 1.2 um at r = 4). Both the move's disc and the levels' swept
+    region are such polygons, so a rest up to twice that thick may be their chords alone: along a
+    round wall a D8 level left 32 such scallops 1.19 um thick (0.0019 mm^2 in all) that a descent
+    touched, and the zig-zag refused 7 of 30 deep fuzz pockets as a move through material.
+
+    >>> round(sliver_mm(4.0) * 1000, 3)
+    1.205
+    """
+    return r * (1.0 - math.cos(math.pi / (4 * _QUAD_SEGS)))
 
 
 #: the move kinds that run at the job's entry feed (:func:`with_entry_feed`); a plunge keeps its feed
@@ -105,7 +121,7 @@ def swept_region(path: ToolPath, below_z: float, r: float, moves=None):
                 for k in range(0, max(len(xy) - 1, 1), _CHUNK):
                     q = xy[k:k + _CHUNK + 1]
                     g = Point(q[0]) if len(q) == 1 or np.ptp(q, axis=0).max() == 0 else LineString(q)
-                    geoms.append(g.buffer(r, quad_segs=32))
+                    geoms.append(g.buffer(r, quad_segs=_QUAD_SEGS))
     return shapely.union_all(geoms) if geoms else shapely.Polygon()
 
 
@@ -139,8 +155,8 @@ def _move_sweep(path, k, r):
     if path.arc[k]:
         return swept_region(path.take(slice(k - 1, k + 1)), math.inf, r)
     if math.hypot(b[0] - a[0], b[1] - a[1]) <= _EPS:
-        return Point(b[:2]).buffer(r, quad_segs=32)
-    return LineString([a[:2], b[:2]]).buffer(r, quad_segs=32)
+        return Point(b[:2]).buffer(r, quad_segs=_QUAD_SEGS)
+    return LineString([a[:2], b[:2]]).buffer(r, quad_segs=_QUAD_SEGS)
 
 
 def _following_helix(path, k):
@@ -261,7 +277,9 @@ def _prove_level(p, k, top, top0, left_above, r, tol_mm2):
         if i in replace:
             continue
         sweep = _move_sweep(p, i, r)
-        ok = left_above.is_empty or sweep.intersection(left_above).area <= tol_mm2
+        met = shapely.Polygon() if left_above.is_empty else sweep.intersection(left_above)
+        # a rest no thicker than the polygons' chords (:func:`sliver_mm`) is not material
+        ok = met.area <= tol_mm2 or met.buffer(-sliver_mm(r), quad_segs=_QUAD_SEGS).is_empty
         if ok:
             tags[i] = _with_tag(tags[i], CLEARED_ABOVE)
             cleared[i] = True
@@ -277,7 +295,7 @@ def _prove_level(p, k, top, top0, left_above, r, tol_mm2):
         if new is None:
             x, y = p.xyz[i, :2]
             raise LevelError(f"level {k + 1} (top z {top:g} mm): move {i} at x {x:.3f} y {y:.3f} mm runs "
-                             f"through material the levels above left ({sweep.intersection(left_above).area:.3g} "
+                             f"through material the levels above left ({met.area:.3g} "
                              "mm^2) and is no descent onto a helix that could enter from the stock top")
         for m in range(i, j):
             replace[m] = None                     # the vertical pieces before the descent's end
