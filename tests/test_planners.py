@@ -95,3 +95,20 @@ def test_kim_yang_strategies_plan_a_polygonal_circle_without_gouging(name):
     job = Job(Polygon(np.column_stack([20 * np.cos(a), 20 * np.sin(a)])), Tool(6.0), 45.0, 1.0, v_c=100, f_z=0.05)
     p = plan(job, name)
     assert coverage.wall_gouge(p, job)[0] <= 1e-3
+
+
+def test_hybrid_plans_a_job_whose_cutting_feed_is_above_the_default_v_fmax():
+    """f_z 0.1 x 3 teeth x 7958 rpm = 2387 mm/min, above the default v_fmax of 1000 mm/min (the feed
+    control's cap): the hybrid scores its wall-share candidates with the cap at the cutting feed
+    instead of failing inside the feed control (five of the fuzz campaign's pockets were refused
+    with "v_fmax (1000.0) must be >= v_nominal"); its program runs at the job's feed."""
+    from shapely.geometry import box
+
+    from cnclab.toolpath.job import Job
+    from cnclab.toolpath.path import Tool
+
+    job = Job(box(0, 0, 40, 30), Tool(8.0, flutes=3), 60.0, 2.0, start_hole=(20, 15, 10), v_c=200, f_z=0.1)
+    assert job.feed_mm_min > job.v_fmax
+    p = plan(job, "hybrid", allow_uncut=True)
+    cut = p.is_kind("cut")
+    assert cut.any() and np.nanmax(p.feed[cut]) == pytest.approx(job.feed_mm_min)

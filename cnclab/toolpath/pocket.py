@@ -29,6 +29,7 @@ Every strategy returns a :class:`~cnclab.toolpath.path.ToolPath` at the cutting 
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -270,6 +271,10 @@ def hybrid_path(job: Job, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=2
     if not cands or not all(0 < c <= 1 for c in cands):
         raise ValueError(f"wall_share_candidates must be numbers in (0, 1], got {wall_share_candidates!r}")
     paths, rows = [], []
+    # the feed control only scores the candidates (their time): a job whose cutting feed is above its
+    # v_fmax (the default 1000 mm/min under a fast job's f_z x teeth x rpm) is scored with the cap at
+    # that feed (the controller then only slows down); the program runs at the job's own feeds
+    scored = job if job.v_fmax >= job.feed_mm_min else dataclasses.replace(job, v_fmax=job.feed_mm_min)
     for w in cands:
         prev = paths[-1] if paths else None
         stop = prev.info["stop_lap_wall_share"] if prev is not None else None
@@ -283,7 +288,7 @@ def hybrid_path(job: Job, resolution_mm=0.05, dt=0.1, max_laps=20, max_periods=2
         hp = _hybrid_path_one(job, resolution_mm, dt, max_laps, max_periods, spacing_mm, max_rounds,
                               arm_min_area_mm2, w)
         t1 = time.perf_counter()
-        s = evaluate(hp, job, resolution_mm, feed_control=True, level_only=True).trace["level_summary"]
+        s = evaluate(hp, scored, resolution_mm, feed_control=True, level_only=True).trace["level_summary"]
         paths.append(hp)
         rows.append({"max_wall_share": w, "same_as": None, "laps": hp.info["laps"], "arms": len(hp.info["arms"]),
                      "uncut_beyond_unreachable_mm2": s["uncut_area_mm2"] - s["unreachable_area_mm2"],
@@ -633,9 +638,27 @@ def _free_link(E, S, allowed, stock, r, ds, via=None):
     return np.vstack([E, S]), "rapid"
 
 
+def _polygons_in(g) -> list:
+    """The polygons of a geometry, nested collections flattened (``make_valid`` of an invalid
+    MultiPolygon is a collection holding a MultiPolygon and lines)."""
+    out = []
+    for p in shapely.get_parts(g):
+        if isinstance(p, Polygon):
+            out.append(p)
+        elif not isinstance(p, (Point, LineString)) and hasattr(p, "geoms"):
+            out += _polygons_in(p)
+    return out
+
+
 def _polygonal(g):
-    """Polygonal part of a geometry as a valid (Multi)Polygon (slivers under 1e-6 mm^2 dropped)."""
-    parts = [p for p in shapely.get_parts(shapely.make_valid(g)) if isinstance(p, Polygon) and p.area > 1e-6]
+    """Polygonal part of a geometry as a valid (Multi)Polygon (slivers under 1e-6 mm^2 dropped).
+
+    >>> from shapely.geometry import box
+    >>> bad = MultiPolygon([box(0, 0, 2, 2), box(1, 0, 3, 2), box(5, 5, 6, 6)])   # overlapping: invalid
+    >>> round(_polygonal(bad).area, 6)        # make_valid nests a MultiPolygon in a collection: found
+    7.0
+    """
+    parts = [p for p in _polygons_in(shapely.make_valid(g)) if p.area > 1e-6]
     if not parts:
         return Polygon()
     g = shapely.union_all(parts).buffer(0)
