@@ -172,3 +172,17 @@ def test_cli_slot_narrow_slots_the_strip_the_refusal_names(tmp_path, capsys):
     assert cli_plan.main([str(job), "-o", str(out), "--slot-narrow"]) == 0
     text = out.read_text()
     assert "uncut beyond unreachable corners by region" in text and "WARNING" not in text
+
+
+def test_a_deep_refusal_says_the_uncut_area_is_summed_over_the_levels():
+    """The uncut area and its limit are sums over the levels, the reachable area one level's: the
+    message says so (it read "7628.1 mm^2 left of 5350 mm^2 reachable per level, summed over its 3
+    levels" on a fuzz L, as if more were left than could be reached)."""
+    rep = {"levels": [-1.0, -2.0, -3.0], "uncut_mm2": [7628.1], "reach_mm2": [5350.0], "limit_mm2": [163.5],
+           "over": [0]}
+    job = Job(box(0, 0, 10, 10), Tool(4.0), 60.0, 1.0, depth=3.0, v_c=100, f_z=0.05)
+    msg = planners._uncut_message(job, "hybrid", rep)
+    assert "region 0: 7628.1 mm^2 left over its 3 levels of 5350 mm^2 reachable on each level " \
+           "(limit 163.5, summed over the levels)" in msg
+    one = planners._uncut_message(job, "hybrid", dict(rep, levels=[-1.0]))
+    assert "region 0: 7628.1 mm^2 left of 5350 mm^2 reachable (limit 163.5)" in one

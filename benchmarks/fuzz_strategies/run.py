@@ -5,7 +5,7 @@ programs, 15 % of the others; resolution max(D / 45, 0.12) mm). One JSON line pe
 ``OUT/results.jsonl`` (a rerun skips the runs already there). Session 21's run is summarised in the
 README (issue 29 section) and its closing note. Not a test: about an hour on 2 cores.
 
-    .venv/bin/python benchmarks/fuzz_strategies/run.py [--out DIR] [JOB-NAME-FRAGMENT ...]
+    .venv/bin/python benchmarks/fuzz_strategies/run.py [--out DIR] [--strategies A,B] [JOB-NAME-FRAGMENT ...]
 """
 import csv, glob, json, os, random, re, shutil, subprocess, sys, time
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -16,6 +16,9 @@ args = sys.argv[1:]
 BASE = "build/fuzz_strategies"
 if args[:1] == ["--out"]:
     BASE, args = args[1], args[2:]
+only = None
+if args[:1] == ["--strategies"]:
+    only, args = args[1].split(","), args[2:]
 BASE = os.path.abspath(BASE)
 RS274 = shutil.which("rs274")
 STRATS = ["adaptive", "constant-engagement", "contour-parallel", "hybrid", "kim-yang-modified", "kim-yang-original", "zig-zag"]
@@ -36,7 +39,7 @@ if os.path.exists(RES):
 
 tasks = []
 for j in jobs:
-    for s in STRATS:
+    for s in (only or STRATS):
         name = os.path.basename(j)[:-5]
         if (name, s) in done:
             continue

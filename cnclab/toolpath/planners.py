@@ -561,9 +561,13 @@ def _uncut_message(job: Job, strategy: str, rep: dict, left=()) -> str:
     """The uncut-area refusal (or warning): the regions over their limit, then how many parts the
     planner stated it left (``info["left_parts"]``: each with where, its size and why) and the first."""
     n = len(rep.get("levels", ())) or 1
-    per = "" if n == 1 else f" per level, summed over its {n} levels"   # the uncut area and its limit are sums
-    parts = "; ".join(f"region {k}: {rep['uncut_mm2'][k]:.1f} mm^2 left of {rep['reach_mm2'][k]:.0f} mm^2 reachable{per} "
-                      f"(limit {rep['limit_mm2'][k]:.1f})" for k in rep["over"])
+    # the uncut area and its limit are sums over the levels, the reachable area is one level's (a
+    # deep pocket read "7628.1 mm^2 left of 5350 mm^2 reachable per level, summed over its 3 levels")
+    over = "" if n == 1 else f" over its {n} levels"
+    each = "" if n == 1 else " on each level"
+    summed = "" if n == 1 else ", summed over the levels"
+    parts = "; ".join(f"region {k}: {rep['uncut_mm2'][k]:.1f} mm^2 left{over} of {rep['reach_mm2'][k]:.0f} mm^2 "
+                      f"reachable{each} (limit {rep['limit_mm2'][k]:.1f}{summed})" for k in rep["over"])
     why = "" if not left else (f"; the plan states {len(left)} part(s) left" + (", the first" if len(left) > 1 else "")
                                + f": {left[0]}")
     return (f"{job.source}: strategy {strategy} leaves material uncut beyond the corners no tool disc reaches: "
