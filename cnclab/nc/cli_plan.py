@@ -151,7 +151,8 @@ def main(argv=None) -> int:
                     help=f"planner: {', '.join(sorted(STRATEGIES))} (default: {DEFAULT_STRATEGY}). "
                          f"constant-engagement plans only a pocket on which it keeps the engagement <= theta + "
                          f"{CE_PROMISE_DEG:g} deg and <= theta + 5 deg on all but {CE_SHARE_ABOVE_5_PCT:g} %% of its "
-                         "cutting length (discs; rectangles, wedges and islands are refused with the measured values); "
+                         "cutting length, measured on each job (planned so far: discs, ellipses, rectangles also "
+                         "filleted or rotated, a U; refused with the measured values: L, star, islands); "
                          "hybrid promises no engagement bound (measured on Jacso's star, rectangle and L: <= theta "
                          f"+ {HYBRID_JACSO_MAX_DEG:g} deg, {HYBRID_JACSO_SHARE_ABOVE_5_PCT:g} %% above theta + 5; "
                          "159.5 deg on a keyhole)")
