@@ -25,7 +25,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, Point, box
 
-__all__ = ["SweptDiscs", "engagement_along", "engagement_swept", "vector_engagement"]
+__all__ = ["SweptDiscs", "engagement_along", "engagement_swept", "vector_engagement", "point_segment_distances"]
 
 
 def _swept(xy: np.ndarray, cutting: np.ndarray, k: int, r: float, quad_segs: int):
@@ -34,7 +34,7 @@ def _swept(xy: np.ndarray, cutting: np.ndarray, k: int, r: float, quad_segs: int
     a cutting sample with no such step: its own disc. None when there is none."""
     c = xy[k]
     a, b = xy[:k - 1], xy[1:k]
-    near = _point_seg(np.broadcast_to(c, a.shape), a, b) <= 2.0 * r + 1e-9
+    near = point_segment_distances(np.broadcast_to(c, a.shape), a, b) <= 2.0 * r + 1e-9
     step = near & cutting[:k - 1] & cutting[1:k]              # step i: xy[i] -> xy[i + 1]
     parts = []
     idx = np.flatnonzero(step)
@@ -257,12 +257,16 @@ class SweptDiscs:
             if lens.sum():
                 who = np.flatnonzero(ask)[np.repeat(np.arange(len(lists)), lens)]
                 seg = off + np.concatenate([np.asarray(q, int) for q in lists if len(q)])
-                np.minimum.at(out, who, _point_seg(pts[who], self.A[seg], self.B[seg]))
+                np.minimum.at(out, who, point_segment_distances(pts[who], self.A[seg], self.B[seg]))
         return out
 
 
-def _point_seg(p, a, b):
-    """Distances (n,) from the points p to the segments a -> b (row by row), mm."""
+def point_segment_distances(p, a, b):
+    """Distances (n,) from the points p to the segments a -> b (row by row; p may be one point), mm.
+
+    >>> point_segment_distances(np.array([1.0, 1.0]), np.array([[0.0, 0], [2, 0]]), np.array([[2.0, 0], [2, 0]])).tolist()
+    [1.0, 1.4142135623730951]
+    """
     ab = b - a
     t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0.0, 1.0)
     return np.hypot(*(a + t[:, None] * ab - p).T)

@@ -40,6 +40,7 @@ from shapely.geometry import Point, Polygon
 from shapely.geometry import LinearRing
 
 from ..simulation import pixel
+from ..simulation.vector import point_segment_distances
 from .job import Job
 from .offsets import allowed_region, link_loops, offset_levels
 from .path import ToolPath, ToolPathBuilder, helix_ring, subdivide
@@ -257,15 +258,6 @@ def _circle(p, q, s):
     return np.array([ux, uy]), math.hypot(ax - ux, ay - uy)
 
 
-def _segment_distances(p, c) -> np.ndarray:
-    """Distance (mm) of the point ``c`` from each segment of the polyline ``p`` (n, 2)."""
-    a, b = p[:-1], p[1:]
-    ab = b - a
-    L2 = np.einsum("ij,ij->i", ab, ab)
-    t = np.clip(np.einsum("ij,ij->i", c - a, ab) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
-    return np.hypot(*(a + t[:, None] * ab - c).T)
-
-
 def fit_arcs(points, tol_mm: float = 0.02, short_mm: float = 2.0, min_points: int = 4,
              max_radius_mm: float = 500.0, chords: bool = False):
     """§3.3 circular interpolation: runs of short segments (≤ ``short_mm``) whose points lie within
@@ -302,7 +294,7 @@ def fit_arcs(points, tol_mm: float = 0.02, short_mm: float = 2.0, min_points: in
             ctr, rad = c
             if np.max(np.abs(np.hypot(*(p[i:j + 1] - ctr).T) - rad)) > tol_mm:
                 break
-            if chords and np.max(rad - _segment_distances(p[i:j + 1], ctr)) > tol_mm:
+            if chords and np.max(rad - point_segment_distances(ctr, p[i:j], p[i + 1:j + 1])) > tol_mm:
                 break
             v = p[i:j + 1] - ctr
             ang = np.unwrap(np.arctan2(v[:, 1], v[:, 0]))
