@@ -83,6 +83,26 @@ def test_second_pass_is_air_cut_and_levels():
     assert full.mrr_max_over_nominal == pytest.approx(4.0, rel=0.02)
 
 
+@pytest.mark.parametrize("below_um, cuts_slab_2", [(0.0, False), (0.05, False), (0.5, False), (10.0, True)])
+def test_a_pass_at_a_level_as_written_does_not_cut_the_slab_below(below_um, cuts_slab_2):
+    """Levels of 7.475 / 3 = 2.491667 mm: a program writes the first floor as Z-2.4917 (0.033 um
+    lower, 4 decimals) or Z-2.492 (0.33 um, 3 decimals). A second pass along a slot cut at the first
+    level, written that way, runs in the slot (air); read 33 nm into the slab below it was cut at full
+    width there (180 deg, the fuzz campaign's adaptive floor circles). 10 um below is a cut."""
+    job = Job(box(0, 0, 40, 20), Tool(6.0, flutes=2), 90.0, 2.99, depth=7.475, v_c=100, feed_mm_min=F)
+    z1 = job.levels()[0]
+    assert z1 == pytest.approx(-7.475 / 3)
+    ev = evaluate(ToolPath.concat([_slot(z=z1), _slot(z=z1 - below_um * 1e-3)]), job, H)
+    second = ev.trace["move"] >= 4
+    cut = second & ev.trace["cutting"]
+    assert cut.any() == cuts_slab_2
+    if cuts_slab_2:                           # a real cut below the level: the full slot, at 180 deg
+        assert np.nanmax(ev.trace["engagement_deg"][cut]) == pytest.approx(180, abs=0.5)
+    else:
+        assert ev.engagement_max_deg == pytest.approx(180, abs=0.5)      # the first pass's slot only
+        assert ev.air_cut_length_mm == pytest.approx(7.0 + 50.0, abs=0.5)
+
+
 def test_summary_table_and_schema():
     ev = evaluate(_slot(), _job(), 0.1)
     d = ev.to_dict()

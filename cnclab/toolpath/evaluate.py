@@ -7,7 +7,8 @@ Model (units: mm, deg, mm/min, s):
   down to ``top_z - depth``, cut in the levels of :meth:`Job.levels`. Each level is a slab with its
   own 2D dixel stock (:class:`cnclab.simulation.dixel.Stock`); the path is sampled every
   ``resolution_mm`` (:meth:`ToolPath.resample`) and every sample whose tool tip is below a slab's
-  top cuts the tool disc out of that slab, in path order (:func:`cnclab.simulation.common.simulate`
+  top (by more than :data:`POSITION_TOL_MM`: a written program's rounding of a level's z does not
+  enter the slab below) cuts the tool disc out of that slab, in path order (:func:`cnclab.simulation.common.simulate`
   on each run of consecutive samples inside the slab). The slab is 2D: a tool that has entered it
   removes its full thickness under the disc, so ramps and helices are approximated by the level
   they cross (they are entries: excluded from the engagement statistics anyway). The engagement is
@@ -552,7 +553,10 @@ def _simulate_slabs(P, dxy, job: Job, h: float):
     stocks = []
     for top, bot in zip(tops, levels):
         stock = dixel.Stock.from_polygon(material, h)
-        inside = np.flatnonzero(P[:, 2] < top - 1e-9)
+        # a tip less than POSITION_TOL_MM below the slab's top has not entered it: a level's z as a
+        # program writes it (-2.4917 for -2.491667) is up to half a last digit below the level, and
+        # the slab under it would otherwise be cut 33 nm deep at full width (read as 180 deg)
+        inside = np.flatnonzero(P[:, 2] < top - POSITION_TOL_MM)
         thick = top - np.maximum(P[:, 2], bot)
         if inside.size:
             brk = np.r_[True, np.diff(inside) > 1]
