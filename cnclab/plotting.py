@@ -33,6 +33,7 @@ from typing import Callable
 
 from .fileio import atomic_write
 from .paths import PACKAGE_DIR, figures_dir
+from .runtime import fast_mode
 
 STYLE_PATH = PACKAGE_DIR / "paper.mplstyle"
 #: journal figure widths (mm): one column and the full page width
@@ -307,13 +308,30 @@ def export_figure(fig, name: str, outdir, *, width_mm=None, height_mm=None, form
     return [atomic_write(path, data) for path, data in blobs]
 
 
-def savefig(fig, name: str, work: str, formats=("pdf", "svg", "png"), dpi: int = 300) -> list[Path]:
-    """Save ``fig`` as ``build/figures/<work>/<name>.{pdf,svg,png}`` (PNG at ``dpi``), atomically:
-    :func:`export_figure` into the collection's figure folder at the figure's own size.
+#: what :func:`savefig` writes by default: PDF, SVG and PNG at 300 dpi (``make reproduce``)
+SAVE_FORMATS, SAVE_DPI = ("pdf", "svg", "png"), 300
+#: ... and in fast mode (``CNCLAB_FAST=1``: ``make test`` runs every notebook so): the PNG alone at
+#: 100 dpi. The figure is still drawn and rasterised whole; the PDF and SVG writers and the 300 dpi
+#: PNG are tested on their own (tests/test_figures.py, tests/test_claims_machinery.py). Writing
+#: the three formats took 95 of the notebooks' 280 CPU s in fast mode (56 figures, 2026-11-28).
+FAST_SAVE_FORMATS, FAST_SAVE_DPI = ("png",), 100
 
+
+def savefig(fig, name: str, work: str, formats=None, dpi: int | None = None) -> list[Path]:
+    """Save ``fig`` as ``build/figures/<work>/<name>.<format>``, atomically: :func:`export_figure`
+    into the collection's figure folder at the figure's own size.
+
+    ``formats`` / ``dpi`` (raster formats, dots per inch): None gives :data:`SAVE_FORMATS` at
+    :data:`SAVE_DPI` (PDF, SVG and PNG at 300 dpi), in fast mode (``CNCLAB_FAST=1``)
+    :data:`FAST_SAVE_FORMATS` at :data:`FAST_SAVE_DPI` (a 100 dpi PNG).
     ``name`` should say which seed figure it reproduces, e.g. ``"fig3-5_rz_ra_ratio"``.
     Returns the written paths.
     """
+    fast = fast_mode()
+    if formats is None:
+        formats = FAST_SAVE_FORMATS if fast else SAVE_FORMATS
+    if dpi is None:
+        dpi = FAST_SAVE_DPI if fast else SAVE_DPI
     return export_figure(fig, name, figures_dir(work), formats=formats, dpi=dpi)
 
 

@@ -394,7 +394,7 @@ def main(argv=None) -> int:
         "previous run. Exits non-zero if a notebook fails or a claim no longer holds (make reproduce).",
         examples=["python -m cnclab reproduce --jobs 2", "python -m cnclab reproduce --only mgherony2024/ch3"],
         writes=["build/notebooks/<work>/<name>.ipynb, .html   the executed notebooks",
-                "build/figures/<work>/<figure>.pdf, .svg, .png every figure",
+                "build/figures/<work>/<figure>.pdf, .svg, .png every figure (CNCLAB_FAST=1: a 100 dpi .png)",
                 "build/gcode/<work>/*.ngc, manifest.json       every NC program",
                 "build/claims.csv, build/claims.md             the claims report",
                 "build/site/index.html                         the offline site"])

@@ -238,12 +238,24 @@ def test_savefig_writes_three_formats(tmp_path, monkeypatch):
 
     from cnclab import savefig
 
+    from PIL import Image
+
     monkeypatch.setenv("CNCLAB_BUILD_DIR", str(tmp_path))
+    monkeypatch.setenv("CNCLAB_FAST", "0")                  # what make reproduce writes
     fig, ax = plt.subplots()
     ax.plot([0, 1], [1, 0])
     paths = savefig(fig, "t_fig", "hoang2024")
     assert {p.suffix for p in paths} == {".pdf", ".svg", ".png"}
     assert all(p.parent == tmp_path / "figures" / "hoang2024" and p.stat().st_size > 0 for p in paths)
+    w_in = fig.get_size_inches()[0]
+    with Image.open(paths[-1]) as im:                       # 300 dpi, up to the tight crop of the style
+        full_px = im.size[0]
+    assert 0.8 * 300 * w_in < full_px <= 300 * w_in + 1
+    monkeypatch.setenv("CNCLAB_FAST", "1")                  # fast mode (make test's notebooks): a 100 dpi PNG
+    [png] = savefig(fig, "t_fig_fast", "hoang2024")
+    assert png.suffix == ".png" and not png.with_suffix(".pdf").exists()
+    with Image.open(png) as im:
+        assert im.size[0] == pytest.approx(full_px / 3, abs=2)
     with pytest.raises(ValueError):
         savefig(fig, "../escape", "hoang2024")
     with pytest.raises(ValueError):
