@@ -15,8 +15,8 @@
 >>> figsize(2, 1) == (12.0, 3.8)                  # two panels of the style's 6.0 x 3.8 in
 True
 >>> fig, ax = plt.subplots(figsize=figsize()); _ = ax.plot([0, 1], [0, 1])
->>> paths = savefig(fig, "doctest_line", "mgherony2024")   # PDF, SVG, PNG under build/figures/
->>> sorted(p.suffix for p in paths)
+>>> paths = savefig(fig, "doctest_line", "mgherony2024", formats=SAVE_FORMATS)   # under build/figures/
+>>> sorted(p.suffix for p in paths)                 # the default, except in fast mode (a PNG alone)
 ['.pdf', '.png', '.svg']
 >>> import tempfile
 >>> [p] = export_figure(fig, "doctest_line", tempfile.mkdtemp(), width_mm="column", formats=("pdf",))
