@@ -1,6 +1,7 @@
 """Content-addressed cache of expensive results under ``build/cache/``.
 
-A result is stored under a key made of the function's qualified name, a hash of the **source files
+A result is stored under a key made of the function's qualified name, the **fast-mode flag**
+(``CNCLAB_FAST``: a value computed with fast mode's settings is never served to a full run), a hash of the **source files
 of the cnclab modules it depends on** (its own module and every cnclab module it imports,
 transitively, found by reading the ``import`` statements), a hash of the **data files it reads**
 (given to the decorator) and its **arguments**. Change any of these and the key changes, so a stale
@@ -39,6 +40,7 @@ from typing import Callable, Iterable, Sequence
 
 from .fileio import atomic_write
 from .paths import DATA_DIR, PACKAGE_DIR, build_dir
+from .runtime import fast_mode
 
 __all__ = ["cache_dir", "enabled", "module_closure", "code_hash", "data_hash", "cache_key", "cached",
            "map_cached"]
@@ -138,9 +140,14 @@ def data_hash(files: Sequence) -> str:
 
 
 def cache_key(func: Callable, args: tuple = (), kwargs: dict | None = None, data: Sequence = ()) -> str:
-    """Hex key of ``func(*args, **kwargs)``: qualname, code hash, data hash and pickled arguments."""
+    """Hex key of ``func(*args, **kwargs)``: qualname, the fast-mode flag, code hash, data hash and
+    pickled arguments. The flag is in the key because a function may read it anywhere below
+    (:func:`cnclab.runtime.pick`): ``make test`` (``CNCLAB_FAST=1``) and ``make reproduce`` share
+    ``build/cache``, and a value computed with fast mode's coarser settings must never be served to
+    a full run (nor the other way round)."""
     h = hashlib.sha256()
     h.update(f"{func.__module__}.{func.__qualname__}".encode() + b"\0")
+    h.update(f"fast={fast_mode()}".encode() + b"\0")
     h.update(code_hash(func.__module__).encode())
     h.update(data_hash(data).encode() if data else b"-")
     h.update(pickle.dumps((tuple(args), sorted((kwargs or {}).items())), protocol=4))

@@ -80,6 +80,27 @@ def test_no_cache_env_and_map_cached(fake_pkg, monkeypatch):
     assert calls[2:] == [("fa", 1), ("fa", 2)]
 
 
+def test_a_fast_mode_value_is_never_served_to_a_full_run(fake_pkg, monkeypatch):
+    """make test (CNCLAB_FAST=1) and make reproduce share build/cache: a function that reads the mode
+    (runtime.pick) below its arguments gets a key per mode."""
+    from cnclab.runtime import pick
+
+    calls = []
+
+    def f(x):
+        calls.append(x)
+        return x * pick(10, 1)                    # full mode 10, fast mode 1
+    f.__module__, f.__qualname__ = "cnclab.sub.c", "f_mode"
+    f = cache.cached()(f)
+    monkeypatch.setenv("CNCLAB_FAST", "1")
+    assert f(3) == 3
+    monkeypatch.setenv("CNCLAB_FAST", "0")
+    assert f(3) == 30 and not f.last_hit          # computed again, not the fast value
+    assert f(3) == 30 and f.last_hit
+    monkeypatch.setenv("CNCLAB_FAST", "1")
+    assert f(3) == 3 and f.last_hit and calls == [3, 3]
+
+
 def test_missing_data_file_is_named(fake_pkg):
     f = _recipe("cnclab.sub.c", "fm", ("absent.csv",), [])
     with pytest.raises(FileNotFoundError, match="absent.csv"):
