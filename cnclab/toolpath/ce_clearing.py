@@ -74,6 +74,7 @@ from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.geometry.polygon import orient
 from shapely.ops import nearest_points
 
+from ..geometry.planar import polygon_parts
 from ..simulation import dixel
 from ..simulation.common import simulate
 from .constant_engagement import (ShiftedContour, clamp_to_region, cleared_boundary_contour, lap_start,
@@ -91,10 +92,6 @@ PLAN_KINDS = ("entry", "cut", "cleanup", "linkcut", "link", "rapid")
 CLEARED = "cleared"
 #: planning label of a jump's last point when it lies in the cleared region (the descent meets air)
 CLEARED_LANDING = "rapid-cleared"
-
-
-def _polys(g) -> list:
-    return [p for p in shapely.get_parts(g) if isinstance(p, Polygon) and not p.is_empty]
 
 
 def _check_common(pocket, tool_radius, theta_deg=None):
@@ -122,13 +119,13 @@ def default_seeds(allowed, seed_clearance_ratio: float = 0.6) -> list[tuple]:
     """
     if not 0 < seed_clearance_ratio < 1:
         raise ValueError(f"seed_clearance_ratio must be in (0, 1), got {seed_clearance_ratio!r}")
-    parts = _polys(allowed)
+    parts = polygon_parts(allowed)
     if not parts:
         raise ValueError("allowed must be a non-empty polygon")
     rmax = max(shapely.maximum_inscribed_circle(p, 0.01).length for p in parts)   # centre -> nearest point
     core = allowed.buffer(-seed_clearance_ratio * rmax)
     seeds = []
-    for p in sorted(_polys(core), key=lambda q: (-round(q.area, 6), q.centroid.x, q.centroid.y)):
+    for p in sorted(polygon_parts(core), key=lambda q: (-round(q.area, 6), q.centroid.x, q.centroid.y)):
         c = shapely.get_coordinates(shapely.maximum_inscribed_circle(p, 0.01))[0]
         seeds.append((float(c[0]), float(c[1])))
     return seeds
@@ -350,7 +347,7 @@ def _rings(region) -> list:
     """The rings ((n, 2) mm, closed) of the polygons of ``region``: outer rings counter-clockwise,
     holes clockwise (climb milling with an M3 spindle: the material on the right)."""
     rings = []
-    for p in _polys(region):
+    for p in polygon_parts(region):
         p = orient(p, 1.0)
         rings += [np.asarray(p.exterior.coords)] + [np.asarray(i.coords) for i in p.interiors]
     return rings

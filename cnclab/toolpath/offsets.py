@@ -30,17 +30,9 @@ import numpy as np
 from shapely.geometry import LineString, MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
+from ..geometry.planar import polygon_parts
+
 __all__ = ["offset_levels", "link_loops", "passes_length", "allowed_region"]
-
-
-def _polys(g) -> list[Polygon]:
-    if g.is_empty:
-        return []
-    if isinstance(g, Polygon):
-        return [g]
-    if isinstance(g, MultiPolygon):
-        return list(g.geoms)
-    return [p for p in getattr(g, "geoms", []) if isinstance(p, Polygon)]
 
 
 def allowed_region(pocket: Polygon, tool_radius: float):
@@ -69,7 +61,7 @@ def offset_levels(pocket: Polygon, tool_radius: float, stepover: float, min_area
     levels = []
     for k in range(max_levels):
         g = pocket.buffer(-(tool_radius + k * stepover), join_style="round", quad_segs=quad_segs)
-        polys = [orient(p, 1.0) for p in _polys(g) if p.area > min_area]
+        polys = [orient(p, 1.0) for p in polygon_parts(g) if p.area > min_area]
         if not polys:
             break
         loops = []

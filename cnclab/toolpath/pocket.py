@@ -38,6 +38,7 @@ import shapely
 from shapely import affinity
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 
+from ..geometry.planar import polygon_parts
 from ..simulation import dixel
 from ..simulation.common import simulate
 from .evaluate import SEGMENT_KINDS, entry_hole, evaluate, planar_view
@@ -638,18 +639,6 @@ def _free_link(E, S, allowed, stock, r, ds, via=None):
     return np.vstack([E, S]), "rapid"
 
 
-def _polygons_in(g) -> list:
-    """The polygons of a geometry, nested collections flattened (``make_valid`` of an invalid
-    MultiPolygon is a collection holding a MultiPolygon and lines)."""
-    out = []
-    for p in shapely.get_parts(g):
-        if isinstance(p, Polygon):
-            out.append(p)
-        elif not isinstance(p, (Point, LineString)) and hasattr(p, "geoms"):
-            out += _polygons_in(p)
-    return out
-
-
 def _polygonal(g):
     """Polygonal part of a geometry as a valid (Multi)Polygon (slivers under 1e-6 mm^2 dropped).
 
@@ -658,7 +647,7 @@ def _polygonal(g):
     >>> round(_polygonal(bad).area, 6)        # make_valid nests a MultiPolygon in a collection: found
     7.0
     """
-    parts = [p for p in _polygons_in(shapely.make_valid(g)) if p.area > 1e-6]
+    parts = [p for p in polygon_parts(shapely.make_valid(g)) if p.area > 1e-6]
     if not parts:
         return Polygon()
     g = shapely.union_all(parts).buffer(0)
