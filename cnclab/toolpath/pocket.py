@@ -121,7 +121,6 @@ def medial_axis(polygon, spacing_mm=0.25, min_clearance_mm=None):
     n = max(int(math.ceil(ring.length / spacing_mm)), 16)
     pts = shapely.line_interpolate_point(ring, np.linspace(0, ring.length, n, endpoint=False))
     edges = shapely.voronoi_polygons(shapely.multipoints(pts), only_edges=True)
-    segs = np.asarray(shapely.get_parts(shapely.line_merge(edges) if False else edges))
     segs = shapely.get_parts(edges)
     segs = segs[shapely.within(segs, polygon)]
     clear = 2 * spacing_mm if min_clearance_mm is None else min_clearance_mm
