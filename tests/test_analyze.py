@@ -462,3 +462,32 @@ def test_a_deeper_move_clears_the_floor_above_it():
     at = sum(coverage.uncut_report(deep, job2)["uncut_mm2"])
     assert below == pytest.approx(2 * f, abs=1e-9)
     assert at > below + 2 * 20 * 3          # level 1 by its own pass: a 26 x 6 mm slot of 40 x 20
+
+
+@pytest.mark.parametrize("above_um, level_2_cut", [(0.0, True), (0.033, True), (1.0, True), (10.0, False)])
+def test_a_floor_written_a_rounding_above_its_level_clears_it(above_um, level_2_cut):
+    """Levels of 4.983333 / 2: a program writes the last floor as Z-4.9833, 0.033 um above the level
+    (4 decimals). uncut_report(at_or_below=True) counts it as the level's (the analyzer read the
+    whole last floor uncut: 1193 mm^2 of a planned 40 x 30 pocket); 10 um above is not the level."""
+    from shapely.geometry import box
+
+    from cnclab.toolpath import coverage
+    from cnclab.toolpath.job import Job
+    from cnclab.toolpath.path import Tool, ToolPath
+
+    job = Job(box(0, 0, 40, 20), Tool(6.0), 60.0, 2.5, depth=4.983333, v_c=100, f_z=0.05)
+    z1, z2 = job.levels()
+    assert z2 == pytest.approx(-4.983333)
+    pts, kinds = [], []
+    for z in (z1, z2 + above_um * 1e-3):
+        for y in (3, 8, 12, 17):
+            pts += [[3, y, 5], [3, y, z], [37, y, z], [37, y, 5]]
+            kinds += ["rapid", "plunge", "cut", "rapid"]
+    rep = coverage.uncut_report(ToolPath.build(pts, kind=kinds, feed=300), job, at_or_below=True)
+    one_level = sum(coverage.uncut_report(ToolPath.build(pts[:16], kind=kinds[:16], feed=300),
+                                          Job(box(0, 0, 40, 20), Tool(6.0), 60.0, -z1, v_c=100, f_z=0.05))["uncut_mm2"])
+    total = sum(rep["uncut_mm2"])
+    if level_2_cut:                         # both floors: what the four passes leave, twice
+        assert total == pytest.approx(2 * one_level, abs=1e-9)
+    else:                                   # the second floor is not the level's: its area left
+        assert total > 2 * one_level + 30 * 14

@@ -34,6 +34,7 @@ import shapely
 from ..simulation.pixel import Stock
 from ..simulation.vector import SweptDiscs
 
+from .evaluate import POSITION_TOL_MM
 from .job import Job
 from .path import ToolPath
 
@@ -58,7 +59,9 @@ def uncut_limit_mm2(reach_area_mm2: float) -> float:
 def _runs(P: np.ndarray, z: float, at_or_below: bool = False) -> list:
     """The (m, 2) polylines (mm) of the runs of ``P`` ((n, 3) mm, the path's polyline) whose two ends
     are at ``z`` (``at_or_below``: at or below it), and single such points as (1, 2) arrays."""
-    at = (P[:, 2] <= z + 1e-6) if at_or_below else (np.abs(P[:, 2] - z) <= 1e-6)
+    # at or below: up to POSITION_TOL_MM above z too, a level's z as a program writes it (-4.9833 for
+    # -4.983333 is 33 nm above; at 1e-6 the last level's whole floor read uncut: 1193 mm^2 of a 40 x 30)
+    at = (P[:, 2] <= z + POSITION_TOL_MM) if at_or_below else (np.abs(P[:, 2] - z) <= 1e-6)
     seg = at[1:] & at[:-1]
     edges = np.flatnonzero(np.diff(np.r_[0, seg.astype(int), 0]))
     runs = [P[i0:i1 + 1, :2] for i0, i1 in zip(edges[0::2], edges[1::2])]      # segments i0..i1-1
@@ -107,8 +110,10 @@ def uncut_report(path: ToolPath, job: Job, at_or_below: bool = False) -> dict:
     ``{"uncut_mm2": [..], "reach_mm2": [..],
     "limit_mm2": [..], "over": [region indices above their limit], "levels": [z ..]}``.
     A level's floor counts as cut where the moves at its depth swept it (a planner's own levels);
-    ``at_or_below``: the moves at or below its depth (any program: a deeper move clears the floor
-    above it too, and a floor cut 0.1 mm above the level is not the level's)."""
+    ``at_or_below``: the moves at or below its depth, within the programs' reading tolerance
+    :data:`~cnclab.toolpath.evaluate.POSITION_TOL_MM` (any program: a deeper move clears the floor
+    above it too, a floor written 33 nm above the level by rounding is the level's, and a floor cut
+    0.1 mm above it is not)."""
     r = job.tool_radius
     regions = list(shapely.get_parts(job.polygon))
     reach = [g.buffer(-r, quad_segs=64).buffer(r, quad_segs=64) for g in regions]
