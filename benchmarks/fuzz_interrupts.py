@@ -1,7 +1,7 @@
 """Interrupt fuzz, the long run (issue 28 item 5): SIGINT / SIGTERM sent to ``python -m cnclab plan |
 analyze | spindle`` at seeded random offsets from 0.02 to 3 s, a share of the runs with an EMPTY numba
 cache (``NUMBA_CACHE_DIR`` a fresh folder: the kernels compile in the run, llvmlite calls back into
-Python), every outcome classified by ``tests/_fuzz_support.classify_interrupt`` (complete / nothing
+Python), every outcome classified by ``tests/_fuzz_support.classify_interrupt`` (complete / stopped after writing / nothing
 written / interpreter start-up; anything else is counted by class: crash, traceback, exception
 ignored, lying message, partial outputs, temporary file left, early default action).
 

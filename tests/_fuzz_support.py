@@ -6,6 +6,9 @@ Outcomes of an interrupted run (:func:`classify_interrupt`):
 
 * ``complete`` -- exit 0, every output on disk and readable (finished, or interrupted after the
   outputs were committed: then stderr says "complete ... on disk");
+* ``stopped after writing`` -- exit 128 + signal, every output on disk and readable, the last line
+  "interrupted (SIG...): COMMAND stopped after writing <exactly those outputs> (each complete ...)": the
+  signal came after the command's last write, before it returned (``cnclab/__main__.py`` reports it);
 * ``nothing written`` -- exit 128 + signal, the last line "interrupted (SIG...): nothing written ...",
   no traceback, no output and no temporary file;
 * ``interpreter start-up`` -- the signal arrived before any cnclab code ran (Python's own start-up:
@@ -126,7 +129,16 @@ def classify_interrupt(rc, err, outs, sig, delay, startup, d: Path, check_comple
     if rc == 128 + sig:
         bad("traceback", "Traceback" not in err)
         lines = [ln for ln in err.splitlines() if ln.strip()]
-        bad("lying message", not any(on_disk) and bool(lines)
+        if any(on_disk):
+            # the signal came after the command's last output was committed (after its
+            # InterruptReport window, before it returned): __main__ names exactly what is on disk
+            m = re.fullmatch(r"interrupted \(SIG[A-Z]+\): \S+ stopped after writing (.*) \(each complete, "
+                             r"written atomically\); no other output was written", lines[-1] if lines else "")
+            bad("lying message", m is not None and set(m.group(1).split(", ")) == {str(o) for o in outs})
+            if check_complete is not None:
+                check_complete(outs)
+            return "stopped after writing"
+        bad("lying message", bool(lines)
             and re.fullmatch(r"interrupted \(SIG[A-Z]+\): nothing written.*", lines[-1]) is not None)
         return "nothing written"
     # Python's default action: only before cnclab's first line can run

@@ -2,7 +2,7 @@
 spindle | finish-path`` at offsets from 0.05 s (while the interpreter is still importing: the
 handlers at the top of ``cnclab/__main__.py``) to past the end of an uninterrupted run.
 
-Every outcome is classified by :func:`tests._fuzz_support.classify_interrupt` (complete / nothing
+Every outcome is classified by :func:`tests._fuzz_support.classify_interrupt` (complete / stopped after writing / nothing
 written / interpreter start-up; a crash, a traceback through cnclab, "Exception ignored", a message
 that does not match the disk or a leftover temporary file fails). The offsets are fixed (early ones)
 plus fractions of a measured uninterrupted run, so all phases are hit whatever the machine's speed.
@@ -123,3 +123,31 @@ def test_signals_ignored_at_start_stay_ignored(tmp_path):
     rc, out, err, wall = run_cli(argv, signal.SIGHUP, 0.6, ignored=(signal.SIGHUP, signal.SIGINT))
     assert rc == 0 and "interrupted" not in err, (rc, err[-2000:])
     check_complete("finish-path")(outs)
+
+
+def test_classify_a_signal_after_the_last_write(tmp_path):
+    """CI once sent SIGINT to ``finish-path`` after its output was committed but before ``main``
+    returned: exit 130 and "stopped after writing f.apt". That outcome is honest when the message names
+    exactly the outputs on disk and they read back; a message naming other files, or the same message
+    with nothing on disk, is a lie."""
+    from tests._fuzz_support import BadOutcome
+
+    outs = [tmp_path / "a.ngc", tmp_path / "b.apt"]
+    line = ("interrupted (SIGINT): plan stopped after writing {} (each complete, written atomically); "
+            "no other output was written")
+    honest = "\n" + line.format(f"{outs[0]}, {outs[1]}") + "\n"
+    with pytest.raises(BadOutcome, match="lying message"):        # nothing on disk
+        classify_interrupt(130, honest, outs, signal.SIGINT, 1.0, 0.1, tmp_path)
+    for o in outs:
+        o.write_text("x")
+    read = []
+    assert classify_interrupt(130, honest, outs, signal.SIGINT, 1.0, 0.1, tmp_path, read.append) \
+        == "stopped after writing"
+    assert read == [outs]
+    with pytest.raises(BadOutcome, match="lying message"):        # names one of the two
+        classify_interrupt(130, line.format(outs[0]), outs, signal.SIGINT, 1.0, 0.1, tmp_path)
+    with pytest.raises(BadOutcome, match="lying message"):        # claims nothing was written
+        classify_interrupt(130, "interrupted (SIGINT): nothing written", outs, signal.SIGINT, 1.0, 0.1, tmp_path)
+    outs[1].unlink()
+    with pytest.raises(BadOutcome, match="partial outputs"):
+        classify_interrupt(130, honest, outs, signal.SIGINT, 1.0, 0.1, tmp_path)
