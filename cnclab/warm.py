@@ -69,7 +69,9 @@ def _warm_evaluator() -> None:
     uncut_report(tp, job)                   # plan()'s count of what a path leaves
     write_program(tp, job)                  # the writer's arc fit
     xs = np.arange(-2.0, 14.0, 0.1)
-    pixel.simulate(pixel.Stock.from_polygon(job.polygon, 0.1), np.c_[xs, np.full_like(xs, 4.5)], 1.5, 1.0, 255.0)
+    st = pixel.Stock.from_polygon(job.polygon, 0.1)
+    pixel.simulate(st, np.c_[xs, np.full_like(xs, 4.5)], 1.5, 1.0, 255.0)
+    st.segment_pixels((2.0, 2.0), (10.0, 7.0), 1.5, cut=True, backend="numba")    # Kim & Yang's Linear_Motion
 
 
 def _warm_freeform() -> None:

@@ -223,3 +223,37 @@ def test_cut_disks_pixels_equals_one_disk_at_a_time():
         assert b.cut_disks_pixels(C, r) == n and np.array_equal(a.grid, b.grid)
     with pytest.raises(ValueError, match="centers_xy"):
         b.cut_disks_pixels([[np.nan, 0.0]], 1.0)
+
+
+@settings(max_examples=N_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), h=st.sampled_from([0.05, 0.1, 0.3]))
+def test_segment_pixels_compiled_equals_reference(seed, h):
+    """``Stock.segment_pixels`` (Kim & Yang's Linear_Motion count and cut): the numba kernel counts and
+    removes the same pixels as the numpy window test, segment after segment on one stock (zero-length
+    segments, segments leaving the stock and pixel-centre ties on a grid-aligned radius included)."""
+    rng = np.random.default_rng(seed)
+    a = pixel.Stock.from_polygon(_random_stock_polygon(rng), h)
+    b = a.copy()
+    start, counts = int(a.grid.sum()), []
+    for k in range(12):
+        p0 = rng.uniform(-8, 8, 2)
+        p1 = p0 if k % 5 == 0 else (np.round(rng.uniform(-8, 8, 2) / h) * h if k % 3 == 0 else rng.uniform(-8, 8, 2))
+        r = float(rng.uniform(0.3, 3.0)) if k % 4 else 4 * h        # 4 h: centres exactly at r along an axis
+        cut = bool(k % 2)
+        counts.append(a.segment_pixels(p0, p1, r, cut=cut, backend="numpy"))
+        assert counts[-1] == b.segment_pixels(p0, p1, r, cut=cut, backend="numba")
+        assert np.array_equal(a.grid, b.grid)
+    assert max(counts) > 0 and int(a.grid.sum()) < start    # not vacuous: material met and removed
+
+
+def test_segment_pixels_is_the_union_of_the_discs_along_it():
+    """A hand-checkable case: the pixels within r of a segment are those some disc centred on it covers
+    (dense discs every h/20 along it: the same set up to centres within h/20 of the capsule's rim)."""
+    st_ = pixel.Stock.from_polygon(box(0, 0, 20, 10), 0.1)
+    full = int(st_.grid.sum())
+    n = st_.segment_pixels((3.0, 4.0), (15.0, 6.5), 2.0)
+    discs = st_.copy()
+    t = np.linspace(0, 1, int(np.hypot(12.0, 2.5) / 0.005) + 1)
+    removed = discs.cut_disks_pixels(np.c_[3 + 12 * t, 4 + 2.5 * t], 2.0)
+    assert int(st_.grid.sum()) == full              # read only without cut
+    assert abs(n - removed) <= 0.002 * n, (n, removed)

@@ -172,14 +172,14 @@ def fit_run(P, tol, grid, scale, max_radius, max_step, max_sweep, arcs, max_span
     cxs = np.empty(n)
     cys = np.empty(n)
     k = 0
-    i = 0
+    i = np.int64(0)        # int64 and np.bool_ arguments: one compiled _longest, not one per literal
     while i < n:
-        jl, _, _, _, _ = _longest(P, i, i + 1, tol, False, grid, scale, max_radius, max_step, max_sweep, max_span)
+        jl, _, _, _, _ = _longest(P, i, i + 1, tol, np.bool_(False), grid, scale, max_radius, max_step, max_sweep, max_span)
         jl = max(jl, i + 1)
         ja, found = i, False
         code, cx, cy = 0, math.nan, math.nan
         if arcs and n - i >= 2:
-            ja, found, code, cx, cy = _longest(P, i, i + 2, tol, True, grid, scale, max_radius, max_step,
+            ja, found, code, cx, cy = _longest(P, i, i + 2, tol, np.bool_(True), grid, scale, max_radius, max_step,
                                                max_sweep, max_span)
         if found and ja > jl:
             ends[k], codes[k], cxs[k], cys[k] = ja, code, cx, cy

@@ -55,7 +55,9 @@ def _png_pdf(fig):
     out = {}
     for ext in ("png", "pdf"):
         buf = io.BytesIO()
-        fig.savefig(buf, format=ext, dpi=150, bbox_inches="tight")
+        # no creation date in the PDF: the same program and job give the same bytes (as plotting.savefig)
+        fig.savefig(buf, format=ext, dpi=150, bbox_inches="tight",
+                    metadata={"CreationDate": None} if ext == "pdf" else None)
         out[ext] = buf.getvalue()
     return out
 

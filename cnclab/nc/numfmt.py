@@ -148,7 +148,7 @@ def gcode_linear_body(kx, ky, kz, rapid, kf, ks, has_s, decimals, feed_decimals)
         if has_s[i] != have_s or (has_s[i] and ks[i] != cur_s):
             if has_s[i]:
                 buf[pos] = 83  # 'S'
-                pos = _put_fixed(buf, pos + 1, ks[i], 0)
+                pos = _put_fixed(buf, pos + 1, ks[i], np.int64(0))
                 buf[pos:pos + 4] = np.array([32, 77, 51, 10], np.uint8)  # ' M3\n'
                 pos += 4
             else:

@@ -362,7 +362,7 @@ def _dixel_engagement_front(A, B, y0, h, cx, cy, r, psi0, m, j_lo, polyline, bis
             if abs(x * cu + dy * su) <= tol:
                 p = _crossing_psi(o, m, j_lo, y0, h, cy, r, psi0)
                 inr[o] = p > lo and p < hi
-    n_r = 0
+    n_r = np.int64(0)      # typed int64 from the start: no second compile of the callees for a literal 0
     for o in range(n):
         n_r += inr[o]
     if n_r == 0 or n_r == n:
@@ -510,7 +510,7 @@ def _finish(A, B, y0, h, circ, crossings, ne, lo, hi, polyline, bisections):
         trans[n_t] = k
         n_t += (dist[k] > 0) != (dist[k + 1] > 0)
     edges = np.empty(64)
-    n_e = 0
+    n_e = np.int64(0)
     wk = np.empty(ne, np.int64)           # wide brackets, to resolve afterwards
     n_w = 0
     for kt in range(n_t):
@@ -559,7 +559,7 @@ def _finish(A, B, y0, h, circ, crossings, ne, lo, hi, polyline, bisections):
         ra = np.empty(n_w)
         rb = np.empty(n_w)
         rm = np.empty(n_w, np.bool_)
-        n_r = 0
+        n_r = np.int64(0)      # typed int64 from the start: no second compile of the callees for a literal 0
         for q in range(n_w):
             k = wk[q]
             if n_e + 4 * A.shape[0] + 2 > edges.size:
@@ -584,7 +584,7 @@ def _finish(A, B, y0, h, circ, crossings, ne, lo, hi, polyline, bisections):
             edges = e2
             n_e = n_e + n_b
         edges = np.sort(edges[:n_e])
-    return _bounds_to_intervals(pe[0], pe[ne - 1], dist[0] > 0, dist[ne - 1] > 0, edges, n_e, lo, hi, True)
+    return _bounds_to_intervals(pe[0], pe[ne - 1], dist[0] > 0, dist[ne - 1] > 0, edges, n_e, lo, hi, np.bool_(True))
 
 
 @njit(cache=True)
@@ -673,6 +673,39 @@ def pixel_cut(grid, x0, y0, h, cx, cy, r):
 
 
 @njit(cache=True)
+def segment_pixels(grid, x0, y0, h, ax, ay, bx, by, r, L2, cut):
+    """Port of :meth:`.pixel.Stock.segment_pixels`: the material pixels whose centres lie within ``r``
+    of the segment (ax, ay)--(bx, by) (mm; ``L2`` its squared length, computed by the caller);
+    ``cut`` removes them. Returns their count. Same operations in the same order as the numpy
+    reference (no fused multiply-add), so the same pixels."""
+    ny, nx = grid.shape
+    i0 = max(int(math.floor((min(ax, bx) - r - x0) / h)), 0)
+    i1 = min(int(math.ceil((max(ax, bx) + r - x0) / h)), nx)
+    j0 = max(int(math.floor((min(ay, by) - r - y0) / h)), 0)
+    j1 = min(int(math.ceil((max(ay, by) + r - y0) / h)), ny)
+    d0 = bx - ax
+    d1 = by - ay
+    rr = r * r
+    n = 0
+    for j in range(j0, j1):
+        Y = (y0 + (j + 0.5) * h) - ay
+        for i in range(i0, i1):
+            if not grid[j, i]:
+                continue
+            X = (x0 + (i + 0.5) * h) - ax
+            t = 0.0
+            if L2 != 0:
+                t = min(max((X * d0 + Y * d1) / L2, 0.0), 1.0)
+            u = X - t * d0
+            v = Y - t * d1
+            if u * u + v * v <= rr:
+                n += 1
+                if cut:
+                    grid[j, i] = False
+    return n
+
+
+@njit(cache=True)
 def pixel_engagement(grid, x0, y0, h, cx, cy, r, f0, f1, front_only, n_samples, bisections):
     """Port of ``StockBase.engagement`` on the pixel grid: (k, 2) engaged intervals (rad)."""
     psi0, lo, hi = _angle_range(f0, f1, front_only)
@@ -686,7 +719,7 @@ def pixel_engagement(grid, x0, y0, h, cx, cy, r, f0, f1, front_only, n_samples, 
     for i in range(n_samples):
         p = i * step + lo if i < n_samples - 1 else hi
         ang = psi0 + p
-        m[i] = _contains_any(2, A, A, grid, x0, y0, h, cx + r * math.cos(ang), cy + r * math.sin(ang))
+        m[i] = _contains_any(np.int64(2), A, A, grid, x0, y0, h, cx + r * math.cos(ang), cy + r * math.sin(ang))
         n_in += m[i]
     if n_in == 0:
         return empty
@@ -695,7 +728,7 @@ def pixel_engagement(grid, x0, y0, h, cx, cy, r, f0, f1, front_only, n_samples, 
         out[0, 0] = lo
         out[0, 1] = hi
         return out
-    nq = 0
+    nq = np.int64(0)
     for i in range(n_samples - 1):
         if m[i] != m[i + 1]:
             nq += 1
@@ -710,9 +743,9 @@ def pixel_engagement(grid, x0, y0, h, cx, cy, r, f0, f1, front_only, n_samples, 
             rm[q] = m[i]
             q += 1
     buf = np.empty(256 * nq)
-    n_b = _refine(2, A, A, grid, (x0, y0, h), (cx, cy, r, psi0), (ra, rb, rm), nq, bisections, buf, 0)
+    n_b = _refine(np.int64(2), A, A, grid, (x0, y0, h), (cx, cy, r, psi0), (ra, rb, rm), nq, bisections, buf, 0)
     edges = np.sort(buf[:n_b])
-    return _bounds_to_intervals(lo, hi, m[0], m[n_samples - 1], edges, n_b, lo, hi, False)
+    return _bounds_to_intervals(lo, hi, m[0], m[n_samples - 1], edges, n_b, lo, hi, np.bool_(False))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -75,49 +75,18 @@ def reference_pixel_count(feed_per_tooth_mm: float, step_length_mm: float, pixel
     return (feed_per_tooth_mm / pixel_mm) * (step_length_mm / pixel_mm)
 
 
-def _window(stock, p0, p1, r):
-    h = stock.resolution_mm
-    ny, nx = stock.grid.shape
-    lo = np.minimum(p0, p1) - r
-    hi = np.maximum(p0, p1) + r
-    i0 = max(int(math.floor((lo[0] - stock.x0) / h)), 0)
-    i1 = min(int(math.ceil((hi[0] - stock.x0) / h)), nx)
-    j0 = max(int(math.floor((lo[1] - stock.y0) / h)), 0)
-    j1 = min(int(math.ceil((hi[1] - stock.y0) / h)), ny)
-    if i1 <= i0 or j1 <= j0:
-        return None
-    xc = stock.x0 + (np.arange(i0, i1) + 0.5) * h
-    yc = stock.y0 + (np.arange(j0, j1) + 0.5) * h
-    d = p1 - p0
-    L2 = float(d @ d)
-    X, Y = xc[None, :] - p0[0], yc[:, None] - p0[1]
-    t = np.zeros_like(X + Y) if L2 == 0 else np.clip((X * d[0] + Y * d[1]) / L2, 0.0, 1.0)
-    mask = (X - t * d[0]) ** 2 + (Y - t * d[1]) ** 2 <= r * r
-    return (slice(j0, j1), slice(i0, i1)), mask
-
-
 def linear_motion(stock, p0, p1, tool_radius: float) -> int:
     """``Linear_Motion``: material pixels (centre within ``tool_radius`` of segment p0–p1) [count].
 
-    ``stock`` is a :class:`cnclab.simulation.pixel.Stock` (read only here).
+    ``stock`` is a :class:`cnclab.simulation.pixel.Stock` (read only here;
+    :meth:`~cnclab.simulation.pixel.Stock.segment_pixels`).
     """
-    w = _window(stock, np.asarray(p0, float), np.asarray(p1, float), float(tool_radius))
-    if w is None:
-        return 0
-    sl, mask = w
-    return int(np.count_nonzero(stock.grid[sl] & mask))
+    return stock.segment_pixels(p0, p1, tool_radius)
 
 
 def cut_linear(stock, p0, p1, tool_radius: float) -> int:
     """Remove the pixels swept by the tool along p0–p1; returns how many were material."""
-    w = _window(stock, np.asarray(p0, float), np.asarray(p1, float), float(tool_radius))
-    if w is None:
-        return 0
-    sl, mask = w
-    win = stock.grid[sl]
-    n = int(np.count_nonzero(win & mask))
-    win &= ~mask
-    return n
+    return stock.segment_pixels(p0, p1, tool_radius, cut=True)
 
 
 def resample_polyline(points, step_mm: float) -> np.ndarray:

@@ -273,7 +273,7 @@ def step_heading(M, Amask, D, K, px, py, phi, dpsi, was_air, slope, slope_g):
         e = 0.0
         eg = 0.0
     else:
-        st, psi, e, eg, slope = search_heading(Q, lo, hi, hi if was_air else phi + dpsi, target, 0, slope)
+        st, psi, e, eg, slope = search_heading(Q, lo, hi, hi if was_air else phi + dpsi, target, np.int64(0), slope)
         if st == 1:
             return 1, psi, e, eg, slope, slope_g
     if eg > guard:
@@ -281,7 +281,7 @@ def step_heading(M, Amask, D, K, px, py, phi, dpsi, was_air, slope, slope_g):
         # within ``guard``; where the arc runs nearly tangent to a cut boundary (corner rests,
         # crescents between passes) the 1/2 level can miss a few degrees of thin slivers: turn left
         # until it holds
-        st, psi, e, eg, slope_g = search_heading(Q, lo, psi, psi, guard, 1, slope_g)
+        st, psi, e, eg, slope_g = search_heading(Q, lo, psi, psi, guard, np.int64(1), slope_g)
         if st == 1:
             return 1, psi, e, eg, slope, slope_g
     if not inside_mask(Amask, x0, y0, h, px + ds * math.cos(psi), py + ds * math.sin(psi)):
@@ -295,7 +295,7 @@ def step_heading(M, Amask, D, K, px, py, phi, dpsi, was_air, slope, slope_g):
         if e > target + SLIDE_MARGIN:
             return 1, psi, e, eg, slope, slope_g
         if eg > guard:
-            st, psi, e, eg, slope_g = search_heading(Q, lo, psi, psi, guard, 1, slope_g)
+            st, psi, e, eg, slope_g = search_heading(Q, lo, psi, psi, guard, np.int64(1), slope_g)
             if st == 1 or not inside_mask(Amask, x0, y0, h, px + ds * math.cos(psi), py + ds * math.sin(psi)):
                 return 1, psi, e, eg, slope, slope_g
     return -1, psi, e, eg, slope, slope_g
@@ -333,12 +333,13 @@ def pass_kernel(M, Amask, Mr, D, grid, tool, start, control, steps):
     P[0, 0] = start[0]
     P[0, 1] = start[1]
     s = np.zeros(max_steps + 1)
-    n, k_cut, removed, air, n_air_start, reason = 1, 0, 0.0, 0.0, 1, 3
+    # int64 / np.bool_ from the start: the kernels called with them compile once, not once per literal
+    n, k_cut, removed, air, n_air_start, reason = np.int64(1), 0, 0.0, 0.0, np.int64(1), 3
     phi = start[2]
     dpsi = 0.0       # the last heading change: the guess of the next one
     slope = -1.0     # d engagement / d heading (rad/rad) of the last root: the Newton step of the next
     slope_g = -1.0
-    was_air = False  # the last step met no material at all: the next guess is the hard right turn
+    was_air = np.bool_(False)  # the last step met no material at all: the next guess is the hard right turn
     span = np.empty((M.shape[0], 4), np.int64)   # the last disc's row spans (see cut_disc_both)
     rows = np.array([1, 0], np.int64)
     for step in range(max_steps):

@@ -218,7 +218,7 @@ def dijkstra(D, Ac, banned, r_free, band_hi, goal, start, geo, reach, buf, A):
     nt = 1
     hk[0] = 0.0
     hv[0] = s0
-    n = 1
+    n = np.int64(1)        # int64 from the start: _heap_pop compiles once
     dj = (-1, -1, -1, 0, 0, 1, 1, 1)
     di = (-1, 0, 1, -1, 1, -1, 0, 1)
     ww = (1.4142, 1.0, 1.4142, 1.0, 1.0, 1.4142, 1.0, 1.4142)
