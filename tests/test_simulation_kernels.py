@@ -257,3 +257,23 @@ def test_segment_pixels_is_the_union_of_the_discs_along_it():
     removed = discs.cut_disks_pixels(np.c_[3 + 12 * t, 4 + 2.5 * t], 2.0)
     assert int(st_.grid.sum()) == full              # read only without cut
     assert abs(n - removed) <= 0.002 * n, (n, removed)
+
+
+@settings(max_examples=N_EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 10_000), h=st.sampled_from([0.1, 0.3]), model=st.sampled_from(["pixel", "dixel"]))
+def test_removal_equals_the_simulation_s_removal_columns(seed, h, model):
+    """``common.removal`` (no engagement measured: the pixel stock's compiled disc loop, the dixel
+    stock's fallback through ``simulate``) gives exactly ``simulate``'s s, ds, removed_mm2 and
+    mrr_mm3_min, and leaves the same stock, on random stocks and paths (a standstill included)."""
+    rng = np.random.default_rng(seed)
+    mod = {"pixel": pixel, "dixel": dixel}[model]
+    a = mod.Stock.from_polygon(_random_stock_polygon(rng), h)
+    b = a.copy()
+    P = _random_path(rng, step=0.2)
+    r = float(rng.uniform(0.5, 3.0))
+    ref = common.simulate(a, P, r, 2.0, 300.0)
+    got = common.removal(b, P, r, 2.0, 300.0)
+    for col in ("s", "ds", "removed_mm2", "mrr_mm3_min"):
+        np.testing.assert_array_equal(got[col].to_numpy(), ref[col].to_numpy(), err_msg=col)
+    assert np.array_equal(getattr(a, "grid", None), getattr(b, "grid", None)) if model == "pixel" \
+        else a.area() == b.area()

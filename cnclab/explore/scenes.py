@@ -237,7 +237,7 @@ def kim_yang_scene(theta_deg, tool_radius_mm=5.0, pixel_mm=0.5, tolerance=0.15, 
             pts = cm.resample_polyline(p, sample_mm)
             if len(pts) < 2:
                 continue
-            df = pixel.simulate(st, pts, r, a_p=a_p_mm, feed_mm_min=feed_mm_min)
+            df = pixel.removal(st, pts, r, a_p_mm, feed_mm_min)        # the MRR only: no engagement measured
             out.append(np.c_[df.s.to_numpy()[1:] + s0, df.mrr_mm3_min.to_numpy()[1:]])
             s0 += float(df.s.iloc[-1])
         return np.vstack(out)

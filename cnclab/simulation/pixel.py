@@ -23,10 +23,10 @@ import math
 
 import numpy as np
 
-from .common import Engagement, PathSettings, StockBase, check_radius, check_xy, resolve_backend, simulate
+from .common import Engagement, PathSettings, StockBase, check_radius, check_xy, removal, resolve_backend, simulate
 from .dixel import rings, scanline_intervals
 
-__all__ = ["Stock", "simulate", "Engagement"]
+__all__ = ["Stock", "simulate", "removal", "Engagement"]
 
 
 class Stock(StockBase):
@@ -91,6 +91,13 @@ class Stock(StockBase):
         cfg = PathSettings(1, self.x0, self.y0, self.resolution_mm, r, lag, central, front_only, True, 24, 0, f_z,
                              hold_front)
         K.simulate_path(dummy, dummy, self.grid, P, d, ds, s, cfg, (0, 0, float(d[0, 0]), float(d[0, 1])), tuple(out))
+        return True
+
+    def _removed_compiled(self, P, r, rem) -> bool:
+        from . import _kernels as K
+
+        dummy = np.empty((1, 1))
+        K.cut_path(1, dummy, dummy, self.grid, self.x0, self.y0, self.resolution_mm, np.ascontiguousarray(P), r, 0, rem)
         return True
 
     def engagement(self, center_xy, tool_radius, feed_direction_xy, front_only: bool = True,

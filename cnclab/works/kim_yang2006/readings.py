@@ -108,7 +108,7 @@ def run_reading(pocket: str, reading: str, sample_mm: float | None = None) -> di
     kept, all_m = [], []
     for poly, L_entry in zip(cmp.cut_polylines(path.to_moves(), sample), entry_len):
         pts = cm.resample_polyline(poly, sample)
-        df = pixel.simulate(stock, pts, job.tool_radius, a_p=job.a_p, feed_mm_min=job.feed_mm_min).iloc[1:]
+        df = pixel.removal(stock, pts, job.tool_radius, job.a_p, job.feed_mm_min).iloc[1:]   # MRR only
         m = df.mrr_mm3_min.to_numpy() / nominal
         ok = np.isfinite(m)
         all_m.append(m[ok])
