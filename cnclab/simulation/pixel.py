@@ -158,7 +158,7 @@ class Stock(StockBase):
         removes them. Returns how many were material.
 
         ``backend``: "numpy" (vectorised over the segment's bounding window, the reference), "numba"
-        (:func:`._kernels.segment_pixels`, the same arithmetic per pixel: the same count and stock)
+        (:func:`._segment_kernel.segment_pixels`, the same arithmetic per pixel: the same count and stock)
         or None (default of :func:`.common.set_backend`).
 
         >>> from shapely.geometry import box
@@ -176,10 +176,10 @@ class Stock(StockBase):
         d = b - a
         L2 = float(d @ d)                   # computed once, here, for both backends (the same bits)
         if resolve_backend(backend) == "numba":
-            from . import _kernels as K
+            from . import _segment_kernel as KS
 
-            return int(K.segment_pixels(self.grid, self.x0, self.y0, self.resolution_mm, float(a[0]), float(a[1]),
-                                        float(b[0]), float(b[1]), r, L2, bool(cut)))
+            return int(KS.segment_pixels(self.grid, self.x0, self.y0, self.resolution_mm, float(a[0]), float(a[1]),
+                                           float(b[0]), float(b[1]), r, L2, bool(cut)))
         h = self.resolution_mm
         ny, nx = self.grid.shape
         lo = np.minimum(a, b) - r
