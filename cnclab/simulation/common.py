@@ -389,6 +389,22 @@ class SimOptions:
     lag_rule: str = "path"
 
 
+def _path_steps(centres, tool_radius, a_p, feed_mm_min):
+    """The checked inputs of a path run (:func:`simulate`, :func:`removal`): centres ``P`` (N, 2) mm,
+    the radius, the steps ``d`` (N-1, 2) and their lengths ``ds`` (N,, 0 first), mm."""
+    P = np.asarray(centres, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 2 or len(P) < 2:
+        raise ValueError(f"centres must be an (N, 2) array with N >= 2 (mm), got shape {P.shape}")
+    if not np.all(np.isfinite(P)):
+        raise ValueError("centres must be finite")
+    r = check_radius(tool_radius)
+    for name, v in (("a_p", a_p), ("feed_mm_min", feed_mm_min)):
+        if not (math.isfinite(float(v)) and float(v) > 0):
+            raise ValueError(f"{name} must be positive, got {v!r}")
+    d = np.diff(P, axis=0)
+    return P, r, d, np.r_[0.0, np.hypot(d[:, 0], d[:, 1])]
+
+
 def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None, teeth=None, *,
              copy: bool = False, options: SimOptions | None = None, **fields):
     """Move the tool through ``centres`` cutting ``stock``; return a per-step pandas DataFrame.
@@ -452,15 +468,7 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     lag_mm, feed_direction, lag_rule = o.lag_mm, o.feed_direction, o.lag_rule
     if copy:
         stock = stock.copy()
-    P = np.asarray(centres, dtype=float)
-    if P.ndim != 2 or P.shape[1] != 2 or len(P) < 2:
-        raise ValueError(f"centres must be an (N, 2) array with N >= 2 (mm), got shape {P.shape}")
-    if not np.all(np.isfinite(P)):
-        raise ValueError("centres must be finite")
-    r = check_radius(tool_radius)
-    for name, v in (("a_p", a_p), ("feed_mm_min", feed_mm_min)):
-        if not (math.isfinite(float(v)) and float(v) > 0):
-            raise ValueError(f"{name} must be positive, got {v!r}")
+    P, r, d, ds = _path_steps(centres, tool_radius, a_p, feed_mm_min)
     if f_z is not None and not float(f_z) > 0:
         raise ValueError(f"f_z must be a positive feed per tooth in mm, got {f_z!r}")
     if teeth is not None and not (int(teeth) == teeth and teeth >= 1):
@@ -471,8 +479,6 @@ def simulate(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, f_z=None,
     if lag_rule not in ("path", "front"):
         raise ValueError(f"lag_rule must be 'path' or 'front', got {lag_rule!r}")
     hold_front = lag_rule == "front"
-    d = np.diff(P, axis=0)
-    ds = np.r_[0.0, np.hypot(d[:, 0], d[:, 1])]
     n = len(P)
     eng = np.empty(n)
     ent = np.empty(n)
@@ -520,15 +526,7 @@ def removal(stock: StockBase, centres, tool_radius, a_p, feed_mm_min, *, backend
     """
     import pandas as pd
 
-    P = np.asarray(centres, dtype=float)
-    if P.ndim != 2 or P.shape[1] != 2 or len(P) < 2 or not np.all(np.isfinite(P)):
-        raise ValueError(f"centres must be a finite (N, 2) array with N >= 2 (mm), got shape {P.shape}")
-    r = check_radius(tool_radius)
-    for name, v in (("a_p", a_p), ("feed_mm_min", feed_mm_min)):
-        if not (math.isfinite(float(v)) and float(v) > 0):
-            raise ValueError(f"{name} must be positive, got {v!r}")
-    d = np.diff(P, axis=0)
-    ds = np.r_[0.0, np.hypot(d[:, 0], d[:, 1])]
+    P, r, _, ds = _path_steps(centres, tool_radius, a_p, feed_mm_min)
     rem = np.empty(len(P))
     if not (resolve_backend(backend) == "numba" and stock._plain() and stock._removed_compiled(P, r, rem)):
         rem = simulate(stock, P, r, a_p, feed_mm_min, backend=backend)["removed_mm2"].to_numpy()

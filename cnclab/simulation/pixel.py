@@ -94,6 +94,8 @@ class Stock(StockBase):
         return True
 
     def _removed_compiled(self, P, r, rem) -> bool:
+        """The discs at ``P`` cut in order by :func:`._kernels.cut_path` (the numba
+        :meth:`cut_disk_pixels` per centre): their removed areas (mm^2) in ``rem``."""
         from . import _kernels as K
 
         dummy = np.empty((1, 1))
@@ -213,14 +215,12 @@ class Stock(StockBase):
         (160 pixels; at each end the column of centres 0.25 mm from the edge has 4 within the disk,
         |y - 2| <= sqrt(1 - 0.25^2) = 0.968, the next column, 0.75 mm, 2: |y - 2| <= 0.661)
         """
-        from . import _kernels as K
-
         C = np.ascontiguousarray(np.asarray(centers_xy, float).reshape(-1, 2))
         if not np.isfinite(C).all():
             raise ValueError("centers_xy must be finite (mm)")
         h = self.resolution_mm
         rem = np.empty(len(C))
-        K.cut_path(1, np.empty((1, 1)), np.empty((1, 1)), self.grid, self.x0, self.y0, h, C, check_radius(tool_radius), 0, rem)
+        self._removed_compiled(C, check_radius(tool_radius), rem)
         return int(round(float(rem.sum()) / (h * h)))
 
     def cut_disk(self, center_xy, tool_radius, backend: str | None = None) -> float:
